@@ -1,0 +1,1 @@
+"""thermogel ways in: the command line, the HTTP service and its client."""

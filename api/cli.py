@@ -1,0 +1,43 @@
+"""The ``thermogel`` command line.
+
+Each sub-command lives in its own ``api/commands/<name>.py`` module exposing
+``register(subparsers)``; heavy imports (fastapi, matplotlib) happen inside commands.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from solver.errors import NotApplicableError, ParameterError, SolverError
+
+COMMANDS = ["equilibrium", "classify", "phase_map"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every registered sub-command."""
+    parser = argparse.ArgumentParser(
+        prog="thermogel", description="Plan drug release from thermo-responsive gel beads.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    for name in COMMANDS:
+        importlib.import_module(f"api.commands.{name}").register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point: parse, run, and turn input errors into exit code 2 with a message."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (ParameterError, NotApplicableError) as exc:
+        print(f"thermogel: error: {exc}", file=sys.stderr)
+        return 2
+    except SolverError as exc:
+        print(f"thermogel: solver failed: {exc}", file=sys.stderr)
+        return 3
+
+
+if __name__ == "__main__":
+    sys.exit(main())

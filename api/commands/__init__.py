@@ -1,0 +1,1 @@
+"""Sub-commands of the ``thermogel`` command line, one module each."""

@@ -1,0 +1,1 @@
+"""Matplotlib figures (imported only by the commands that draw them)."""

@@ -1,0 +1,1 @@
+"""thermogel dose planner: actuation times, schedules, units, validation cache."""
