@@ -77,8 +77,10 @@ def _parts(gel: Gel, lam: np.ndarray | float) -> tuple:
 
 def residual(gel: Gel, temperature: float, stretch: np.ndarray | float) -> np.ndarray | float:
     """Left side of eq. EqlEqn, (lambda^2-1)/lambda^3 - Omega P(phi)."""
-    c, d, _, _ = _parts(gel, stretch)
-    return c + temperature * d
+    lam = np.asarray(stretch, dtype=float)
+    phi = -np.expm1(-3.0 * np.log(lam))
+    p = osmotic_p(phi, gel.chi0(temperature), gel.chi1(temperature))
+    return (lam * lam - 1.0) / lam**3 - gel.omega * p
 
 
 def residual_slope(gel: Gel, temperature: float, stretch: np.ndarray | float) -> np.ndarray | float:

@@ -43,7 +43,10 @@ class Permeability:
         if self.law not in ("constant", "power"):
             raise ParameterError("permeability.law", self.law, "'constant' or 'power'")
         if self.law == "power":
-            b = require_finite("permeability.beta", self.beta)
+            try:
+                b = float(self.beta)
+            except (TypeError, ValueError):
+                b = math.nan
             if not (BETA_RANGE[0] < b < BETA_RANGE[1]):
                 raise ParameterError("permeability.beta", self.beta, "0 < beta < 10")
             object.__setattr__(self, "beta", b)
