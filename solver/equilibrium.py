@@ -135,10 +135,19 @@ def equilibrium(gel: Gel, temperature: float, branch: Branch = "swollen") -> Equ
     """The stable equilibrium on the named branch: the most swollen or the most shrunken."""
     if branch not in ("swollen", "shrunken"):
         raise ParameterError("branch", branch, "'swollen' or 'shrunken'")
+    stable = _stable(gel, temperature)
+    return stable[-1] if branch == "swollen" else stable[0]
+
+
+def _stable(gel: Gel, temperature: float) -> list[Equilibrium]:
+    """The stable equilibria at T; ParameterError when the gel has none (it is dry there)."""
     stable = [e for e in equilibria(gel, temperature) if e.stable]
     if not stable:
-        raise ParameterError("temperature", temperature, "a temperature with a stable equilibrium")
-    return stable[-1] if branch == "swollen" else stable[0]
+        raise ParameterError(
+            "temperature", temperature,
+            f"a temperature at which this gel holds fluid (porosity > {1 - LAMBDA_MIN**-3:.0e})",
+            "the gel is dry at this temperature")
+    return stable
 
 
 def nearest_stable(gel: Gel, temperature: float, stretch: float) -> Equilibrium:
@@ -147,7 +156,7 @@ def nearest_stable(gel: Gel, temperature: float, stretch: float) -> Equilibrium:
     dW/dlambda > 0 means the energy falls as the gel shrinks, so it goes to the nearest
     stable root below; otherwise to the nearest stable root above.
     """
-    eqs = [e for e in equilibria(gel, temperature) if e.stable]
+    eqs = _stable(gel, temperature)
     g = residual(gel, temperature, stretch)
     if g > 0:
         below = [e for e in eqs if e.stretch <= stretch]

@@ -65,3 +65,10 @@ def test_spinodal_curve_and_nesting() -> None:
 def test_hht_regions_miss_the_equilibrium_curve_when_swelling() -> None:
     # Paper sec. Hirotsu dynamics: for HHT the regions do not cross the equilibrium curve.
     assert classify_jump(HHT, 308, 300).behaviour == "smooth"
+
+
+def test_dry_gel_is_a_clear_error() -> None:
+    from solver import ParameterError
+
+    with pytest.raises(ParameterError, match="temperature.*holds fluid"):
+        classify_jump(HHT, 274, 358)
