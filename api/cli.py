@@ -12,7 +12,8 @@ import sys
 
 from solver.errors import NotApplicableError, ParameterError, SolverError
 
-COMMANDS = ["equilibrium", "classify", "phase_map"]
+COMMANDS = ["equilibrium", "classify", "phase_map", "serve", "front", "dose", "schedule",
+            "simulate", "plot", "bench"]
 
 
 def build_parser() -> argparse.ArgumentParser:

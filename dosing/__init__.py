@@ -1,1 +1,58 @@
-"""thermogel dose planner: actuation times, schedules, units, validation cache."""
+"""thermogel dose planner: actuation times, schedules, units, validation cache.
+
+    from dosing import DoseRequest, plan_dose
+    ans = plan_dose(DoseRequest("ANB", 302, 308, dose_fraction=0.8, dry_radius_um=50))
+
+Times are dimensionless (by tau of eq. timescale) and in seconds when a bead size is
+given.  Nothing here imports fastapi or matplotlib.
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import Executor, ThreadPoolExecutor
+from typing import Any
+
+from .cache import ValidationCache
+from .jobs import JobRunner, QueueFullError
+from .planner import DoseAnswer, Planner, UnknownValidationError, ValidationStatus
+from .request import DoseRequest, ScheduleRequest
+from .scenario import TRUTH, Scenario, SolverSettings, Trajectory
+from .schedule import ScheduleAnswer
+from .units import PhysicalConstants, Timescale, timescale, water_viscosity
+
+
+def _one_shot(cache_path: str | None, executor: Executor | None, **kw: Any) -> Planner:
+    # A one-shot call runs any full-solver work in this process (no pool start-up).
+    return Planner(cache_path=cache_path, executor=executor or ThreadPoolExecutor(2), **kw)
+
+
+def plan_dose(req: DoseRequest, validate: bool = False, cache_path: str | None = None,
+              executor: Executor | None = None, **planner_kw: Any) -> DoseAnswer:
+    """One dose with a throw-away :class:`Planner` (the cache persists)."""
+    planner = _one_shot(cache_path, executor, **planner_kw)
+    try:
+        return planner.dose(req, validate=validate)
+    finally:
+        planner.close()
+        if executor is None:
+            planner.jobs.executor.shutdown(wait=True)
+
+
+def plan_schedule(req: ScheduleRequest, cache_path: str | None = None,
+                  executor: Executor | None = None, **planner_kw: Any) -> ScheduleAnswer:
+    """One schedule with a throw-away :class:`Planner` (the cache persists)."""
+    planner = _one_shot(cache_path, executor, **planner_kw)
+    try:
+        return planner.schedule(req)
+    finally:
+        planner.close()
+        if executor is None:
+            planner.jobs.executor.shutdown(wait=True)
+
+
+__all__ = [
+    "TRUTH", "DoseAnswer", "DoseRequest", "JobRunner", "PhysicalConstants", "Planner",
+    "QueueFullError", "Scenario", "ScheduleAnswer", "ScheduleRequest", "SolverSettings",
+    "Timescale", "Trajectory", "UnknownValidationError", "ValidationCache", "ValidationStatus",
+    "plan_dose", "plan_schedule", "timescale", "water_viscosity",
+]

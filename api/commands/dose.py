@@ -1,0 +1,102 @@
+"""``thermogel dose``: how long to heat a bead to release a dose (sec. Application)."""
+
+from __future__ import annotations
+
+import argparse
+import textwrap
+from typing import Any
+
+from .common import add_gel_options, gel_from_args, print_json
+
+
+def _viscosity(text: str) -> float | str:
+    return text if text.strip().lower() == "water" else float(text)
+
+
+def add_planning_options(p: argparse.ArgumentParser) -> None:
+    """Jump, bead size, timescale constants, solver settings and cache options."""
+    add_gel_options(p)
+    p.add_argument("--t-start", type=float, required=True, help="start temperature in K")
+    p.add_argument("--t-end", type=float, required=True, help="heating temperature in K")
+    p.add_argument("--branch", choices=["swollen", "shrunken"], default=None,
+                   help="start branch at T_start (default swollen)")
+    size = p.add_mutually_exclusive_group()
+    size.add_argument("--dry-radius-um", type=float, default=None, help="dry bead radius in um")
+    size.add_argument("--swollen-radius-um", type=float, default=None,
+                      help="bead radius in um, swollen at T_start")
+    c = p.add_argument_group("timescale constants (eq. timescale)")
+    c.add_argument("--viscosity", type=_viscosity, default=1.0e-3,
+                   help="fluid viscosity in Pa s, or 'water' for water at T_end (default 1e-3)")
+    c.add_argument("--polymer-volume-m3", type=float, default=3.0e-25,
+                   help="Omega_p, volume of a polymer unit in m^3 (default 3e-25)")
+    c.add_argument("--k0-m2", type=float, default=8.0e-20,
+                   help="permeability scale k0 in m^2 (default 8e-20)")
+    s = p.add_argument_group("full solver (validation truth)")
+    s.add_argument("--grid", choices=["eulerian", "lagrangian"], default="eulerian",
+                   help="truth grid (default eulerian, the paper's)")
+    s.add_argument("--n", type=int, default=400, help="grid cells (default 400)")
+    p.add_argument("--cache", default=None,
+                   help="validation cache file (default $THERMOGEL_CACHE or "
+                        "~/.cache/thermogel/validations.sqlite)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def planning_kwargs(args: argparse.Namespace) -> dict[str, Any]:
+    """Request keyword arguments shared by ``dose`` and ``schedule``."""
+    from dosing import PhysicalConstants, SolverSettings
+
+    return {"gel": gel_from_args(args), "t_start": args.t_start, "t_end": args.t_end,
+            "branch": args.branch, "dry_radius_um": args.dry_radius_um,
+            "swollen_radius_um": args.swollen_radius_um,
+            "constants": PhysicalConstants(args.viscosity, args.polymer_volume_m3, args.k0_m2),
+            "settings": SolverSettings(grid=args.grid, n=args.n)}
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the sub-command."""
+    p = sub.add_parser("dose", help="actuation time to release a dose")
+    add_planning_options(p)
+    d = p.add_mutually_exclusive_group(required=True)
+    d.add_argument("--fraction", type=float, help="dose as a fraction of the stored fluid")
+    d.add_argument("--volume-ul", type=float, help="dose volume in uL (needs a bead size)")
+    d.add_argument("--drug-mass-ug", type=float,
+                   help="drug mass in ug (needs --concentration-ug-per-ul and a bead size)")
+    p.add_argument("--concentration-ug-per-ul", type=float, default=None,
+                   help="drug concentration of the loaded fluid in ug/uL")
+    p.add_argument("--validate", action="store_true",
+                   help="also run the full solver on both grids (blocking, cached)")
+    p.set_defaults(func=run)
+
+
+def _wrap(text: str) -> str:
+    return textwrap.fill(text, width=96, initial_indent="  ", subsequent_indent="  ")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Print the answer."""
+    from dosing import DoseRequest, plan_dose
+
+    req = DoseRequest(dose_fraction=args.fraction, dose_volume_ul=args.volume_ul,
+                      drug_mass_ug=args.drug_mass_ug,
+                      concentration_ug_per_ul=args.concentration_ug_per_ul,
+                      **planning_kwargs(args))
+    ans = plan_dose(req, validate=args.validate, cache_path=args.cache)
+    if args.json:
+        print_json(ans.to_dict())
+        return 0
+    print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K: release "
+          f"{ans.dose_fraction:.1%} of the stored fluid (radius {ans.start_radius:.4g} -> "
+          f"{ans.final_radius:.4g} dry radii)")
+    secs = "" if ans.seconds is None else f" = {ans.seconds:.4g} s"
+    print(f"  {ans.model} model: heat for t = {ans.time:.4g} (dimensionless){secs}")
+    if ans.expelled_volume_ul is not None:
+        print(f"  expels {ans.expelled_volume_ul:.4g} uL of {ans.stored_volume_ul:.4g} uL "
+              f"stored; final radius {ans.final_radius_um:.4g} um")
+    print(_wrap(ans.timescale_formula))
+    print(f"  error estimate {ans.error_estimate:.1%}:")
+    print(_wrap(ans.error_explanation))
+    if ans.validation:
+        grids = ", ".join(f"{g} {e['time']:.4g}" if "time" in e else f"{g} failed"
+                          for g, e in ans.validation["grids"].items())
+        print(f"  full solver: {grids}")
+    return 0

@@ -1,0 +1,77 @@
+"""``thermogel serve``: the HTTP planner service under uvicorn, on the embedded SQLite cache.
+
+Options reach the app (in every worker process) through environment variables read by
+:func:`api.http.app_from_env`; fastapi and uvicorn are imported only when this runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the sub-command."""
+    p = sub.add_parser("serve", help="run the HTTP planner service (FastAPI under uvicorn)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="interface to bind (default 127.0.0.1; 0.0.0.0 in a container)")
+    p.add_argument("--port", type=int, default=8000, help="TCP port (default 8000)")
+    p.add_argument("--cache", default=None, metavar="PATH",
+                   help="SQLite file of the validation cache (default: the planner's, "
+                        "$THERMOGEL_CACHE if set)")
+    p.add_argument("--workers", type=int, default=1,
+                   help="uvicorn worker processes, each with its own planner on the same "
+                        "cache file (default 1)")
+    p.add_argument("--max-pending", type=int, default=None,
+                   help="validations queued or running before 429 (default: the planner's)")
+    p.add_argument("--log-level", default="info",
+                   choices=["critical", "error", "warning", "info", "debug"])
+    p.add_argument("--no-warmup", action="store_true",
+                   help="skip warming the numba kernels at start-up")
+    p.add_argument("--warmup-only", action="store_true",
+                   help="warm (and cache on disk) every numba kernel, print the report, exit "
+                        "(the Dockerfile runs it at build time)")
+    p.set_defaults(func=run)
+
+
+def configure_env(args: argparse.Namespace) -> None:
+    """Pass the options to the app factory through the environment."""
+    if args.cache:
+        os.environ["THERMOGEL_CACHE"] = os.path.abspath(args.cache)
+    if args.max_pending is not None:
+        os.environ["THERMOGEL_MAX_PENDING"] = str(args.max_pending)
+    os.environ["THERMOGEL_WARMUP"] = "0" if args.no_warmup else "1"
+
+
+def warm_only() -> int:
+    """Warm every kernel (a throw-away planner on a temporary cache for the front-model
+    dose), then print the report."""
+    import tempfile
+
+    from api.warmup import warm_up
+    from dosing import Planner
+
+    from .common import print_json
+
+    with tempfile.TemporaryDirectory() as tmp, Planner(cache_path=f"{tmp}/c.sqlite") as p:
+        report = warm_up(p)
+    print_json(report.to_dict())
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    """Start uvicorn (blocks until stopped)."""
+    from solver.errors import ParameterError
+
+    if not (0 <= args.port <= 65535):
+        raise ParameterError("--port", args.port, "0-65535")
+    if args.workers < 1:
+        raise ParameterError("--workers", args.workers, "an integer >= 1")
+    if args.warmup_only:
+        return warm_only()
+    configure_env(args)
+    import uvicorn
+
+    uvicorn.run("api.http:app_from_env", factory=True, host=args.host, port=args.port,
+                workers=args.workers, log_level=args.log_level, timeout_graceful_shutdown=10)
+    return 0

@@ -1,0 +1,458 @@
+"""Pydantic v2 models of the HTTP service: every field states its unit and its bounds.
+
+Temperatures are in kelvin (liquid water, 273.15-373.15 K); stretches, porosities, radii
+and times without a unit suffix are dimensionless as in the paper (lengths by the dry
+radius, time by tau of eq. timescale).  Fields ending in ``_um``, ``_ul``, ``_ug`` or
+``seconds`` carry SI-derived units.  These models are shared by the server
+(:mod:`api.http`) and the client (:mod:`api.client`); they import no physics.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    field_validator,
+    model_validator,
+)
+
+T_MIN = 273.15  # K, same bounds as solver.gel.check_temperature
+T_MAX = 373.15
+
+PresetName = Literal["ANB", "HHT"]
+Branch = Literal["swollen", "shrunken"]
+
+
+def temperature_field(what: str, example: float) -> Any:
+    """A temperature field in kelvin bounded to liquid water."""
+    return Field(ge=T_MIN, le=T_MAX, examples=[example],
+                 description=f"{what} in K; liquid water, {T_MIN}-{T_MAX} K")
+
+
+class _Model(BaseModel):
+    """Base: unknown fields are rejected (a typo is a 422, not a silent default)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+
+class _Out(BaseModel):
+    """Base of answers: tolerant of fields a newer server adds."""
+
+    model_config = ConfigDict(extra="allow")
+
+
+# ----------------------------------------------------------------------------- gels
+
+class GelParameters(_Model):
+    """A custom gel: a preset with any of its parameters replaced (eq. FloryParam)."""
+
+    base: PresetName = Field("ANB", description="preset whose parameters fill any left unset")
+    omega: float | None = Field(None, gt=0.0, le=1.0e4, examples=[100.0],
+                                description="Omega = Omega_p / Omega_f, dimensionless, 0 < Omega "
+                                            "<= 1e4 (default: the preset's)")
+    a0: float | None = Field(None, ge=-1.0e3, le=1.0e3, examples=[-12.947],
+                             description="A0 in chi0 = A0 + B0 T, dimensionless, |A0| <= 1000")
+    b0: float | None = Field(None, ge=-10.0, le=10.0, examples=[0.04496],
+                             description="B0 in chi0 = A0 + B0 T, per K, |B0| <= 10")
+    a1: float | None = Field(None, ge=-1.0e3, le=1.0e3, examples=[17.92],
+                             description="A1 in chi1 = A1 + B1 T, dimensionless, |A1| <= 1000")
+    b1: float | None = Field(None, ge=-10.0, le=10.0, examples=[-0.0569],
+                             description="B1 in chi1 = A1 + B1 T, per K, |B1| <= 10")
+    permeability: Literal["constant", "power"] | None = Field(
+        None, description="permeability law: 'constant' (k = 1) or 'power' "
+                          "(k = phi/(1-phi)^beta, eq. Permeability); default: the preset's")
+    beta: float | None = Field(None, gt=0.0, lt=10.0, examples=[1.0],
+                               description="exponent of the power law, 0 < beta < 10; "
+                                           "required when permeability is 'power'")
+
+    @model_validator(mode="after")
+    def _beta_with_power(self) -> GelParameters:
+        if self.permeability == "power" and self.beta is None:
+            raise ValueError("beta is required when permeability is 'power' (0 < beta < 10)")
+        if self.beta is not None and self.permeability != "power":
+            raise ValueError("beta applies only with permeability 'power'")
+        return self
+
+
+def _gel_kind(value: Any) -> str:
+    """Tag of a gel spec: a preset name (a string) or custom parameters (an object)."""
+    return "preset" if isinstance(value, str) else "custom"
+
+
+GelSpec = Annotated[
+    Annotated[PresetName, Tag("preset")] | Annotated[GelParameters, Tag("custom")],
+    Discriminator(_gel_kind),
+    Field(description="a preset name ('ANB' or 'HHT') or custom parameters", examples=["ANB"]),
+]
+
+
+class PermeabilityOut(_Out):
+    """The permeability law of a gel."""
+
+    law: Literal["constant", "power"] = Field(description="'constant' (k = 1) or 'power'")
+    beta: float = Field(description="power-law exponent, dimensionless (0 for 'constant')")
+
+
+class GelOut(_Out):
+    """A gel's parameters (eq. FloryParam)."""
+
+    name: str = Field(description="preset name, or 'custom'")
+    omega: float = Field(description="Omega = Omega_p / Omega_f, dimensionless, > 0")
+    a0: float = Field(description="A0 in chi0 = A0 + B0 T, dimensionless")
+    b0: float = Field(description="B0 in chi0 = A0 + B0 T, per K")
+    a1: float = Field(description="A1 in chi1 = A1 + B1 T, dimensionless")
+    b1: float = Field(description="B1 in chi1 = A1 + B1 T, per K")
+    permeability: PermeabilityOut = Field(description="permeability law (eq. Permeability)")
+
+
+class FoldOut(_Out):
+    """A fold (volume-phase transition) of the equilibrium curve."""
+
+    temperature: float = Field(description="fold temperature in K, 273.15-373.15")
+    stretch: float = Field(description="isotropic stretch lambda at the fold, dimensionless, > 1")
+    kind: Literal["shrink", "swell"] = Field(
+        description="'shrink': heating past it loses the swollen branch; 'swell': cooling past "
+                    "it loses the shrunken branch")
+
+
+class GelPreset(_Out):
+    """A preset gel with its fold temperatures."""
+
+    gel: GelOut
+    folds: list[FoldOut] = Field(description="folds in 273.15-373.15 K, ascending in T")
+
+
+class GelsResponse(_Out):
+    """Every preset gel."""
+
+    gels: list[GelPreset] = Field(description="the presets (ANB, HHT)")
+
+
+# ----------------------------------------------------------------------------- physics
+
+class EquilibriumRequest(_Model):
+    """Every free-swelling equilibrium of a gel at one temperature (eq. EqlEqn)."""
+
+    gel: GelSpec = "ANB"
+    temperature: float = temperature_field("temperature", 305.0)
+
+    model_config = ConfigDict(
+        extra="forbid", json_schema_extra={"examples": [{"gel": "ANB", "temperature": 305.0}]})
+
+
+class EquilibriumOut(_Out):
+    """One free-swelling equilibrium."""
+
+    temperature: float = Field(description="temperature in K")
+    stretch: float = Field(description="isotropic stretch lambda = a / a_dry, dimensionless, > 1")
+    porosity: float = Field(description="porosity phi = 1 - lambda^-3, dimensionless, 0-1")
+    stable: bool = Field(description="true when linearly stable")
+
+
+class EquilibriumResponse(_Out):
+    """Equilibria at T (smallest stretch first) and the gel's folds."""
+
+    gel: GelOut
+    temperature: float = Field(description="temperature in K")
+    equilibria: list[EquilibriumOut] = Field(
+        description="every equilibrium (stable and unstable), smallest stretch first")
+    folds: list[FoldOut] = Field(description="folds in 273.15-373.15 K, ascending in T")
+
+
+class ClassifyRequest(_Model):
+    """What an instant temperature jump T_start -> T_end does to a uniform bead."""
+
+    gel: GelSpec = "ANB"
+    t_start: float = temperature_field("start temperature", 302.0)
+    t_end: float = temperature_field("end temperature", 308.0)
+    branch: Branch | None = Field(
+        None, description="start branch: 'swollen' or 'shrunken' (default: swollen when "
+                          "heating, shrunken when cooling)")
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={
+        "examples": [{"gel": "ANB", "t_start": 302.0, "t_end": 308.0}]})
+
+
+class ClassifyResponse(_Out):
+    """The jump's class (sec. Comparison of results)."""
+
+    t_start: float = Field(description="start temperature in K")
+    t_end: float = Field(description="end temperature in K")
+    branch: Branch = Field(description="start branch")
+    start_stretch: float = Field(description="start stretch, dimensionless, > 1")
+    final_stretch: float = Field(description="final equilibrium stretch, dimensionless, > 1")
+    direction: Literal["swell", "shrink", "none"] = Field(description="what the bead does")
+    behaviour: Literal["smooth", "front", "delayed_front", "spinodal"] = Field(
+        description="'front': a sharp front forms at once; 'delayed_front': after a delay; "
+                    "'smooth': no front; 'spinodal': spinodal decomposition")
+    reason: str = Field(description="one sentence on why")
+
+
+# ----------------------------------------------------------------------------- dosing
+
+class ConstantsIn(_Model):
+    """Constants of the timescale tau = eta Omega_p R^2 / (k0 k_B T_end) (eq. timescale, R the
+    dry radius); unset fields keep the paper's values."""
+
+    viscosity_pa_s: float | Literal["water"] | None = Field(
+        None, examples=[0.001, "water"],
+        description="fluid viscosity eta in Pa s, 0 < eta <= 10, or 'water' for the viscosity "
+                    "of water at T_end (default 1e-3 Pa s)")
+    polymer_volume_m3: float | None = Field(
+        None, gt=0.0, le=1.0e-20, examples=[3.0e-25],
+        description="polymer molecular volume Omega_p in m^3, 0 < Omega_p <= 1e-20 "
+                    "(default 3e-25 m^3)")
+    permeability_m2: float | None = Field(
+        None, gt=0.0, le=1.0e-10, examples=[8.0e-20],
+        description="permeability scale k0 in m^2, 0 < k0 <= 1e-10 (default 8e-20 m^2; the "
+                    "paper prints m^3)")
+
+    @field_validator("viscosity_pa_s")
+    @classmethod
+    def _viscosity_range(cls, v: float | str | None) -> float | str | None:
+        if isinstance(v, float) and not (0.0 < v <= 10.0):
+            raise ValueError("viscosity_pa_s must satisfy 0 < eta <= 10 Pa s, or be 'water'")
+        return v
+
+
+class DoseTimeRequest(_Model):
+    """How long to hold a bead at T_end to release a dose.
+
+    Give exactly one dose (``dose_fraction``, ``dose_volume_ul``, or ``drug_mass_ug`` with
+    ``concentration_ug_per_ul``) and at most one bead size (``dry_radius_um`` or
+    ``swollen_radius_um``; none gives dimensionless answers only).  The stored fluid is the
+    pore volume of the swollen bead, (4 pi / 3)(a0^3 - 1) dry volumes.
+    """
+
+    gel: GelSpec = "ANB"
+    t_start: float = temperature_field("start (loading) temperature", 302.0)
+    t_end: float = temperature_field("end (actuation) temperature", 308.0)
+    dose_fraction: float | None = Field(
+        None, gt=0.0, le=1.0, examples=[0.8],
+        description="dose as a fraction of the stored fluid, dimensionless, 0 < f <= 1 "
+                    "(reachable doses stop at the final equilibrium's volume)")
+    dose_volume_ul: float | None = Field(
+        None, gt=0.0, le=1.0e6, examples=[0.05],
+        description="dose as a fluid volume in microlitres, 0 < V <= 1e6 (needs a bead size)")
+    drug_mass_ug: float | None = Field(
+        None, gt=0.0, le=1.0e9, examples=[0.1],
+        description="dose as a drug mass in micrograms, 0 < m <= 1e9 (needs a bead size and "
+                    "concentration_ug_per_ul)")
+    concentration_ug_per_ul: float | None = Field(
+        None, gt=0.0, le=1.0e6, examples=[2.0],
+        description="drug concentration of the loaded fluid in ug/uL, 0 < c <= 1e6")
+    dry_radius_um: float | None = Field(
+        None, gt=0.0, le=1.0e5, examples=[50.0],
+        description="dry bead radius in micrometres, 0 < r <= 1e5")
+    swollen_radius_um: float | None = Field(
+        None, gt=0.0, le=1.0e6, examples=[114.6],
+        description="bead radius swollen at T_start in micrometres, 0 < r <= 1e6")
+    branch: Branch | None = Field(
+        None, description="start branch at T_start (default: swollen)")
+    constants: ConstantsIn | None = Field(
+        None, description="timescale constants (default: the paper's values)")
+    validate_full: bool = Field(
+        False, alias="validate",
+        description="also queue a full-solver validation of this dose (poll "
+                    "/v1/validations/{id})")
+
+    model_config = ConfigDict(extra="forbid", populate_by_name=True, json_schema_extra={
+        "examples": [{"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.8,
+                      "dry_radius_um": 50.0}]})
+
+
+class GridCheck(_Out):
+    """The full solver's answer on one grid."""
+
+    n: int | None = Field(None, description="grid points N")
+    scenario_key: str | None = Field(None, description="cache key of this run")
+    time: float | None = Field(None, description="full solver's actuation time, dimensionless")
+    wall_seconds: float | None = Field(None, description="wall time of the run, s")
+    front_time_error: float | None = Field(
+        None, description="front model's relative time error, (t_front - t_full) / t_full")
+    front_volume_error: float | None = Field(
+        None, description="relative error of the volume the full solver expels by the front "
+                          "model's time, (V_full(t_front) - V_dose) / V_dose")
+    error: str | None = Field(None, description="why this grid's run failed, if it did")
+
+
+class ValidationReport(_Out):
+    """The full solver's time for the same dose (truth grid first) and the front model's
+    errors in time and in volume."""
+
+    time: float | None = Field(None, description="full solver's actuation time on the truth "
+                                                 "grid, dimensionless (units of tau)")
+    truth_grid: str | None = Field(None, description="grid taken as the truth ('eulerian')")
+    settings: dict[str, Any] | None = Field(None, description="full-solver settings (grid, N, "
+                                                              "integrator, rtol)")
+    grids: dict[str, GridCheck] = Field(default_factory=dict,
+                                        description="the answer on each grid")
+    grid_spread: float | None = Field(
+        None, description="(max - min) / truth of the grids' times: the full model's own "
+                          "uncertainty where a sharp front forms")
+    front_time: float | None = Field(None, description="front model's time, dimensionless "
+                                                       "(null where it does not apply)")
+    front_time_error: float | None = Field(
+        None, description="front model's relative time error against the truth grid")
+    front_volume_error: float | None = Field(
+        None, description="front model's relative volume error against the truth grid")
+
+
+class DoseTimeResponse(_Out):
+    """The actuation time for a dose (``status`` 'answered'), or a validation id to poll
+    (``status`` 'pending', HTTP 202) when the scenario needs a full-solver run not yet
+    cached; once that validation is done the same request is answered at once."""
+
+    status: Literal["answered", "pending"] = Field(
+        description="'answered': the fields below hold the answer; 'pending': the scenario "
+                    "needs the full solver, poll validation_url, then ask again")
+    model: Literal["front", "full"] | None = Field(
+        None, description="'front' (reduced front model, milliseconds) or 'full' (PDE solver)")
+    behaviour: str | None = Field(
+        None, description="the jump's class: 'front', 'delayed_front', 'smooth', 'spinodal'")
+    time: float | None = Field(None, description="actuation time, dimensionless (units of tau)")
+    seconds: float | None = Field(None, description="actuation time in s (with a bead size)")
+    timescale_seconds: float | None = Field(None, description="tau in s (eq. timescale)")
+    timescale_formula: str | None = Field(None, description="how tau was computed")
+    start_radius: float | None = Field(None, description="radius at T_start, dry radii")
+    final_radius: float | None = Field(None, description="radius after the dose, dry radii")
+    final_radius_um: float | None = Field(None, description="radius after the dose in um")
+    expelled_volume: float | None = Field(
+        None, description="expelled fluid volume in dry-radius^3 units")
+    expelled_volume_ul: float | None = Field(None, description="expelled volume in uL")
+    stored_volume: float | None = Field(
+        None, description="stored fluid (4 pi/3)(a0^3 - 1) in dry-radius^3 units")
+    stored_volume_ul: float | None = Field(None, description="stored fluid in uL")
+    dose_fraction: float | None = Field(None, description="dose / stored fluid, 0-1")
+    error_estimate: float | None = Field(
+        None, description="estimated relative error of the time, dimensionless")
+    error_explanation: str | None = Field(None, description="the error estimate in words")
+    validation: ValidationReport | None = Field(
+        None, description="the full solver's verdict when already known")
+    scenario_key: str | None = Field(None, description="key of the dimensionless scenario")
+    note: str | None = Field(None, description="caveats, in words")
+    validation_id: str | None = Field(None, description="id to poll at /v1/validations/{id}")
+    validation_url: str | None = Field(None, description="path of the validation to poll")
+
+
+class ValidationResponse(_Out):
+    """A full-solver job: a dose validation or a schedule check.  When done, ``result`` is a
+    :class:`ValidationReport` (dose) or a :class:`ScheduleResponse` (schedule)."""
+
+    id: str = Field(description="validation id")
+    kind: Literal["dose", "schedule"] = Field("dose", description="what was checked")
+    status: Literal["pending", "running", "done", "failed"] = Field(description="its state")
+    result: dict[str, Any] | None = Field(
+        None, description="when done: the full solver's time for the dose on each grid and "
+                          "the front model's errors (dose), or the schedule (schedule)")
+    error: str | None = Field(None, description="when failed: why")
+
+
+Fraction = Annotated[float, Field(gt=0.0, le=1.0)]
+Rest = Annotated[float, Field(ge=0.0, le=1.0e3)]
+RestSeconds = Annotated[float, Field(ge=0.0, le=1.0e7)]
+
+
+class ScheduleRequest(_Model):
+    """Several doses released one after another, resting at T_start between heatings.
+
+    Answered at once under the hold assumption (the paper's reading: one continuous heating,
+    doses read off cumulatively).  ``check_protocol`` simulates the real heat/rest protocol
+    with the full solver and ``correct`` shoots for actuation times meeting every dose
+    within ``tolerance``: both run as a job (HTTP 202, poll /v1/validations/{id}).
+    """
+
+    gel: GelSpec = "ANB"
+    t_start: float = temperature_field("start (rest) temperature", 302.0)
+    t_end: float = temperature_field("end (actuation) temperature", 308.0)
+    doses: list[Fraction] = Field(
+        min_length=1, max_length=20, examples=[[0.3, 0.3, 0.3]],
+        description="1-20 doses, each a fraction of the stored fluid (0 < f <= 1); their sum "
+                    "must stay below what the gel can expel at T_end")
+    rests: list[Rest] | None = Field(
+        None, max_length=19, examples=[[0.5, 0.5]],
+        description="rests at T_start between consecutive doses (one fewer than doses), "
+                    "dimensionless (units of tau), 0-1000 each")
+    rests_seconds: list[RestSeconds] | None = Field(
+        None, max_length=19, description="the rests in seconds instead (needs a bead size), "
+                                         "0-1e7 s each")
+    dry_radius_um: float | None = Field(
+        None, gt=0.0, le=1.0e5, examples=[50.0],
+        description="dry bead radius in micrometres, 0 < r <= 1e5")
+    swollen_radius_um: float | None = Field(
+        None, gt=0.0, le=1.0e6, description="bead radius swollen at T_start in micrometres, "
+                                            "0 < r <= 1e6")
+    branch: Branch | None = Field(None, description="start branch at T_start (default swollen)")
+    constants: ConstantsIn | None = Field(None, description="timescale constants")
+    check_protocol: bool = Field(
+        False, description="simulate the heat/rest protocol with the full solver (a job)")
+    correct: bool = Field(
+        False, description="shoot on the full solver for times meeting every dose (a job)")
+    tolerance: float = Field(0.01, gt=0.0, le=0.2,
+                             description="relative tolerance of the corrected doses, 0-0.2")
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
+        {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dry_radius_um": 50.0,
+         "doses": [0.3, 0.3, 0.3], "rests": [0.5, 0.5]}]})
+
+
+class ScheduleResponse(_Out):
+    """A schedule's actuation times under each reading, with the delivered volumes."""
+
+    status: Literal["answered", "pending"] = Field(
+        "answered", description="'pending': a job was queued, poll validation_url")
+    model: str | None = Field(None, description="which model(s) gave the hold times")
+    doses: list[float] | None = Field(None, description="the doses, fractions of stored fluid")
+    rests: list[float] | None = Field(None, description="the rests, dimensionless")
+    hold: list[dict[str, Any]] | None = Field(
+        None, description="per dose under the hold assumption: start, end and actuation_time "
+                          "(dimensionless), actuation_seconds, error_estimate")
+    protocol_check: dict[str, Any] | None = Field(
+        None, description="the hold times simulated as heat/rest steps: delivered_fractions, "
+                          "relative_errors, rest_uptake_fractions")
+    corrected: dict[str, Any] | None = Field(
+        None, description="actuation times meeting every dose within the tolerance")
+    start_radius: float | None = Field(None, description="radius at T_start, dry radii")
+    stored_volume: float | None = Field(None, description="stored fluid, dry-radius^3 units")
+    stored_volume_ul: float | None = Field(None, description="stored fluid in uL")
+    timescale_seconds: float | None = Field(None, description="tau in s")
+    timescale_formula: str | None = Field(None, description="how tau was computed")
+    scenario_key: str | None = Field(None, description="key of the dimensionless scenario")
+    note: str | None = Field(None, description="caveats, in words")
+    validation_id: str | None = Field(None, description="id of the queued job")
+    validation_url: str | None = Field(None, description="path of the job to poll")
+
+
+# ----------------------------------------------------------------------------- service
+
+class HealthResponse(_Out):
+    """Liveness and readiness of the service."""
+
+    status: Literal["ok", "starting"] = Field(description="'ok' once the kernels are warm")
+    version: str = Field(description="thermogel version")
+    kernels_warm: int = Field(description="numba kernels compiled or loaded from the cache")
+    kernels_cold: list[str] = Field(
+        description="kernels never compiled in this process: unused ones, and helpers called "
+                    "only from other kernels (compiled into their callers)")
+    warmup_seconds: float | None = Field(None, description="time the warm-up took, s")
+    planner: dict[str, Any] = Field(description="planner state: cache path, queue")
+
+
+class ErrorItem(_Out):
+    """One problem with a request; ``loc`` names the field."""
+
+    loc: list[str | int] = Field(description="where: ['body', field, ...] or ['path', name]")
+    msg: str = Field(description="what is wrong, with the valid range")
+    type: str = Field(description="kind of error")
+
+
+class ErrorResponse(_Out):
+    """An error answer (422, 404, 429)."""
+
+    detail: list[ErrorItem] | str = Field(
+        description="the problems (422: each names its field in loc), or a message")

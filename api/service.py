@@ -1,0 +1,246 @@
+"""The service layer under the HTTP routes: request models to planner calls, and back.
+
+Blocking, FastAPI-free functions (the routes run them in the threadpool): conversions from
+the API's pydantic models (:mod:`api.schemas`) to ``solver`` and ``dosing`` objects, the
+choice between answering a dose at once and queueing a full-solver validation, schedule
+jobs, and the state the routes share.  No physics here.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from functools import lru_cache
+from itertools import accumulate
+from typing import Any
+
+from dosing import (
+    DoseRequest,
+    JobRunner,
+    Planner,
+    QueueFullError,
+    ScheduleRequest,
+    UnknownValidationError,
+)
+from solver.equilibrium import equilibria, folds
+from solver.errors import NotApplicableError, ParameterError, SolverError
+from solver.gel import PRESETS, Gel, Permeability, preset
+from solver.phase import classify_jump
+
+from . import schemas as s
+from .warmup import WarmupReport, warm_up
+
+log = logging.getLogger("thermogel.service")
+
+SCHEDULE_QUEUE = 8  # schedule jobs queued or running before 429
+SCHEDULE_PREFIX = "schedule-"
+_GEL_FIELDS = ("omega", "a0", "b0", "a1", "b1")
+
+
+# ----------------------------------------------------------------------------- physics
+
+def to_gel(spec: str | s.GelParameters) -> Gel:
+    """The solver gel a request names: a preset, or a preset with parameters replaced."""
+    if isinstance(spec, str):
+        return preset(spec)
+    base = preset(spec.base)
+    custom = {n: getattr(spec, n) for n in _GEL_FIELDS if getattr(spec, n) is not None}
+    params = {n: custom.get(n, getattr(base, n)) for n in _GEL_FIELDS}
+    if spec.permeability == "power":
+        perm = Permeability("power", spec.beta)
+    elif spec.permeability == "constant":
+        perm = Permeability("constant")
+    else:
+        perm = base.permeability
+    same = not custom and perm == base.permeability
+    try:
+        return Gel(**params, permeability=perm, name=base.name if same else "custom")
+    except ParameterError as exc:
+        raise ParameterError(f"gel.{exc.field}", exc.value, exc.valid) from None
+
+
+def _folds(gel: Gel) -> list[dict[str, Any]]:
+    return [f.to_dict() for f in folds(gel)]
+
+
+@lru_cache(maxsize=1)
+def presets_answer() -> dict[str, Any]:
+    """Every preset with its parameters and folds (computed once)."""
+    return {"gels": [{"gel": g.to_dict(), "folds": _folds(g)} for g in PRESETS.values()]}
+
+
+def equilibrium_answer(req: s.EquilibriumRequest) -> dict[str, Any]:
+    """All equilibria at T and the folds (blocking)."""
+    gel = to_gel(req.gel)
+    return {"gel": gel.to_dict(), "temperature": req.temperature,
+            "equilibria": [e.to_dict() for e in equilibria(gel, req.temperature)],
+            "folds": _folds(gel)}
+
+
+def classify_answer(req: s.ClassifyRequest) -> dict[str, Any]:
+    """The jump's class (blocking)."""
+    return classify_jump(to_gel(req.gel), req.t_start, req.t_end, req.branch).to_dict()
+
+
+@contextmanager
+def solver_guard() -> Iterator[None]:
+    """Let input and solver errors through; turn any other failure inside the physics into a
+    SolverError (a 422 naming the failure, logged with its traceback) instead of a 500."""
+    try:
+        yield
+    except (ParameterError, NotApplicableError, SolverError, QueueFullError,
+            UnknownValidationError):
+        raise
+    except Exception as exc:
+        log.exception("solver failure on a request")
+        raise SolverError(f"internal failure ({type(exc).__name__}: {exc})",
+                          {"exception": type(exc).__name__}) from exc
+
+
+# ----------------------------------------------------------------------------- state
+
+@dataclass
+class ServiceState:
+    """What the routes share: the planner (owned or lent), the warm-up report."""
+
+    planner: Any = None
+    owns_planner: bool = False
+    warmup: WarmupReport | None = None
+    options: dict[str, Any] = field(default_factory=dict)
+    _schedules: JobRunner | None = None
+
+    @property
+    def schedules(self) -> JobRunner:
+        """Schedule jobs: one thread (their full-solver runs go to the planner's executor)."""
+        if self._schedules is None:
+            pool = ThreadPoolExecutor(1, thread_name_prefix="schedule")
+            self._schedules = JobRunner(pool, max_pending=SCHEDULE_QUEUE)
+        return self._schedules
+
+    def start(self, warm: bool) -> None:
+        """Create the planner if none was given, then warm the kernels (blocking)."""
+        if self.planner is None:
+            self.planner = Planner(**self.options)
+            self.owns_planner = True
+        if warm:
+            self.warmup = warm_up(self.planner)
+
+    def describe(self) -> dict[str, Any]:
+        """Cache path and queue state for /health (empty for a stand-in planner)."""
+        p = self.planner
+        if p is None or not hasattr(p, "jobs"):
+            return {}
+        return {"cache": str(p.cache.path), "cached_trajectories": len(p.cache),
+                "validations_unfinished": p.jobs.pending(), "max_pending": p.jobs.max_pending,
+                "schedule_jobs_unfinished": self.schedules.pending()}
+
+    def stop(self, wait: bool = False) -> None:
+        """Drop queued schedule jobs (``wait``: join the running one); close the planner if
+        this service created it."""
+        if self._schedules is not None:
+            self._schedules.executor.shutdown(wait=wait, cancel_futures=True)
+            self._schedules = None
+        if self.owns_planner and self.planner is not None:
+            self.planner.close()
+            self.planner = None
+
+
+# ----------------------------------------------------------------------------- dosing
+
+def _constants(c: s.ConstantsIn | None) -> dict[str, Any] | None:
+    return None if c is None else c.model_dump(exclude_none=True)
+
+
+def to_dose_request(body: s.DoseTimeRequest) -> DoseRequest:
+    """The planner's request (it checks the dose against the stored fluid: ParameterError)."""
+    return DoseRequest(
+        to_gel(body.gel), body.t_start, body.t_end, dose_fraction=body.dose_fraction,
+        dose_volume_ul=body.dose_volume_ul, drug_mass_ug=body.drug_mass_ug,
+        concentration_ug_per_ul=body.concentration_ug_per_ul,
+        dry_radius_um=body.dry_radius_um, swollen_radius_um=body.swollen_radius_um,
+        constants=_constants(body.constants), branch=body.branch)
+
+
+def to_schedule_request(body: s.ScheduleRequest) -> ScheduleRequest:
+    """The planner's schedule request."""
+    return ScheduleRequest(
+        to_gel(body.gel), body.t_start, body.t_end, doses=tuple(body.doses),
+        rests=body.rests if body.rests is not None or body.rests_seconds is not None
+        else [0.0] * (len(body.doses) - 1),
+        rests_seconds=body.rests_seconds, dry_radius_um=body.dry_radius_um,
+        swollen_radius_um=body.swollen_radius_um, constants=_constants(body.constants),
+        branch=body.branch, check_protocol=body.check_protocol, correct=body.correct,
+        tolerance=body.tolerance)
+
+
+def answerable_now(planner: Any, req: DoseRequest) -> bool:
+    """True when ``planner.dose(req)`` needs no new full-solver run: the front model gives
+    this dose, or every grid's trajectory covering it is already cached."""
+    from dosing.planner import choose_model, front_run
+    from dosing.units import radius_after_dose
+
+    radius = radius_after_dose(req.start_radius, req.fraction)
+    model, _ = choose_model(req.gel, req.t_start, req.t_end, req.branch)
+    if model == "front":
+        try:
+            front_run(req.gel, req.t_start, req.t_end, req.branch,
+                      planner.front_correction).time_to_radius(radius)
+            return True
+        except (ValueError, NotApplicableError, SolverError):
+            pass
+    return all(planner.cached(sc, radius) is not None for sc in planner.scenarios(req))
+
+
+def _poll(vid: str) -> dict[str, str]:
+    return {"validation_id": vid, "validation_url": f"/v1/validations/{vid}"}
+
+
+def dose_time(planner: Any, body: s.DoseTimeRequest) -> tuple[int, dict[str, Any]]:
+    """(HTTP status, answer): 200 from the front model or the cache, else 202 and an id."""
+    req = to_dose_request(body)
+    if not answerable_now(planner, req):
+        vid = planner.submit_validation(req)
+        return 202, {"status": "pending", **_poll(vid), "note": (
+            "This scenario needs the full solver (no front model applies and no run is cached "
+            "yet). Poll validation_url; once it is done, send the same request again: it is "
+            "then answered at once from the cache.")}
+    out = {"status": "answered", **planner.dose(req).to_dict()}
+    if body.validate_full:
+        out.update(_poll(planner.submit_validation(req)))
+    return 200, out
+
+
+def schedule(state: ServiceState, body: s.ScheduleRequest) -> tuple[int, dict[str, Any]]:
+    """200 with the hold schedule when nothing needs a new full-solver run, else 202 + id."""
+    req = to_schedule_request(body)
+    planner = state.planner
+    quick = not (req.check_protocol or req.correct) and all(
+        answerable_now(planner, req.dose_request(c)) for c in accumulate(req.doses))
+    if quick:
+        return 200, {"status": "answered", **planner.schedule(req).to_dict()}
+    key = hashlib.sha256(body.model_dump_json().encode()).hexdigest()[:24]
+    state.schedules.submit(key, planner.schedule, req)
+    return 202, {"status": "pending", **_poll(SCHEDULE_PREFIX + key), "note": (
+        "The schedule needs the full solver; poll validation_url for the result.")}
+
+
+def validation(state: ServiceState, vid: str) -> dict[str, Any]:
+    """A dose validation from the planner (persistent), or a schedule job (in memory)."""
+    if not vid.startswith(SCHEDULE_PREFIX):
+        return {"kind": "dose", **state.planner.validation(vid).to_dict()}
+    key = vid[len(SCHEDULE_PREFIX):]
+    status = state.schedules.state(key)
+    if status is None:
+        raise UnknownValidationError(vid)
+    out: dict[str, Any] = {"id": vid, "kind": "schedule", "status": status}
+    fut = state.schedules.get(key)
+    if status == "done":
+        out["result"] = fut.result().to_dict()
+    elif status == "failed":
+        exc = fut.exception()
+        out["error"] = f"{type(exc).__name__}: {exc}"
+    return out

@@ -1,0 +1,190 @@
+"""Interfacial energy (docs/interfacial.md): grid convergence at fixed ell, the limit ell -> 0,
+the smooth cases, and the sharp-interface front model.
+
+    .venv/bin/python benchmarks/interfacial_convergence.py                 # everything (~30 min)
+    .venv/bin/python benchmarks/interfacial_convergence.py --section grid  # one section
+    .venv/bin/python benchmarks/interfacial_convergence.py --quick         # coarse ladders
+
+Sections:
+  grid    80% dose time of ANB 302->308 K and HHT 304->308 K vs N at ell = 0.01, 0.005, 0.0025
+          on both grids, wall time, observed order, last change and the two grids' gap.
+  limit   the dose times 10%..90% at ell = 0.01 ... 0.00125 (Lagrangian, resolved), the observed
+          order in ell and the Richardson limit ell -> 0; the paper's model (ell = 0) on both
+          grids for comparison.
+  smooth  max relative change of a(t) by the term in the smooth cases, and its order in ell.
+  model   the paper's and the sharp-interface front models against the ell -> 0 limit.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import numpy as np
+
+from solver.equilibrium import equilibrium
+from solver.front import front_trajectory
+from solver.front.result import fraction_radius
+from solver.front.sharp import sharp_front_trajectory
+from solver.full import simulate
+from solver.gel import preset
+
+CASES = {"ANB": (302.0, 308.0), "HHT": (304.0, 308.0)}
+ELLS = (0.01, 0.005, 0.0025)
+LIMIT_ELLS = (0.01, 0.005, 0.0025, 0.00125)
+FRACTIONS = np.arange(1, 10) / 10.0
+# cells per ell on each grid: the Lagrangian grid resolves the interface with ~2/ell cells,
+# the Eulerian grid (uniform in r, the shrunken side compressed) needs about eight times more
+LADDER = {"lagrangian": (2, 4, 8), "eulerian": (8, 16, 32)}
+LIMIT_CELLS = 4  # Lagrangian cells per ell for the ell -> 0 runs (4 and 8 agree to 1e-4)
+RTOL = 1e-5
+UNTIL = {"ANB": 0.1, "HHT": 0.25}  # first try for the run length (doubled if too short)
+NUCLEATED = 0.6  # edge-cell porosity below which the front has nucleated
+
+
+def dose_times(gel: str, ell: float, grid: str, n: int,
+               fractions: np.ndarray = FRACTIONS) -> tuple[np.ndarray, float, int, float]:
+    """(times to expel each fraction, wall time, steps, nucleation time) of one regularized
+    run; the front nucleates at the edge when the outermost cell's porosity drops below
+    NUCLEATED (first output, every until/400)."""
+    t_start, t_end = CASES[gel]
+    a0 = equilibrium(preset(gel), t_start).stretch
+    targets = fraction_radius(a0, fractions)
+    until = UNTIL[gel] * (1.6 if fractions.max() > 0.8 else 1.0)
+    started = time.perf_counter()
+    while True:
+        res = simulate(gel, t_start, t_end, until=until, grid=grid, n=n,
+                       interfacial_length=ell, rtol=RTOL, every=until / 400)
+        if res.radius.min() <= targets.min() or until > 5.0:
+            break
+        until *= 2.0
+    times = np.array([_crossing(res, a) for a in targets])
+    below = np.nonzero(res.phi[:, -1] < NUCLEATED)[0]
+    t_nuc = float(res.t[below[0]]) if below.size else math.nan
+    return times, time.perf_counter() - started, int(res.diagnostics["steps"]), t_nuc
+
+
+def _crossing(res: object, a: float) -> float:
+    try:
+        return float(res.time_to_radius(a))  # type: ignore[attr-defined]
+    except ValueError:
+        return math.nan
+
+
+def observed_order(v: list[float], ratio: float = 2.0) -> float:
+    """Order p from three values at h, h/ratio, h/ratio^2: |v0 - v1| / |v1 - v2| = ratio^p."""
+    d1, d2 = abs(v[-3] - v[-2]), abs(v[-2] - v[-1])
+    return math.log(d1 / d2, ratio) if d1 > 0 and d2 > 0 else math.nan
+
+
+def richardson(v: list[float], p: float, ratio: float = 2.0) -> float:
+    """Limit h -> 0 of the last two values with order p."""
+    return v[-1] - (v[-2] - v[-1]) / (ratio**p - 1.0)
+
+
+def section_grid(gels: list[str], quick: bool) -> None:
+    print("== grid convergence of the 80% dose time at fixed ell (rtol 1e-5) ==")
+    print(f"{'gel':4} {'grid':10} {'ell':>7} {'N':>6} {'t80':>10} {'wall s':>7} {'steps':>6}")
+    finest: dict[tuple[str, str, float], float] = {}
+    for gel in gels:
+        for grid in ("lagrangian", "eulerian"):
+            for ell in ELLS[:1] if quick else ELLS:
+                values = []
+                for c in LADDER[grid][:2] if quick else LADDER[grid]:
+                    n = int(round(c / ell))
+                    t, wall, steps, _ = dose_times(gel, ell, grid, n, np.array([0.8]))
+                    values.append(float(t[0]))
+                    print(f"{gel:4} {grid:10} {ell:7.4f} {n:6d} {t[0]:10.6f} {wall:7.2f} "
+                          f"{steps:6d}", flush=True)
+                change = abs(values[-1] - values[-2]) / values[-1]
+                order = observed_order(values) if len(values) >= 3 else math.nan
+                print(f"     -> last refinement changes t80 by {100 * change:.3f}%, "
+                      f"observed order {order:.2f}")
+                finest[(gel, grid, ell)] = values[-1]
+        for ell in ELLS[:1] if quick else ELLS:
+            lag, eul = finest[(gel, "lagrangian", ell)], finest[(gel, "eulerian", ell)]
+            print(f"  {gel} ell={ell}: grids differ by {100 * abs(eul - lag) / lag:.3f}%")
+
+
+def section_limit(gels: list[str], quick: bool) -> dict[str, np.ndarray]:
+    print("== the limit ell -> 0 (Lagrangian, N = 4/ell): dose times for 10%..90%, and the "
+          "time the front nucleates at the edge ==")
+    limits = {}
+    ells = LIMIT_ELLS[:3] if quick else LIMIT_ELLS
+    for gel in gels:
+        rows = []
+        for ell in ells:
+            n = int(round(LIMIT_CELLS / ell))
+            t, wall, _, t_nuc = dose_times(gel, ell, "lagrangian", n)
+            rows.append(t)
+            print(f"{gel} ell={ell:<8} N={n:5d} " + " ".join(f"{x:.5f}" for x in t)
+                  + f"  nucleation {t_nuc:.5f}  ({wall:.1f} s)", flush=True)
+        arr = np.array(rows)
+        orders = np.array([observed_order(list(arr[:, j])) for j in range(arr.shape[1])])
+        lim = np.array([richardson(list(arr[:, j]), orders[j]) for j in range(arr.shape[1])])
+        print(f"{gel} order in ell   " + " ".join(f"{x:7.2f}" for x in orders))
+        print(f"{gel} ell -> 0       " + " ".join(f"{x:.5f}" for x in lim))
+        limits[gel] = lim
+        t_start, t_end = CASES[gel]
+        a80 = fraction_radius(equilibrium(preset(gel), t_start).stretch, 0.8)
+        for grid, n in (("eulerian", 400), ("lagrangian", 400)):
+            res = simulate(gel, t_start, t_end, until=0.4, grid=grid, n=n, rtol=RTOL)
+            print(f"{gel} ell = 0 (paper's model), {grid} N={n}: t80 = "
+                  f"{res.time_to_radius(a80):.5f}")
+    return limits
+
+
+def section_smooth(quick: bool) -> None:
+    print("== smooth cases: max relative change of a(t) by the term (N = 400) ==")
+    for gel, t_start, t_end, until in (("ANB", 308.0, 302.0, 1.0), ("HHT", 304.0, 307.6, 8.0)):
+        for grid in ("lagrangian", "eulerian"):
+            base = simulate(gel, t_start, t_end, until=until, grid=grid, n=400, rtol=1e-7,
+                            every=until / 50).radius
+            changes = []
+            for ell in (0.02, 0.01, 0.005):
+                a = simulate(gel, t_start, t_end, until=until, grid=grid, n=400, rtol=1e-7,
+                             every=until / 50, interfacial_length=ell).radius
+                changes.append(float(np.max(np.abs(a - base) / base)))
+            print(f"{gel} {t_start:g}->{t_end:g} {grid:10}: change at ell = 0.02, 0.01, 0.005: "
+                  + ", ".join(f"{c:.2e}" for c in changes)
+                  + f"; order {observed_order(changes):.2f} (O(ell^2) would be 2)")
+            if quick:
+                break
+
+
+def section_model(gels: list[str], limits: dict[str, np.ndarray]) -> None:
+    print("== front models against the regularized limit ell -> 0 (relative time error) ==")
+    for gel in gels:
+        t_start, t_end = CASES[gel]
+        paper = front_trajectory(preset(gel), t_start, t_end)
+        sharp = sharp_front_trajectory(preset(gel), t_start, t_end)
+        ref = limits[gel]
+        for name, model in (("paper", paper), ("sharp", sharp)):
+            t = np.array([model.time_to_fraction(f) for f in FRACTIONS])
+            err = (t - ref) / ref
+            print(f"{gel} {name:5} " + " ".join(f"{100 * e:6.1f}%" for e in err)
+                  + f"   max over 20-90%: {100 * np.max(np.abs(err[1:])):.1f}%")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--section", choices=["grid", "limit", "smooth", "model", "all"],
+                    default="all")
+    ap.add_argument("--gel", choices=["ANB", "HHT", "both"], default="both")
+    ap.add_argument("--quick", action="store_true", help="coarse ladders (minutes, not tens)")
+    args = ap.parse_args()
+    gels = ["ANB", "HHT"] if args.gel == "both" else [args.gel]
+    if args.section in ("grid", "all"):
+        section_grid(gels, args.quick)
+    limits: dict[str, np.ndarray] = {}
+    if args.section in ("limit", "model", "all"):
+        limits = section_limit(gels, args.quick)
+    if args.section in ("smooth", "all"):
+        section_smooth(args.quick)
+    if args.section in ("model", "all"):
+        section_model(gels, limits)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,315 @@
+"""Dose and schedule requests, validated on construction (ParameterError names the field).
+
+A dose is a fraction of the stored fluid, the pore volume of the swollen bead
+(4 pi/3)(a0^3 - 1) in dry-radius units, an absolute volume in microlitres, or a drug mass
+with the loaded concentration.  It must be smaller than what the gel can expel at T_end,
+(4 pi/3)(a0^3 - a_inf^3), reached only as t -> infinity.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from solver.equilibrium import equilibrium, nearest_stable
+from solver.errors import ParameterError, require_finite_positive
+from solver.gel import Gel, check_temperature, preset
+
+from .scenario import TRUTH, SolverSettings
+from .units import PhysicalConstants, stored_volume, ul_to_volume, volume_to_ul
+
+BRANCHES = ("swollen", "shrunken")
+
+
+def resolve_gel(value: Gel | str | dict[str, Any]) -> Gel:
+    """A Gel from a Gel, a preset name or a parameter dict (field ``gel``)."""
+    if isinstance(value, Gel):
+        return value
+    if isinstance(value, str):
+        return preset(value)
+    if isinstance(value, dict):
+        try:
+            return Gel.from_dict(value)
+        except TypeError as exc:
+            raise ParameterError("gel", value, "a preset name (ANB, HHT) or gel parameters "
+                                 "omega, a0, b0, a1, b1, permeability") from exc
+    raise ParameterError("gel", value, "a preset name (ANB, HHT), a Gel or a parameter dict")
+
+
+@dataclass(frozen=True)
+class Jump:
+    """The heating jump of a request: start and final equilibrium radii (dry-radius units)."""
+
+    t_start: float
+    t_end: float
+    branch: str
+    start_radius: float
+    final_radius: float
+
+    @property
+    def stored_volume(self) -> float:
+        """Dimensionless pore volume at the start, (4 pi/3)(a0^3 - 1)."""
+        return stored_volume(self.start_radius)
+
+    @property
+    def max_fraction(self) -> float:
+        """Largest fraction of the stored fluid the gel gives up at T_end (as t -> inf)."""
+        a0, af = self.start_radius, self.final_radius
+        return (a0**3 - af**3) / (a0**3 - 1.0)
+
+
+def resolve_jump(gel: Gel, t_start: float, t_end: float, branch: str | None) -> Jump:
+    """Validate temperatures and branch; refuse a jump on which the gel does not shrink."""
+    t0 = check_temperature(t_start, "t_start")
+    t1 = check_temperature(t_end, "t_end")
+    if branch is None:
+        branch = "swollen" if t1 >= t0 else "shrunken"
+    if branch not in BRANCHES:
+        raise ParameterError("branch", branch, "'swollen' or 'shrunken'")
+    try:
+        a0 = equilibrium(gel, t0, branch).stretch
+    except ParameterError as exc:
+        raise ParameterError("t_start", t_start, "a temperature with a stable equilibrium "
+                             "for this gel") from exc
+    af = nearest_stable(gel, t1, a0).stretch
+    if not af < a0 * (1.0 - 1e-9):
+        raise ParameterError(
+            "t_end", t_end, f"a temperature at which the gel shrinks from its {branch} state "
+            f"at t_start = {t0:g} K (usually above the volume-phase transition)",
+            f"on this jump the gel goes from radius {a0:.4g} to {af:.4g}: it "
+            f"{'swells, taking up fluid' if af > a0 else 'does not change'} and releases none")
+    return Jump(t0, t1, branch, a0, af)
+
+
+def resolve_dry_radius(dry_radius_um: float | None, swollen_radius_um: float | None,
+                       start_radius: float) -> float | None:
+    """The dry radius in um from either size (the swollen one at T_start), or None."""
+    if dry_radius_um is not None and swollen_radius_um is not None:
+        raise ParameterError("swollen_radius_um", swollen_radius_um,
+                             "None when dry_radius_um is given (give one bead size)")
+    if dry_radius_um is not None:
+        return require_finite_positive("dry_radius_um", dry_radius_um)
+    if swollen_radius_um is not None:
+        return require_finite_positive("swollen_radius_um", swollen_radius_um) / start_radius
+    return None
+
+
+def _constants(value: PhysicalConstants | dict[str, Any] | None) -> PhysicalConstants:
+    if value is None:
+        return PhysicalConstants()
+    if isinstance(value, dict):
+        return PhysicalConstants.from_dict(value)
+    if not isinstance(value, PhysicalConstants):
+        raise ParameterError("constants", value, "PhysicalConstants or a dict of its fields")
+    return value
+
+
+def _settings(value: SolverSettings | dict[str, Any] | None) -> SolverSettings:
+    if value is None:
+        return TRUTH
+    if isinstance(value, dict):
+        return SolverSettings(**value)
+    if not isinstance(value, SolverSettings):
+        raise ParameterError("settings", value, "SolverSettings or a dict of its fields")
+    return value
+
+
+def _fraction_range(jump: Jump) -> str:
+    return (f"0 < fraction < {jump.max_fraction:.4f} of the stored fluid (the gel keeps "
+            f"radius {jump.final_radius:.4g} at T_end, so it never gives up all of it)")
+
+
+def check_fraction(name: str, value: float, jump: Jump, limit: float | None = None) -> float:
+    """A dose fraction of the stored fluid, 0 < f < what the gel can expel at T_end."""
+    f = require_finite_positive(name, value)
+    top = jump.max_fraction if limit is None else limit
+    if f >= top:
+        why = ("a dose larger than the stored fluid" if f > 1.0 else
+               "more than the gel can expel at T_end")
+        raise ParameterError(name, value, _fraction_range(jump), why)
+    return f
+
+
+@dataclass(frozen=True)
+class DoseRequest:
+    """One dose: how long to heat a bead from T_start to T_end to release it.
+
+    Give exactly one of ``dose_fraction`` (of the stored fluid), ``dose_volume_ul``, or
+    ``drug_mass_ug`` with ``concentration_ug_per_ul``; volumes and seconds need a bead
+    size (``dry_radius_um`` or ``swollen_radius_um`` at T_start).
+    """
+
+    gel: Gel | str | dict[str, Any]
+    t_start: float
+    t_end: float
+    dose_fraction: float | None = None
+    dose_volume_ul: float | None = None
+    drug_mass_ug: float | None = None
+    concentration_ug_per_ul: float | None = None
+    dry_radius_um: float | None = None
+    swollen_radius_um: float | None = None
+    constants: PhysicalConstants | dict[str, Any] | None = None
+    branch: str | None = None
+    settings: SolverSettings | dict[str, Any] | None = None
+    jump: Jump = field(init=False, repr=False, compare=False)
+    bead_dry_radius_um: float | None = field(init=False, repr=False, compare=False)
+    fraction: float = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        gel = resolve_gel(self.gel)
+        object.__setattr__(self, "gel", gel)
+        object.__setattr__(self, "constants", _constants(self.constants))
+        object.__setattr__(self, "settings", _settings(self.settings))
+        jump = resolve_jump(gel, self.t_start, self.t_end, self.branch)
+        object.__setattr__(self, "jump", jump)
+        object.__setattr__(self, "t_start", jump.t_start)
+        object.__setattr__(self, "t_end", jump.t_end)
+        object.__setattr__(self, "branch", jump.branch)
+        dry = resolve_dry_radius(self.dry_radius_um, self.swollen_radius_um, jump.start_radius)
+        object.__setattr__(self, "bead_dry_radius_um", dry)
+        object.__setattr__(self, "fraction", self._resolve_fraction(jump, dry))
+
+    def _resolve_fraction(self, jump: Jump, dry: float | None) -> float:
+        given = [n for n in ("dose_fraction", "dose_volume_ul", "drug_mass_ug")
+                 if getattr(self, n) is not None]
+        if len(given) != 1:
+            raise ParameterError(given[1] if len(given) > 1 else "dose_fraction", None,
+                                 "exactly one of dose_fraction, dose_volume_ul, drug_mass_ug")
+        if self.concentration_ug_per_ul is not None and given[0] != "drug_mass_ug":
+            raise ParameterError("concentration_ug_per_ul", self.concentration_ug_per_ul,
+                                 "None unless drug_mass_ug is given")
+        if given[0] == "dose_fraction":
+            return check_fraction("dose_fraction", self.dose_fraction, jump)
+        name = given[0]
+        if name == "drug_mass_ug":
+            mass = require_finite_positive("drug_mass_ug", self.drug_mass_ug)
+            if self.concentration_ug_per_ul is None:
+                raise ParameterError("concentration_ug_per_ul", None,
+                                     "a finite number > 0 (ug/uL) to turn drug_mass_ug "
+                                     "into a volume")
+            conc = require_finite_positive("concentration_ug_per_ul",
+                                           self.concentration_ug_per_ul)
+            vol_ul = mass / conc
+        else:
+            vol_ul = require_finite_positive("dose_volume_ul", self.dose_volume_ul)
+        if dry is None:
+            raise ParameterError("dry_radius_um", None,
+                                 f"a finite number > 0 (um; or swollen_radius_um) to turn "
+                                 f"{name} into a fraction of the stored fluid")
+        stored_ul = volume_to_ul(jump.stored_volume, dry)
+        f = ul_to_volume(vol_ul, dry) / jump.stored_volume
+        if not f < jump.max_fraction:
+            unit = "ug" if name == "drug_mass_ug" else "uL"
+            scale = 1.0 if name == "dose_volume_ul" else self.concentration_ug_per_ul
+            top = jump.max_fraction * stored_ul * scale
+            raise ParameterError(
+                name, getattr(self, name), f"0 < {name} < {top:.4g} {unit}",
+                f"the bead stores {stored_ul:.4g} uL of fluid and can expel "
+                f"{jump.max_fraction:.1%} of it at T_end"
+                + ("; this dose is larger than the stored fluid" if f > 1.0 else ""))
+        return f
+
+    @property
+    def start_radius(self) -> float:
+        """a(0): the equilibrium stretch at T_start."""
+        return self.jump.start_radius
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form of the request as resolved (gel parameters, fraction, sizes)."""
+        return {"gel": self.gel.to_dict(), "t_start": self.t_start, "t_end": self.t_end,
+                "branch": self.branch, "dose_fraction": self.fraction,
+                "dry_radius_um": self.bead_dry_radius_um,
+                "constants": self.constants.to_dict(), "settings": self.settings.to_dict()}
+
+
+@dataclass(frozen=True)
+class ScheduleRequest:
+    """Several doses (fractions of the stored fluid) with rests at T_start between them.
+
+    ``rests`` are dimensionless (time / tau), or give ``rests_seconds`` with a bead size;
+    there is one rest between consecutive doses.  ``check_protocol`` simulates the real
+    heat/cool protocol with the full solver; ``correct`` then shoots for actuation times
+    that meet every dose within ``tolerance``.
+    """
+
+    gel: Gel | str | dict[str, Any]
+    t_start: float
+    t_end: float
+    doses: Sequence[float] = ()
+    rests: Sequence[float] | None = None
+    rests_seconds: Sequence[float] | None = None
+    dry_radius_um: float | None = None
+    swollen_radius_um: float | None = None
+    constants: PhysicalConstants | dict[str, Any] | None = None
+    branch: str | None = None
+    settings: SolverSettings | dict[str, Any] | None = None
+    check_protocol: bool = True
+    correct: bool = True
+    tolerance: float = 0.01
+    jump: Jump = field(init=False, repr=False, compare=False)
+    bead_dry_radius_um: float | None = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        gel = resolve_gel(self.gel)
+        object.__setattr__(self, "gel", gel)
+        object.__setattr__(self, "constants", _constants(self.constants))
+        object.__setattr__(self, "settings", _settings(self.settings))
+        jump = resolve_jump(gel, self.t_start, self.t_end, self.branch)
+        object.__setattr__(self, "jump", jump)
+        object.__setattr__(self, "t_start", jump.t_start)
+        object.__setattr__(self, "t_end", jump.t_end)
+        object.__setattr__(self, "branch", jump.branch)
+        dry = resolve_dry_radius(self.dry_radius_um, self.swollen_radius_um, jump.start_radius)
+        object.__setattr__(self, "bead_dry_radius_um", dry)
+        doses = tuple(self.doses or ())
+        if not doses:
+            raise ParameterError("doses", self.doses, "a non-empty list of fractions")
+        doses = tuple(check_fraction(f"doses[{i}]", d, jump) for i, d in enumerate(doses))
+        if sum(doses) >= jump.max_fraction:
+            raise ParameterError("doses", list(doses), f"fractions summing to less than "
+                                 f"{jump.max_fraction:.4f}", f"they sum to {sum(doses):.4g}: "
+                                 "more than the gel can expel at T_end")
+        object.__setattr__(self, "doses", doses)
+        object.__setattr__(self, "rests", self._resolve_rests(len(doses), dry))
+        tol = require_finite_positive("tolerance", self.tolerance)
+        if tol > 0.2:
+            raise ParameterError("tolerance", self.tolerance, "0 < tolerance <= 0.2")
+        object.__setattr__(self, "tolerance", tol)
+
+    def _resolve_rests(self, n_doses: int, dry: float | None) -> tuple[float, ...]:
+        if self.rests is not None and self.rests_seconds is not None:
+            raise ParameterError("rests_seconds", self.rests_seconds,
+                                 "None when rests is given (give one of them)")
+        name = "rests" if self.rests_seconds is None else "rests_seconds"
+        values = tuple(getattr(self, name) or ())
+        if len(values) != n_doses - 1:
+            raise ParameterError(name, getattr(self, name),
+                                 f"{n_doses - 1} values (one rest between consecutive doses)")
+        out = []
+        for i, v in enumerate(values):
+            x = float(v)
+            if not math.isfinite(x) or x < 0.0:
+                raise ParameterError(f"{name}[{i}]", v, "a finite number >= 0")
+            out.append(x)
+        if name == "rests_seconds":
+            if dry is None:
+                raise ParameterError("dry_radius_um", None, "a finite number > 0 (um; or "
+                                     "swollen_radius_um) to turn rests_seconds into tau units")
+            from .units import timescale
+
+            tau = timescale(dry, self.t_end, self.constants).seconds
+            out = [x / tau for x in out]
+        return tuple(out)
+
+    @property
+    def start_radius(self) -> float:
+        """a(0): the equilibrium stretch at T_start."""
+        return self.jump.start_radius
+
+    def dose_request(self, fraction: float) -> DoseRequest:
+        """The single-dose request for one cumulative fraction (same gel, jump and bead)."""
+        return DoseRequest(self.gel, self.t_start, self.t_end, dose_fraction=fraction,
+                           dry_radius_um=self.bead_dry_radius_um, constants=self.constants,
+                           branch=self.branch, settings=self.settings)

@@ -1,0 +1,319 @@
+"""The dimensionless scenario (the cache key) and the full-solver run that serves it.
+
+One dimensionless run serves every bead size and dose, so the key holds only the gel's
+dimensionless parameters and permeability law, the start temperature and branch, the
+temperature protocol (one jump, or heat/cool steps), the solver settings (grid, N,
+integrator, tolerance, interfacial length) and the code version.  ``run_scenario`` is a
+plain top-level function of plain data so any ``concurrent.futures`` executor (a process
+pool, a Dask client's executor) can run it.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import io
+import json
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from solver.errors import ParameterError, SolverError, require_finite_positive
+from solver.gel import Gel, check_temperature
+
+SCHEMA = 1
+GRIDS = ("eulerian", "lagrangian")
+INTEGRATORS = ("implicit", "explicit")
+N_RANGE = (20, 6400)
+ARRAYS = ("t", "radius", "front", "expelled_volume", "temperature", "step_t", "step_radius",
+          "step_rate")
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """Full-solver settings that define a validation (all part of the scenario key).
+
+    ``interfacial_length`` is the regularizing length of the well-posed model (issue 8);
+    0.0 is the paper's model.  Making the regularized solver the truth is a one-line
+    change of :data:`TRUTH`.
+    """
+
+    grid: str = "eulerian"
+    n: int = 400
+    integrator: str = "implicit"
+    rtol: float = 1.0e-6
+    interfacial_length: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.grid not in GRIDS:
+            raise ParameterError("settings.grid", self.grid, " or ".join(map(repr, GRIDS)))
+        if self.integrator not in INTEGRATORS:
+            raise ParameterError("settings.integrator", self.integrator,
+                                 " or ".join(map(repr, INTEGRATORS)))
+        if isinstance(self.n, bool) or not isinstance(self.n, (int, np.integer)) or not (
+                N_RANGE[0] <= int(self.n) <= N_RANGE[1]):
+            raise ParameterError("settings.n", self.n, f"an integer {N_RANGE[0]}-{N_RANGE[1]}")
+        object.__setattr__(self, "n", int(self.n))
+        rtol = require_finite_positive("settings.rtol", self.rtol)
+        if rtol > 1e-2:
+            raise ParameterError("settings.rtol", self.rtol, "0 < rtol <= 1e-2")
+        object.__setattr__(self, "rtol", rtol)
+        ell = float(self.interfacial_length)
+        if not math.isfinite(ell) or ell < 0.0:
+            raise ParameterError("settings.interfacial_length", self.interfacial_length,
+                                 "a finite number >= 0 (dry radii; 0 = the paper's model)")
+        object.__setattr__(self, "interfacial_length", ell)
+
+    def on_grid(self, grid: str) -> SolverSettings:
+        """The same settings on another grid."""
+        return SolverSettings(grid, self.n, self.integrator, self.rtol, self.interfacial_length)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form."""
+        return asdict(self)
+
+
+TRUTH = SolverSettings()  # the validation truth: the paper's model, Eulerian grid, N = 400
+
+
+@functools.cache
+def code_version() -> str:
+    """Digest of the solver sources a full-solver run depends on (not the front model)."""
+    import solver
+
+    root = Path(solver.__file__).parent
+    h = hashlib.sha256()
+    for p in sorted(root.rglob("*.py")):
+        if p.relative_to(root).parts[0] in ("front", "front.py"):  # the reduced model
+            continue
+        h.update(p.relative_to(root).as_posix().encode())
+        h.update(p.read_bytes())
+    return h.hexdigest()[:16]
+
+
+Step = tuple[float, float]
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A dimensionless full-solver run: one jump (``t_end``) or a protocol of steps.
+
+    ``protocol`` is a tuple of (duration, temperature) steps from the equilibrium at
+    ``t_start`` on ``branch``.  A jump has no fixed duration: its run is extended until
+    the radius asked for is reached, and the cache keeps one row per scenario.
+    """
+
+    gel: Gel
+    t_start: float
+    t_end: float | None = None
+    protocol: tuple[Step, ...] | None = None
+    branch: str = "swollen"
+    settings: SolverSettings = field(default_factory=SolverSettings)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "t_start", check_temperature(self.t_start, "t_start"))
+        if (self.t_end is None) == (self.protocol is None):
+            raise ParameterError("protocol", self.protocol, "exactly one of t_end or protocol")
+        if self.t_end is not None:
+            object.__setattr__(self, "t_end", check_temperature(self.t_end, "t_end"))
+        else:
+            steps = tuple((float(d), check_temperature(t, "protocol.temperature"))
+                          for d, t in self.protocol)
+            for d, _ in steps:
+                if not math.isfinite(d) or d < 0.0:
+                    raise ParameterError("protocol.duration", d, "a finite number >= 0")
+            object.__setattr__(self, "protocol", steps)
+
+    def key_dict(self) -> dict[str, Any]:
+        """Everything that defines the dimensionless answer (JSON-ready, canonical)."""
+        what: dict[str, Any] = ({"t_end": self.t_end} if self.t_end is not None
+                                else {"protocol": [list(s) for s in self.protocol]})
+        return {"schema": SCHEMA, "gel": list(self.gel.key()), "t_start": self.t_start, **what,
+                "branch": self.branch, "settings": self.settings.to_dict(),
+                "code": code_version()}
+
+    def key(self) -> str:
+        """The cache key: a digest of the canonical JSON of :meth:`key_dict`."""
+        text = json.dumps(self.key_dict(), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data for a worker process (and for humans)."""
+        return {"gel": self.gel.to_dict(), "t_start": self.t_start, "t_end": self.t_end,
+                "protocol": None if self.protocol is None else [list(s) for s in self.protocol],
+                "branch": self.branch, "settings": self.settings.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> Scenario:
+        """Inverse of :meth:`to_dict`."""
+        prot = d.get("protocol")
+        return cls(Gel.from_dict(d["gel"]), d["t_start"], d.get("t_end"),
+                   None if prot is None else tuple(tuple(s) for s in prot),
+                   d.get("branch", "swollen"), SolverSettings(**d.get("settings", {})))
+
+    def steps(self, horizon: float) -> list[Step]:
+        """The protocol to simulate (a jump becomes one step of length ``horizon``)."""
+        if self.protocol is not None:
+            return list(self.protocol)
+        return [(float(horizon), self.t_end)]
+
+
+@dataclass
+class Trajectory:
+    """A stored full-solver run: a(t), R_f(t), expelled volume and T(t) at the outputs,
+    plus a(t) and da/dt at every accepted step (``step_*``, empty if the run has none)
+    for accurate crossing times; and metadata."""
+
+    t: np.ndarray
+    radius: np.ndarray
+    front: np.ndarray
+    expelled_volume: np.ndarray
+    temperature: np.ndarray
+    meta: dict[str, Any] = field(default_factory=dict)
+    step_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    step_radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    step_rate: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def horizon(self) -> float:
+        """The last simulated time."""
+        return float(self.t[-1])
+
+    def _dense(self) -> tuple[np.ndarray, np.ndarray]:
+        if self.step_t.size >= 2:
+            return self.step_t, self.step_radius
+        return self.t, self.radius
+
+    def radius_at(self, t: float) -> float:
+        """a(t), interpolated linearly between accepted steps (or outputs)."""
+        tt, aa = self._dense()
+        return float(np.interp(t, tt, aa))
+
+    def time_to_radius(self, radius: float, after: float = 0.0) -> float:
+        """First time >= ``after`` at which a(t) falls to ``radius``.
+
+        Between accepted steps a(t) is the cubic Hermite interpolant of a and da/dt (as
+        the full solver's own crossing times); between outputs, a^3 is linear.
+        """
+        tt, aa = self._dense()
+        i0 = int(np.searchsorted(tt, after, side="left"))
+        hit = np.nonzero(aa[i0:] <= radius)[0]
+        if hit.size == 0:
+            raise ValueError(f"radius {radius:.6g} is not reached by t = {self.horizon:.6g} "
+                             f"(smallest radius {float(aa[i0:].min()):.6g})")
+        j = i0 + int(hit[0])
+        if j == 0 or (j == i0 and tt[j] == after):
+            return float(tt[j])
+        if j == i0:  # crossing between ``after`` and the next sample
+            t0, y0 = after, self.radius_at(after)
+            return _linear_cube(t0, y0, float(tt[j]), float(aa[j]), radius)
+        if self.step_t.size >= 2 and tt[j] > tt[j - 1]:
+            from solver.full.result import _hermite_root  # the solver's own dense a(t)
+
+            return float(_hermite_root(tt[j - 1], tt[j], aa[j - 1], aa[j], self.step_rate[j - 1],
+                                       self.step_rate[j], radius))
+        return _linear_cube(float(tt[j - 1]), float(aa[j - 1]), float(tt[j]), float(aa[j]),
+                            radius)
+
+    def to_npz(self) -> bytes:
+        """The arrays as an .npz blob."""
+        buf = io.BytesIO()
+        np.savez_compressed(buf, **{k: np.asarray(getattr(self, k), dtype=float) for k in ARRAYS})
+        return buf.getvalue()
+
+    @classmethod
+    def from_npz(cls, blob: bytes, meta: dict[str, Any] | None = None) -> Trajectory:
+        """Inverse of :meth:`to_npz`."""
+        with np.load(io.BytesIO(blob)) as z:
+            arrays = {k: np.array(z[k]) for k in ARRAYS if k in z}
+        return cls(**arrays, meta=dict(meta or {}))
+
+
+def _linear_cube(t0: float, a0: float, t1: float, a1: float, radius: float) -> float:
+    """Crossing time of ``radius`` with a^3 linear in t on [t0, t1]."""
+    y0, y1, y = a0**3, a1**3, radius**3
+    return t1 if y0 == y1 else t0 + (y0 - y) / (y0 - y1) * (t1 - t0)
+
+
+def _json_safe(obj: Any) -> Any:
+    """Diagnostics as strict JSON (numpy scalars to Python, non-finite floats to None)."""
+    if isinstance(obj, dict):
+        return {str(k): _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_json_safe(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _json_safe(obj.tolist()) if obj.size <= 64 else f"array{obj.shape}"
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, (str, int, float, bool)) or obj is None:
+        return obj
+    return repr(obj)
+
+
+def _floats(values: Any, like: np.ndarray) -> np.ndarray:
+    """A float array the shape of ``like`` (None entries become NaN; a scalar is broadcast)."""
+    if values is None:
+        return np.full_like(like, np.nan)
+    arr = np.asarray([np.nan if v is None else v for v in np.atleast_1d(values)], dtype=float)
+    return arr * np.ones_like(like) if arr.size == 1 else arr
+
+
+def _simulate(sc: Scenario, horizon: float) -> tuple[Trajectory, dict[str, Any]]:
+    """One full-solver run of ``sc`` (a jump runs for ``horizon``)."""
+    from solver.full import simulate
+
+    s = sc.settings
+    extra: dict[str, Any] = {}
+    if s.interfacial_length > 0.0:  # the regularized model of issue 8
+        extra["interfacial_length"] = s.interfacial_length
+    res = simulate(sc.gel, sc.t_start, protocol=sc.steps(horizon), grid=s.grid, n=s.n,
+                   integrator=s.integrator, rtol=s.rtol, branch=sc.branch, **extra)
+    t = np.asarray(res.t, dtype=float)
+    steps = {k: np.asarray(getattr(res, k, None) if getattr(res, k, None) is not None
+                           else np.zeros(0), dtype=float)
+             for k in ("step_t", "step_radius", "step_rate")}
+    traj = Trajectory(t=t, radius=np.asarray(res.radius, dtype=float),
+                      front=_floats(res.front, t),
+                      expelled_volume=_floats(res.expelled_volume, t),
+                      temperature=_floats(res.temperature, t), **steps)
+    if t.size < 2 or not (np.all(np.isfinite(t)) and np.all(np.isfinite(traj.radius))):
+        raise SolverError("the full solver returned no finite a(t)", {"scenario": sc.key_dict()})
+    diag = _json_safe(getattr(res, "diagnostics", {}) or {})
+    diag["spinodal"] = bool(getattr(res, "spinodal", False))
+    return traj, diag
+
+
+def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: float | None = None,
+                 need_time: float = 0.0, max_horizon: float = 64.0) -> tuple[dict, bytes]:
+    """Run the full solver for a scenario: plain data in, (metadata, npz blob) out.
+
+    A jump is simulated for ``horizon``, extended (x4, up to ``max_horizon``) until a(t)
+    falls to ``need_radius`` and t reaches ``need_time``.  Top-level and free of shared
+    state, so process pools and Dask workers can run it.
+    """
+    sc = Scenario.from_dict(scenario)
+    wall = time.perf_counter()
+    h = float(horizon)
+    runs = 0
+    while True:
+        traj, diag = _simulate(sc, max(h, need_time))
+        runs += 1
+        if sc.protocol is not None or need_radius is None or traj.radius.min() <= need_radius:
+            break
+        if h >= max_horizon:
+            raise SolverError(
+                f"a(t) does not reach {need_radius:.6g} by t = {traj.horizon:.4g} (it is "
+                f"{traj.radius[-1]:.6g}): the dose is too close to the final equilibrium",
+                {"scenario": sc.key_dict(), "horizon": traj.horizon})
+        h = min(4.0 * h, max_horizon)
+    meta = {"scenario": sc.key_dict(), "key": sc.key(), "horizon": traj.horizon,
+            "wall_seconds": time.perf_counter() - wall, "runs": runs, "created": time.time(),
+            "diagnostics": diag}
+    traj.meta = meta
+    return meta, traj.to_npz()

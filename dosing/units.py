@@ -1,0 +1,145 @@
+"""Seconds, micrometres and microlitres: the timescale of eq. timescale and volume conversions.
+
+The solver is dimensionless (lengths by the dry radius R, time by tau).  Here
+tau = eta Omega_p R^2 / (k0 k_B T_end) (eq. timescale).  The paper's constants
+(eta = 1e-3 Pa s, Omega_p = 3e-25 m^3, k0 = 8e-20 m^2: printed "m^3", a slip, see
+../shared/DESIGN.md) give an effective diffusivity D = k0 k_B T / (eta Omega_p) of about
+1e-8 cm^2/s, not the 3e-7 cm^2/s the text calls similar, so every constant is settable.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from solver.errors import ParameterError, require_finite_positive
+from solver.gel import check_temperature
+
+BOLTZMANN = 1.380649e-23  # J/K (exact, SI 2019)
+UM3_PER_UL = 1.0e9  # 1 uL = 1 mm^3 = 1e9 um^3
+WATER = "water"
+
+# Vogel equation for liquid water, mu = A 10^(B / (T - C)); within 2.5 % over 0-370 C.
+_VOGEL_A, _VOGEL_B, _VOGEL_C = 2.414e-5, 247.8, 140.0
+
+
+def water_viscosity(temperature: float) -> float:
+    """Dynamic viscosity of liquid water at T (Pa s), Vogel's correlation."""
+    t = check_temperature(temperature, "temperature")
+    return _VOGEL_A * 10.0 ** (_VOGEL_B / (t - _VOGEL_C))
+
+
+@dataclass(frozen=True)
+class PhysicalConstants:
+    """Constants of eq. timescale.  ``viscosity_pa_s="water"`` uses water at T_end."""
+
+    viscosity_pa_s: float | str = 1.0e-3
+    polymer_volume_m3: float = 3.0e-25
+    permeability_m2: float = 8.0e-20
+
+    def __post_init__(self) -> None:
+        v = self.viscosity_pa_s
+        if isinstance(v, str):
+            if v.strip().lower() != WATER:
+                raise ParameterError("constants.viscosity_pa_s", v,
+                                     "a finite number > 0 (Pa s) or 'water'")
+            object.__setattr__(self, "viscosity_pa_s", WATER)
+        else:
+            object.__setattr__(self, "viscosity_pa_s",
+                               require_finite_positive("constants.viscosity_pa_s", v))
+        for name in ("polymer_volume_m3", "permeability_m2"):
+            object.__setattr__(self, name,
+                               require_finite_positive(f"constants.{name}", getattr(self, name)))
+
+    def viscosity(self, t_end: float) -> float:
+        """eta in Pa s: the given value, or water's at T_end."""
+        if self.viscosity_pa_s == WATER:
+            return water_viscosity(t_end)
+        return float(self.viscosity_pa_s)
+
+    def diffusivity(self, t_end: float) -> float:
+        """Effective diffusivity D = k0 k_B T_end / (eta Omega_p) in m^2/s (after eq. timescale)."""
+        return (self.permeability_m2 * BOLTZMANN * t_end
+                / (self.viscosity(t_end) * self.polymer_volume_m3))
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form."""
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any] | None) -> PhysicalConstants:
+        """Inverse of :meth:`to_dict` (None gives the defaults)."""
+        return cls(**(data or {}))
+
+
+@dataclass(frozen=True)
+class Timescale:
+    """tau of eq. timescale for one bead, with the inputs and the formula written out."""
+
+    seconds: float
+    dry_radius_um: float
+    t_end: float
+    viscosity_pa_s: float
+    polymer_volume_m3: float
+    permeability_m2: float
+    diffusivity_cm2_s: float
+
+    @property
+    def formula(self) -> str:
+        """The formula with the numbers substituted."""
+        return (f"tau = eta Omega_p R^2 / (k0 k_B T_end) = ({self.viscosity_pa_s:.4g} Pa s)"
+                f"({self.polymer_volume_m3:.4g} m^3)({self.dry_radius_um:.4g} um)^2 / "
+                f"(({self.permeability_m2:.4g} m^2)({BOLTZMANN:.6g} J/K)({self.t_end:.5g} K)) "
+                f"= {self.seconds:.4g} s  [R = dry radius; effective diffusivity "
+                f"D = R^2/tau = {self.diffusivity_cm2_s:.3g} cm^2/s]")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form, including the formula text."""
+        return {**asdict(self), "formula": self.formula}
+
+
+SYMBOLIC_FORMULA = ("tau = eta Omega_p R^2 / (k0 k_B T_end) (eq. timescale; R = dry radius): "
+                    "give a bead size to get seconds")
+
+
+def timescale(dry_radius_um: float, t_end: float,
+              constants: PhysicalConstants | None = None) -> Timescale:
+    """tau = eta Omega_p R^2 / (k0 k_B T_end) for a dry radius in micrometres (eq. timescale)."""
+    c = constants or PhysicalConstants()
+    r_um = require_finite_positive("dry_radius_um", dry_radius_um)
+    t1 = check_temperature(t_end, "t_end")
+    d = c.diffusivity(t1)
+    r_m = r_um * 1.0e-6
+    return Timescale(seconds=r_m * r_m / d, dry_radius_um=r_um, t_end=t1,
+                     viscosity_pa_s=c.viscosity(t1), polymer_volume_m3=c.polymer_volume_m3,
+                     permeability_m2=c.permeability_m2, diffusivity_cm2_s=d * 1.0e4)
+
+
+def stored_volume(start_radius: float) -> float:
+    """Dimensionless pore (fluid) volume of the swollen bead, (4 pi/3)(a0^3 - 1)."""
+    return 4.0 * math.pi / 3.0 * (start_radius**3 - 1.0)
+
+
+def expelled_volume(start_radius: float, radius: float) -> float:
+    """Dimensionless expelled volume (4 pi/3)(a(0)^3 - a^3) (eq. FluidVolExpelled)."""
+    return 4.0 * math.pi / 3.0 * (start_radius**3 - radius**3)
+
+
+def radius_after_dose(start_radius: float, fraction: float) -> float:
+    """Radius once ``fraction`` of the stored fluid has left: a^3 = a0^3 - f (a0^3 - 1).
+
+    For f = 0.8 this is a^3 = 0.2 a0^3 + 0.8 (the paper's printed dose formula is the
+    remaining volume, not the dose; ../shared/DESIGN.md).
+    """
+    return (start_radius**3 - fraction * (start_radius**3 - 1.0)) ** (1.0 / 3.0)
+
+
+def volume_to_ul(volume: float, dry_radius_um: float) -> float:
+    """A dimensionless volume (in dry-radius^3 units) in microlitres."""
+    return volume * dry_radius_um**3 / UM3_PER_UL
+
+
+def ul_to_volume(volume_ul: float, dry_radius_um: float) -> float:
+    """Microlitres to a dimensionless volume (in dry-radius^3 units)."""
+    return volume_ul * UM3_PER_UL / dry_radius_um**3

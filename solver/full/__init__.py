@@ -1,0 +1,15 @@
+"""The full poro-elastic PDE solver (eqs. PDE_Dimless to Boundary_Dimless).
+
+Two discretizations (the paper's Eulerian grid in R = r/a and a Lagrangian grid in the dry
+coordinate), an explicit forward Euler reference and an adaptive implicit Rosenbrock
+integrator (RODASP), front tracking and a plain-data result object.
+"""
+
+from .numba_cache import refresh as _refresh_cache
+
+_refresh_cache()
+
+from .result import FullResult  # noqa: E402
+from .run import simulate  # noqa: E402
+
+__all__ = ["FullResult", "simulate"]

@@ -1,0 +1,165 @@
+"""FullResult: the plain-data outcome of a full PDE run (arrays plus diagnostics)."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+_ARRAYS = ("t", "radius", "front", "jump", "phi", "coords", "temperature", "expelled_volume",
+           "solid_error", "step_t", "step_radius", "step_rate")
+
+
+def _clean(obj: Any) -> Any:
+    """JSON-ready copy: arrays to lists, non-finite floats to None."""
+    if isinstance(obj, np.ndarray):
+        return _clean(obj.tolist())
+    if isinstance(obj, (float, np.floating)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (np.bool_,)):
+        return bool(obj)
+    if isinstance(obj, dict):
+        return {str(k): _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    return obj
+
+
+def _hermite_root(t0: float, t1: float, a0: float, a1: float, d0: float, d1: float,
+                  target: float) -> float:
+    """Crossing time of the cubic Hermite a(t) through ``target`` on [t0, t1] (bisection)."""
+    h = t1 - t0
+
+    def a(s: float) -> float:
+        return ((1 + 2 * s) * (1 - s) ** 2 * a0 + s * (1 - s) ** 2 * h * d0
+                + s * s * (3 - 2 * s) * a1 + s * s * (s - 1) * h * d1)
+
+    lo, hi = 0.0, 1.0
+    sign_lo = a(lo) - target
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        v = a(mid) - target
+        if (v > 0) == (sign_lo > 0) and v != 0.0:
+            lo, sign_lo = mid, v
+        else:
+            hi = mid
+    return t0 + 0.5 * (lo + hi) * h
+
+
+@dataclass
+class FullResult:
+    """Outputs of :func:`solver.full.simulate` (dimensionless, as in the paper).
+
+    Per output time t: radius a(t), front R_f(t) (r units, NaN without a sharp front),
+    porosity jump at the front (core minus shell, NaN without a front), porosity
+    snapshots phi (len(t), n) at ``coords`` (cell centres: R = r/a on the Eulerian grid,
+    the dry coordinate rho on the Lagrangian grid), temperature, expelled fluid volume
+    (eq. FluidVolExpelled) and the relative solid-volume error.  ``step_*`` hold a and
+    da/dt at every accepted step (dense a(t) for crossing times).
+    """
+
+    t: np.ndarray
+    radius: np.ndarray
+    front: np.ndarray
+    jump: np.ndarray
+    phi: np.ndarray
+    coords: np.ndarray
+    temperature: np.ndarray
+    expelled_volume: np.ndarray
+    solid_error: np.ndarray
+    spinodal: bool = False
+    diagnostics: dict[str, Any] = field(default_factory=dict)
+    step_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    step_radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    step_rate: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def grid(self) -> str:
+        """'eulerian' or 'lagrangian'."""
+        return str(self.diagnostics.get("grid", "eulerian"))
+
+    def time_to_radius(self, a_target: float) -> float:
+        """First time at which a(t) crosses ``a_target`` (cubic Hermite between steps).
+
+        Raises ValueError if the radius never reaches it.
+        """
+        target = float(a_target)
+        if self.step_t.size >= 2:
+            t, a, d = self.step_t, self.step_radius, self.step_rate
+        else:
+            t, a = self.t, self.radius
+            d = np.gradient(a, t) if t.size >= 2 else np.zeros_like(a)
+        if a.size and a[0] == target:
+            return float(t[0])
+        s = np.sign(a - target)
+        idx = np.nonzero(s[:-1] * s[1:] <= 0)[0]
+        if idx.size == 0:
+            raise ValueError(f"the radius never reaches {target:g} "
+                             f"(range {a.min():.6g} to {a.max():.6g} over t <= {t[-1]:.6g})")
+        k = int(idx[0])
+        if t[k + 1] <= t[k]:
+            return float(t[k])
+        return float(_hermite_root(t[k], t[k + 1], a[k], a[k + 1], d[k], d[k + 1], target))
+
+    def state_at(self, time: float) -> tuple[float, float, np.ndarray]:
+        """(a, R_f, phi profile) at ``time``, interpolated linearly between outputs."""
+        x = float(time)
+        if not (self.t[0] <= x <= self.t[-1]):
+            raise ValueError(f"time {x:g} outside the run [{self.t[0]:g}, {self.t[-1]:g}]")
+        k = int(np.searchsorted(self.t, x, side="right") - 1)
+        k = min(max(k, 0), self.t.size - 1)
+        if k == self.t.size - 1 or self.t[k + 1] == self.t[k]:
+            return float(self.radius[k]), float(self.front[k]), self.phi[k].copy()
+        w = (x - self.t[k]) / (self.t[k + 1] - self.t[k])
+        a = (1 - w) * self.radius[k] + w * self.radius[k + 1]
+        fr = (1 - w) * self.front[k] + w * self.front[k + 1]
+        return float(a), float(fr), (1 - w) * self.phi[k] + w * self.phi[k + 1]
+
+    def cell_radii(self) -> np.ndarray:
+        """Cell-centre radii r at every output, shape (len(t), n)."""
+        if self.grid == "eulerian":
+            return self.radius[:, None] * self.coords[None, :]
+        n = self.coords.size
+        w = np.diff((np.arange(n + 1) / n) ** 3)
+        r3 = np.cumsum(w[None, :] / (1.0 - self.phi), axis=1)
+        lo = np.concatenate([np.zeros((r3.shape[0], 1)), r3[:, :-1]], axis=1)
+        return np.cbrt(0.5 * (lo + r3))
+
+    def to_json_dict(self, profiles: bool = True) -> dict[str, Any]:
+        """JSON-ready dict (NaN -> None); ``profiles=False`` drops the phi snapshots."""
+        out: dict[str, Any] = {}
+        for name in _ARRAYS:
+            if name == "phi" and not profiles:
+                continue
+            out[name] = getattr(self, name)
+        out["spinodal"] = bool(self.spinodal)
+        out["diagnostics"] = self.diagnostics
+        return _clean(out)
+
+    def save(self, path: str | Path) -> Path:
+        """Write to an .npz file (arrays plus the diagnostics as JSON)."""
+        p = Path(path)
+        arrays = {name: np.asarray(getattr(self, name)) for name in _ARRAYS}
+        np.savez_compressed(p, spinodal=np.array(bool(self.spinodal)),
+                            diagnostics=np.array(json.dumps(_clean(self.diagnostics))),
+                            **arrays)
+        return p if p.suffix == ".npz" else p.with_name(p.name + ".npz")
+
+    @classmethod
+    def load(cls, path: str | Path) -> FullResult:
+        """Read a file written by :meth:`save`."""
+        with np.load(Path(path), allow_pickle=False) as data:
+            kwargs: dict[str, Any] = {}
+            for f in fields(cls):
+                if f.name in _ARRAYS and f.name in data:
+                    kwargs[f.name] = np.array(data[f.name])
+            kwargs["spinodal"] = bool(data["spinodal"])
+            kwargs["diagnostics"] = json.loads(str(data["diagnostics"]))
+        return cls(**kwargs)

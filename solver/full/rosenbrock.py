@@ -1,0 +1,231 @@
+"""RODASP: a 6-stage, order-4(3), L-stable, stiffly accurate Rosenbrock method, in numba.
+
+Coefficients: Steinebach (1995), RODASP (RODAS4 variant without order reduction on
+parabolic problems), given as alpha_ij and beta_ij = alpha_ij + gamma_ij with gamma = 1/4;
+they are converted here to the transformed form of Hairer & Wanner (1996, sec. IV.7),
+
+    (I/(h gamma) - J) U_i = f(y0 + sum_j a_ij U_j) + sum_j (c_ij / h) U_j,
+    y1 = y0 + sum_i m_i U_i,     error = sum_i (m_i - mhat_i) U_i,
+
+so each step needs one Jacobian, one factorization and six bordered band solves.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from .banded import bordered_factor, bordered_solve
+from .system import error_norm, event, linearize, rhs
+
+GAMMA = 0.25
+_ALPHA = np.zeros((6, 6))
+_ALPHA[1, 0] = 0.75
+_ALPHA[2, :2] = [8.6120400814152190e-2, 0.1238795991858478]
+_ALPHA[3, :3] = [0.7749345355073236, 0.1492651549508680, -0.2941996904581916]
+_ALPHA[4, :4] = [5.308746682646142, 1.330892140037269, -5.374137811655562, -0.2655010110278497]
+_ALPHA[5, :5] = [-1.764437648774483, -0.4747565572063027, 2.369691846915802,
+                 0.6195023590649829, 0.25]
+_BETA = np.zeros((6, 6))
+_BETA[2, :2] = [-0.049392, -0.014112]
+_BETA[3, :3] = [-0.4820494693877561, -0.1008795555555556, 0.9267290249433117]
+_BETA[4, :4] = [-1.764437648774483, -0.4747565572063027, 2.369691846915802, 0.6195023590649829]
+_BETA[5, :5] = [-8.0368370789113464e-2, -5.6490613592447572e-2, 0.4882856300427991,
+                0.5057162114816189, -0.1071428571428569]
+
+
+def _transformed() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(a, c, m, m - mhat) of the transformed method from (alpha, beta)."""
+    gam = _BETA - _ALPHA
+    np.fill_diagonal(gam, GAMMA)
+    ginv = np.linalg.inv(gam)
+    b = np.append(_BETA[5, :5], GAMMA)
+    bhat = np.append(np.append(_BETA[4, :4], GAMMA), 0.0)
+    a = _ALPHA @ ginv
+    c = np.diag(np.full(6, 1.0 / GAMMA)) - ginv
+    m = b @ ginv
+    mhat = bhat @ ginv
+    return np.tril(a, -1), np.tril(c, -1), m, m - mhat
+
+
+A_COEF, C_COEF, M_COEF, E_COEF = _transformed()
+
+
+class Method(NamedTuple):
+    """A Rosenbrock method in transformed form: [gamma, 1/(embedded order + 1)], a, c, m, e."""
+
+    tableau: np.ndarray
+    a: np.ndarray
+    c: np.ndarray
+    m: np.ndarray
+    e: np.ndarray
+
+
+RODASP = Method(np.array([GAMMA, 0.25]), A_COEF, C_COEF, M_COEF, E_COEF)
+
+
+
+@njit(cache=True)
+def _combine(base, coef, row, scale, u, out):  # noqa: ANN001, ANN202
+    """out = base + scale * sum_{j < row} coef[row, j] U_j."""
+    n = base.size
+    for i in range(n):
+        out[i] = base[i]
+    for j in range(row):
+        cj = coef[row, j] * scale
+        if cj != 0.0:
+            uj = u[j]
+            for i in range(n):
+                out[i] += cj * uj[i]
+
+
+@njit(cache=True)
+def rodas_try(grid, y, f0, h, par, geo, work, lower, upper, jband, jc, jd, je, lu, ipiv,  # noqa: ANN001, ANN201
+              cm, dm, xm, em, spiv, zbuf, u, ytmp, ftmp, ynew, errv, rtol, atol,
+              gamma, acoef, ccoef, mcoef, ecoef):
+    """One RODASP step of size h from (y, f0 = f(y)) with Jacobian J.
+
+    Returns (status, error norm): status 0 done, 1 singular iteration matrix,
+    2 an unphysical stage state (the caller shrinks the step).
+    """
+    m = jband.shape[1]
+    p = je.shape[0]
+    n = y.size
+    hg = 1.0 / (h * gamma)
+    stages = mcoef.size
+    kv = lower + upper
+    lu[:, :] = 0.0
+    for j in range(m):
+        for i in range(max(0, j - upper), min(m, j + lower + 1)):
+            lu[kv + i - j, j] = -jband[upper + i - j, j]
+        lu[kv, j] += hg
+    for i in range(m):
+        for k in range(p):
+            cm[i, k] = -jc[i, k]
+    for r in range(p):
+        for i in range(m):
+            dm[r, i] = -jd[r, i]
+        for k in range(p):
+            em[r, k] = -je[r, k]
+        em[r, r] += hg
+    if not bordered_factor(lu, lower, upper, ipiv, cm, dm, em, xm, spiv):
+        return 1, np.inf
+    for s in range(stages):
+        if s == 0:
+            for i in range(n):
+                ftmp[i] = f0[i]
+        else:
+            _combine(y, acoef, s, 1.0, u, ytmp)
+            if not rhs(grid, ytmp, par, geo, ftmp, work):
+                return 2, np.inf
+        _combine(ftmp, ccoef, s, 1.0 / h, u, u[s])
+        bordered_solve(lu, lower, upper, ipiv, dm, xm, em, spiv, u[s], zbuf)
+    for i in range(n):
+        ynew[i] = y[i]
+        errv[i] = 0.0
+    for s in range(stages):
+        ms, es = mcoef[s], ecoef[s]
+        us = u[s]
+        for i in range(n):
+            ynew[i] += ms * us[i]
+            errv[i] += es * us[i]
+    return 0, error_norm(grid, y, ynew, errv, geo, rtol, atol, work)
+
+
+# counters: rhs calls, Jacobians, accepted steps, rejected steps, merge events
+C_RHS, C_JAC, C_STEPS, C_REJECTED, C_MERGES = 0, 1, 2, 3, 4
+# run status
+RUN_REACHED, RUN_RECORD_FULL, RUN_BUDGET, RUN_UNDERFLOW, RUN_BAD_STATE = 0, 1, 2, 3, 4
+SAFETY, FAC_MIN, FAC_MAX = 0.9, 0.2, 6.0
+
+
+@njit(cache=True)
+def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, upper,  # noqa: ANN001, ANN201
+              jband, jc, jd, je, lu, ipiv, cm, dm, xm, em, spiv, zbuf, u, ytmp, ftmp, ynew,
+              fnew, errv, scale, rtol, atol, tableau, acoef, ccoef, mcoef, ecoef, counters,
+              ctrl, rec, max_steps, jac_mode):
+    """Adaptive RODASP steps from tt[0] until tt[0] >= t_stop (never past t_seg).
+
+    y and f = f(y) advance in place; yold, fold and tt[1] keep the last step's start for
+    dense output.  ctrl = [h, h of the last accepted step, its error, Jacobian valid flag]
+    (Gustafsson's predictive controller, Hairer & Wanner IV.8).  An accepted step is
+    linearized at once (f and J at the new state; an unphysical new state rejects it).
+    rec = (3, capacity) record of (t, a, da/dt) per accepted step, its count in
+    counters[5].  Returns a RUN_* status.
+    """
+    n = y.size
+    ia = n - 1
+    gamma, expo = tableau[0], tableau[1]
+    while tt[0] < t_stop:
+        if counters[C_STEPS] >= max_steps:
+            return RUN_BUDGET
+        if counters[5] >= rec.shape[1]:
+            return RUN_RECORD_FULL
+        t = tt[0]
+        if ctrl[3] == 0.0:
+            calls = linearize(grid, y, f, par, geo, work, lower, upper, jband, jc, jd, je,
+                              ytmp, ftmp, scale, jac_mode)
+            counters[C_JAC] += 1
+            if calls < 0:
+                return RUN_BAD_STATE
+            counters[C_RHS] += calls
+            ctrl[3] = 1.0
+        h = ctrl[0]
+        last = False
+        if t + h >= t_seg - 1e-12 * max(1.0, abs(t_seg)):
+            h = t_seg - t
+            last = True
+        if h < 1e-14 * max(1.0, abs(t)):
+            return RUN_UNDERFLOW
+        status, err = rodas_try(grid, y, f, h, par, geo, work, lower, upper, jband, jc, jd,
+                                je, lu, ipiv, cm, dm, xm, em, spiv, zbuf, u, ytmp, ftmp, ynew,
+                                errv, rtol, atol, gamma, acoef, ccoef, mcoef, ecoef)
+        counters[C_RHS] += mcoef.size - 1
+        ok = status == 0 and err <= 1.0
+        if ok:
+            calls = linearize(grid, ynew, fnew, par, geo, work, lower, upper, jband, jc, jd,
+                              je, ytmp, ftmp, scale, jac_mode)
+            counters[C_JAC] += 1
+            ok = calls >= 0
+            if ok:
+                counters[C_RHS] += calls
+            else:
+                ctrl[3] = 0.0  # J now belongs to no state: recompute at y
+        if not ok:
+            counters[C_REJECTED] += 1
+            if status != 0 or not np.isfinite(err) or err > 1e10 or err <= 1.0:
+                ctrl[0] = 0.25 * h
+            else:
+                ctrl[0] = h * max(FAC_MIN, min(1.0, SAFETY * err**-expo))
+            continue
+        quot = max(1.0 / FAC_MAX, min(1.0 / FAC_MIN, max(err, 1e-12) ** expo / SAFETY))
+        if ctrl[1] > 0.0:
+            gus = (ctrl[1] / h) * (max(err, 1e-12) ** 2 / ctrl[2]) ** expo / SAFETY
+            quot = max(quot, max(1.0 / FAC_MAX, min(1.0 / FAC_MIN, gus)))
+        ctrl[1] = h
+        ctrl[2] = max(1e-2, err)
+        tt[1] = t
+        for i in range(n):
+            yold[i] = y[i]
+            fold[i] = f[i]
+            y[i] = ynew[i]
+            f[i] = fnew[i]
+        tt[0] = t_seg if last else t + h
+        ctrl[0] = h / quot
+        counters[C_STEPS] += 1
+        if event(grid, y, geo) > 0:
+            counters[C_MERGES] += 1
+            ctrl[3] = 0.0
+            ctrl[0] = min(ctrl[0], 1e-2 * h)
+            ctrl[1] = 0.0
+            if not rhs(grid, y, par, geo, f, work):
+                return RUN_BAD_STATE
+            counters[C_RHS] += 1
+        k = counters[5]
+        rec[0, k] = tt[0]
+        rec[1, k] = y[ia]
+        rec[2, k] = f[ia]
+        counters[5] = k + 1
+    return RUN_REACHED

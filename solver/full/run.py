@@ -1,0 +1,278 @@
+"""simulate(): validate a scenario, build the grid and initial state, integrate, collect.
+
+Time is in units of tau (eq. timescale); tau is treated as the same for every protocol
+step (the paper's choice: the few-kelvin changes of k_B T and viscosity are neglected).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from ..equilibrium import equilibrium
+from ..errors import ParameterError, SolverError
+from ..gel import Gel, check_temperature, preset
+from . import front as fronts
+from .integrate import Segment, Stats, Workspace, run_explicit, run_implicit
+from .result import FullResult
+from .system import GRID_CODES, JAC_ANALYTIC, JAC_FD, MODULES, porosity, solid_error
+
+N_RANGE = (10, 20000)
+ELL_MAX = 0.2  # the interfacial length must be small against the dry radius
+MAX_OUTPUTS = 100_000
+DEFAULT_OUTPUTS = 200
+DEFAULT_MAX_STEPS = {"implicit": 500_000, "explicit": 20_000_000}
+
+Initial = FullResult | tuple[float, Sequence[float]] | None
+
+
+def _protocol(t_end: float | None, until: float | None,
+              protocol: Sequence[tuple[float, float]] | None) -> list[tuple[float, float]]:
+    """The validated list of (duration, temperature) steps."""
+    if protocol is None:
+        if t_end is None or until is None:
+            raise ParameterError("protocol", None, "a protocol, or both t_end and until")
+        protocol = [(until, t_end)]
+    elif t_end is not None or until is not None:
+        raise ParameterError("protocol", protocol, "either a protocol or t_end/until, not both")
+    steps = []
+    try:
+        items = list(protocol)
+    except TypeError:
+        raise ParameterError("protocol", protocol, "a list of (duration, temperature)") from None
+    if not items:
+        raise ParameterError("protocol", protocol, "at least one (duration, temperature) step")
+    for k, item in enumerate(items):
+        try:
+            duration, temperature = item
+            duration = float(duration)
+        except (TypeError, ValueError):
+            raise ParameterError(f"protocol[{k}]", item, "a (duration, temperature) pair") from None
+        if not (math.isfinite(duration) and 0.0 < duration <= 1e6):
+            raise ParameterError(f"protocol[{k}].duration", duration, "0 < duration <= 1e6")
+        steps.append((duration, check_temperature(temperature, f"protocol[{k}].temperature")))
+    return steps
+
+
+def _choice(field: str, value: Any, options: Sequence[str]) -> str:
+    if value not in options:
+        raise ParameterError(field, value, " or ".join(repr(o) for o in options))
+    return str(value)
+
+
+def _initial_state(mod: Any, gel: Gel, t_start: float, first_t: float, branch: str | None,
+                   initial: Initial, n: int) -> tuple[np.ndarray, str]:
+    """State vector on the grid: uniform equilibrium, a FullResult's last state, or (a, phi)."""
+    if initial is None:
+        if branch is None:
+            branch = "swollen" if first_t >= t_start else "shrunken"
+        _choice("branch", branch, ("swollen", "shrunken"))
+        eq = equilibrium(gel, t_start, branch)  # type: ignore[arg-type]
+        return mod.state_from_profile(eq.stretch, np.full(n, eq.porosity)), branch
+    if isinstance(initial, FullResult):
+        src = MODULES[GRID_CODES[initial.grid]]
+        phi = initial.phi[-1]
+        y_src = src.state_from_profile(float(initial.radius[-1]), phi)
+        geo_src = src.geometry(phi.size)
+        r, s = src.dry_profile(y_src, geo_src)
+        return mod.state_from_dry(r, s, n), "given"
+    try:
+        radius, phi = initial
+        phi = np.asarray(phi, dtype=float)
+        radius = float(radius)
+    except (TypeError, ValueError):
+        raise ParameterError("initial", initial, "a FullResult or (radius, phi profile)") from None
+    if phi.shape != (n,) or not np.all((phi > 0.0) & (phi < 1.0)):
+        raise ParameterError("initial", "phi", f"{n} cell porosities in (0, 1) on the grid")
+    y = mod.state_from_profile(radius, phi)
+    a = mod.radius(y)
+    if not (math.isfinite(radius) and abs(a - radius) <= 1e-3 * a):
+        raise ParameterError("initial.radius", radius,
+                             f"the radius implied by the profile, {a:.6g} (solid volume 1)")
+    return y, "given"
+
+
+def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
+             until: float | None = None, protocol: Sequence[tuple[float, float]] | None = None,
+             grid: str = "eulerian", n: int = 400, integrator: str = "implicit",
+             rtol: float = 1e-6, atol: float = 1e-9, every: float | None = None,
+             branch: str | None = None, initial: Initial = None, dt: float | None = None,
+             max_steps: int | None = None, progress: Callable[[float], None] | None = None,
+             jacobian: str = "analytic", interfacial_length: float = 0.0) -> FullResult:
+    """Run the full poro-elastic model (eqs. PDE_Dimless to Boundary_Dimless).
+
+    The gel starts from a uniform equilibrium at ``t_start`` (``branch``: default swollen
+    when the first step heats, shrunken when it cools) or from ``initial`` (a FullResult's
+    final state, remapped conservatively, or (radius, phi) on this grid), then follows
+    ``protocol`` [(duration, temperature), ...] from t = 0; without a protocol it is
+    [(until, t_end)].  ``grid``: 'eulerian' (the paper's, appendix Numerical scheme) or
+    'lagrangian'; ``integrator``: 'implicit' (adaptive RODASP, rtol/atol on porosity and
+    radius) or 'explicit' (the paper's forward Euler; ``dt``, the largest step, defaults to
+    0.8 of the stability limit; output times are hit exactly).  ``every`` is the output
+    interval (default: 200 outputs); ``progress(fraction)`` is called as the run advances.
+    ``interfacial_length`` ell (dry radii) adds the interfacial energy (ell^2/2)|grad_X J|^2
+    (docs/interfacial.md); 0 is the paper's model, unchanged. The interface is about 10 ell
+    wide: resolve it with n >= 2/ell cells (Lagrangian grid; the Eulerian grid needs several
+    times more, and uses the finite-difference Jacobian with the term). Raises ParameterError
+    for bad input and SolverError (with diagnostics) for numerical failure.
+    """
+    started = time.perf_counter()
+    if isinstance(gel, str):
+        gel = preset(gel)
+    if not isinstance(gel, Gel):
+        raise ParameterError("gel", gel, "a Gel or a preset name")
+    t_start = check_temperature(t_start, "t_start")
+    steps = _protocol(t_end, until, protocol)
+    grid = _choice("grid", grid, tuple(GRID_CODES))
+    integrator = _choice("integrator", integrator, ("implicit", "explicit"))
+    jac_mode = {"analytic": JAC_ANALYTIC, "fd": JAC_FD}[_choice("jacobian", jacobian,
+                                                              ("analytic", "fd"))]
+    ell = _interfacial_length(interfacial_length)
+    if ell > 0.0 and grid == "eulerian":
+        jac_mode = JAC_FD
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not (
+            N_RANGE[0] <= n <= N_RANGE[1]):
+        raise ParameterError("n", n, f"an integer {N_RANGE[0]}-{N_RANGE[1]}")
+    n = int(n)
+    if not (isinstance(rtol, (int, float)) and 1e-13 <= rtol <= 0.1):
+        raise ParameterError("rtol", rtol, "1e-13 <= rtol <= 0.1")
+    if not (isinstance(atol, (int, float)) and 0.0 < atol <= 1.0):
+        raise ParameterError("atol", atol, "0 < atol <= 1")
+    if dt is not None:
+        if integrator != "explicit":
+            raise ParameterError("dt", dt, "None for the implicit integrator (explicit only)")
+        if not (isinstance(dt, (int, float)) and math.isfinite(dt) and 0.0 < dt < 1.0):
+            raise ParameterError("dt", dt, "0 < dt < 1")
+    if max_steps is None:
+        max_steps = DEFAULT_MAX_STEPS[integrator]
+    if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
+        raise ParameterError("max_steps", max_steps, "a positive integer")
+    if progress is not None and not callable(progress):
+        raise ParameterError("progress", progress, "a callable taking the fraction done")
+    total = float(sum(d for d, _ in steps))
+    if every is None:
+        every = total / DEFAULT_OUTPUTS
+    if not (isinstance(every, (int, float)) and math.isfinite(every) and every > 0.0):
+        raise ParameterError("every", every, "an output interval > 0")
+    if total / every > MAX_OUTPUTS:
+        raise ParameterError("every", every, f">= {total / MAX_OUTPUTS:.3g} "
+                             f"(at most {MAX_OUTPUTS} outputs)")
+
+    code = GRID_CODES[grid]
+    mod = MODULES[code]
+    geo = mod.geometry(n)
+    y0, branch_used = _initial_state(mod, gel, t_start, steps[0][1], branch, initial, n)
+    segments, t0 = [], 0.0
+    perm = gel.permeability
+    for duration, temp in steps:
+        par = np.array([gel.omega, gel.chi0(temp), gel.chi1(temp), float(perm.code), perm.beta,
+                        ell * ell])
+        segments.append(Segment(t0, t0 + duration, temp, par))
+        t0 += duration
+    segments[-1].t1 = total
+    k_out = int(math.floor(total / every + 1e-9))
+    out_times = np.unique(np.concatenate([np.arange(k_out + 1) * every, [total]]))
+    out_times = out_times[out_times <= total]
+
+    ws = Workspace(code, geo, interfacial=ell > 0.0)
+    collector = _Collector(mod, code, geo, segments, out_times.size, n,
+                           fronts.diffuse_window(ell, n) if ell > 0.0 else fronts.WINDOW)
+    stats = Stats()
+    diag: dict[str, Any] = {
+        "grid": grid, "n": n, "integrator": integrator, "rtol": rtol, "atol": atol,
+        "jacobian": "fd" if jac_mode == JAC_FD else "analytic", "interfacial_length": ell,
+        "gel": gel.to_dict(), "t_start": t_start, "branch": branch_used,
+        "protocol": [list(s) for s in steps]}
+    try:
+        if integrator == "implicit":
+            run_implicit(ws, y0, segments, out_times, collector, float(rtol), float(atol),
+                         int(max_steps), progress, stats, jac_mode=jac_mode)
+        else:
+            diag["dt"] = dt
+            run_explicit(ws, y0, segments, out_times, collector, dt, int(max_steps),
+                         progress, stats)
+    except SolverError as exc:
+        exc.diagnostics.update(diag)
+        exc.diagnostics["wall_time"] = time.perf_counter() - started
+        if collector.spinodal_time is None:
+            raise
+        exc.diagnostics["spinodal_time"] = collector.spinodal_time
+        raise SolverError(f"{exc} (spinodal collapse detected from t="
+                          f"{collector.spinodal_time:.4g}: interior cells collapse at grid "
+                          f"scale, the start is inside the spinodal region)",
+                          exc.diagnostics) from exc
+    diag.update(steps=stats.steps, rejected=stats.rejected, jacobians=stats.jacobians,
+                rhs_calls=stats.rhs_calls, merges=stats.merges,
+                wall_time=time.perf_counter() - started)
+    result = collector.result(diag, stats)
+    return result
+
+
+def _interfacial_length(value: Any) -> float:
+    """Validated interfacial length ell in dry radii: 0 (the paper's model) to ELL_MAX."""
+    try:
+        ell = float(value)
+    except (TypeError, ValueError):
+        ell = math.nan
+    if isinstance(value, bool) or not (math.isfinite(ell) and 0.0 <= ell <= ELL_MAX):
+        raise ParameterError("interfacial_length", value, f"0 <= ell <= {ELL_MAX} (dry radii)")
+    return ell
+
+
+class _Collector:
+    """Receives the state at every output time and builds the result arrays."""
+
+    def __init__(self, mod: Any, code: int, geo: np.ndarray, segments: list[Segment],
+                 size: int, n: int, window: int = fronts.WINDOW) -> None:
+        self.mod, self.code, self.geo, self.segments = mod, code, geo, segments
+        self.window = window
+        self.t = np.zeros(size)
+        self.radius = np.zeros(size)
+        self.phi = np.zeros((size, n))
+        self.solid = np.zeros(size)
+        self.k = 0
+        self.spinodal_time: float | None = None
+
+    def __call__(self, t: float, y: np.ndarray) -> None:
+        k = self.k
+        a = porosity(self.code, y, self.geo, self.phi[k])
+        self.t[k], self.radius[k] = t, a
+        self.solid[k] = solid_error(self.code, y, self.geo, self.phi[k])
+        if self.spinodal_time is None and fronts.spinodal_collapse(self.phi[k]):
+            self.spinodal_time = t
+        self.k = k + 1
+
+    def _temperature(self, t: float) -> float:
+        """Temperature at output t: the protocol step with t0 < t <= t1 (the first at t = 0)."""
+        for seg in self.segments:
+            if t <= seg.t1:
+                return seg.temperature
+        return self.segments[-1].temperature
+
+    def result(self, diag: dict[str, Any], stats: Stats) -> FullResult:
+        k = self.k
+        t, radius, phi = self.t[:k], self.radius[:k], self.phi[:k]
+        coords = self.geo[1, : phi.shape[1]].copy()
+        front = np.full(k, np.nan)
+        jump = np.full(k, np.nan)
+        res = FullResult(t=t, radius=radius, front=front, jump=jump, phi=phi, coords=coords,
+                         temperature=np.array([self._temperature(x) for x in t]),
+                         expelled_volume=4.0 * np.pi / 3.0 * (radius[0] ** 3 - radius ** 3),
+                         solid_error=self.solid[:k], spinodal=self.spinodal_time is not None,
+                         diagnostics=diag, step_t=np.array(stats.t),
+                         step_radius=np.array(stats.a), step_rate=np.array(stats.da))
+        radii = res.cell_radii()
+        for i in range(k):
+            front[i], jump[i] = fronts.locate_front(radii[i], phi[i], self.window)
+        if res.spinodal:
+            diag["spinodal_time"] = self.spinodal_time
+            diag["message"] = (f"spinodal collapse: interior cells collapsed at grid scale "
+                               f"from t={self.spinodal_time:.4g}; the solution depends on the "
+                               f"grid and is not converged")
+        else:
+            diag["message"] = "ok"
+        return res

@@ -1,0 +1,168 @@
+"""Grid dispatch for the integrators, and the colored finite-difference Jacobian.
+
+Both grids expose the same numba kernels (rhs, fd_scale, error_norm, porosity); the
+integrators call them through these dispatchers with an integer grid code, so one
+compiled integrator serves both grids.  The state is y = [band part (m) | border (p)].
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from . import eulerian, lagrangian
+
+EULERIAN, LAGRANGIAN = 0, 1
+GRID_CODES = {"eulerian": EULERIAN, "lagrangian": LAGRANGIAN}
+MODULES = {EULERIAN: eulerian, LAGRANGIAN: lagrangian}
+
+
+@njit(cache=True)
+def rhs(grid, y, par, geo, out, work):  # noqa: ANN001, ANN201
+    """dy/dt on the chosen grid; False for an unphysical state."""
+    if grid == EULERIAN:
+        return eulerian.rhs(y, par, geo, out, work)
+    return lagrangian.rhs(y, par, geo, out, work)
+
+
+@njit(cache=True)
+def fd_scale(grid, y, geo, out):  # noqa: ANN001, ANN201
+    """Finite-difference increments for the Jacobian."""
+    if grid == EULERIAN:
+        eulerian.fd_scale(y, geo, out)
+    else:
+        lagrangian.fd_scale(y, geo, out)
+
+
+@njit(cache=True)
+def error_norm(grid, y, ynew, err, geo, rtol, atol, work):  # noqa: ANN001, ANN201
+    """Weighted norm of a local error estimate (porosity and radius errors)."""
+    if grid == EULERIAN:
+        return eulerian.error_norm(y, ynew, err, geo, rtol, atol, work)
+    return lagrangian.error_norm(y, ynew, err, geo, rtol, atol, work)
+
+
+@njit(cache=True)
+def porosity(grid, y, geo, out):  # noqa: ANN001, ANN201
+    """Cell porosities; returns the radius a."""
+    if grid == EULERIAN:
+        return eulerian.porosity(y, geo, out)
+    return lagrangian.porosity(y, geo, out)
+
+
+JAC_ANALYTIC, JAC_FD = 0, 1
+
+
+@njit(cache=True)
+def dense_output(grid, geo, t0, t1, y0, y1, f0, f1, t, out, phi):  # noqa: ANN001, ANN201
+    """State at t in [t0, t1] into ``out`` (cubic Hermite; linear where the cubic leaves
+    the physical range in a fast transient), its porosities into ``phi``; returns
+    |solid volume - 1| of the porosity representation (the conservation check)."""
+    h = t1 - t0
+    s = (t - t0) / h if h > 0.0 else 1.0
+    c0 = (1.0 + 2.0 * s) * (1.0 - s) ** 2
+    c1 = s * (1.0 - s) ** 2 * h
+    c2 = s * s * (3.0 - 2.0 * s)
+    c3 = s * s * (s - 1.0) * h
+    for i in range(out.size):
+        out[i] = c0 * y0[i] + c1 * f0[i] + c2 * y1[i] + c3 * f1[i]
+    porosity(grid, out, geo, phi)
+    for i in range(phi.size):
+        if not (0.0 < phi[i] < 1.0):
+            for j in range(out.size):
+                out[j] = (1.0 - s) * y0[j] + s * y1[j]
+            porosity(grid, out, geo, phi)
+            break
+    return solid_error(grid, out, geo, phi)
+
+
+@njit(cache=True)
+def solid_error(grid, y, geo, phi):  # noqa: ANN001, ANN201
+    """|dry volume - 1| from the radius and the cell porosities ``phi`` of state y."""
+    n = phi.size
+    acc = 0.0
+    if grid == EULERIAN:
+        a = y[n - 1]
+        for i in range(n):
+            acc += (1.0 - phi[i]) * geo[2, i]
+        return abs(a * a * a * acc - 1.0)
+    prev3 = 0.0
+    for c in range(n):
+        r3 = y[c] * y[c] * y[c]
+        acc += (r3 - prev3) * (1.0 - phi[c])
+        prev3 = r3
+    return abs(acc - 1.0)
+
+
+@njit(cache=True)
+def linearize(grid, y, f, par, geo, work, lower, upper, jband, jc, jd, je,  # noqa: ANN001, ANN201
+              ytmp, ftmp, scale, mode):
+    """f(y) into ``f`` and the Jacobian at y in bordered band storage: analytic (mode
+    JAC_ANALYTIC) or colored finite differences.  Returns the cost in rhs-call
+    equivalents, or -1 if y is unphysical.
+    """
+    if mode == JAC_FD:
+        if not rhs(grid, y, par, geo, f, work):
+            return -1
+        calls = fd_jacobian(grid, y, f, par, geo, work, lower, upper, jband, jc, jd, je,
+                            ytmp, ftmp, scale)
+        return calls + 1 if calls >= 0 else -1
+    if grid == EULERIAN:
+        ok = eulerian.jacobian(y, par, geo, work, upper, jband, jc, jd, je, f)
+    else:
+        ok = lagrangian.jacobian(y, par, geo, work, upper, jband, jc, jd, je, f)
+    return 2 if ok and np.isfinite(f[f.size - 1]) else -1
+
+
+@njit(cache=True)
+def fd_jacobian(grid, y, f0, par, geo, work, lower, upper, jband, jc, jd, je,  # noqa: ANN001, ANN201
+                ytmp, ftmp, scale):
+    """Colored forward-difference Jacobian of the bordered band structure.
+
+    Band columns are perturbed lower + upper + 1 at a time; each border column alone.
+    Border rows may depend only on the last lower + upper + 1 band columns (true on both
+    grids: only the outermost cells feed the edge).  Returns the number of rhs calls, or
+    -1 if a perturbed state is unphysical.
+    """
+    m = jband.shape[1]
+    p = je.shape[0]
+    w = lower + upper + 1
+    fd_scale(grid, y, geo, scale)
+    for i in range(y.size):
+        ytmp[i] = y[i]
+    jd[:, :] = 0.0
+    calls = 0
+    for color in range(min(w, m)):
+        for j in range(color, m, w):
+            ytmp[j] = y[j] + scale[j]
+        calls += 1
+        if not rhs(grid, ytmp, par, geo, ftmp, work):
+            return -1
+        for j in range(color, m, w):
+            d = scale[j]
+            for i in range(max(0, j - upper), min(m, j + lower + 1)):
+                jband[upper + i - j, j] = (ftmp[i] - f0[i]) / d
+            if j >= m - w:
+                for r in range(p):
+                    jd[r, j] = (ftmp[m + r] - f0[m + r]) / d
+            ytmp[j] = y[j]
+    for k in range(p):
+        d = scale[m + k]
+        ytmp[m + k] = y[m + k] + d
+        calls += 1
+        if not rhs(grid, ytmp, par, geo, ftmp, work):
+            return -1
+        for i in range(m):
+            jc[i, k] = (ftmp[i] - f0[i]) / d
+        for r in range(p):
+            je[r, k] = (ftmp[m + r] - f0[m + r]) / d
+        ytmp[m + k] = y[m + k]
+    return calls
+
+
+@njit(cache=True)
+def event(grid, y, geo):  # noqa: ANN001, ANN201
+    """Apply a discrete event to y in place (the Eulerian core merge); returns cells merged."""
+    if grid == EULERIAN:
+        return eulerian.merge_core(y, geo)
+    return 0

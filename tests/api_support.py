@@ -1,0 +1,130 @@
+"""Helpers for the API tests: an app served through httpx's ASGI transport, a real uvicorn."""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import AsyncIterator, Iterator
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import asynccontextmanager, contextmanager
+from pathlib import Path
+
+import httpx
+import pytest
+from dosing_fakes import FakeSolver
+from fastapi import FastAPI
+
+from api.client import AsyncClient
+from dosing import Planner
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@asynccontextmanager
+async def asgi(app: FastAPI) -> AsyncIterator[tuple[AsyncClient, httpx.AsyncClient]]:
+    """Run the app's lifespan; yield (api client, raw httpx client) on the ASGI transport."""
+    async with app.router.lifespan_context(app):
+        transport = httpx.ASGITransport(app=app)
+        async with AsyncClient("http://test", transport=transport) as api, \
+                httpx.AsyncClient(base_url="http://test", transport=transport) as raw:
+            yield api, raw
+
+
+def free_port() -> int:
+    """A free TCP port on the loopback interface."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@contextmanager
+def serve(cache: Path, *extra: str, timeout: float = 240.0) -> Iterator[str]:
+    """Run ``thermogel serve`` on a loopback port; yield its base URL; SIGKILL it after."""
+    port = free_port()
+    with _server([sys.executable, "-m", "api.cli", "serve", "--port", str(port), "--cache",
+                  str(cache), "--log-level", "warning", *extra], port, timeout) as (url, _):
+        yield url
+
+
+@contextmanager
+def fake_server(cache: Path, delay: float, timeout: float = 60.0) -> Iterator[tuple[str, object]]:
+    """The service with fake full-solver jobs (tests/api_fake_server.py); yields (url, proc)."""
+    port = free_port()
+    script = Path(__file__).with_name("api_fake_server.py")
+    with _server([sys.executable, str(script), str(port), str(cache), str(delay)], port,
+                 timeout) as pair:
+        yield pair
+
+
+@contextmanager
+def _server(cmd: list[str], port: int, timeout: float) -> Iterator[tuple[str, object]]:
+    """Start ``cmd`` (a server on ``port``), wait for /health, SIGKILL it afterwards."""
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    url = f"http://127.0.0.1:{port}"
+    try:
+        wait_healthy(url, proc, timeout)
+        yield url, proc
+    finally:
+        proc.kill()
+        proc.wait(timeout=10)
+        if proc.stderr:
+            proc.stderr.close()
+
+
+def wait_healthy(url: str, proc: subprocess.Popen, timeout: float) -> None:
+    """Poll /health until 200; fail with the server's stderr if it dies or times out."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            raise RuntimeError(f"server exited {proc.returncode}: {proc.stderr.read()}")
+        try:
+            if httpx.get(f"{url}/health", timeout=1.0).status_code == 200:
+                return
+        except httpx.TransportError:
+            pass
+        time.sleep(0.1)
+    proc.kill()
+    raise RuntimeError(f"server not healthy after {timeout} s: {proc.stderr.read()}")
+
+
+# ----------------------------------------------------------------------------- a fake solver
+
+class SlowFakeSolver(FakeSolver):
+    """The dosing tests' closed-form fake of ``solver.full.simulate``, taking ``delay`` s."""
+
+    def __init__(self, delay: float = 0.0) -> None:
+        super().__init__()
+        self.delay = delay
+
+    def __call__(self, *args: object, **kwargs: object) -> object:
+        time.sleep(self.delay)
+        return super().__call__(*args, **kwargs)
+
+
+@contextmanager
+def fake_full_solver(delay: float = 0.0) -> Iterator[SlowFakeSolver]:
+    """Replace ``solver.full`` by the fake while the block runs.  The planner's
+    ``run_scenario`` imports ``simulate`` when it runs, so a planner on a thread executor
+    (:func:`fake_planner`) runs every full-solver job on the fake, in milliseconds."""
+    fake = SlowFakeSolver(delay)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(sys.modules, "solver.full", fake.module())
+        yield fake
+
+
+@contextmanager
+def fake_planner(cache: Path, cls: type[Planner] = Planner, **kw: object) -> Iterator[Planner]:
+    """A planner running its full-solver jobs on one thread of this process (use it inside
+    :func:`fake_full_solver`); on exit, queued jobs are cancelled and the thread joined."""
+    pool = ThreadPoolExecutor(1, thread_name_prefix="fake-full")
+    planner = cls(cache_path=cache, executor=pool, **kw)
+    try:
+        yield planner
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+        planner.close()

@@ -1,0 +1,33 @@
+"""``thermogel front``: JSON series and clear errors."""
+
+import json
+
+import pytest
+
+from api.cli import main
+
+
+def test_front_json(capsys) -> None:  # noqa: ANN001
+    assert main(["front", "--gel", "HHT", "--t-start", "304", "--t-end", "308",
+                 "--every", "0.05", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["model"] == "front-leading" and out["start"] == "equilibrium"
+    assert len(out["t"]) == len(out["radius"]) == len(out["front"]) == 9
+    assert out["front"][-1] == 0.0 and out["t"][1] == 0.05
+
+
+def test_front_text_and_not_applicable(capsys) -> None:  # noqa: ANN001
+    assert main(["front", "--t-start", "302", "--t-end", "308", "--target-radius", "1.47"]) == 0
+    assert "front-leading" in capsys.readouterr().out
+    assert main(["front", "--t-start", "308", "--t-end", "302"]) == 2
+    assert "not applicable" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_front_started_from_the_full_solver(capsys) -> None:  # noqa: ANN001
+    assert main(["front", "--gel", "HHT", "--t-start", "304", "--t-end", "308",
+                 "--start-from-full", "0.01", "--paper-start", "--target-radius", "1.67",
+                 "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["start"] == "full@0.01" and out["t"][0] == 0.01
+    assert out["t"][-1] == pytest.approx(0.123, rel=0.04)  # the paper's HHT 80% dose

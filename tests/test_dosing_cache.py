@@ -1,0 +1,158 @@
+"""The validation cache: SQLite WAL, atomic rows, restarts, SIGKILL mid-write, concurrency."""
+
+import hashlib
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dosing import ValidationCache
+from dosing.scenario import Trajectory
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _traj(seed: int, n: int = 50) -> Trajectory:
+    rng = np.random.default_rng(seed)
+    t = np.sort(rng.random(n))
+    front = rng.random(n)
+    front[-5:] = np.nan  # no front at the end
+    return Trajectory(t=t, radius=2.0 - t, front=front, expelled_volume=t * 3.0,
+                      temperature=np.full(n, 308.0), meta={"seed": seed, "horizon": float(t[-1])})
+
+
+def test_round_trip_and_restart(tmp_path: Path) -> None:
+    path = tmp_path / "c.sqlite"
+    with ValidationCache(path) as cache:
+        for s in range(3):
+            cache.put_trajectory(f"k{s}", _traj(s))
+        cache.put_validation("v1", {"keys": ["k0"], "fraction": 0.8})
+        assert cache.get("missing") is None
+    with ValidationCache(path) as again:  # a restart: a new object on the same file
+        assert len(again) == 3 and again.keys() == ["k0", "k1", "k2"]
+        got, want = again.get("k1"), _traj(1)
+        for name in ("t", "radius", "front", "expelled_volume", "temperature"):
+            np.testing.assert_array_equal(getattr(got, name), getattr(want, name))
+        assert got.meta["seed"] == 1
+        assert again.get_validation("v1") == {"keys": ["k0"], "fraction": 0.8}
+        journal = again._con().execute("PRAGMA journal_mode").fetchone()[0]
+        assert journal == "wal"
+
+
+def test_put_if_longer_never_shortens(tmp_path: Path) -> None:
+    with ValidationCache(tmp_path / "c.sqlite") as cache:
+        assert cache.put_if_longer("k", {"horizon": 4.0}, b"long")
+        assert not cache.put_if_longer("k", {"horizon": 1.0}, b"short")
+        assert cache.meta("k")["horizon"] == 4.0
+        assert cache.put_if_longer("k", {"horizon": 16.0}, b"longer")
+
+
+def test_default_path_from_environment(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("THERMOGEL_CACHE", str(tmp_path / "env" / "v.sqlite"))
+    with ValidationCache() as cache:
+        assert cache.path == tmp_path / "env" / "v.sqlite" and cache.path.exists()
+
+
+_WRITER = textwrap.dedent("""
+    import hashlib, sys
+    import numpy as np
+    from dosing.cache import ValidationCache
+    cache = ValidationCache(sys.argv[1])
+    for i in range(1000):
+        data = np.random.default_rng(i).bytes(int(sys.argv[2]))
+        meta = {"i": i, "sha": hashlib.sha256(data).hexdigest()}
+        print("begin", i, flush=True)
+        cache.put(f"key{i}", meta, data)
+        print("done", i, flush=True)
+""")
+
+
+def test_sigkill_mid_write_keeps_every_committed_row(tmp_path: Path) -> None:
+    path = tmp_path / "killed.sqlite"
+    size = 24 * 2**20  # 24 MiB rows: a write takes long enough to be interrupted
+    proc = subprocess.Popen([sys.executable, "-c", _WRITER, str(path), str(size)],
+                            stdout=subprocess.PIPE, text=True, cwd=ROOT)
+    done: list[int] = []
+    killed_during = None
+    try:
+        for line in proc.stdout:
+            word, i = line.split()
+            if word == "done":
+                done.append(int(i))
+            elif int(i) >= 2:
+                time.sleep(0.005)  # inside cache.put of row i
+                proc.send_signal(signal.SIGKILL)
+                killed_during = int(i)
+                break
+    finally:
+        proc.kill()
+        rest = proc.communicate(timeout=30)[0]
+    assert proc.returncode == -signal.SIGKILL
+    done += [int(x.split()[1]) for x in rest.splitlines() if x.startswith("done")]
+    assert done == list(range(len(done))) and len(done) >= 2
+    assert killed_during not in done  # the kill landed before that write returned
+    with ValidationCache(path) as cache:
+        assert cache.integrity() == "ok"
+        keys = set(cache.keys())
+        assert {f"key{i}" for i in done} <= keys
+        assert keys <= {f"key{i}" for i in range(killed_during + 1)}
+        for key in keys:  # every row there is whole
+            row = cache._con().execute("SELECT meta, data FROM trajectories WHERE key = ?",
+                                       (key,)).fetchone()
+            meta = __import__("json").loads(row[0])
+            assert hashlib.sha256(bytes(row[1])).hexdigest() == meta["sha"]
+        cache.put("after", {"i": -1}, b"x")  # and writable again
+        assert "after" in cache
+
+
+_WORKER = textwrap.dedent("""
+    import sys
+    from dosing.cache import ValidationCache
+    cache, me = ValidationCache(sys.argv[1]), int(sys.argv[2])
+    seen = 0
+    for i in range(15):
+        cache.put(f"p{me}-{i}", {"me": me, "i": i}, bytes([me]) * 200_000)
+        for k in cache.keys():
+            row = cache.meta(k)
+            assert row is not None
+            seen += 1
+    print(seen)
+""")
+
+
+@pytest.mark.slow
+def test_concurrent_processes_and_threads(tmp_path: Path) -> None:
+    path = tmp_path / "shared.sqlite"
+    ValidationCache(path).close()
+    procs = [subprocess.Popen([sys.executable, "-c", _WORKER, str(path), str(me)],
+                              stdout=subprocess.PIPE, text=True, cwd=ROOT) for me in range(2)]
+    cache = ValidationCache(path)
+    errors: list[BaseException] = []
+
+    def thread_work(me: int) -> None:
+        try:
+            for i in range(15):
+                cache.put_trajectory(f"t{me}-{i}", _traj(i))
+                assert cache.get(f"t{me}-{i}") is not None
+        except BaseException as exc:  # noqa: BLE001
+            errors.append(exc)
+
+    threads = [threading.Thread(target=thread_work, args=(me,)) for me in range(4)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    outs = [p.communicate(timeout=120) for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], outs
+    assert not errors
+    assert len(cache) == 2 * 15 + 4 * 15
+    assert cache.integrity() == "ok"
+    cache.close()
+    assert os.path.getsize(path) > 0

@@ -1,0 +1,64 @@
+"""`thermogel dose` / `thermogel schedule` and the README's Python example (issue 5)."""
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from api.cli import main
+from dosing.units import timescale
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def _json(capsys: pytest.CaptureFixture, argv: list[str]) -> dict:
+    assert main(argv) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_dose_json_front_model(capsys, tmp_path: Path) -> None:
+    out = _json(capsys, ["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308",
+                         "--fraction", "0.8", "--dry-radius-um", "50", "--json",
+                         "--cache", str(tmp_path / "c.sqlite")])
+    assert out["model"] == "front" and out["validation"] is None
+    assert out["final_radius"] == pytest.approx(1.4750, abs=1e-4)
+    assert out["seconds"] == pytest.approx(out["time"] * timescale(50, 308).seconds, rel=1e-12)
+    assert "eta Omega_p R^2" in out["timescale_formula"]
+
+
+def test_dose_text_and_errors(capsys, tmp_path: Path) -> None:
+    assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction",
+                 "0.5", "--swollen-radius-um", "100", "--viscosity", "water",
+                 "--cache", str(tmp_path / "c.sqlite")]) == 0
+    text = capsys.readouterr().out
+    assert "front model: heat for t =" in text and " s\n" in text and "tau =" in text
+    assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308",
+                 "--fraction", "1.5", "--cache", str(tmp_path / "c.sqlite")]) == 2
+    assert "dose_fraction" in capsys.readouterr().err
+    assert main(["dose", "--gel", "ANB", "--t-start", "308", "--t-end", "302",
+                 "--fraction", "0.5", "--cache", str(tmp_path / "c.sqlite")]) == 2
+    assert "t_end" in capsys.readouterr().err
+    assert main(["dose", "--gel", "XYZ", "--t-start", "302", "--t-end", "308",
+                 "--fraction", "0.5", "--cache", str(tmp_path / "c.sqlite")]) == 2
+    assert "gel" in capsys.readouterr().err
+
+
+def test_schedule_hold_only_json(capsys, tmp_path: Path) -> None:
+    out = _json(capsys, ["schedule", "--gel", "ANB", "--t-start", "302", "--t-end", "308",
+                         "--doses", "0.3", "0.3", "0.3", "--rests", "0.5", "0.5",
+                         "--no-check", "--no-correct", "--json",
+                         "--cache", str(tmp_path / "c.sqlite")])
+    assert out["model"] == "front" and out["protocol_check"] is None
+    ends = [h["end"] for h in out["hold"]]
+    assert ends == sorted(ends) and out["hold"][0]["start"] == 0.0
+
+
+def test_readme_python_example_runs(tmp_path: Path, monkeypatch, capsys) -> None:
+    text = README.read_text()
+    section = text.split("## Python use", 1)[1]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    monkeypatch.setenv("THERMOGEL_CACHE", str(tmp_path / "readme.sqlite"))
+    exec(compile(code, "README.md", "exec"), {})
+    out = capsys.readouterr().out
+    assert out.startswith("front t = 0.09") and "tau = eta Omega_p" in out

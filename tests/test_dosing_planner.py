@@ -1,0 +1,180 @@
+"""Planner logic on a fake full solver with a closed-form a(t): model choice, validations,
+error estimates, deduplication, restarts, failures, horizon extension, schedules.
+
+The real solver's numbers are checked in test_dosing_validation.py.
+"""
+
+import sys
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+from dosing_fakes import FakeSolver, exact_time
+
+from dosing import DoseRequest, Planner, QueueFullError, ScheduleRequest, UnknownValidationError
+from dosing.planner import front_prior
+from dosing.units import expelled_volume, radius_after_dose
+from solver import HHT, equilibrium
+from solver.equilibrium import nearest_stable
+
+SMOOTH = {"gel": "HHT", "t_start": 304.0, "t_end": 307.6}  # the classifier says smooth
+FRONT = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0}
+
+
+@pytest.fixture
+def fake(monkeypatch: pytest.MonkeyPatch) -> FakeSolver:
+    f = FakeSolver()
+    monkeypatch.setitem(sys.modules, "solver.full", f.module())
+    return f
+
+
+def _planner(path: Path, workers: int = 2, **kw) -> Planner:
+    return Planner(cache_path=path, executor=ThreadPoolExecutor(workers), **kw)
+
+
+@pytest.fixture
+def planner(tmp_path: Path, fake: FakeSolver):
+    p = _planner(tmp_path / "c.sqlite")
+    yield p
+    p.close()
+    p.jobs.executor.shutdown()
+
+
+def _wait(planner: Planner, vid: str, timeout: float = 20.0):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        st = planner.validation(vid)
+        if st.status in ("done", "failed"):
+            return st
+        time.sleep(0.02)
+    raise AssertionError("validation did not finish")
+
+
+def test_smooth_jump_is_answered_by_the_full_solver_on_both_grids(planner, fake) -> None:
+    req = DoseRequest(**SMOOTH, dose_fraction=0.5)
+    ans = planner.dose(req)
+    a0 = req.start_radius
+    af = nearest_stable(HHT, 307.6, a0).stretch
+    a = radius_after_dose(a0, 0.5)
+    assert ans.model == "full" and ans.behaviour == "smooth"
+    # 400 samples (h = 0.0025) per step, a^3 interpolated linearly: the read-off of
+    # exp(-k t) is exact to (k h)^2 / (8 k) = 8e-6 for k = 10
+    assert ans.time == pytest.approx(exact_time(a0, af, a), abs=1e-5)
+    grids = ans.validation["grids"]
+    assert grids["lagrangian"]["time"] == pytest.approx(exact_time(a0, af, a, "lagrangian"),
+                                                        abs=1e-5)
+    assert ans.validation["grid_spread"] == pytest.approx(0.25, rel=1e-3)  # rates 10 vs 8
+    assert ans.error_estimate == pytest.approx(0.25, rel=1e-3)
+    assert "disagree by 25%" in ans.error_explanation
+    assert len(fake.calls) == 2
+    assert planner.dose(req).time == ans.time and len(fake.calls) == 2  # served by the cache
+
+
+def test_front_answer_needs_no_full_solver_then_validation_adds_both_grids(planner,
+                                                                           fake) -> None:
+    req = DoseRequest(**FRONT, dose_fraction=0.8)
+    quick = planner.dose(req)
+    assert quick.model == "front" and quick.validation is None and not fake.calls
+    assert quick.error_estimate == front_prior(0.8) == 0.8
+    assert "Not yet checked" in quick.error_explanation
+    checked = planner.dose(req, validate=True)
+    v = checked.validation
+    t_e, t_l = v["grids"]["eulerian"]["time"], v["grids"]["lagrangian"]["time"]
+    assert v["time"] == t_e and v["truth_grid"] == "eulerian" and v["front_time"] == quick.time
+    assert v["front_time_error"] == pytest.approx((quick.time - t_e) / t_e, rel=1e-12)
+    a0, a = req.start_radius, quick.final_radius
+    af = nearest_stable(req.gel, 308.0, a0).stretch
+    a_full = ((a0**3 - af**3) * __import__("math").exp(-10.0 * quick.time) + af**3) ** (1 / 3)
+    want = (expelled_volume(a0, a_full) - expelled_volume(a0, a)) / expelled_volume(a0, a)
+    assert v["front_volume_error"] == pytest.approx(want, abs=1e-4)
+    est = max(abs(quick.time - t_e), abs(quick.time - t_l)) / quick.time
+    assert checked.error_estimate == pytest.approx(est, rel=1e-12)
+    assert "on the eulerian grid" in checked.error_explanation
+    assert "lagrangian" in checked.error_explanation
+    again = planner.dose(req)  # a later plain answer carries the cached validation
+    assert again.validation == v and len(fake.calls) == 2
+
+
+def test_submit_validation_returns_at_once_dedups_and_survives_restart(tmp_path: Path,
+                                                                      fake) -> None:
+    fake.gate = threading.Event()
+    path = tmp_path / "c.sqlite"
+    p = _planner(path, workers=4)
+    t0 = time.perf_counter()
+    vid = p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.8))
+    vid2 = p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.5))
+    assert time.perf_counter() - t0 < 1.0 and vid != vid2
+    assert p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.8)) == vid
+    assert p.validation(vid).status in ("pending", "running")
+    fake.gate.set()
+    st = _wait(p, vid)
+    assert st.status == "done" and st.result["time"] > 0
+    assert set(st.result["grids"]) == {"eulerian", "lagrangian"}
+    assert st.result["front_time_error"] is not None
+    assert st.result["front_volume_error"] is not None
+    assert _wait(p, vid2).status == "done"
+    assert len(fake.calls) == 2  # one run per grid served both doses
+    p.close()
+    p.jobs.executor.shutdown()
+    again = _planner(path)  # a restart: same file, new planner
+    assert again.validation(vid).result == st.result and len(fake.calls) == 2
+    with pytest.raises(UnknownValidationError):
+        again.validation("nope")
+    again.close()
+    again.jobs.executor.shutdown()
+
+
+def test_failed_validation_reports_the_error(planner, fake) -> None:
+    fake.fail = "boom: step budget exhausted"
+    vid = planner.submit_validation(DoseRequest(**FRONT, dose_fraction=0.3))
+    st = _wait(planner, vid)
+    assert st.status == "failed" and "boom" in st.error
+
+
+def test_queue_is_bounded(tmp_path: Path, fake) -> None:
+    fake.gate = threading.Event()
+    p = _planner(tmp_path / "c.sqlite", max_pending=1)
+    with pytest.raises(QueueFullError) as err:
+        p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.3))  # two grids, room for one
+    assert err.value.retry_after > 0
+    fake.gate.set()
+    p.close()
+    p.jobs.executor.shutdown()
+
+
+def test_long_doses_extend_the_run_under_one_key(tmp_path: Path, monkeypatch) -> None:
+    slow = FakeSolver(rate_scale=0.05)  # 70 % takes t = 3.0: beyond the first horizon 1
+    monkeypatch.setitem(sys.modules, "solver.full", slow.module())
+    p = _planner(tmp_path / "c.sqlite")
+    req = DoseRequest(**SMOOTH, dose_fraction=0.7)
+    ans = p.dose(req)
+    a0 = req.start_radius
+    af = nearest_stable(HHT, 307.6, a0).stretch
+    assert ans.time == pytest.approx(exact_time(a0, af, ans.final_radius, scale=0.05), rel=1e-4)
+    assert ans.time > 1.0
+    meta = p.cache.meta(ans.scenario_key)
+    assert meta["runs"] == 2 and meta["horizon"] == pytest.approx(4.0)
+    assert len(p.cache) == 2  # one row per scenario (grid), extended in place
+    p.close()
+    p.jobs.executor.shutdown()
+
+
+def test_schedule_on_the_fake_solver(planner, fake) -> None:
+    req = ScheduleRequest(**SMOOTH, doses=[0.2, 0.2, 0.2], rests=[0.1, 0.1],
+                          dry_radius_um=50.0)
+    ans = planner.schedule(req)
+    a0 = equilibrium(HHT, 304.0).stretch
+    af = nearest_stable(HHT, 307.6, a0).stretch
+    ends = [exact_time(a0, af, radius_after_dose(a0, f)) for f in (0.2, 0.4, 0.6)]
+    assert [h["end"] for h in ans.hold] == pytest.approx(ends, abs=1e-5)  # (kh)^2/(8k) = 8e-6
+    chk = ans.protocol_check
+    assert chk["relative_errors"][0] == pytest.approx(0.0, abs=1e-4)  # no rest before dose 1
+    assert all(u > 0.01 for u in chk["rest_uptake_fractions"])  # it re-swells at rest
+    assert chk["delivered_fractions"][1] > 0.2  # restarting from a larger radius: faster
+    cor = ans.corrected
+    assert cor["met"] and max(abs(e) for e in cor["relative_errors"]) <= 0.01
+    assert cor["actuation_seconds"][0] == pytest.approx(cor["actuation_times"][0]
+                                                        * ans.timescale_seconds)
+    assert "2205" not in ans.timescale_formula  # T_end = 307.6 K here

@@ -1,0 +1,95 @@
+"""Extreme inputs converge or fail with SolverError (never NaN, never a hang); bad input
+raises ParameterError naming the field."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from solver.errors import ParameterError, SolverError
+from solver.full import simulate
+from solver.gel import ANB, HHT
+
+
+def _finite_or_solver_error(**kwargs: object) -> object:
+    try:
+        res = simulate(**kwargs)
+    except SolverError as exc:
+        assert exc.diagnostics["steps"] >= 0 and "grid" in exc.diagnostics
+        return None
+    for name in ("t", "radius", "phi", "solid_error", "expelled_volume"):
+        assert np.all(np.isfinite(getattr(res, name))), name
+    return res
+
+
+@pytest.mark.parametrize("grid", ["eulerian", "lagrangian"])
+def test_huge_jump_290_to_320(grid: str) -> None:
+    # deep inside the spinodal at 320 K: flagged, or (Eulerian: the centre cell cavitates
+    # among the collapsing shells) a SolverError that says so
+    try:
+        res = simulate(ANB, 290, 320, until=0.3, n=60, grid=grid, rtol=1e-5)
+    except SolverError as exc:
+        assert "spinodal" in str(exc) and exc.diagnostics["spinodal_time"] < exc.diagnostics["t"]
+        return
+    assert res.spinodal and np.all(np.isfinite(res.radius)) and np.all(np.isfinite(res.phi))
+
+
+def test_huge_cooling_320_to_290() -> None:
+    res = _finite_or_solver_error(gel=ANB, t_start=320, t_end=290, until=2.0, n=60)
+    assert res is not None and res.radius[-1] > 2.5
+
+
+@pytest.mark.parametrize("grid", ["eulerian", "lagrangian"])
+@pytest.mark.parametrize(("t0", "t1"), [(302, 308), (308, 302)])
+def test_omega_1e4(grid: str, t0: float, t1: float) -> None:
+    gel = replace(ANB, omega=1e4)
+    _finite_or_solver_error(gel=gel, t_start=t0, t_end=t1, until=0.1, n=60, grid=grid,
+                            rtol=1e-5)
+
+
+@pytest.mark.parametrize("beta", [1.5, 2.0])
+def test_power_law_permeability(beta: float) -> None:
+    gel = ANB.with_permeability("power", beta)
+    res = _finite_or_solver_error(gel=gel, t_start=302, t_end=308, until=0.05, n=60)
+    assert res is not None and np.all(np.diff(res.radius) <= 1e-12)
+
+
+def test_start_just_past_a_fold() -> None:
+    # HHT's swelling fold is ~307.6 K: 0.01 K past it the shrinkage is critically slow
+    res = _finite_or_solver_error(gel=HHT, t_start=304, t_end=307.61, until=2.0, n=60)
+    assert res is not None
+
+
+def test_step_budget_raises_with_diagnostics() -> None:
+    with pytest.raises(SolverError, match="budget") as err:
+        simulate(ANB, 302, 308, until=0.3, n=60, max_steps=50)
+    d = err.value.diagnostics
+    assert d["steps"] == 50 and d["grid"] == "eulerian" and d["t"] < 0.3
+
+
+@pytest.mark.parametrize(("kwargs", "field"), [
+    ({"t_end": 308}, "protocol"),
+    ({"t_end": 308, "until": 0.1, "protocol": [(0.1, 308)]}, "protocol"),
+    ({"protocol": [(-1.0, 308)]}, "protocol[0].duration"),
+    ({"protocol": [(0.1, 400)]}, "protocol[0].temperature"),
+    ({"t_end": 308, "until": 0.1, "grid": "polar"}, "grid"),
+    ({"t_end": 308, "until": 0.1, "n": 3}, "n"),
+    ({"t_end": 308, "until": 0.1, "integrator": "rk4"}, "integrator"),
+    ({"t_end": 308, "until": 0.1, "rtol": 0.0}, "rtol"),
+    ({"t_end": 308, "until": 0.1, "dt": 1e-6}, "dt"),
+    ({"t_end": 308, "until": 0.1, "every": 1e-9}, "every"),
+    ({"t_end": 308, "until": 0.1, "branch": "middle"}, "branch"),
+    ({"t_end": 308, "until": 0.1, "initial": (2.0, [0.5, 0.5])}, "initial"),
+])
+def test_invalid_input_names_the_field(kwargs: dict, field: str) -> None:
+    with pytest.raises(ParameterError) as err:
+        simulate(ANB, 302, n=kwargs.pop("n", 40), **kwargs)
+    assert err.value.field == field
+
+
+def test_bad_start_temperature() -> None:
+    with pytest.raises(ParameterError) as err:
+        simulate(ANB, 500, 308, until=0.1, n=40)
+    assert err.value.field == "t_start"
