@@ -96,6 +96,22 @@ def resolve_dry_radius(dry_radius_um: float | None, swollen_radius_um: float | N
     return None
 
 
+
+def _resolve_scenario(req: Any) -> tuple[Jump, float | None]:
+    """Validate and normalise the fields a dose and a schedule request share (in place)."""
+    gel = resolve_gel(req.gel)
+    object.__setattr__(req, "gel", gel)
+    object.__setattr__(req, "constants", _constants(req.constants))
+    object.__setattr__(req, "settings", _settings(req.settings))
+    jump = resolve_jump(gel, req.t_start, req.t_end, req.branch)
+    object.__setattr__(req, "jump", jump)
+    object.__setattr__(req, "t_start", jump.t_start)
+    object.__setattr__(req, "t_end", jump.t_end)
+    object.__setattr__(req, "branch", jump.branch)
+    dry = resolve_dry_radius(req.dry_radius_um, req.swollen_radius_um, jump.start_radius)
+    object.__setattr__(req, "bead_dry_radius_um", dry)
+    return jump, dry
+
 def _constants(value: PhysicalConstants | dict[str, Any] | None) -> PhysicalConstants:
     if value is None:
         return PhysicalConstants()
@@ -158,17 +174,7 @@ class DoseRequest:
     fraction: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        gel = resolve_gel(self.gel)
-        object.__setattr__(self, "gel", gel)
-        object.__setattr__(self, "constants", _constants(self.constants))
-        object.__setattr__(self, "settings", _settings(self.settings))
-        jump = resolve_jump(gel, self.t_start, self.t_end, self.branch)
-        object.__setattr__(self, "jump", jump)
-        object.__setattr__(self, "t_start", jump.t_start)
-        object.__setattr__(self, "t_end", jump.t_end)
-        object.__setattr__(self, "branch", jump.branch)
-        dry = resolve_dry_radius(self.dry_radius_um, self.swollen_radius_um, jump.start_radius)
-        object.__setattr__(self, "bead_dry_radius_um", dry)
+        jump, dry = _resolve_scenario(self)
         object.__setattr__(self, "fraction", self._resolve_fraction(jump, dry))
 
     def _resolve_fraction(self, jump: Jump, dry: float | None) -> float:
@@ -252,17 +258,7 @@ class ScheduleRequest:
     bead_dry_radius_um: float | None = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        gel = resolve_gel(self.gel)
-        object.__setattr__(self, "gel", gel)
-        object.__setattr__(self, "constants", _constants(self.constants))
-        object.__setattr__(self, "settings", _settings(self.settings))
-        jump = resolve_jump(gel, self.t_start, self.t_end, self.branch)
-        object.__setattr__(self, "jump", jump)
-        object.__setattr__(self, "t_start", jump.t_start)
-        object.__setattr__(self, "t_end", jump.t_end)
-        object.__setattr__(self, "branch", jump.branch)
-        dry = resolve_dry_radius(self.dry_radius_um, self.swollen_radius_um, jump.start_radius)
-        object.__setattr__(self, "bead_dry_radius_um", dry)
+        jump, dry = _resolve_scenario(self)
         doses = tuple(self.doses or ())
         if not doses:
             raise ParameterError("doses", self.doses, "a non-empty list of fractions")

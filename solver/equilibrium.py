@@ -10,6 +10,7 @@ bracketed between consecutive critical points of g, where g is monotone.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from functools import lru_cache
 from typing import Literal
 
 import numpy as np
@@ -113,9 +114,14 @@ def equilibria(gel: Gel, temperature: float) -> list[Equilibrium]:
     """All free-swelling equilibria at T, smallest stretch first (eq. EqlEqn).
 
     Roots are bracketed between the critical points of the residual (where it is
-    monotone), then found with brentq; no Newton iteration from a guess.
+    monotone), then found with brentq; no Newton iteration from a guess.  Results are
+    memoised per (gel, T): the gel is immutable and the planner asks the same often.
     """
-    t = check_temperature(temperature)
+    return list(_equilibria(gel, check_temperature(temperature)))
+
+
+@lru_cache(maxsize=4096)
+def _equilibria(gel: Gel, t: float) -> tuple[Equilibrium, ...]:
     _, _, dc, dd = _parts(gel, _GRID)
     slope = dc + t * dd
     crit = _sign_change_roots(lambda lam: residual_slope(gel, t, lam), _GRID, slope)
@@ -128,7 +134,7 @@ def equilibria(gel: Gel, temperature: float) -> list[Equilibrium]:
         out.append(Equilibrium(temperature=t, stretch=float(lam),
                                porosity=float(1.0 - lam**-3.0),
                                stable=bool(residual_slope(gel, t, lam) > 0.0)))
-    return out
+    return tuple(out)
 
 
 def equilibrium(gel: Gel, temperature: float, branch: Branch = "swollen") -> Equilibrium:

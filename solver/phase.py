@@ -11,6 +11,7 @@ min_n [W(n, lambda) - W(lambda, lambda) - dW/dn(lambda, lambda) (n - lambda)] < 
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from functools import lru_cache
 from typing import Literal
 
 import numpy as np
@@ -189,6 +190,12 @@ def classify_jump(gel: Gel, t_start: float, t_end: float, branch: Branch | None 
         branch = "swollen" if t1 >= t0 else "shrunken"
     if branch not in ("swollen", "shrunken"):
         raise ParameterError("branch", branch, "'swollen' or 'shrunken'")
+    return _classify(gel, t0, t1, branch, int(path_samples))
+
+
+@lru_cache(maxsize=1024)
+def _classify(gel: Gel, t0: float, t1: float, branch: Branch, path_samples: int) -> JumpClass:
+    """:func:`classify_jump` on validated inputs, memoised (the gel is immutable)."""
     lam0 = equilibrium(gel, t0, branch).stretch
     lam1 = nearest_stable(gel, t1, lam0).stretch
     if abs(lam1 - lam0) <= 1e-12 * lam0:
