@@ -15,7 +15,8 @@ For each of the paper's cases (ANB 302->308, 308->302, 308->304; HHT 304->308, 3
   * the full solver (implicit) over a sweep of N on both grids, and over a sweep of rtol;
   * the paper's explicit forward Euler (N and dt of the paper), timed from a short partial run
     and extrapolated to the whole run (its error is that of its semi-discretization);
-  * the front model from the bare equilibrium and from the full solution at the paper's t0.
+  * the front model (and issue 8's sharp-interface one, where present) from the bare
+    equilibrium and from the full solution at the paper's t0.
 Per method: wall time (median of repeats after warm-up), max relative error of a(t) (dense, as
 benchmarks/full_solver.py), max error of R_f(t) where the reference has a front, and the
 relative error of the time to expel 80% of the stored fluid (swelling cases: to take up 80%
@@ -50,6 +51,11 @@ from solver.front import fraction_radius, front_applicability, front_trajectory
 from solver.full import FullResult, simulate
 from solver.gel import Gel, preset
 from solver.phase import classify_jump
+
+try:  # issue 8's sharp-interface front model, where present
+    from solver.front.sharp import sharp_front_trajectory
+except ImportError:  # pragma: no cover - older trees
+    sharp_front_trajectory = None
 
 Log = Callable[[str], None]
 FRONT_KINDS = ("front", "delayed_front")
@@ -374,14 +380,17 @@ REFERENCE_COLUMNS = ("case", "behaviour", "grid", "n", "rtol", "ell", "a80", "t8
 
 
 def reference_setting(case: Case, plan: Plan, ell: float | None) -> tuple[str, float]:
-    """(grid, rtol) of the reference.  Smooth cases: Eulerian at ``ref_rtol``.  Front cases:
-    at the sweep's rtol, where the time error (the rtol sweep's err_a_same_n, ~1e-5) is far
+    """(grid, rtol) of the reference.  Smooth cases: Eulerian at ``ref_rtol``.  Delayed
+    fronts: Eulerian at the rtol sweep's tightest (shared with it; ``ref_rtol`` on the finest
+    grid costs minutes there).  Fronts: at the sweep's rtol, whose time error (~1e-5) is far
     below the grid error, so the ladder shares the sweep's runs; on the Lagrangian grid when
     regularized (it resolves the interface with the fewest cells), else on the paper's
     Eulerian grid (whose front speed keeps moving with N: no converged reference exists)."""
-    if case.behaviour not in FRONT_KINDS:
-        return "eulerian", plan.ref_rtol
-    return ("lagrangian" if ell is not None else "eulerian"), plan.rtol
+    if case.behaviour == "front":
+        return ("lagrangian" if ell is not None else "eulerian"), plan.rtol
+    if case.behaviour == "delayed_front":
+        return "eulerian", min(plan.rtols)
+    return "eulerian", plan.ref_rtol
 
 
 def reference(case: Case, plan: Plan, runner: Runner, ell: float | None) -> Reference:
@@ -521,8 +530,9 @@ def explicit_row(case: Case, plan: Plan, runner: Runner, ref: Reference) -> dict
         row.update(dt=dt, wall_s=wall / part.diagnostics["steps"] * steps, steps=steps,
                    timing=f"extrapolated from {part.diagnostics['steps']} steps "
                           f"(t <= {horizon:.2g}) timed in {wall:.2f} s",
-                   note=(f"errors: its semi-discretization's (implicit N={n}, rtol "
-                         f"{min(plan.rtols):g}); the partial run matched it to {gap:.1e}"
+                   note=(f"errors: its semi-discretization's (the paper's model, implicit "
+                         f"N={n}, rtol {min(plan.rtols):g}); the partial run matched it to "
+                         f"{gap:.1e}"
                          + (f"; unstable at dt = {', '.join(unstable)}" if unstable else "")))
         return row
     row.update(status="failed", err_a=None, err_front=None, err_t80=None, t80=None,
@@ -530,44 +540,58 @@ def explicit_row(case: Case, plan: Plan, runner: Runner, ref: Reference) -> dict
     return row
 
 
+def front_models() -> list[tuple[str, Callable[..., Any]]]:
+    """(label, trajectory function): the paper's front model and, where present, issue 8's
+    sharp-interface-consistent one."""
+    models: list[tuple[str, Callable[..., Any]]] = [("front model", front_trajectory)]
+    if sharp_front_trajectory is not None:
+        models.append(("sharp front model", sharp_front_trajectory))
+    return models
+
+
 def front_rows(case: Case, plan: Plan, ref: Reference) -> list[dict[str, Any]]:
-    """The front model from the bare equilibrium and from the reference's state at the
-    paper's t0 (conservative form), where the model applies (else no rows).  The a(t) error
-    covers the model's range [t0, front at the centre]."""
+    """Each front model from the bare equilibrium and from the reference's state at the
+    paper's t0 ('full@t0', conservative form), where the model applies (else no rows).  The
+    a(t) error covers the model's range [t0, front at the centre]."""
     gel = preset(case.gel)
     if case.behaviour != "front" or not front_applicability(gel, case.t_start, case.t_end)[0]:
         return []
     starts: list[tuple[str, tuple[float, float, float] | None]] = [("equilibrium", None)]
     if case.front_start is not None:
         a, rf, _ = ref.result.state_at(case.front_start)
-        starts.append((f"full@{case.front_start:g}", (case.front_start, a, rf)))
-    times = np.linspace(0.0, case.until, 4001)
-    rows = []
-    for label, start in starts:
-        def solve(start: tuple[float, float, float] | None = start) -> Any:
-            return front_trajectory(gel, case.t_start, case.t_end, start=start)
+        starts.append(("full@t0", (case.front_start, a, rf)))
+    return [front_row(case, plan, ref, model, fun, start_label, start)
+            for model, fun in front_models() for start_label, start in starts]
 
-        res = solve()
-        wall = median_time(solve, plan.front_repeats)
-        inside = times[(times >= res.t[0]) & (times <= res.t_stop)]
-        x = res.curve.front_at(inside)
-        a = res.curve.radius(x)
-        b = dense_radius(ref.result, inside)
-        row: dict[str, Any] = dict.fromkeys(COLUMNS)
-        row.update(case=case.name, behaviour=case.behaviour,
-                   method=f"front model ({label} start)", wall_s=wall,
-                   timing=f"median of {plan.front_repeats}", status="ok",
-                   err_a=float(np.max(np.abs(a / b - 1.0))),
-                   err_front=front_error(inside, x, ref.result),
-                   note=f"a(t) and R_f(t) compared over t = {res.t[0]:g}..{res.t_stop:.3g} "
-                        "(front at the centre)")
-        try:
-            row["t80"] = res.time_to_radius(ref.a80)
-        except (ParameterError, NotApplicableError) as exc:
-            row["note"] += f"; no 80% time: {exc}"
-        row["err_t80"] = relative(row["t80"], ref.t80)
-        rows.append(row)
-    return rows
+
+def front_row(case: Case, plan: Plan, ref: Reference, model: str, fun: Callable[..., Any],
+              start_label: str, start: tuple[float, float, float] | None) -> dict[str, Any]:
+    """One front-model trajectory timed (median of plan.front_repeats) and measured."""
+    gel = preset(case.gel)
+
+    def solve() -> Any:
+        return fun(gel, case.t_start, case.t_end, start=start)
+
+    res = solve()
+    wall = median_time(solve, plan.front_repeats)
+    times = np.linspace(0.0, case.until, 4001)
+    inside = times[(times >= res.t[0]) & (times <= res.t_stop)]
+    x = res.curve.front_at(inside)
+    b = dense_radius(ref.result, inside)
+    row: dict[str, Any] = dict.fromkeys(COLUMNS)
+    row.update(case=case.name, behaviour=case.behaviour, method=f"{model} ({start_label} start)",
+               wall_s=wall, timing=f"median of {plan.front_repeats}", status="ok",
+               err_a=float(np.max(np.abs(res.curve.radius(x) / b - 1.0))),
+               err_front=front_error(inside, x, ref.result),
+               note=(f"t0 = {start[0]:g}; " if start else "")
+               + f"a(t) and R_f(t) compared over t = {res.t[0]:g}..{res.t_stop:.3g} "
+                 "(front at the centre)")
+    try:
+        row["t80"] = res.time_to_radius(ref.a80)
+    except (ParameterError, NotApplicableError) as exc:
+        row["note"] += f"; no 80% time: {exc}"
+    row["err_t80"] = relative(row["t80"], ref.t80)
+    return row
 
 
 # --- the report ---------------------------------------------------------------------------------
@@ -631,7 +655,7 @@ def headline(report: Report) -> list[dict[str, Any]]:
     """Per case: the reference's 80% time, the paper's explicit scheme (extrapolated), the
     planner's validation truth (e400: the paper's model, Eulerian, N=400, rtol 1e-6), the
     cheapest full-solver run within 1% of the reference on both a(t) and the 80% time, and
-    the front model from the bare equilibrium."""
+    the front models (the paper's, and issue 8's sharp one) from the bare equilibrium."""
     out = []
     for ref in report.references:
         rows = [r for r in report.rows if r["case"] == ref.case.name]
@@ -644,6 +668,8 @@ def headline(report: Report) -> list[dict[str, Any]]:
                         and "N sweep" in r["method"]), None)
         expl = next((r for r in rows if r["method"].startswith("explicit")), None)
         front = next((r for r in rows if r["method"] == "front model (equilibrium start)"), None)
+        sharp = next((r for r in rows if r["method"] == "sharp front model (equilibrium start)"),
+                     None)
         out.append({
             "case": ref.case.name, "behaviour": ref.case.behaviour, "t80": ref.t80,
             "reference": ("converged" if ref.converged else "not converged")
@@ -655,13 +681,14 @@ def headline(report: Report) -> list[dict[str, Any]]:
             "best_within_1pct": best and f"{best['grid']} N={best['n']} rtol={best['rtol']:g}",
             "best_wall_s": best and best["wall_s"],
             "front_wall_s": front and front["wall_s"],
-            "front_err_t80": front and front["err_t80"]})
+            "front_err_t80": front and front["err_t80"],
+            "sharp_err_t80": sharp and sharp["err_t80"]})
     return out
 
 
 HEADLINE_COLUMNS = ("case", "behaviour", "t80", "reference", "explicit_wall_s", "e400_wall_s",
                     "e400_err_a", "e400_err_t80", "best_within_1pct", "best_wall_s",
-                    "front_wall_s", "front_err_t80")
+                    "front_wall_s", "front_err_t80", "sharp_err_t80")
 
 
 def fmt(value: Any) -> str:

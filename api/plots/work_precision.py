@@ -29,6 +29,7 @@ def draw_work_precision(rows: Sequence[dict[str, Any]], out: Path,
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
 
     cases = list(dict.fromkeys(r["case"] for r in rows))
     methods = list(dict.fromkeys(r["method"] for r in rows))
@@ -49,6 +50,7 @@ def draw_work_precision(rows: Sequence[dict[str, Any]], out: Path,
                     mfc="none" if hollow else colour)
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_title(case, fontsize=10)
         ax.set_xlabel(METRICS[metric], fontsize=8)
         ax.set_ylabel("wall time (s)", fontsize=8)
