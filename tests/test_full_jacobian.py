@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from jacobian_support import dense_jacobian
 
 from solver.equilibrium import equilibrium
 from solver.full import eulerian, lagrangian
@@ -17,16 +18,6 @@ from solver.full.system import JAC_ANALYTIC, JAC_FD, linearize
 from solver.gel import ANB
 
 N = 40
-
-
-def _dense(ws: Workspace) -> np.ndarray:
-    m, p = ws.jband.shape[1], ws.je.shape[0]
-    out = np.zeros((m + p, m + p))
-    for j in range(m):
-        for i in range(max(0, j - ws.upper), min(m, j + ws.lower + 1)):
-            out[i, j] = ws.jband[ws.upper + i - j, j]
-    out[:m, m:], out[m:, :m], out[m:, m:] = ws.jc, ws.jd, ws.je
-    return out
 
 
 @pytest.mark.parametrize("code", [0, 1])
@@ -46,7 +37,7 @@ def test_analytic_jacobian_matches_finite_differences(mod: object, code: int) ->
         assert linearize(grid, y, f, par, geo, ws.work, ws.lower, ws.upper, ws.jband, ws.jc,
                          ws.jd, ws.je, ws.ytmp, ws.ftmp, ws.scale, mode) > 0
         np.testing.assert_allclose(f, ws.rhs(y, par), rtol=1e-12, atol=1e-12)
-        mats[mode] = _dense(ws)
+        mats[mode] = dense_jacobian(ws)
     central = np.zeros((N, N))
     for j in range(N):
         h = 1e-5 * (y[j] - (y[j - 1] if j else 0.0))

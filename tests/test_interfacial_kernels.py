@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from jacobian_support import dense_jacobian
 
 from solver.equilibrium import equilibrium
 from solver.errors import ParameterError
@@ -21,16 +22,6 @@ from solver.gel import ANB
 
 N = 40
 ELL = 0.05
-
-
-def _dense(ws: Workspace) -> np.ndarray:
-    m, p = ws.jband.shape[1], ws.je.shape[0]
-    out = np.zeros((m + p, m + p))
-    for j in range(m):
-        for i in range(max(0, j - ws.upper), min(m, j + ws.lower + 1)):
-            out[i, j] = ws.jband[ws.upper + i - j, j]
-    out[:m, m:], out[m:, :m], out[m:, m:] = ws.jc, ws.jd, ws.je
-    return out
 
 
 def _front_state(mod: object, grid: int, code: int) -> tuple:
@@ -65,7 +56,7 @@ def test_lagrangian_analytic_jacobian_with_term(code: int) -> None:
     assert linearize(1, y, f, par, geo, ws.work, ws.lower, ws.upper, ws.jband, ws.jc, ws.jd,
                      ws.je, ws.ytmp, ws.ftmp, ws.scale, JAC_ANALYTIC) > 0
     np.testing.assert_allclose(f, ws.rhs(y, par), rtol=1e-12, atol=1e-12)
-    assert np.max(np.abs(_dense(ws) - central) / scale) < 1e-7
+    assert np.max(np.abs(dense_jacobian(ws) - central) / scale) < 1e-7
 
 
 def test_eulerian_fd_jacobian_with_wider_border() -> None:
@@ -76,7 +67,7 @@ def test_eulerian_fd_jacobian_with_wider_border() -> None:
     f = np.zeros(N)
     assert linearize(0, y, f, par, geo, ws.work, ws.lower, ws.upper, ws.jband, ws.jc, ws.jd,
                      ws.je, ws.ytmp, ws.ftmp, ws.scale, JAC_FD) > 0
-    assert np.max(np.abs(_dense(ws) - central) / scale) < 1e-5
+    assert np.max(np.abs(dense_jacobian(ws) - central) / scale) < 1e-5
 
 
 def test_korteweg_kernel_is_the_dry_laplacian() -> None:

@@ -20,7 +20,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..equilibrium import Branch
-from ..errors import NotApplicableError, SolverError
+from ..errors import NotApplicableError
 from ..gel import Gel
 from ..thermo import osmotic_p
 from .evolve import (
@@ -31,11 +31,11 @@ from .evolve import (
     radius_of_front,
 )
 from .flux import flux_numerator, front_value
-from .levels import FrontLevels, front_applicability, front_levels
+from .levels import FrontLevels, front_levels
 from .maxwell import maxwell_porosities
 from .result import FrontResult
 from .start import resolve_start
-from .trajectory import _sample_times, _stop
+from .trajectory import sample_curve
 
 
 @lru_cache(maxsize=256)
@@ -92,21 +92,6 @@ def sharp_front_trajectory(gel: Gel, t_start: float, t_end: float, *,
     value = sharp_front_value(gel, float(t_start), float(t_end), branch)
     st = resolve_start(levels, start, True)
     curve = sharp_curve(levels, value, st.t0, st.front, st.solid)
-    t_stop, x_stop, reason = _stop(curve, until, target_radius)
-    t = _sample_times(st.t0, t_stop, every, n)
-    x = curve.front_at(t)
-    x[0], x[-1] = st.front, x_stop
-    a = curve.radius(x)
-    with np.errstate(divide="ignore"):
-        amp = curve.flux(x)
-    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(a))):
-        raise SolverError("sharp front model produced a non-finite state",
-                          {"t_stop": t_stop, "front_stop": x_stop})
-    _, why = front_applicability(gel, t_start, t_end, branch)
-    diag = {"behaviour": levels.behaviour, "applicability": why, "stop": reason,
-            "t_centre": curve.t_centre, "front_value": value,
-            "paper_front_value": front_value(levels), "solid": st.solid, "a0": levels.a0,
-            **st.diagnostics}
-    return FrontResult(t=t, radius=a, front=x, flux=amp, phi_minus=levels.phi_minus,
-                       phi_plus=levels.phi_plus, model="front-sharp", start=st.label,
-                       diagnostics=diag, curve=curve, t_stop=t_stop, front_stop=x_stop)
+    return sample_curve(gel, t_start, t_end, branch, levels, st, curve, until, target_radius,
+                        every, n, "front-sharp",
+                        {"front_value": value, "paper_front_value": front_value(levels)})

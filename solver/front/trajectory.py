@@ -8,9 +8,9 @@ from ..equilibrium import Branch
 from ..errors import ParameterError, SolverError, require_finite_positive
 from ..gel import Gel
 from .evolve import FrontCurve, leading_curve
-from .levels import front_applicability, front_levels
+from .levels import FrontLevels, front_applicability, front_levels
 from .result import FrontResult
-from .start import resolve_start
+from .start import StartState, resolve_start
 
 MAX_SAMPLES = 1_000_000
 CORRECTION_NOT_KEPT = (
@@ -75,6 +75,19 @@ def front_trajectory(gel: Gel, t_start: float, t_end: float, *, branch: Branch |
     levels = front_levels(gel, t_start, t_end, branch)
     st = resolve_start(levels, start, conservative)
     curve = leading_curve(levels, st.t0, st.front, st.solid)
+    return sample_curve(gel, t_start, t_end, branch, levels, st, curve, until, target_radius,
+                        every, n, "front-leading",
+                        {"radius_centre": float(curve.radius(0.0)),
+                         "t_end_temperature": levels.t_end,
+                         "chebyshev_degree": curve.rate.degree(),
+                         "conservative": conservative})
+
+
+def sample_curve(gel: Gel, t_start: float, t_end: float, branch: Branch | None,
+                 levels: FrontLevels, st: StartState, curve: FrontCurve, until: float | None,
+                 target_radius: float | None, every: float | None, n: int, model: str,
+                 extra: dict) -> FrontResult:
+    """Sample a front curve from its start to its stop into a :class:`FrontResult`."""
     t_stop, x_stop, reason = _stop(curve, until, target_radius)
     t = _sample_times(st.t0, t_stop, every, n)
     x = curve.front_at(t)
@@ -83,18 +96,12 @@ def front_trajectory(gel: Gel, t_start: float, t_end: float, *, branch: Branch |
     with np.errstate(divide="ignore"):
         amp = curve.flux(x)
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(a))):
-        raise SolverError("front model produced a non-finite state",
+        raise SolverError(f"{model} model produced a non-finite state",
                           {"t_stop": t_stop, "front_stop": x_stop})
     _, why = front_applicability(gel, t_start, t_end, branch)
-    diag = {
-        "behaviour": levels.behaviour, "applicability": why, "stop": reason,
-        "t_centre": curve.t_centre, "radius_centre": float(curve.radius(0.0)),
-        "solid": st.solid, "a0": levels.a0, "t_end_temperature": levels.t_end,
-        "chebyshev_degree": curve.rate.degree(), "conservative": conservative,
-        **st.diagnostics,
-    }
+    diag = {"behaviour": levels.behaviour, "applicability": why, "stop": reason,
+            "t_centre": curve.t_centre, "solid": st.solid, "a0": levels.a0, **extra,
+            **st.diagnostics}
     return FrontResult(t=t, radius=a, front=x, flux=amp, phi_minus=levels.phi_minus,
-                       phi_plus=levels.phi_plus,
-                       model="front-leading",
-                       start=st.label, diagnostics=diag, curve=curve, t_stop=t_stop,
-                       front_stop=x_stop)
+                       phi_plus=levels.phi_plus, model=model, start=st.label,
+                       diagnostics=diag, curve=curve, t_stop=t_stop, front_stop=x_stop)
