@@ -29,13 +29,6 @@ def osmotic_dp(phi, chi0, chi1):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def osmotic_ddp(phi, chi0, chi1):  # noqa: ANN001, ANN201
-    """P''(phi)."""
-    x = 1.0 - phi
-    return 1.0 / (phi * phi) - 2.0 * (chi0 - chi1) - 12.0 * chi1 * x
-
-
-@njit(cache=True)
 def mixing_energy(jac, chi0, chi1):  # noqa: ANN001, ANN201
     """W_mix / Omega per dry volume: J[phi log phi + chi phi (1-phi)] (eq. MixingEnergy)."""
     x = 1.0 / jac
