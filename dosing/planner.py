@@ -213,10 +213,10 @@ class Planner:
         fr = front_run(req.gel, req.t_start, req.t_end, req.branch, self.front_correction)
         return float(fr.time_to_radius(radius))
 
-    def dose(self, req: DoseRequest, validate: bool = False) -> DoseAnswer:
-        """The actuation time for one dose (front model, or the full solver where needed)."""
-        a0, f = req.start_radius, req.fraction
-        radius = radius_after_dose(a0, f)
+    def _model_answer(self, req: DoseRequest) -> tuple[float, str, str, float | None]:
+        """(target radius, model, why, front-model time or None) for a dose request: the
+        front model where the classifier allows and it reaches the dose, else the full one."""
+        radius = radius_after_dose(req.start_radius, req.fraction)
         model, why = choose_model(req.gel, req.t_start, req.t_end, req.branch)
         t_front = None
         if model == "front":
@@ -224,6 +224,12 @@ class Planner:
                 t_front = self._front_time(req, radius)
             except (ValueError, NotApplicableError, SolverError) as exc:
                 model, why = "full", f"the front model cannot give this dose ({exc})"
+        return radius, model, why, t_front
+
+    def dose(self, req: DoseRequest, validate: bool = False) -> DoseAnswer:
+        """The actuation time for one dose (front model, or the full solver where needed)."""
+        a0, f = req.start_radius, req.fraction
+        radius, model, why, t_front = self._model_answer(req)
         scs = self.scenarios(req)
         need_time = 0.0 if t_front is None else t_front
         if model == "full" or validate:
@@ -274,14 +280,7 @@ class Planner:
     def submit_validation(self, req: DoseRequest) -> str:
         """Queue the full-solver check of this dose on both grids; returns an id at once."""
         a0, f = req.start_radius, req.fraction
-        radius = radius_after_dose(a0, f)
-        model, _ = choose_model(req.gel, req.t_start, req.t_end, req.branch)
-        t_front = None
-        if model == "front":
-            try:
-                t_front = self._front_time(req, radius)
-            except (ValueError, NotApplicableError, SolverError):
-                t_front = None
+        radius, _, _, t_front = self._model_answer(req)
         scs = self.scenarios(req)
         keys = [sc.key() for sc in scs]
         vid = hashlib.sha256(json.dumps([keys, round(f, 12)]).encode()).hexdigest()[:24]
