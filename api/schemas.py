@@ -23,9 +23,30 @@ from pydantic import (
 
 T_MIN = 273.15  # K, same bounds as solver.gel.check_temperature
 T_MAX = 373.15
+# interfacial length of the validation truth (dosing.scenario: DEFAULT_INTERFACIAL_LENGTH,
+# and the coarsest ladder rung's range)
+ELL_DEFAULT = 0.005
+ELL_RANGE = (0.0025, 0.02)
 
 PresetName = Literal["ANB", "HHT"]
 Branch = Literal["swollen", "shrunken"]
+
+
+def interfacial_length_field() -> Any:
+    """The validation truth's interfacial length: 0 (the paper's model) or the ladder's."""
+    return Field(ELL_DEFAULT, ge=0.0, le=ELL_RANGE[1], examples=[ELL_DEFAULT], description=(
+        f"interfacial length ell of the validation truth in dry radii: 0 for the paper's "
+        f"model (no interfacial energy; checked on two grids), or {ELL_RANGE[0]}-"
+        f"{ELL_RANGE[1]}: the regularized model's limit ell -> 0, extrapolated from runs at "
+        f"ell, ell/2, ell/4 (default {ELL_DEFAULT})"))
+
+
+def check_interfacial_length(value: float) -> float:
+    """0 or within ELL_RANGE (a ValueError names the range)."""
+    if value != 0.0 and not ELL_RANGE[0] <= value <= ELL_RANGE[1]:
+        raise ValueError(f"interfacial_length must be 0 (the paper's model) or "
+                         f"{ELL_RANGE[0]}-{ELL_RANGE[1]} dry radii")
+    return value
 
 
 def temperature_field(what: str, example: float) -> Any:
@@ -256,6 +277,7 @@ class DoseTimeRequest(_Model):
         None, description="start branch at T_start (default: swollen)")
     constants: ConstantsIn | None = Field(
         None, description="timescale constants (default: the paper's values)")
+    interfacial_length: float = interfacial_length_field()
     validate_full: bool = Field(
         False, alias="validate",
         description="also queue a full-solver validation of this dose (poll "
@@ -265,42 +287,62 @@ class DoseTimeRequest(_Model):
         "examples": [{"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.8,
                       "dry_radius_um": 50.0}]})
 
+    _ell = field_validator("interfacial_length")(check_interfacial_length)
 
-class GridCheck(_Out):
-    """The full solver's answer on one grid."""
 
-    n: int | None = Field(None, description="grid points N")
+class RunCheck(_Out):
+    """The full solver's answer in one validation run."""
+
+    grid: str | None = Field(None, description="'eulerian' or 'lagrangian'")
+    n: int | None = Field(None, description="grid cells N")
+    interfacial_length: float | None = Field(None, description="ell of this run, dry radii")
     scenario_key: str | None = Field(None, description="cache key of this run")
     time: float | None = Field(None, description="full solver's actuation time, dimensionless")
     wall_seconds: float | None = Field(None, description="wall time of the run, s")
-    front_time_error: float | None = Field(
-        None, description="front model's relative time error, (t_front - t_full) / t_full")
     front_volume_error: float | None = Field(
-        None, description="relative error of the volume the full solver expels by the front "
+        None, description="relative error of the volume this run expels by the front "
                           "model's time, (V_full(t_front) - V_dose) / V_dose")
-    error: str | None = Field(None, description="why this grid's run failed, if it did")
+    warning: str | None = Field(None, description="what the run reports (spinodal collapse)")
+    error: str | None = Field(None, description="why this run failed, if it did")
+
+
+class LimitOut(_Out):
+    """The regularized model's dose time extrapolated to ell -> 0."""
+
+    time: float = Field(description="the limit, dimensionless")
+    error: float = Field(description="its absolute error bound (1.25 x the extrapolation)")
+    order: float | None = Field(None, description="observed order in ell (null: none trusted)")
+    method: str = Field(description="how the limit was taken, in words")
 
 
 class ValidationReport(_Out):
-    """The full solver's time for the same dose (truth grid first) and the front model's
+    """The truth's time for the same dose, every run behind it, and the front model's
     errors in time and in volume."""
 
-    time: float | None = Field(None, description="full solver's actuation time on the truth "
-                                                 "grid, dimensionless (units of tau)")
-    truth_grid: str | None = Field(None, description="grid taken as the truth ('eulerian')")
+    model: Literal["regularized", "paper"] | None = Field(
+        None, description="'regularized' (limit ell -> 0 of the model with interfacial energy) "
+                          "or 'paper' (no interfacial energy)")
+    interfacial_length: float | None = Field(
+        None, description="coarsest ell of the ladder, dry radii (0: the paper's model)")
+    time: float | None = Field(None, description="the truth's actuation time, dimensionless "
+                                                 "(units of tau)")
+    error: float | None = Field(
+        None, description="the truth's own relative uncertainty: the limit's error bound, or "
+                          "the paper's model's grid spread")
     settings: dict[str, Any] | None = Field(None, description="full-solver settings (grid, N, "
-                                                              "integrator, rtol)")
-    grids: dict[str, GridCheck] = Field(default_factory=dict,
-                                        description="the answer on each grid")
+                                                              "integrator, rtol, ell)")
+    runs: list[RunCheck] = Field(default_factory=list, description=(
+        "the runs: ell, ell/2, ell/4 (regularized) or the two grids (paper)"))
+    limit: LimitOut | None = Field(None, description="the extrapolation (regularized only)")
     grid_spread: float | None = Field(
-        None, description="(max - min) / truth of the grids' times: the full model's own "
-                          "uncertainty where a sharp front forms")
+        None, description="(max - min) / truth of the grids' times (paper's model only): its "
+                          "own uncertainty where a sharp front forms")
     front_time: float | None = Field(None, description="front model's time, dimensionless "
                                                        "(null where it does not apply)")
     front_time_error: float | None = Field(
-        None, description="front model's relative time error against the truth grid")
+        None, description="front model's relative time error against the truth")
     front_volume_error: float | None = Field(
-        None, description="front model's relative volume error against the truth grid")
+        None, description="front model's relative volume error against the truth's run")
 
 
 class DoseTimeResponse(_Out):
@@ -311,8 +353,13 @@ class DoseTimeResponse(_Out):
     status: Literal["answered", "pending"] = Field(
         description="'answered': the fields below hold the answer; 'pending': the scenario "
                     "needs the full solver, poll validation_url, then ask again")
-    model: Literal["front", "full"] | None = Field(
-        None, description="'front' (reduced front model, milliseconds) or 'full' (PDE solver)")
+    model: Literal["front-sharp", "front", "full"] | None = Field(
+        None, description="'front-sharp' (reduced front model with the sharp-interface front "
+                          "condition, milliseconds), 'front' (the paper's reduced model, with "
+                          "interfacial_length 0) or 'full' (PDE solver)")
+    interfacial_length: float | None = Field(
+        None, description="interfacial length of the truth, dry radii (0: the paper's model)")
+    truth: str | None = Field(None, description="what the answer is checked against, in words")
     behaviour: str | None = Field(
         None, description="the jump's class: 'front', 'delayed_front', 'smooth', 'spinodal'")
     time: float | None = Field(None, description="actuation time, dimensionless (units of tau)")
@@ -395,6 +442,9 @@ class ScheduleRequest(_Model):
         False, description="shoot on the full solver for times meeting every dose (a job)")
     tolerance: float = Field(0.01, gt=0.0, le=0.2,
                              description="relative tolerance of the corrected doses, 0-0.2")
+    interfacial_length: float = interfacial_length_field()
+
+    _ell = field_validator("interfacial_length")(check_interfacial_length)
 
     model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
         {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dry_radius_um": 50.0,

@@ -24,6 +24,7 @@ from dosing import (
     Planner,
     QueueFullError,
     ScheduleRequest,
+    SolverSettings,
     UnknownValidationError,
 )
 from solver.equilibrium import equilibria, folds
@@ -162,7 +163,8 @@ def to_dose_request(body: s.DoseTimeRequest) -> DoseRequest:
         dose_volume_ul=body.dose_volume_ul, drug_mass_ug=body.drug_mass_ug,
         concentration_ug_per_ul=body.concentration_ug_per_ul,
         dry_radius_um=body.dry_radius_um, swollen_radius_um=body.swollen_radius_um,
-        constants=_constants(body.constants), branch=body.branch)
+        constants=_constants(body.constants), branch=body.branch,
+        settings=SolverSettings(interfacial_length=body.interfacial_length))
 
 
 def to_schedule_request(body: s.ScheduleRequest) -> ScheduleRequest:
@@ -174,21 +176,21 @@ def to_schedule_request(body: s.ScheduleRequest) -> ScheduleRequest:
         rests_seconds=body.rests_seconds, dry_radius_um=body.dry_radius_um,
         swollen_radius_um=body.swollen_radius_um, constants=_constants(body.constants),
         branch=body.branch, check_protocol=body.check_protocol, correct=body.correct,
-        tolerance=body.tolerance)
+        tolerance=body.tolerance,
+        settings=SolverSettings(interfacial_length=body.interfacial_length))
 
 
 def answerable_now(planner: Any, req: DoseRequest) -> bool:
     """True when ``planner.dose(req)`` needs no new full-solver run: the front model gives
-    this dose, or every grid's trajectory covering it is already cached."""
-    from dosing.planner import choose_model, front_run
+    this dose, or every validation run's trajectory covering it is already cached."""
+    from dosing.planner import choose_model
     from dosing.units import radius_after_dose
 
     radius = radius_after_dose(req.start_radius, req.fraction)
     model, _ = choose_model(req.gel, req.t_start, req.t_end, req.branch)
     if model == "front":
         try:
-            front_run(req.gel, req.t_start, req.t_end, req.branch,
-                      planner.front_correction).time_to_radius(radius)
+            planner.front_time(req, radius)
             return True
         except (ValueError, NotApplicableError, SolverError):
             pass

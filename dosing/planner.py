@@ -4,9 +4,12 @@ Procedure of sec. Application: a(0) is the equilibrium stretch at T_start (eq. E
 a dose f of the stored fluid leaves a^3 = a0^3 - f (a0^3 - 1) (eq. FluidVolExpelled);
 the answer is the time a(t) falls to that radius, times tau (eq. timescale) for seconds.
 The front model answers in milliseconds where the jump classifier says "front"; the
-full solver answers (blocking, cached) otherwise.  A validation runs the full solver on
-both of its grids: in the front regime the paper's model is ill-posed and the two grids
-disagree, so the error estimate includes their spread.
+full solver answers (blocking, cached) otherwise.  The truth is set by the request's
+``SolverSettings``: by default the regularized model's sharp-interface limit (answered by
+the sharp-interface front model 'front-sharp', validated by a ladder of interfacial
+lengths), or the paper's model (interfacial_length 0: the paper's front model 'front',
+validated on both grids, whose spread is part of the error estimate).  Module
+``validation`` writes the verdict.
 """
 
 from __future__ import annotations
@@ -14,14 +17,11 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
-import math
 import threading
 from collections import OrderedDict
 from concurrent.futures import Executor, Future, ThreadPoolExecutor, wait
 from dataclasses import asdict, dataclass
 from typing import Any
-
-import numpy as np
 
 from solver.errors import NotApplicableError, SolverError
 from solver.gel import Gel
@@ -30,7 +30,7 @@ from solver.phase import JumpClass, classify_jump
 from .cache import ValidationCache
 from .jobs import JobRunner
 from .request import DoseRequest, ScheduleRequest
-from .scenario import GRIDS, Scenario, Trajectory, run_scenario
+from .scenario import Scenario, SolverSettings, Trajectory, run_scenario
 from .units import (
     SYMBOLIC_FORMULA,
     expelled_volume,
@@ -39,21 +39,9 @@ from .units import (
     timescale,
     volume_to_ul,
 )
+from .validation import error_estimate, failure, validation_report
 
 DEFAULT_HORIZON = 1.0  # first simulated time of a jump (extended x4 when a dose needs more)
-# Prior relative error |t_front - t_full| / t_front of an unvalidated front-model time, by
-# dose fraction: the largest gap to either full-solver grid (N = 400) over ANB 302->308 K
-# and HHT 304->308 K, rounded up (printed by `python -m dosing.calibrate`; the HHT
-# Lagrangian grid dominates, and small doses are worst: the full model's shell takes time
-# to form, the front model's starts at once).
-PRIOR_FRACTIONS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
-PRIOR_GAPS = (4.4, 2.9, 2.2, 1.8, 1.5, 1.2, 1.0, 0.8, 0.6)
-PRIOR_NOTE = "doses of 10-90 % for ANB 302->308 K and HHT 304->308 K"
-
-
-def front_prior(fraction: float) -> float:
-    """The prior error of a front-model time for a dose fraction (interpolated, clamped)."""
-    return float(np.interp(fraction, PRIOR_FRACTIONS, PRIOR_GAPS))
 
 
 class UnknownValidationError(KeyError):
@@ -79,11 +67,27 @@ def choose_model(gel: Gel, t_start: float, t_end: float, branch: str) -> tuple[s
 
 
 @functools.lru_cache(maxsize=256)
-def front_run(gel: Gel, t_start: float, t_end: float, branch: str, correction: bool) -> Any:
-    """The front model's whole trajectory from the initial equilibrium (memoised)."""
+def front_run(gel: Gel, t_start: float, t_end: float, branch: str, sharp: bool) -> Any:
+    """The front model's whole trajectory from the initial equilibrium (memoised): the
+    sharp-interface model for the regularized truth, the paper's for the paper's."""
+    if sharp:
+        from solver.front.sharp import sharp_front_trajectory
+
+        return sharp_front_trajectory(gel, t_start, t_end, branch=branch)
     from solver.front import front_trajectory
 
-    return front_trajectory(gel, t_start, t_end, branch=branch, correction=correction)
+    return front_trajectory(gel, t_start, t_end, branch=branch)
+
+
+MODEL_NAMES = {"front": "the paper's step-function front model",
+               "front-sharp": "the step-function front model with the sharp-interface front "
+                              "condition (docs/interfacial.md, sec. 8)",
+               "full": "the full solver"}
+
+
+def front_model_name(settings: SolverSettings) -> str:
+    """'front-sharp' for the regularized truth, 'front' (the paper's) otherwise."""
+    return "front-sharp" if settings.regularized else "front"
 
 
 @dataclass
@@ -91,6 +95,8 @@ class DoseAnswer:
     """How long to heat: dimensionless and in seconds, with the model and its error."""
 
     model: str
+    interfacial_length: float
+    truth: str
     time: float
     seconds: float | None
     timescale_seconds: float | None
@@ -129,10 +135,6 @@ class ValidationStatus:
         return asdict(self)
 
 
-def _rel(a: float, b: float) -> float:
-    return abs(a - b) / abs(b)
-
-
 class Planner:
     """Plans doses and schedules; keeps full-solver validations in a persistent cache.
 
@@ -141,21 +143,19 @@ class Planner:
     """
 
     def __init__(self, cache_path: str | None = None, executor: Executor | None = None,
-                 max_pending: int = 64, front_correction: bool = False,
-                 horizon: float = DEFAULT_HORIZON) -> None:
+                 max_pending: int = 64, horizon: float = DEFAULT_HORIZON) -> None:
         self.cache = ValidationCache(cache_path)
         self.jobs = JobRunner(executor, max_pending)
-        self.front_correction = bool(front_correction)
         self.horizon = float(horizon)
         self._mem: OrderedDict[str, Trajectory] = OrderedDict()
         self._mem_lock = threading.Lock()
 
     # ------------------------------------------------------------------ trajectories
     def scenarios(self, req: DoseRequest | ScheduleRequest) -> list[Scenario]:
-        """The jump's validation scenarios: the truth grid first, then the other grid."""
-        grids = [req.settings.grid] + [g for g in GRIDS if g != req.settings.grid]
-        return [Scenario(req.gel, req.t_start, req.t_end, branch=req.branch,
-                         settings=req.settings.on_grid(g)) for g in grids]
+        """The jump's validation runs (``SolverSettings.rungs``): the ladder of interfacial
+        lengths, or the paper's model on the truth grid and then the other grid."""
+        return [Scenario(req.gel, req.t_start, req.t_end, branch=req.branch, settings=s)
+                for s in req.settings.rungs()]
 
     def cached(self, sc: Scenario, need_radius: float | None = None,
                need_time: float = 0.0) -> Trajectory | None:
@@ -200,17 +200,17 @@ class Planner:
         raise SolverError("the full-solver run does not cover the dose", {"key": sc.key()})
 
     def _trajectories(self, scs: list[Scenario], need_radius: float,
-                      need_time: float) -> dict[str, Trajectory | Exception]:
-        """Both grids' trajectories, run concurrently; a failure is returned, not raised."""
+                      need_time: float) -> list[Trajectory | BaseException]:
+        """The runs' trajectories, run concurrently; a failure is returned, not raised."""
         with ThreadPoolExecutor(len(scs)) as pool:
-            futs = {sc.settings.grid: pool.submit(self.trajectory, sc, need_radius, need_time)
-                    for sc in scs}
-            wait(list(futs.values()))
-        return {g: (f.exception() or f.result()) for g, f in futs.items()}
+            futs = [pool.submit(self.trajectory, sc, need_radius, need_time) for sc in scs]
+            wait(futs)
+        return [f.exception() or f.result() for f in futs]
 
     # ------------------------------------------------------------------ doses
-    def _front_time(self, req: DoseRequest, radius: float) -> float:
-        fr = front_run(req.gel, req.t_start, req.t_end, req.branch, self.front_correction)
+    def front_time(self, req: DoseRequest, radius: float) -> float:
+        """The front model's time to ``radius`` (raises where it does not apply)."""
+        fr = front_run(req.gel, req.t_start, req.t_end, req.branch, req.settings.regularized)
         return float(fr.time_to_radius(radius))
 
     def _model_answer(self, req: DoseRequest) -> tuple[float, str, str, float | None]:
@@ -220,32 +220,32 @@ class Planner:
         model, why = choose_model(req.gel, req.t_start, req.t_end, req.branch)
         t_front = None
         if model == "front":
+            model = front_model_name(req.settings)
             try:
-                t_front = self._front_time(req, radius)
+                t_front = self.front_time(req, radius)
             except (ValueError, NotApplicableError, SolverError) as exc:
                 model, why = "full", f"the front model cannot give this dose ({exc})"
         return radius, model, why, t_front
 
     def dose(self, req: DoseRequest, validate: bool = False) -> DoseAnswer:
         """The actuation time for one dose (front model, or the full solver where needed)."""
-        a0, f = req.start_radius, req.fraction
         radius, model, why, t_front = self._model_answer(req)
         scs = self.scenarios(req)
         need_time = 0.0 if t_front is None else t_front
         if model == "full" or validate:
-            trajs: dict[str, Any] = self._trajectories(scs, radius, need_time)
-            truth = trajs[scs[0].settings.grid]
-            if isinstance(truth, Exception):
-                raise truth
+            trajs: list[Any] = self._trajectories(scs, radius, need_time)
         else:
-            trajs = {sc.settings.grid: self.cached(sc, radius, need_time) for sc in scs}
-            if any(t is None for t in trajs.values()):
-                trajs = {}
-        time = t_front if model == "front" else trajs[scs[0].settings.grid].time_to_radius(radius)
-        validation = (validation_report(scs, trajs, a0, radius, t_front) if trajs else None)
-        est, explain = error_estimate(model, time, validation, scs[0], f)
-        return self._answer(req, model, time, radius, est, explain, validation, scs[0].key(),
-                            why)
+            trajs = [self.cached(sc, radius, need_time) for sc in scs]
+            if any(t is None for t in trajs):
+                trajs = []
+        rep = (validation_report(scs, trajs, req.start_radius, radius, t_front)
+               if trajs else None)
+        if model == "full" and rep["time"] is None:
+            raise next((t for t in trajs if isinstance(t, BaseException)),
+                       SolverError(f"no full-solver time: {failure(rep)}"))
+        time = t_front if t_front is not None else rep["time"]
+        est, explain = error_estimate(model, time, rep, req.fraction)
+        return self._answer(req, model, time, radius, est, explain, rep, scs[0].key(), why)
 
     def _answer(self, req: DoseRequest, model: str, time: float, radius: float, est: float,
                 explain: str, validation: dict[str, Any] | None, key: str,
@@ -255,17 +255,23 @@ class Planner:
         tau = timescale(dry, req.t_end, req.constants) if dry is not None else None
         dv, sv = expelled_volume(a0, radius), stored_volume(a0)
         behaviour = jump_class(req.gel, req.t_start, req.t_end, req.branch).behaviour
-        note = (f"{'front model' if model == 'front' else 'full solver'}: {why}. "
-                + ("front model started from the initial equilibrium alone. "
-                   if model == "front" else "")
+        s = req.settings
+        truth = (f"the regularized model's sharp-interface limit ell -> 0 (validated at "
+                 f"interfacial lengths {', '.join(f'{r.interfacial_length:g}' for r in s.rungs())}"
+                 f", {s.grid} grid)" if s.regularized else
+                 f"the paper's model, no interfacial energy ({s.grid} grid, N = {s.n})")
+        note = (f"{MODEL_NAMES[model]}: {why}. "
+                + ("Started from the initial equilibrium alone. " if model != "full" else "")
+                + f"Truth: {truth}. "
                 + ("" if validation else "No full-solver validation yet for this scenario.")
-                + "".join(f" The full solver on the {g} grid reports: {e['warning']}."
-                          for g, e in (validation or {}).get("grids", {}).items()
-                          if e.get("warning"))
+                + "".join(f" The full solver ({e['grid']} grid, N = {e['n']}, ell = "
+                          f"{e['interfacial_length']:g}) reports: {e['warning']}."
+                          for e in (validation or {}).get("runs", []) if e.get("warning"))
                 + ("" if dry else " Give a bead size (dry_radius_um or swollen_radius_um) "
                    "for seconds and microlitres."))
         return DoseAnswer(
-            model=model, time=float(time),
+            model=model, interfacial_length=s.interfacial_length, truth=truth,
+            time=float(time),
             seconds=None if tau is None else float(time) * tau.seconds,
             timescale_seconds=None if tau is None else tau.seconds,
             timescale_formula=SYMBOLIC_FORMULA if tau is None else tau.formula,
@@ -278,7 +284,7 @@ class Planner:
 
     # ------------------------------------------------------------------ validations
     def submit_validation(self, req: DoseRequest) -> str:
-        """Queue the full-solver check of this dose on both grids; returns an id at once."""
+        """Queue the full-solver runs that check this dose; returns an id at once."""
         a0, f = req.start_radius, req.fraction
         radius, _, _, t_front = self._model_answer(req)
         scs = self.scenarios(req)
@@ -291,28 +297,24 @@ class Planner:
         self._advance(record)
         return vid
 
-    def _advance(self, record: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
-        """Per grid: a covering trajectory, an exception, or the job state (submitting)."""
+    def _advance(self, record: dict[str, Any]) -> tuple[list[Any], list[str]]:
+        """Per run: a covering trajectory, an exception, or None and its job state in the
+        second list (submitting what is neither cached nor queued)."""
         need_r, need_t = record["target_radius"], record["front_time"] or 0.0
-        out: dict[str, Any] = {}
+        out: list[Any] = []
         states = []
         for scd in record["scenarios"]:
             sc = Scenario.from_dict(scd)
-            grid = sc.settings.grid
             traj = self.cached(sc, need_r, need_t)
-            if traj is not None:
-                out[grid] = traj
-                continue
-            fut = self.jobs.get(sc.key())
-            state = self.jobs.state(sc.key())
+            state = None if traj is not None else self.jobs.state(sc.key())
             if state == "failed":
-                out[grid] = fut.exception() or RuntimeError("cancelled")
-                continue
-            if state in ("pending", "running"):
+                traj = self.jobs.get(sc.key()).exception() or RuntimeError("cancelled")
+            elif traj is None:
+                if state not in ("pending", "running"):  # never run, or short of the dose
+                    self.submit(sc, need_r, need_t)
+                    state = self.jobs.state(sc.key()) or "pending"
                 states.append(state)
-                continue
-            self.submit(sc, need_r, need_t)  # never run here, or finished short of the dose
-            states.append(self.jobs.state(sc.key()) or "pending")
+            out.append(traj)
         return out, states
 
     def validation(self, vid: str) -> ValidationStatus:
@@ -324,11 +326,11 @@ class Planner:
         if states:
             return ValidationStatus(vid, "running" if "running" in states else "pending")
         scs = [Scenario.from_dict(d) for d in record["scenarios"]]
-        truth = trajs[scs[0].settings.grid]
-        if isinstance(truth, Exception):
-            return ValidationStatus(vid, "failed", error=f"{type(truth).__name__}: {truth}")
         rep = validation_report(scs, trajs, record["start_radius"], record["target_radius"],
                                 record["front_time"])
+        why = failure(rep)
+        if why is not None:
+            return ValidationStatus(vid, "failed", error=why)
         return ValidationStatus(vid, "done", result=rep)
 
     # ------------------------------------------------------------------ schedules
@@ -356,91 +358,3 @@ def _covers(traj: Trajectory, sc: Scenario, need_radius: float | None, need_time
     if need_radius is not None and traj.radius.min() > need_radius:
         return False
     return traj.horizon >= need_time
-
-
-def validation_report(scs: list[Scenario], trajs: dict[str, Any], start_radius: float,
-                      radius: float, t_front: float | None) -> dict[str, Any]:
-    """The full solver's time for the dose on each grid, and the front model's errors.
-
-    The volume error is what the full solver expels by the front model's time, against
-    the dose: (V_full(t_front) - V) / V.
-    """
-    target = expelled_volume(start_radius, radius)
-    grids: dict[str, Any] = {}
-    for sc in scs:
-        g, traj = sc.settings.grid, trajs.get(sc.settings.grid)
-        entry: dict[str, Any] = {"n": sc.settings.n, "scenario_key": sc.key()}
-        if isinstance(traj, Trajectory):
-            entry["time"] = traj.time_to_radius(radius)
-            entry["wall_seconds"] = traj.meta.get("wall_seconds")
-            diag = traj.meta.get("diagnostics", {})
-            if diag.get("spinodal"):
-                entry["warning"] = diag.get("message") or "spinodal collapse (not converged)"
-            if t_front is not None:
-                got = expelled_volume(start_radius, traj.radius_at(t_front))
-                entry["front_time_error"] = (t_front - entry["time"]) / entry["time"]
-                entry["front_volume_error"] = (got - target) / target
-        else:
-            entry["error"] = f"{type(traj).__name__}: {traj}"
-        grids[g] = entry
-    first = grids[scs[0].settings.grid]
-    times = [e["time"] for e in grids.values() if "time" in e]
-    spread = (max(times) - min(times)) / first["time"] if len(times) > 1 and "time" in first \
-        else None
-    rep: dict[str, Any] = {
-        "time": first.get("time"), "truth_grid": scs[0].settings.grid,
-        "settings": scs[0].settings.to_dict(), "grids": grids, "grid_spread": spread,
-        "front_time": t_front,
-        "front_time_error": first.get("front_time_error"),
-        "front_volume_error": first.get("front_volume_error")}
-    return rep
-
-
-def _pct(x: float) -> str:
-    return f"{100 * x:.2g}%" if x < 0.1 else f"{100 * x:.0f}%"
-
-
-def error_estimate(model: str, time: float, validation: dict[str, Any] | None,
-                   truth: Scenario, fraction: float) -> tuple[float, str]:
-    """(relative error of the answer's time, the reason in plain words)."""
-    s = truth.settings
-    if validation is None:
-        prior = front_prior(fraction)
-        return prior, (
-            f"Not yet checked against the full solver for this scenario (ask for a "
-            f"validation). For {PRIOR_NOTE}, the front model's time was within "
-            f"{_pct(prior)} of the full model's answers on both of its grids at this dose "
-            f"(small doses are worst: in the full model the shrunken shell takes time to "
-            f"form). Much of that gap is the full model's own uncertainty in this regime: "
-            "without an interfacial energy the speed of a sharp front is not fixed by the "
-            "model, and different discretizations pick different speeds.")
-    times = {g: e["time"] for g, e in validation["grids"].items() if "time" in e}
-    failed = [g for g, e in validation["grids"].items() if "error" in e]
-    gaps = [_rel(t, time) for t in times.values()]  # relative to the answer's time
-    spread = validation["grid_spread"]
-    lo, hi = min([time, *times.values()]), max([time, *times.values()])
-    if model == "front":
-        est = max(gaps)
-        listing = ", ".join(f"{t:.4g} on the {g} grid" for g, t in times.items())
-        text = (f"The front model (a fast reduced model) gives {time:.4g}; the full model gives "
-                f"{listing} (N = {s.n}). ")
-    else:
-        est = max([s.rtol, *gaps])
-        listing = ", ".join(f"{t:.6g} on the {g} grid" for g, t in times.items()
-                            if g != s.grid) or "no answer"
-        text = (f"Answered by the full solver: {time:.6g} on the {s.grid} grid (N = {s.n}); "
-                f"its second, independent discretization gives {listing}. ")
-    if spread is not None and spread > 0.01:
-        text += (f"The two grids disagree by {_pct(spread)}: here a sharp front forms and the "
-                 "paper's model, which has no interfacial energy, does not fix its speed, so "
-                 "each discretization picks its own. ")
-    elif spread is not None:
-        text += f"The two grids agree to {_pct(max(spread, 1e-6))}. "
-    if failed:
-        text += f"The {', '.join(failed)} grid failed to run, so it is not in the estimate. "
-    text += (f"The estimate ({_pct(est)}) is the largest gap between this answer and the full "
-             f"model's answers; treat the true time as somewhere between {lo:.4g} and "
-             f"{hi:.4g}.")
-    if math.isnan(est):
-        est = front_prior(fraction)
-    return est, text

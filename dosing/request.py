@@ -126,9 +126,14 @@ def _settings(value: SolverSettings | dict[str, Any] | None) -> SolverSettings:
     if value is None:
         return TRUTH
     if isinstance(value, dict):
-        return SolverSettings(**value)
+        try:
+            value = SolverSettings(**value)
+        except TypeError as exc:
+            raise ParameterError("settings", value, "a dict of grid, n, integrator, rtol, "
+                                 "interfacial_length") from exc
     if not isinstance(value, SolverSettings):
         raise ParameterError("settings", value, "SolverSettings or a dict of its fields")
+    value.rungs()  # the validation runs must be possible (ParameterError names the field)
     return value
 
 

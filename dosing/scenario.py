@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from solver.crossing import first_fall
 from solver.errors import ParameterError, SolverError, require_finite_positive
 from solver.gel import Gel, check_temperature
 
@@ -29,55 +30,106 @@ SCHEMA = 1
 GRIDS = ("eulerian", "lagrangian")
 INTEGRATORS = ("implicit", "explicit")
 N_RANGE = (20, 6400)
+# ell of one run: <= 0.02 keeps a ladder in the range where t(ell) converges
+# (docs/interfacial.md, sec. 7); the lower end is a ladder's finest rung at N_RANGE's top
+ELL_RANGE = (0.000625, 0.02)
 ARRAYS = ("t", "radius", "front", "expelled_volume", "temperature", "step_t", "step_radius",
-          "step_rate")
+          "step_rate", "step_edge")
+
+
+DEFAULT_INTERFACIAL_LENGTH = 0.005  # coarsest rung of the validation ladder (dry radii)
+CELLS_PER_LENGTH = 4  # Lagrangian cells per ell: t80 converged to 1e-4 (docs/interfacial.md)
+RUNGS = 3  # ladder ell, ell/2, ell/4: three values give the observed order and the limit
 
 
 @dataclass(frozen=True)
 class SolverSettings:
     """Full-solver settings that define a validation (all part of the scenario key).
 
-    ``interfacial_length`` is the regularizing length of the well-posed model (issue 8);
-    0.0 is the paper's model.  Making the regularized solver the truth is a one-line
-    change of :data:`TRUTH`.
+    ``interfacial_length`` ell > 0 (the default, issue 8) makes the truth the regularized
+    model's sharp-interface limit: the validation runs the ladder ell, ell/2, ell/4 (see
+    :meth:`rungs`), each grid-converged at ``CELLS_PER_LENGTH / ell`` cells on the Lagrangian
+    grid, and extrapolates the dose time to ell -> 0 (module ``dosing.ladder``).  ell = 0 is
+    the paper's model, checked on both grids (Eulerian N = 400 is the paper's).  Unset
+    fields take the defaults of the model chosen: grid Lagrangian / Eulerian, n
+    ``CELLS_PER_LENGTH / ell`` / 400, rtol 1e-5 / 1e-6.
     """
 
-    grid: str = "eulerian"
-    n: int = 400
+    grid: str | None = None
+    n: int | None = None
     integrator: str = "implicit"
-    rtol: float = 1.0e-6
-    interfacial_length: float = 0.0
+    rtol: float | None = None
+    interfacial_length: float = DEFAULT_INTERFACIAL_LENGTH
 
     def __post_init__(self) -> None:
+        ell = _interfacial_length(self.interfacial_length)
+        object.__setattr__(self, "interfacial_length", ell)
+        if self.grid is None:
+            object.__setattr__(self, "grid", "lagrangian" if ell > 0.0 else "eulerian")
         if self.grid not in GRIDS:
             raise ParameterError("settings.grid", self.grid, " or ".join(map(repr, GRIDS)))
         if self.integrator not in INTEGRATORS:
             raise ParameterError("settings.integrator", self.integrator,
                                  " or ".join(map(repr, INTEGRATORS)))
+        if self.n is None:
+            object.__setattr__(self, "n", math.ceil(CELLS_PER_LENGTH / ell - 1e-9)
+                               if ell > 0.0 else 400)
         if isinstance(self.n, bool) or not isinstance(self.n, (int, np.integer)) or not (
                 N_RANGE[0] <= int(self.n) <= N_RANGE[1]):
             raise ParameterError("settings.n", self.n, f"an integer {N_RANGE[0]}-{N_RANGE[1]}")
         object.__setattr__(self, "n", int(self.n))
-        rtol = require_finite_positive("settings.rtol", self.rtol)
+        rtol = require_finite_positive("settings.rtol", self.rtol if self.rtol is not None
+                                       else (1e-5 if ell > 0.0 else 1e-6))
         if rtol > 1e-2:
             raise ParameterError("settings.rtol", self.rtol, "0 < rtol <= 1e-2")
         object.__setattr__(self, "rtol", rtol)
-        ell = float(self.interfacial_length)
-        if not math.isfinite(ell) or ell < 0.0:
-            raise ParameterError("settings.interfacial_length", self.interfacial_length,
-                                 "a finite number >= 0 (dry radii; 0 = the paper's model)")
-        object.__setattr__(self, "interfacial_length", ell)
+
+    @property
+    def regularized(self) -> bool:
+        """True for the regularized model (ell > 0), False for the paper's."""
+        return self.interfacial_length > 0.0
 
     def on_grid(self, grid: str) -> SolverSettings:
         """The same settings on another grid."""
         return SolverSettings(grid, self.n, self.integrator, self.rtol, self.interfacial_length)
+
+    def rungs(self) -> list[SolverSettings]:
+        """The validation runs: the ladder ell / 2^k with n 2^k cells (k < RUNGS), or, for
+        the paper's model, this grid and then the other one."""
+        if not self.regularized:
+            return [self.on_grid(g) for g in (self.grid, *(g for g in GRIDS if g != self.grid))]
+        scale = 1 << (RUNGS - 1)
+        if self.interfacial_length / scale < ELL_RANGE[0]:
+            raise ParameterError("settings.interfacial_length", self.interfacial_length,
+                                 f"0 or {ELL_RANGE[0] * scale:g}-{ELL_RANGE[1]:g} dry radii "
+                                 f"(the ladder goes down to ell / {scale})")
+        if self.n * scale > N_RANGE[1]:
+            raise ParameterError("settings.n", self.n, f"an integer {N_RANGE[0]}-"
+                                 f"{N_RANGE[1] // scale} (the ladder's finest rung has {scale} "
+                                 f"times more cells)")
+        return [SolverSettings(self.grid, self.n << k, self.integrator, self.rtol,
+                               self.interfacial_length / (1 << k)) for k in range(RUNGS)]
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
         return asdict(self)
 
 
-TRUTH = SolverSettings()  # the validation truth: the paper's model, Eulerian grid, N = 400
+def _interfacial_length(value: Any) -> float:
+    """A validated settings.interfacial_length: 0 or ell_min..ELL_MAX dry radii."""
+    try:
+        ell = float(value)
+    except (TypeError, ValueError):
+        ell = math.nan
+    if isinstance(value, bool) or not (ell == 0.0 or ELL_RANGE[0] <= ell <= ELL_RANGE[1]):
+        raise ParameterError("settings.interfacial_length", value,
+                             f"0 (the paper's model) or {ELL_RANGE[0]:g}-{ELL_RANGE[1]:g} dry "
+                             "radii")
+    return ell
+
+
+TRUTH = SolverSettings()  # the validation truth: the regularized model's limit ell -> 0
+PAPER = SolverSettings(interfacial_length=0.0)  # the paper's model: Eulerian grid, N = 400
 
 
 @functools.cache
@@ -165,8 +217,8 @@ class Scenario:
 @dataclass
 class Trajectory:
     """A stored full-solver run: a(t), R_f(t), expelled volume and T(t) at the outputs,
-    plus a(t) and da/dt at every accepted step (``step_*``, empty if the run has none)
-    for accurate crossing times; and metadata."""
+    plus a(t), da/dt and the edge cell's porosity at every accepted step (``step_*``, empty
+    if the run has none) for accurate crossing and nucleation times; and metadata."""
 
     t: np.ndarray
     radius: np.ndarray
@@ -177,6 +229,7 @@ class Trajectory:
     step_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     step_radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
     step_rate: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    step_edge: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def horizon(self) -> float:
@@ -218,6 +271,13 @@ class Trajectory:
                                        self.step_rate[j], radius))
         return _linear_cube(float(tt[j - 1]), float(aa[j - 1]), float(tt[j]), float(aa[j]),
                             radius)
+
+    def nucleation_time(self, level: float) -> float | None:
+        """First time the edge cell's porosity falls to ``level`` (None if it never does)."""
+        if self.step_edge.size != self.step_t.size or self.step_t.size < 2:
+            return None
+        t = first_fall(self.step_t, self.step_edge, level)
+        return None if math.isnan(t) else t
 
     def to_npz(self) -> bytes:
         """The arrays as an .npz blob."""
@@ -277,7 +337,7 @@ def _simulate(sc: Scenario, horizon: float) -> tuple[Trajectory, dict[str, Any]]
     t = np.asarray(res.t, dtype=float)
     steps = {k: np.asarray(getattr(res, k, None) if getattr(res, k, None) is not None
                            else np.zeros(0), dtype=float)
-             for k in ("step_t", "step_radius", "step_rate")}
+             for k in ("step_t", "step_radius", "step_rate", "step_edge")}
     traj = Trajectory(t=t, radius=np.asarray(res.radius, dtype=float),
                       front=_floats(res.front, t),
                       expelled_volume=_floats(res.expelled_volume, t),

@@ -87,14 +87,23 @@ def plan_schedule_with(planner: Planner, req: ScheduleRequest) -> ScheduleAnswer
     _seconds(corrected, tau and tau.seconds)
     sv = stored_volume(req.start_radius)
     s = req.settings
+    solver = (f"full solver, {s.grid} grid, N = {s.n}" + (
+        f", the regularized model at interfacial length {s.interfacial_length:g}"
+        if s.regularized else ", the paper's model"))
     note = ("Hold times assume the gel keeps its state while it rests (the paper's reading: "
             "doses read off one continuous heating). In the real protocol the gel takes up "
             "fresh fluid at T_start during each rest, so the next heating starts from a larger "
-            "radius; the protocol check shows what those times really deliver (full solver, "
-            f"{s.grid} grid, N = {s.n}), and the corrected times were found by shooting on the "
-            f"same solver to meet each dose within {req.tolerance:.0%}. Volumes are fluid "
-            "volumes; the model does not track the drug in re-absorbed fluid.")
-    if "front" in model:
+            f"radius; the protocol check shows what those times really deliver ({solver}), "
+            f"and the corrected times were found by shooting on the same solver to meet each "
+            f"dose within {req.tolerance:.0%}. Volumes are fluid volumes; the model does not "
+            "track the drug in re-absorbed fluid.")
+    if "front" in model and s.regularized:
+        note += (" In this front regime the hold times are the sharp-interface limit "
+                 "(ell -> 0) while the protocol runs use the ladder's coarsest ell, whose "
+                 "front first has to nucleate at the edge: part of the correction is that "
+                 "delay (a few % of an 80 % dose for ANB, more for HHT; each dose's "
+                 "validation gives the ladder).")
+    elif "front" in model:
         note += (" In this front regime the full solver's own answers depend on its grid "
                  "(no interfacial energy in the paper's model): treat its times as uncertain "
                  "by the grid spread shown in each dose's validation.")

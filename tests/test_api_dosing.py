@@ -64,8 +64,11 @@ async def test_front_dose_answers_at_once(clients, planner) -> None:
     assert r.status_code == 200
     ans = await api.dose_time(FRONT)
     want = planner.dose(DoseRequest(**FRONT))
-    assert ans.status == "answered" and ans.model == "front" and ans.behaviour == "front"
+    assert ans.status == "answered" and ans.model == "front-sharp" and ans.behaviour == "front"
     assert ans.time == want.time and ans.seconds == want.seconds
+    assert ans.interfacial_length == 0.005 and ans.truth == want.truth
+    paper = await api.dose_time({**FRONT, "interfacial_length": 0.0})
+    assert paper.model == "front" and paper.time > ans.time  # the paper's model: slower
     # issue 5: 80 % of ANB's stored fluid leaves a^3 = 0.2 a0^3 + 0.8: radius 2.29 -> 1.47
     assert ans.start_radius == pytest.approx(2.2924, abs=5e-4)
     assert ans.final_radius == pytest.approx(1.475, abs=5e-3)
@@ -82,7 +85,8 @@ async def test_validate_queues_and_reports_front_errors(clients) -> None:
     v = await _wait_done(api, ans.validation_id)
     assert v.status == "done", v.error
     res = v.result
-    assert set(res["grids"]) == {"eulerian", "lagrangian"}
+    assert [e["interfacial_length"] for e in res["runs"]] == [0.005, 0.0025, 0.00125]
+    assert res["limit"]["order"] == pytest.approx(1.5, abs=0.01)  # the fake's t(ell)
     # the front model's error is measured against the (fake) full trajectory's time
     assert res["front_time_error"] == pytest.approx(
         (ans.time - res["time"]) / res["time"], rel=1e-9)
@@ -101,7 +105,7 @@ async def test_full_scenario_is_202_then_answered_from_cache(clients, fake) -> N
     assert r1.headers["location"] == f"/v1/validations/{vid}"
     v = await _wait_done(api, vid)
     assert v.status == "done" and v.result["time"] > 0
-    assert sorted(c["grid"] for c in fake.calls) == ["eulerian", "lagrangian"]  # one run each
+    assert sorted(c["n"] for c in fake.calls) == [800, 1600, 3200]  # one run per rung
     ans = await api.dose_time(SMOOTH)
     assert ans.status == "answered" and ans.model == "full"
     req = DoseRequest(**SMOOTH)
@@ -121,6 +125,8 @@ async def test_full_scenario_is_202_then_answered_from_cache(clients, fake) -> N
     ({**FRONT, "dry_radius_um": "big"}, "dry_radius_um"),
     ({**FRONT, "constants": {"viscosity_pa_s": "honey"}}, "constants.viscosity_pa_s"),
     ({**FRONT, "swollen_radius_um": 100.0}, "swollen_radius_um"),           # two sizes
+    ({**FRONT, "interfacial_length": 0.001}, "interfacial_length"),         # ladder too fine
+    ({**FRONT, "interfacial_length": 0.5}, "interfacial_length"),
 ])
 async def test_bad_dose_is_422_naming_the_field(clients, body, field) -> None:
     api, raw = clients
@@ -140,9 +146,9 @@ async def test_unknown_validation_is_404(clients) -> None:
 
 async def test_full_queue_is_429_with_retry_after(tmp_path) -> None:
     with fake_full_solver(delay=1.0), \
-            fake_planner(tmp_path / "c.sqlite", max_pending=2) as planner:
+            fake_planner(tmp_path / "c.sqlite", max_pending=3) as planner:
         async with asgi(create_app(planner=planner, warm=False)) as (_, raw):
-            r1 = await raw.post("/v1/dose-time", json=SMOOTH)  # two grids: the queue is full
+            r1 = await raw.post("/v1/dose-time", json=SMOOTH)  # three rungs: the queue is full
             r2 = await raw.post("/v1/dose-time", json={**SMOOTH, "t_start": 300.5})
             assert r1.status_code == 202
             assert r2.status_code == 429 and int(r2.headers["retry-after"]) >= 1
@@ -164,7 +170,7 @@ async def test_blocking_work_never_blocks_the_event_loop(tmp_path, fake) -> None
             assert (await api.health()).status == "ok"
             assert time.perf_counter() - t0 < 0.7
             assert not slow.done()
-            assert (await slow).model == "front"
+            assert (await slow).model == "front-sharp"
 
 
 async def test_schedule_hold_then_checked_job(clients) -> None:

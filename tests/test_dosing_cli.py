@@ -21,7 +21,8 @@ def test_dose_json_front_model(capsys, tmp_path: Path) -> None:
     out = _json(capsys, ["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308",
                          "--fraction", "0.8", "--dry-radius-um", "50", "--json",
                          "--cache", str(tmp_path / "c.sqlite")])
-    assert out["model"] == "front" and out["validation"] is None
+    assert out["model"] == "front-sharp" and out["validation"] is None
+    assert out["interfacial_length"] == 0.005 and "limit ell -> 0" in out["truth"]
     assert out["final_radius"] == pytest.approx(1.4750, abs=1e-4)
     assert out["seconds"] == pytest.approx(out["time"] * timescale(50, 308).seconds, rel=1e-12)
     assert "eta Omega_p R^2" in out["timescale_formula"]
@@ -32,7 +33,8 @@ def test_dose_text_and_errors(capsys, tmp_path: Path) -> None:
                  "0.5", "--swollen-radius-um", "100", "--viscosity", "water",
                  "--cache", str(tmp_path / "c.sqlite")]) == 0
     text = capsys.readouterr().out
-    assert "front model: heat for t =" in text and " s\n" in text and "tau =" in text
+    assert "front-sharp model: heat for t =" in text and " s\n" in text and "tau =" in text
+    assert "truth: the regularized model's sharp-interface limit" in text
     assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308",
                  "--fraction", "1.5", "--cache", str(tmp_path / "c.sqlite")]) == 2
     assert "dose_fraction" in capsys.readouterr().err
@@ -42,6 +44,18 @@ def test_dose_text_and_errors(capsys, tmp_path: Path) -> None:
     assert main(["dose", "--gel", "XYZ", "--t-start", "302", "--t-end", "308",
                  "--fraction", "0.5", "--cache", str(tmp_path / "c.sqlite")]) == 2
     assert "gel" in capsys.readouterr().err
+    assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction",
+                 "0.5", "--interfacial-length", "0.001",
+                 "--cache", str(tmp_path / "c.sqlite")]) == 2
+    assert "settings.interfacial_length" in capsys.readouterr().err
+
+
+def test_dose_paper_model_is_selectable(capsys, tmp_path: Path) -> None:
+    out = _json(capsys, ["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308",
+                         "--fraction", "0.8", "--interfacial-length", "0", "--json",
+                         "--cache", str(tmp_path / "c.sqlite")])
+    assert out["model"] == "front" and out["interfacial_length"] == 0.0
+    assert out["time"] == pytest.approx(0.0950, abs=1e-4)  # issue 5 (the paper: 0.092)
 
 
 def test_schedule_hold_only_json(capsys, tmp_path: Path) -> None:
@@ -49,7 +63,7 @@ def test_schedule_hold_only_json(capsys, tmp_path: Path) -> None:
                          "--doses", "0.3", "0.3", "0.3", "--rests", "0.5", "0.5",
                          "--no-check", "--no-correct", "--json",
                          "--cache", str(tmp_path / "c.sqlite")])
-    assert out["model"] == "front" and out["protocol_check"] is None
+    assert out["model"] == "front-sharp" and out["protocol_check"] is None
     ends = [h["end"] for h in out["hold"]]
     assert ends == sorted(ends) and out["hold"][0]["start"] == 0.0
 
@@ -61,4 +75,4 @@ def test_readme_python_example_runs(tmp_path: Path, monkeypatch, capsys) -> None
     monkeypatch.setenv("THERMOGEL_CACHE", str(tmp_path / "readme.sqlite"))
     exec(compile(code, "README.md", "exec"), {})
     out = capsys.readouterr().out
-    assert out.startswith("front t = 0.09") and "tau = eta Omega_p" in out
+    assert out.startswith("front-sharp t = 0.07") and "tau = eta Omega_p" in out

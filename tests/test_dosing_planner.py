@@ -14,8 +14,9 @@ import pytest
 from dosing_fakes import FakeSolver, exact_time
 
 from dosing import DoseRequest, Planner, QueueFullError, ScheduleRequest, UnknownValidationError
-from dosing.planner import front_prior
+from dosing.scenario import PAPER
 from dosing.units import expelled_volume, radius_after_dose
+from dosing.validation import front_prior
 from solver import HHT, equilibrium
 from solver.equilibrium import nearest_stable
 
@@ -52,8 +53,33 @@ def _wait(planner: Planner, vid: str, timeout: float = 20.0):
     raise AssertionError("validation did not finish")
 
 
-def test_smooth_jump_is_answered_by_the_full_solver_on_both_grids(planner, fake) -> None:
+def test_smooth_jump_is_answered_by_the_ladder_limit(planner, fake) -> None:
+    """Default truth: the ladder ell = 0.005, 0.0025, 0.00125 (N = 800, 1600, 3200) on the
+    Lagrangian grid, extrapolated to ell -> 0; the fake's t(ell) = t0 (1 + 200 ell^1.5)."""
     req = DoseRequest(**SMOOTH, dose_fraction=0.5)
+    ans = planner.dose(req)
+    a0 = req.start_radius
+    af = nearest_stable(HHT, 307.6, a0).stretch
+    t0 = exact_time(a0, af, radius_after_dose(a0, 0.5), "lagrangian")
+    v = ans.validation
+    assert ans.model == "full" and v["model"] == "regularized"
+    assert ans.interfacial_length == 0.005 and "limit ell -> 0" in ans.truth
+    assert [(e["grid"], e["n"], e["interfacial_length"]) for e in v["runs"]] == [
+        ("lagrangian", 800, 0.005), ("lagrangian", 1600, 0.0025), ("lagrangian", 3200, 0.00125)]
+    assert sorted((c["n"], c["interfacial_length"]) for c in fake.calls) == [
+        (800, 0.005), (1600, 0.0025), (3200, 0.00125)]
+    # each rung's read-off is exact to ~1e-5 (below); the extrapolation amplifies that by
+    # 1/(2^1.5 - 1) ~ 0.55 on the last difference
+    assert v["limit"]["order"] == pytest.approx(1.5, abs=0.01)
+    assert ans.time == v["time"] == pytest.approx(t0, abs=2e-5)
+    assert v["runs"][0]["time"] == pytest.approx(t0 * (1 + 200 * 0.005**1.5), abs=1e-5)
+    assert ans.error_estimate == pytest.approx(v["error"] + 1e-5, rel=1e-9)  # + rtol
+    assert v["limit"]["error"] == pytest.approx(1.25 * abs(v["time"] - v["runs"][2]["time"]))
+    assert "Richardson" in ans.error_explanation
+
+
+def test_smooth_jump_is_answered_by_the_full_solver_on_both_grids(planner, fake) -> None:
+    req = DoseRequest(**SMOOTH, dose_fraction=0.5, settings=PAPER)
     ans = planner.dose(req)
     a0 = req.start_radius
     af = nearest_stable(HHT, 307.6, a0).stretch
@@ -62,9 +88,9 @@ def test_smooth_jump_is_answered_by_the_full_solver_on_both_grids(planner, fake)
     # 400 samples (h = 0.0025) per step, a^3 interpolated linearly: the read-off of
     # exp(-k t) is exact to (k h)^2 / (8 k) = 8e-6 for k = 10
     assert ans.time == pytest.approx(exact_time(a0, af, a), abs=1e-5)
-    grids = ans.validation["grids"]
-    assert grids["lagrangian"]["time"] == pytest.approx(exact_time(a0, af, a, "lagrangian"),
-                                                        abs=1e-5)
+    runs = ans.validation["runs"]
+    assert [e["grid"] for e in runs] == ["eulerian", "lagrangian"]
+    assert runs[1]["time"] == pytest.approx(exact_time(a0, af, a, "lagrangian"), abs=1e-5)
     assert ans.validation["grid_spread"] == pytest.approx(0.25, rel=1e-3)  # rates 10 vs 8
     assert ans.error_estimate == pytest.approx(0.25, rel=1e-3)
     assert "disagree by 25%" in ans.error_explanation
@@ -72,17 +98,36 @@ def test_smooth_jump_is_answered_by_the_full_solver_on_both_grids(planner, fake)
     assert planner.dose(req).time == ans.time and len(fake.calls) == 2  # served by the cache
 
 
-def test_front_answer_needs_no_full_solver_then_validation_adds_both_grids(planner,
-                                                                           fake) -> None:
+def test_front_answer_is_the_sharp_model_checked_against_the_ladder_limit(planner,
+                                                                         fake) -> None:
     req = DoseRequest(**FRONT, dose_fraction=0.8)
     quick = planner.dose(req)
+    assert quick.model == "front-sharp" and quick.validation is None and not fake.calls
+    assert quick.error_estimate == front_prior(0.8, "front-sharp")
+    assert "sharp-interface" in quick.error_explanation and quick.interfacial_length == 0.005
+    checked = planner.dose(req, validate=True)
+    v = checked.validation
+    assert checked.time == quick.time and len(fake.calls) == 3
+    lim = v["limit"]
+    assert v["front_time_error"] == pytest.approx((quick.time - lim["time"]) / lim["time"])
+    want = (abs(quick.time - lim["time"]) + lim["error"]) / quick.time
+    assert checked.error_estimate == pytest.approx(want, rel=1e-12)
+    assert "sharp-interface limit" in checked.error_explanation
+    assert v["front_volume_error"] == v["runs"][2]["front_volume_error"]  # the finest rung
+
+
+def test_front_answer_needs_no_full_solver_then_validation_adds_both_grids(planner,
+                                                                           fake) -> None:
+    req = DoseRequest(**FRONT, dose_fraction=0.8, settings=PAPER)
+    quick = planner.dose(req)
     assert quick.model == "front" and quick.validation is None and not fake.calls
-    assert quick.error_estimate == front_prior(0.8) == 0.8
+    assert quick.error_estimate == front_prior(0.8, "front") == 0.8
+    assert quick.interfacial_length == 0.0 and "no interfacial energy" in quick.truth
     assert "Not yet checked" in quick.error_explanation
     checked = planner.dose(req, validate=True)
     v = checked.validation
-    t_e, t_l = v["grids"]["eulerian"]["time"], v["grids"]["lagrangian"]["time"]
-    assert v["time"] == t_e and v["truth_grid"] == "eulerian" and v["front_time"] == quick.time
+    t_e, t_l = (e["time"] for e in v["runs"])
+    assert v["time"] == t_e and v["model"] == "paper" and v["front_time"] == quick.time
     assert v["front_time_error"] == pytest.approx((quick.time - t_e) / t_e, rel=1e-12)
     a0, a = req.start_radius, quick.final_radius
     af = nearest_stable(req.gel, 308.0, a0).stretch
@@ -111,15 +156,15 @@ def test_submit_validation_returns_at_once_dedups_and_survives_restart(tmp_path:
     fake.gate.set()
     st = _wait(p, vid)
     assert st.status == "done" and st.result["time"] > 0
-    assert set(st.result["grids"]) == {"eulerian", "lagrangian"}
+    assert [e["interfacial_length"] for e in st.result["runs"]] == [0.005, 0.0025, 0.00125]
     assert st.result["front_time_error"] is not None
     assert st.result["front_volume_error"] is not None
     assert _wait(p, vid2).status == "done"
-    assert len(fake.calls) == 2  # one run per grid served both doses
+    assert len(fake.calls) == 3  # one run per rung served both doses
     p.close()
     p.jobs.executor.shutdown()
     again = _planner(path)  # a restart: same file, new planner
-    assert again.validation(vid).result == st.result and len(fake.calls) == 2
+    assert again.validation(vid).result == st.result and len(fake.calls) == 3
     with pytest.raises(UnknownValidationError):
         again.validation("nope")
     again.close()
@@ -137,7 +182,7 @@ def test_queue_is_bounded(tmp_path: Path, fake) -> None:
     fake.gate = threading.Event()
     p = _planner(tmp_path / "c.sqlite", max_pending=1)
     with pytest.raises(QueueFullError) as err:
-        p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.3))  # two grids, room for one
+        p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.3))  # three rungs, room for one
     assert err.value.retry_after > 0
     fake.gate.set()
     p.close()
@@ -145,25 +190,26 @@ def test_queue_is_bounded(tmp_path: Path, fake) -> None:
 
 
 def test_long_doses_extend_the_run_under_one_key(tmp_path: Path, monkeypatch) -> None:
-    slow = FakeSolver(rate_scale=0.05)  # 70 % takes t = 3.0: beyond the first horizon 1
+    slow = FakeSolver(rate_scale=0.05)  # 60 % takes t = 2.7: beyond the first horizon 1
     monkeypatch.setitem(sys.modules, "solver.full", slow.module())
     p = _planner(tmp_path / "c.sqlite")
-    req = DoseRequest(**SMOOTH, dose_fraction=0.7)
+    req = DoseRequest(**SMOOTH, dose_fraction=0.6)
     ans = p.dose(req)
     a0 = req.start_radius
     af = nearest_stable(HHT, 307.6, a0).stretch
-    assert ans.time == pytest.approx(exact_time(a0, af, ans.final_radius, scale=0.05), rel=1e-4)
+    assert ans.time == pytest.approx(exact_time(a0, af, ans.final_radius, "lagrangian", 0.05),
+                                     rel=1e-4)
     assert ans.time > 1.0
     meta = p.cache.meta(ans.scenario_key)
     assert meta["runs"] == 2 and meta["horizon"] == pytest.approx(4.0)
-    assert len(p.cache) == 2  # one row per scenario (grid), extended in place
+    assert len(p.cache) == 3  # one row per scenario (rung), extended in place
     p.close()
     p.jobs.executor.shutdown()
 
 
 def test_schedule_on_the_fake_solver(planner, fake) -> None:
     req = ScheduleRequest(**SMOOTH, doses=[0.2, 0.2, 0.2], rests=[0.1, 0.1],
-                          dry_radius_um=50.0)
+                          dry_radius_um=50.0, settings=PAPER)  # hold and protocol: one grid
     ans = planner.schedule(req)
     a0 = equilibrium(HHT, 304.0).stretch
     af = nearest_stable(HHT, 307.6, a0).stretch
@@ -178,3 +224,14 @@ def test_schedule_on_the_fake_solver(planner, fake) -> None:
     assert cor["actuation_seconds"][0] == pytest.approx(cor["actuation_times"][0]
                                                         * ans.timescale_seconds)
     assert "2205" not in ans.timescale_formula  # T_end = 307.6 K here
+
+
+def test_regularized_schedule_runs_the_protocol_at_the_coarsest_rung(planner, fake) -> None:
+    req = ScheduleRequest(**FRONT, doses=[0.3, 0.3], rests=[0.2])
+    ans = planner.schedule(req)
+    assert ans.model == "front-sharp"
+    protocol_runs = [c for c in fake.calls if len(c["protocol"]) > 1]
+    assert protocol_runs and {(c["grid"], c["n"], c["interfacial_length"])
+                              for c in protocol_runs} == {("lagrangian", 800, 0.005)}
+    assert "interfacial length 0.005" in ans.note and "nucleate" in ans.note
+    assert ans.corrected["met"]

@@ -1,4 +1,5 @@
-"""A three-dose ANB schedule on the real full solver (Eulerian, N = 400) (issue 5).
+"""A three-dose ANB schedule on the real full solver, the paper's model (Eulerian, N = 400)
+(issue 5).
 
 30 %, 30 %, 30 % of the stored fluid with rests of 0.5 tau at 302 K between heatings at
 308 K: the hold-assumption times, what they really deliver in the heat/cool protocol,
@@ -13,6 +14,7 @@ import pytest
 
 from dosing import DoseRequest, Planner, ScheduleRequest
 from dosing.protocol import heat_cool_protocol, windows
+from dosing.scenario import PAPER
 from solver.full import simulate
 
 DOSES, RESTS = [0.3, 0.3, 0.3], [0.5, 0.5]
@@ -22,7 +24,8 @@ DOSES, RESTS = [0.3, 0.3, 0.3], [0.5, 0.5]
 def answer(tmp_path_factory):
     planner = Planner(cache_path=tmp_path_factory.mktemp("s") / "c.sqlite",
                       executor=ThreadPoolExecutor(2))
-    req = ScheduleRequest("ANB", 302.0, 308.0, doses=DOSES, rests=RESTS, dry_radius_um=50.0)
+    req = ScheduleRequest("ANB", 302.0, 308.0, doses=DOSES, rests=RESTS, dry_radius_um=50.0,
+                          settings=PAPER)
     ans = planner.schedule(req)
     yield planner, req, ans
     planner.close()
@@ -33,7 +36,7 @@ def answer(tmp_path_factory):
 def test_hold_assumption_reads_one_heating_cumulatively(answer) -> None:
     planner, req, ans = answer
     assert ans.model == "front"
-    ends = [planner.dose(DoseRequest("ANB", 302.0, 308.0, dose_fraction=f)).time
+    ends = [planner.dose(DoseRequest("ANB", 302.0, 308.0, dose_fraction=f, settings=PAPER)).time
             for f in accumulate(DOSES)]
     assert [h["end"] for h in ans.hold] == pytest.approx(ends, rel=1e-12)
     assert [h["actuation_time"] for h in ans.hold] == pytest.approx(np.diff([0.0, *ends]))

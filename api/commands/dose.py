@@ -32,9 +32,16 @@ def add_planning_options(p: argparse.ArgumentParser) -> None:
     c.add_argument("--k0-m2", type=float, default=8.0e-20,
                    help="permeability scale k0 in m^2 (default 8e-20)")
     s = p.add_argument_group("full solver (validation truth)")
-    s.add_argument("--grid", choices=["eulerian", "lagrangian"], default="eulerian",
-                   help="truth grid (default eulerian, the paper's)")
-    s.add_argument("--n", type=int, default=400, help="grid cells (default 400)")
+    s.add_argument("--interfacial-length", type=float, default=None, metavar="L",
+                   help="interfacial length ell in dry radii: the truth is the regularized "
+                        "model's limit ell -> 0, from runs at L, L/2, L/4 (default 0.005; "
+                        "0.0025-0.02); 0 = the paper's model, checked on both grids")
+    s.add_argument("--grid", choices=["eulerian", "lagrangian"], default=None,
+                   help="truth grid (default lagrangian; eulerian, the paper's, with "
+                        "--interfacial-length 0)")
+    s.add_argument("--n", type=int, default=None,
+                   help="grid cells of the (coarsest) run (default 4/L; 400 with "
+                        "--interfacial-length 0)")
     p.add_argument("--cache", default=None,
                    help="validation cache file (default $THERMOGEL_CACHE or "
                         "~/.cache/thermogel/validations.sqlite)")
@@ -49,7 +56,9 @@ def planning_kwargs(args: argparse.Namespace) -> dict[str, Any]:
             "branch": args.branch, "dry_radius_um": args.dry_radius_um,
             "swollen_radius_um": args.swollen_radius_um,
             "constants": PhysicalConstants(args.viscosity, args.polymer_volume_m3, args.k0_m2),
-            "settings": SolverSettings(grid=args.grid, n=args.n)}
+            "settings": SolverSettings(grid=args.grid, n=args.n, **(
+                {} if args.interfacial_length is None
+                else {"interfacial_length": args.interfacial_length}))}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -64,7 +73,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--concentration-ug-per-ul", type=float, default=None,
                    help="drug concentration of the loaded fluid in ug/uL")
     p.add_argument("--validate", action="store_true",
-                   help="also run the full solver on both grids (blocking, cached)")
+                   help="also run the full solver's validation runs (blocking, cached)")
     p.set_defaults(func=run)
 
 
@@ -89,6 +98,7 @@ def run(args: argparse.Namespace) -> int:
           f"{ans.final_radius:.4g} dry radii)")
     secs = "" if ans.seconds is None else f" = {ans.seconds:.4g} s"
     print(f"  {ans.model} model: heat for t = {ans.time:.4g} (dimensionless){secs}")
+    print(_wrap(f"truth: {ans.truth}"))
     if ans.expelled_volume_ul is not None:
         print(f"  expels {ans.expelled_volume_ul:.4g} uL of {ans.stored_volume_ul:.4g} uL "
               f"stored; final radius {ans.final_radius_um:.4g} um")
@@ -96,7 +106,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"  error estimate {ans.error_estimate:.1%}:")
     print(_wrap(ans.error_explanation))
     if ans.validation:
-        grids = ", ".join(f"{g} {e['time']:.4g}" if "time" in e else f"{g} failed"
-                          for g, e in ans.validation["grids"].items())
-        print(f"  full solver: {grids}")
+        runs = ", ".join(f"{e['grid']} N={e['n']} ell={e['interfacial_length']:g}: "
+                         + (f"{e['time']:.5g}" if "time" in e else "failed")
+                         for e in ans.validation["runs"])
+        print(_wrap(f"full solver: {runs}"))
     return 0

@@ -17,7 +17,15 @@ from numba import njit
 
 from ..errors import SolverError
 from . import rosenbrock as ros
-from .system import JAC_ANALYTIC, MODULES, dense_output, fd_jacobian, porosity, rhs
+from .system import (
+    JAC_ANALYTIC,
+    MODULES,
+    dense_output,
+    edge_porosity,
+    fd_jacobian,
+    porosity,
+    rhs,
+)
 
 OutputFn = Callable[[float, np.ndarray], None]
 ProgressFn = Callable[[float], None]
@@ -35,7 +43,8 @@ class Segment:
 
 @dataclass
 class Stats:
-    """Counters and the per-step record of the radius (for dense crossing times)."""
+    """Counters and the per-step record of the radius (for dense crossing times) and of the
+    edge cell's porosity (for the time a front nucleates)."""
 
     steps: int = 0
     rejected: int = 0
@@ -45,12 +54,14 @@ class Stats:
     t: list = field(default_factory=list)
     a: list = field(default_factory=list)
     da: list = field(default_factory=list)
+    edge: list = field(default_factory=list)
 
-    def record(self, t: float, a: float, da: float) -> None:
-        """Append one accepted step's time, radius and da/dt."""
+    def record(self, t: float, a: float, da: float, edge: float) -> None:
+        """Append one accepted step's time, radius, da/dt and edge-cell porosity."""
         self.t.append(t)
         self.a.append(a)
         self.da.append(da)
+        self.edge.append(edge)
 
 
 class Workspace:
@@ -114,6 +125,7 @@ def _flush(stats: Stats, rec: np.ndarray, counters: np.ndarray) -> None:
     stats.t.extend(rec[0, :k].tolist())
     stats.a.extend(rec[1, :k].tolist())
     stats.da.extend(rec[2, :k].tolist())
+    stats.edge.extend(rec[3, :k].tolist())
     counters[5] = 0
     stats.rhs_calls = int(counters[ros.C_RHS])
     stats.jacobians = int(counters[ros.C_JAC])
@@ -142,7 +154,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
     interpolants of the last step.
     """
     counters = np.zeros(6, dtype=np.int64)
-    rec = np.zeros((3, 4096))
+    rec = np.zeros((4, 4096))
     tt = np.zeros(2)
     total = segments[-1].t1
     h0 = 1e-7 * max(1.0, total)
@@ -160,7 +172,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
             raise _failure("unphysical state at the start of a protocol step", stats, seg.t0)
         tt[0] = seg.t0
         if not stats.t or stats.t[-1] != seg.t0:
-            stats.record(seg.t0, y[ia], f[ia])
+            stats.record(seg.t0, y[ia], f[ia], edge_porosity(ws.grid, y, ws.geo))
         ctrl[0], ctrl[1], ctrl[3] = min(ctrl[0], h0), 0.0, 0.0
         k_out = _emit(out_times, k_out, seg.t0, lambda _t: y.copy(), on_output)
         while tt[0] < seg.t1:
@@ -295,7 +307,7 @@ def run_explicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
             fcur = ws.rhs(y, seg.par)
             if fcur is None:
                 raise _failure(f"unphysical state at t={t:.6g}", stats, t)
-            stats.record(t, y[a_idx], fcur[a_idx])
+            stats.record(t, y[a_idx], fcur[a_idx], edge_porosity(ws.grid, y, ws.geo))
             while k_out < out_times.size and out_times[k_out] <= t + 1e-14 * max(1.0, t):
                 on_output(out_times[k_out], y)
                 k_out += 1

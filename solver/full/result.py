@@ -10,8 +10,10 @@ from typing import Any
 
 import numpy as np
 
+from ..crossing import first_fall
+
 _ARRAYS = ("t", "radius", "front", "jump", "phi", "coords", "temperature", "expelled_volume",
-           "solid_error", "step_t", "step_radius", "step_rate")
+           "solid_error", "step_t", "step_radius", "step_rate", "step_edge")
 
 
 def _clean(obj: Any) -> Any:
@@ -61,8 +63,9 @@ class FullResult:
     porosity jump at the front (core minus shell, NaN without a front), porosity
     snapshots phi (len(t), n) at ``coords`` (cell centres: R = r/a on the Eulerian grid,
     the dry coordinate rho on the Lagrangian grid), temperature, expelled fluid volume
-    (eq. FluidVolExpelled) and the relative solid-volume error.  ``step_*`` hold a and
-    da/dt at every accepted step (dense a(t) for crossing times).
+    (eq. FluidVolExpelled) and the relative solid-volume error.  ``step_*`` hold a,
+    da/dt and the edge cell's porosity at every accepted step (dense a(t) for crossing
+    times; the time a front nucleates at the edge).
     """
 
     t: np.ndarray
@@ -79,11 +82,17 @@ class FullResult:
     step_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     step_radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
     step_rate: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    step_edge: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def grid(self) -> str:
         """'eulerian' or 'lagrangian'."""
         return str(self.diagnostics.get("grid", "eulerian"))
+
+    def nucleation_time(self, level: float) -> float:
+        """First time the edge cell's porosity falls to ``level`` (NaN if it never does):
+        with a level between the swollen and shrunken porosities, when the front forms."""
+        return first_fall(self.step_t, self.step_edge, level)
 
     def time_to_radius(self, a_target: float) -> float:
         """First time at which a(t) crosses ``a_target`` (cubic Hermite between steps).

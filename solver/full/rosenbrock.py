@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from .banded import bordered_factor, bordered_solve
-from .system import error_norm, event, linearize, rhs
+from .system import edge_porosity, error_norm, event, linearize, rhs
 
 GAMMA = 0.25
 _ALPHA = np.zeros((6, 6))
@@ -152,8 +152,8 @@ def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, 
     dense output.  ctrl = [h, h of the last accepted step, its error, Jacobian valid flag]
     (Gustafsson's predictive controller, Hairer & Wanner IV.8).  An accepted step is
     linearized at once (f and J at the new state; an unphysical new state rejects it).
-    rec = (3, capacity) record of (t, a, da/dt) per accepted step, its count in
-    counters[5].  Returns a RUN_* status.
+    rec = (4, capacity) record of (t, a, da/dt, edge-cell porosity) per accepted step, its
+    count in counters[5].  Returns a RUN_* status.
     """
     n = y.size
     ia = n - 1
@@ -227,5 +227,6 @@ def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, 
         rec[0, k] = tt[0]
         rec[1, k] = y[ia]
         rec[2, k] = f[ia]
+        rec[3, k] = edge_porosity(grid, y, geo)
         counters[5] = k + 1
     return RUN_REACHED

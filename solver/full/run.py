@@ -264,7 +264,8 @@ class _Collector:
                          expelled_volume=4.0 * np.pi / 3.0 * (radius[0] ** 3 - radius ** 3),
                          solid_error=self.solid[:k], spinodal=self.spinodal_time is not None,
                          diagnostics=diag, step_t=np.array(stats.t),
-                         step_radius=np.array(stats.a), step_rate=np.array(stats.da))
+                         step_radius=np.array(stats.a), step_rate=np.array(stats.da),
+                         step_edge=np.array(stats.edge))
         radii = res.cell_radii()
         for i in range(k):
             front[i], jump[i] = fronts.locate_front(radii[i], phi[i], self.window)

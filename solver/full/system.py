@@ -50,6 +50,16 @@ def porosity(grid, y, geo, out):  # noqa: ANN001, ANN201
     return lagrangian.porosity(y, geo, out)
 
 
+@njit(cache=True)
+def edge_porosity(grid, y, geo):  # noqa: ANN001, ANN201
+    """Porosity of the outermost cell (where a front nucleates), from state y."""
+    n = geo.shape[1] - 1
+    if grid == EULERIAN:
+        a = y[n - 1]
+        return 1.0 - (1.0 - y[n - 2]) / (a * a * a * geo[2, n - 1])
+    return 1.0 - geo[2, n - 1] / (y[n - 1] ** 3 - y[n - 2] ** 3)
+
+
 JAC_ANALYTIC, JAC_FD = 0, 1
 
 
