@@ -6,12 +6,14 @@ the smooth cases, and the sharp-interface front model.
     .venv/bin/python benchmarks/interfacial_convergence.py --quick         # coarse ladders
 
 Sections:
-  grid    80% dose time of ANB 302->308 K and HHT 304->308 K vs N at ell = 0.01, 0.005, 0.0025
-          on both grids (Eulerian ell = 0.0025 only with --all-eulerian), wall time, observed
-          order, last change and the two grids' gap.
-  limit   the dose times 10%..90% at ell = 0.01 ... 0.00125 (Lagrangian, resolved), the observed
-          order in ell and the Richardson limit ell -> 0; the paper's model (ell = 0) on both
-          grids for comparison.
+  grid    80% dose time of ANB 302->308 K and HHT 304->308 K vs N at ell = 0.02, 0.01, 0.005
+          on both grids (--all-eulerian adds ell = 0.0025), wall time, observed order, last
+          change, the Richardson-extrapolated value with its estimated error, and the two
+          grids' gap.
+  limit   the dose times 10%..90% at ell = 0.01 ... 0.000625 (Lagrangian, resolved) and when
+          the front nucleates at the edge; the limit ell -> 0 of the times (plain Richardson)
+          and of the times after nucleation (dosing.ladder.dose_limit, with its error bound);
+          the paper's model (ell = 0) on both grids for comparison.
   smooth  max relative change of a(t) by the term in the smooth cases, and its order in ell.
   model   the paper's and the sharp-interface front models against the ell -> 0 limit.
 """
@@ -24,15 +26,17 @@ import time
 
 import numpy as np
 
+from dosing.ladder import Limit, dose_limit
 from solver.equilibrium import equilibrium
 from solver.front import front_trajectory
 from solver.front.result import fraction_radius
 from solver.front.sharp import sharp_front_trajectory
 from solver.full import simulate
 from solver.gel import preset
+from solver.phase import nucleation_level
 
 CASES = {"ANB": (302.0, 308.0), "HHT": (304.0, 308.0)}
-ELLS = (0.01, 0.005, 0.0025)
+ELLS = (0.02, 0.01, 0.005)  # both grids converge to 0.5 % here in minutes
 LIMIT_ELLS = (0.01, 0.005, 0.0025, 0.00125, 0.000625)
 FRACTIONS = np.arange(1, 10) / 10.0
 # cells per ell on each grid: the Lagrangian grid resolves the interface with ~2/ell cells,
@@ -41,14 +45,14 @@ LADDER = {"lagrangian": (2, 4, 8), "eulerian": (8, 16, 32)}
 LIMIT_CELLS = 4  # Lagrangian cells per ell for the ell -> 0 runs (4 and 8 agree to 1e-4)
 RTOL = 1e-5
 UNTIL = {"ANB": 0.1, "HHT": 0.25}  # first try for the run length (doubled if too short)
-NUCLEATED = 0.6  # edge-cell porosity below which the front has nucleated
 
 
 def dose_times(gel: str, ell: float, grid: str, n: int,
                fractions: np.ndarray = FRACTIONS) -> tuple[np.ndarray, float, int, float]:
     """(times to expel each fraction, wall time, steps, nucleation time) of one regularized
-    run; the front nucleates at the edge when the outermost cell's porosity drops below
-    NUCLEATED (first output, every until/400)."""
+    run; the front has nucleated at the edge when the outermost cell's porosity falls
+    midway between the start and final porosities (solver.phase.nucleation_level; step
+    resolved)."""
     t_start, t_end = CASES[gel]
     a0 = equilibrium(preset(gel), t_start).stretch
     targets = fraction_radius(a0, fractions)
@@ -61,8 +65,7 @@ def dose_times(gel: str, ell: float, grid: str, n: int,
             break
         until *= 2.0
     times = np.array([_crossing(res, a) for a in targets])
-    below = np.nonzero(res.phi[:, -1] < NUCLEATED)[0]
-    t_nuc = float(res.t[below[0]]) if below.size else math.nan
+    t_nuc = res.nucleation_time(nucleation_level(preset(gel), t_start, t_end))
     return times, time.perf_counter() - started, int(res.diagnostics["steps"]), t_nuc
 
 
@@ -90,9 +93,7 @@ def section_grid(gels: list[str], quick: bool, all_eulerian: bool = False) -> No
     finest: dict[tuple[str, str, float], float] = {}
     for gel in gels:
         for grid in ("lagrangian", "eulerian"):
-            ells = ELLS[:1] if quick else ELLS
-            if grid == "eulerian" and not all_eulerian:
-                ells = ells[:2]  # ell = 0.0025 needs N = 12800: tens of minutes
+            ells = ELLS[:1] if quick else ELLS + ((0.0025,) if all_eulerian else ())
             for ell in ells:
                 values = []
                 for c in LADDER[grid][:2] if quick else LADDER[grid]:
@@ -103,38 +104,48 @@ def section_grid(gels: list[str], quick: bool, all_eulerian: bool = False) -> No
                           f"{steps:6d}", flush=True)
                 change = abs(values[-1] - values[-2]) / values[-1]
                 order = observed_order(values) if len(values) >= 3 else math.nan
+                extra = richardson(values, order) if math.isfinite(order) else values[-1]
                 print(f"     -> last refinement changes t80 by {100 * change:.3f}%, "
-                      f"observed order {order:.2f}")
-                finest[(gel, grid, ell)] = values[-1]
+                      f"observed order {order:.2f}, extrapolated {extra:.6f} (finest off by "
+                      f"{100 * abs(values[-1] - extra) / extra:.3f}%)")
+                finest[(gel, grid, ell)] = (values[-1], extra)
         for ell in ELLS[:1] if quick else ELLS:
             if (gel, "eulerian", ell) not in finest:
                 continue
-            lag, eul = finest[(gel, "lagrangian", ell)], finest[(gel, "eulerian", ell)]
-            print(f"  {gel} ell={ell}: grids differ by {100 * abs(eul - lag) / lag:.3f}%")
+            (lag, lag_x), (eul, eul_x) = (finest[(gel, g, ell)] for g in ("lagrangian",
+                                                                           "eulerian"))
+            print(f"  {gel} ell={ell}: grids differ by {100 * abs(eul - lag) / lag:.3f}% "
+                  f"(finest), {100 * abs(eul_x - lag_x) / lag_x:.3f}% (extrapolated)")
 
 
-def section_limit(gels: list[str], quick: bool) -> dict[str, np.ndarray]:
+def section_limit(gels: list[str], quick: bool) -> dict[str, list[Limit]]:
     print("== the limit ell -> 0 (Lagrangian, N = 4/ell): dose times for 10%..90%, and the "
           "time the front nucleates at the edge ==")
     limits = {}
     ells = LIMIT_ELLS[:3] if quick else LIMIT_ELLS
     for gel in gels:
-        rows = []
+        rows, nucs = [], []
         for ell in ells:
             n = int(round(LIMIT_CELLS / ell))
             t, wall, _, t_nuc = dose_times(gel, ell, "lagrangian", n)
             rows.append(t)
+            nucs.append(t_nuc)
             print(f"{gel} ell={ell:<8} N={n:5d} " + " ".join(f"{x:.5f}" for x in t)
                   + f"  nucleation {t_nuc:.5f}  ({wall:.1f} s)", flush=True)
         arr = np.array(rows)
         orders = np.array([observed_order(list(arr[:, j])) for j in range(arr.shape[1])])
-        lim = np.array([richardson(list(arr[:, j]), orders[j]) for j in range(arr.shape[1])])
-        lower = np.array([richardson(list(arr[:, j]), 1.0) for j in range(arr.shape[1])])
+        plain = np.array([richardson(list(arr[:, j]), orders[j]) for j in range(arr.shape[1])])
         print(f"{gel} order in ell   " + " ".join(f"{x:7.2f}" for x in orders))
-        print(f"{gel} ell -> 0       " + " ".join(f"{x:.5f}" for x in lim))
-        print(f"{gel} bracket low    " + " ".join(f"{x:.5f}" for x in lower)
-              + "   (order-1 extrapolation; the smallest ell is the upper bound)")
-        limits[gel] = np.array([lim, lower, arr[-1]])
+        print(f"{gel} ell -> 0       " + " ".join(f"{x:.5f}" for x in plain)
+              + "   (plain Richardson, last three ell)")
+        last = list(ells[-3:])
+        lims = [dose_limit(last, list(arr[-3:, j]), [None if math.isnan(x) else x
+                                                     for x in nucs[-3:]])
+                for j in range(arr.shape[1])]
+        print(f"{gel} after nucl.    " + " ".join(f"{x.time:.5f}" for x in lims)
+              + "   (dosing.ladder.dose_limit, last three ell)")
+        print(f"{gel} its bound      " + " ".join(f"{x.error / x.time:6.2%} " for x in lims))
+        limits[gel] = lims
         t_start, t_end = CASES[gel]
         a80 = fraction_radius(equilibrium(preset(gel), t_start).stretch, 0.8)
         for grid, n in (("eulerian", 400), ("lagrangian", 400)):
@@ -163,18 +174,19 @@ def section_smooth(quick: bool) -> None:
                 break
 
 
-def section_model(gels: list[str], limits: dict[str, np.ndarray]) -> None:
-    print("== front models against the regularized limit ell -> 0: relative time error, and "
-          "'+' where the model lies inside the bracket ==")
+def section_model(gels: list[str], limits: dict[str, list[Limit]]) -> None:
+    print("== front models against the regularized limit ell -> 0 (after nucleation): "
+          "relative time error, '+' where within the limit's error bound ==")
     for gel in gels:
         t_start, t_end = CASES[gel]
         paper = front_trajectory(preset(gel), t_start, t_end)
         sharp = sharp_front_trajectory(preset(gel), t_start, t_end)
-        ref, lower, upper = limits[gel]
+        ref = np.array([x.time for x in limits[gel]])
+        bound = np.array([x.error for x in limits[gel]])
         for name, model in (("paper", paper), ("sharp", sharp)):
             t = np.array([model.time_to_fraction(f) for f in FRACTIONS])
             err = (t - ref) / ref
-            inside = (t >= lower) & (t <= upper)
+            inside = np.abs(t - ref) <= bound
             print(f"{gel} {name:5} " + " ".join(f"{100 * e:6.1f}%{'+' if k else ' '}"
                                              for e, k in zip(err, inside, strict=True)))
 
@@ -186,12 +198,12 @@ def main() -> None:
     ap.add_argument("--gel", choices=["ANB", "HHT", "both"], default="both")
     ap.add_argument("--quick", action="store_true", help="coarse ladders (minutes, not tens)")
     ap.add_argument("--all-eulerian", action="store_true",
-                    help="also the Eulerian ladder at ell = 0.0025 (N up to 12800, slow)")
+                    help="also ell = 0.0025 (Eulerian N up to 12800: hours)")
     args = ap.parse_args()
     gels = ["ANB", "HHT"] if args.gel == "both" else [args.gel]
     if args.section in ("grid", "all"):
         section_grid(gels, args.quick, args.all_eulerian)
-    limits: dict[str, np.ndarray] = {}
+    limits: dict[str, list[Limit]] = {}
     if args.section in ("limit", "model", "all"):
         limits = section_limit(gels, args.quick)
     if args.section in ("smooth", "all"):

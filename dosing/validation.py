@@ -16,6 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from solver.phase import nucleation_level
+
 from .ladder import dose_limit
 from .scenario import Scenario, Trajectory
 from .units import expelled_volume
@@ -30,23 +32,13 @@ from .units import expelled_volume
 # the limit is not pinned there (docs/interfacial.md, sec. 9).
 PRIOR_FRACTIONS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
 PRIOR_GAPS = {"front": (4.4, 2.9, 2.2, 1.8, 1.5, 1.2, 1.0, 0.8, 0.6),
-              "front-sharp": (60.0, 40.0, 1.0, 0.25, 0.12, 0.08, 0.07, 0.07, 0.07)}
+              "front-sharp": (60.0, 40.0, 1.0, 0.25, 0.12, 0.08, 0.08, 0.08, 0.08)}
 PRIOR_NOTE = "doses of 10-90 % for ANB 302->308 K and HHT 304->308 K"
 
 
 def front_prior(fraction: float, model: str = "front-sharp") -> float:
     """The prior error of a front-model time for a dose fraction (interpolated, clamped)."""
     return float(np.interp(fraction, PRIOR_FRACTIONS, PRIOR_GAPS[model]))
-
-
-def nucleation_level(sc: Scenario) -> float:
-    """Edge porosity at which a front has nucleated: midway between the start porosity and
-    the final equilibrium's."""
-    from solver.equilibrium import equilibrium, nearest_stable
-
-    start = equilibrium(sc.gel, sc.t_start, sc.branch)  # type: ignore[arg-type]
-    final = nearest_stable(sc.gel, sc.t_end, start.stretch)
-    return 0.5 * (start.porosity + final.porosity)
 
 
 def _run_entry(sc: Scenario, traj: Trajectory | BaseException | None, start_radius: float,
@@ -81,7 +73,9 @@ def validation_report(scs: list[Scenario], trajs: list[Any], start_radius: float
     front model's time, against the dose: (V_full(t_front) - V) / V.
     """
     s = scs[0].settings
-    level = nucleation_level(scs[0]) if s.regularized and scs[0].t_end is not None else None
+    sc0 = scs[0]
+    level = (nucleation_level(sc0.gel, sc0.t_start, sc0.t_end, sc0.branch)  # type: ignore[arg-type]
+             if s.regularized and sc0.t_end is not None else None)
     runs = [_run_entry(sc, tr, start_radius, radius, t_front, level)
             for sc, tr in zip(scs, trajs, strict=True)]
     times = [e.get("time") for e in runs]

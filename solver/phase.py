@@ -235,3 +235,11 @@ def shrunken_level(gel: Gel, temperature: float) -> float:
         raise ParameterError("t_end", temperature, "a temperature where P(phi) = 0 has a root")
     i = idx[0]
     return float(brentq(lambda v: osmotic_p(v, chi0, chi1), phi[i], phi[i + 1], xtol=1e-15))
+
+
+def nucleation_level(gel: Gel, t_start: float, t_end: float, branch: Branch = "swollen") -> float:
+    """Edge porosity at which a front has nucleated after T_start -> T_end: midway between
+    the start equilibrium's porosity and the final (nearest stable) equilibrium's."""
+    start = equilibrium(gel, t_start, branch)
+    final = nearest_stable(gel, t_end, start.stretch)
+    return 0.5 * (start.porosity + final.porosity)
