@@ -395,7 +395,7 @@ class ValidationResponse(_Out):
     kind: Literal["dose", "schedule"] = Field("dose", description="what was checked")
     status: Literal["pending", "running", "done", "failed"] = Field(description="its state")
     result: dict[str, Any] | None = Field(
-        None, description="when done: the full solver's time for the dose on each grid and "
+        None, description="when done: the truth's time for the dose, every run behind it and "
                           "the front model's errors (dose), or the schedule (schedule)")
     error: str | None = Field(None, description="when failed: why")
 

@@ -16,6 +16,22 @@ def test_front_json(capsys) -> None:  # noqa: ANN001
     assert out["front"][-1] == 0.0 and out["t"][1] == 0.05
 
 
+def test_front_sharp_is_earlier_than_the_papers(capsys) -> None:  # noqa: ANN001
+    """Sharp-interface front condition: ANB 80 % (a = 1.4750) at 0.0762 against the paper's
+    model's 0.0950 (docs/interfacial.md sec. 8)."""
+    times = {}
+    for extra in ([], ["--sharp"]):
+        assert main(["front", "--t-start", "302", "--t-end", "308", "--target-radius", "1.4750",
+                     "--json", *extra]) == 0
+        out = json.loads(capsys.readouterr().out)
+        times[out["model"]] = out["t"][-1]
+    assert times["front-sharp"] == pytest.approx(0.0762, abs=2e-4)
+    assert times["front-leading"] == pytest.approx(0.0950, abs=2e-4)
+    assert main(["front", "--t-start", "302", "--t-end", "308", "--sharp", "--paper-start",
+                 "--start-from-full", "0.01"]) == 2
+    assert "paper_start" in capsys.readouterr().err
+
+
 def test_front_text_and_not_applicable(capsys) -> None:  # noqa: ANN001
     assert main(["front", "--t-start", "302", "--t-end", "308", "--target-radius", "1.47"]) == 0
     assert "front-leading" in capsys.readouterr().out

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from solver.errors import SolverError
+from solver.errors import ParameterError, SolverError
 from solver.front import front_trajectory
+from solver.front.sharp import sharp_front_trajectory
 
 from .common import add_gel_options, gel_from_args, print_json
 
@@ -24,6 +25,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--paper-start", action="store_true",
                    help="with --start-from-full: keep the measured R_f as the paper did "
                         "(default: R_f from solid conservation)")
+    p.add_argument("--sharp", action="store_true",
+                   help="the front condition of the sharp-interface limit (model front-sharp, "
+                        "docs/interfacial.md sec. 8; the planner's default) instead of the "
+                        "paper's")
     p.add_argument("--until", type=float, default=None, help="stop at this dimensionless time")
     p.add_argument("--target-radius", type=float, default=None,
                    help="stop when the radius reaches this value")
@@ -48,11 +53,16 @@ def _full_start(args: argparse.Namespace, gel: object) -> tuple[float, float, fl
 def run(args: argparse.Namespace) -> int:
     """Print the trajectory (JSON: the series t, radius, front, flux and diagnostics)."""
     gel = gel_from_args(args)
+    if args.sharp and args.paper_start:
+        raise ParameterError("paper_start", True, "off with --sharp (conservative starts only)")
     start = _full_start(args, gel) if args.start_from_full is not None else None
-    res = front_trajectory(gel, args.t_start, args.t_end, branch=args.branch, start=start,
-                           until=args.until, target_radius=args.target_radius,
-                           conservative=not args.paper_start,
-                           every=args.every)
+    common = dict(branch=args.branch, start=start, until=args.until,
+                  target_radius=args.target_radius, every=args.every)
+    if args.sharp:
+        res = sharp_front_trajectory(gel, args.t_start, args.t_end, **common)
+    else:
+        res = front_trajectory(gel, args.t_start, args.t_end, conservative=not args.paper_start,
+                               **common)
     if args.json:
         print_json({"gel": gel.to_dict(), "t_start": args.t_start, "t_end": args.t_end,
                     **res.to_json_dict()})
