@@ -26,7 +26,7 @@ T_MAX = 373.15
 # interfacial length of the validation truth (dosing.scenario: DEFAULT_INTERFACIAL_LENGTH,
 # and the coarsest ladder rung's range)
 ELL_DEFAULT = 0.005
-ELL_RANGE = (0.0025, 0.02)
+ELL_RANGE = (0.0025, 0.01)
 
 PresetName = Literal["ANB", "HHT"]
 Branch = Literal["swollen", "shrunken"]

@@ -5,7 +5,8 @@ above, at an observed order p of 1.2-1.9 (docs/interfacial.md, sec. 7).  Most of
 ell-dependence is the delay t_nuc(ell) before the front nucleates at the edge, which
 vanishes as ell -> 0 (~ell^1.9 ANB, ~ell^1.2 HHT); the time after nucleation,
 s = t - t_nuc, converges much faster.  So where every rung's front nucleated before the
-dose, the limit of t is that of s; otherwise that of t itself.  From three grid-converged
+dose, the limit of t is that of s, with an error bound at least the gap to the limit of t
+where that one has an order; otherwise that of t itself.  From three grid-converged
 runs at ell, ell/2, ell/4 Richardson extrapolation gives the limit and, with the usual
 safety factor of the grid convergence index (Roache), an error bound:
 
@@ -47,14 +48,19 @@ def dose_limit(ells: Sequence[float], times: Sequence[float],
     """The limit ell -> 0 of the dose ``times`` at ``ells``, given each run's nucleation
     delay (None: no front nucleated): after nucleation where every rung has nucleated
     before its dose, else of the times themselves (module doc)."""
+    plain = extrapolate(ells, times)
     if all(d is not None and 0.0 <= d <= t for d, t in zip(delays, times, strict=True)):
         after = [t - d for t, d in zip(times, delays, strict=True)]  # type: ignore[operator]
         lim = extrapolate(ells, after)
         if lim.time > 0.0:
-            return Limit(lim.time, lim.error, lim.order,
-                         f"the time after the front nucleates at the edge (that delay "
-                         f"vanishes as ell -> 0), {lim.method}")
-    return extrapolate(ells, times)
+            # two estimates of one limit: where both have an order, their gap bounds the error
+            gap = abs(lim.time - plain.time) if plain.order is not None else 0.0
+            return Limit(lim.time, max(lim.error, gap), lim.order,
+                         f"{lim.method}, applied to the time after the front nucleates at the "
+                         "edge, a delay that vanishes as ell -> 0"
+                         + (f" (bound: its gap to {plain.time:.5g}, the extrapolation of the "
+                            "dose time itself)" if gap > lim.error else ""))
+    return plain
 
 
 def extrapolate(ells: Sequence[float], times: Sequence[float]) -> Limit:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import textwrap
 from typing import Any
 
@@ -35,7 +36,7 @@ def add_planning_options(p: argparse.ArgumentParser) -> None:
     s.add_argument("--interfacial-length", type=float, default=None, metavar="L",
                    help="interfacial length ell in dry radii: the truth is the regularized "
                         "model's limit ell -> 0, from runs at L, L/2, L/4 (default 0.005; "
-                        "0.0025-0.02); 0 = the paper's model, checked on both grids")
+                        "0.0025-0.01); 0 = the paper's model, checked on both grids")
     s.add_argument("--grid", choices=["eulerian", "lagrangian"], default=None,
                    help="truth grid (default lagrangian; eulerian, the paper's, with "
                         "--interfacial-length 0)")
@@ -89,6 +90,11 @@ def run(args: argparse.Namespace) -> int:
                       drug_mass_ug=args.drug_mass_ug,
                       concentration_ug_per_ul=args.concentration_ug_per_ul,
                       **planning_kwargs(args))
+    if args.validate:
+        runs = ", ".join(f"ell = {s.interfacial_length:g} N = {s.n}" if s.regularized
+                         else f"{s.grid} N = {s.n}" for s in req.settings.rungs())
+        print(f"validating with the full solver ({runs}): seconds to minutes the first "
+              "time, then cached", file=sys.stderr, flush=True)
     ans = plan_dose(req, validate=args.validate, cache_path=args.cache)
     if args.json:
         print_json(ans.to_dict())
