@@ -27,12 +27,12 @@ from .units import expelled_volume
 # `python -m dosing.calibrate [--interfacial-length 0]`).  Paper's model: gap to either grid
 # at N = 400 (small doses worst: the full model's shell takes time to form).  Sharp-interface
 # model: gap to the default ladder's limit plus that limit's error bound; measured
-# 16/18/6.6/4.4/4.2/3.8/3.4/2.9/2.5 % (ANB) and 5800/3700/94/24/11/7.5/6.7/6.8/7.0 % (HHT):
+# 16/18/6.6/4.6/4.2/3.8/3.4/2.9/2.5 % (ANB) and 5800/3700/123/43/23/14/9.8/7.6/7.0 % (HHT):
 # below 30 % the regularized HHT runs deliver the dose before their front nucleates, so
 # the limit is not pinned there (docs/interfacial.md, sec. 9).
 PRIOR_FRACTIONS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
 PRIOR_GAPS = {"front": (4.4, 2.9, 2.2, 1.8, 1.5, 1.2, 1.0, 0.8, 0.6),
-              "front-sharp": (60.0, 40.0, 1.0, 0.25, 0.12, 0.08, 0.08, 0.08, 0.08)}
+              "front-sharp": (60.0, 40.0, 1.3, 0.45, 0.25, 0.15, 0.10, 0.08, 0.08)}
 PRIOR_NOTE = "doses of 10-90 % for ANB 302->308 K and HHT 304->308 K"
 
 
