@@ -65,8 +65,9 @@ def test_planner_on_dask_distributed(tmp_path: Path) -> None:
     from dosing import SolverSettings
     from solver.full import simulate
 
-    # a smooth jump on a coarse grid: a fraction of a second per run
-    req = DoseRequest("HHT", 304, 307.6, dose_fraction=0.5, settings=SolverSettings(n=50))
+    # a smooth jump on a coarse grid, the paper's model (two grids): under a second per run
+    req = DoseRequest("HHT", 304, 307.6, dose_fraction=0.5,
+                      settings=SolverSettings(n=50, interfacial_length=0.0))
     with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
@@ -93,7 +94,8 @@ def test_default_process_pool_runs_validations(tmp_path: Path) -> None:
     """The default executor: spawned worker processes; results stored by the parent."""
     from dosing import SolverSettings
 
-    req = DoseRequest("HHT", 304, 307.6, dose_fraction=0.5, settings=SolverSettings(n=50))
+    req = DoseRequest("HHT", 304, 307.6, dose_fraction=0.5,
+                      settings=SolverSettings(n=50, interfacial_length=0.0))
     with Planner(cache_path=tmp_path / "pool.sqlite") as planner:
         vid = planner.submit_validation(req)
         end = time.monotonic() + 300
