@@ -76,3 +76,23 @@ def test_readme_python_example_runs(tmp_path: Path, monkeypatch, capsys) -> None
     exec(compile(code, "README.md", "exec"), {})
     out = capsys.readouterr().out
     assert out.startswith("front-sharp t = 0.07") and "tau = eta Omega_p" in out
+
+
+def test_validation_plot_from_the_answer_alone(tmp_path: Path, capsys) -> None:
+    from api.plots.validation import draw_validation
+
+    runs = [{"grid": "lagrangian", "n": n, "interfacial_length": e, "time": t,
+             "nucleation_time": d} for n, e, t, d in ((400, 0.01, 0.230, 0.173),
+                                                     (800, 0.005, 0.147, 0.082),
+                                                     (1600, 0.0025, 0.105, 0.036))]
+    answer = {"model": "front-sharp", "time": 0.0724, "dose_fraction": 0.8,
+              "error_estimate": 0.135,
+              "validation": {"runs": runs, "limit": {"time": 0.0727, "error": 0.0093}}}
+    out = draw_validation(answer, tmp_path / "v" / "val.png")
+    assert out.stat().st_size > 10_000 and out.read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(ValueError, match="no regularized validation"):
+        draw_validation({**answer, "validation": None}, tmp_path / "x.png")
+    assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction",
+                 "0.5", "--plot", str(tmp_path / "y.png"),
+                 "--cache", str(tmp_path / "c.sqlite")]) == 2
+    assert "plot" in capsys.readouterr().err

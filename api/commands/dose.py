@@ -7,6 +7,8 @@ import sys
 import textwrap
 from typing import Any
 
+from solver.errors import ParameterError
+
 from .common import add_gel_options, gel_from_args, print_json
 
 
@@ -75,6 +77,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="drug concentration of the loaded fluid in ug/uL")
     p.add_argument("--validate", action="store_true",
                    help="also run the full solver's validation runs (blocking, cached)")
+    p.add_argument("--plot", default=None, metavar="PNG",
+                   help="with --validate: draw the validation (dose time against ell, the "
+                        "limit and the answer) to this file (needs matplotlib)")
     p.set_defaults(func=run)
 
 
@@ -90,12 +95,18 @@ def run(args: argparse.Namespace) -> int:
                       drug_mass_ug=args.drug_mass_ug,
                       concentration_ug_per_ul=args.concentration_ug_per_ul,
                       **planning_kwargs(args))
+    if args.plot and not args.validate:
+        raise ParameterError("plot", args.plot, "used with --validate")
     if args.validate:
         runs = ", ".join(f"ell = {s.interfacial_length:g} N = {s.n}" if s.regularized
                          else f"{s.grid} N = {s.n}" for s in req.settings.rungs())
         print(f"validating with the full solver ({runs}): seconds to minutes the first "
               "time, then cached", file=sys.stderr, flush=True)
     ans = plan_dose(req, validate=args.validate, cache_path=args.cache)
+    if args.plot:
+        from api.plots.validation import draw_validation
+
+        print(f"wrote {draw_validation(ans.to_dict(), args.plot)}", file=sys.stderr)
     if args.json:
         print_json(ans.to_dict())
         return 0
