@@ -269,7 +269,14 @@ class _Collector:
         radii = res.cell_radii()
         for i in range(k):
             front[i], jump[i] = fronts.locate_front(radii[i], phi[i], self.window)
-        if res.spinodal:
+        ell = float(diag.get("interfacial_length") or 0.0)
+        if res.spinodal and ell > 0.0:
+            diag["spinodal_time"] = self.spinodal_time
+            diag["message"] = (f"spinodal decomposition: several interfaces from "
+                               f"t={self.spinodal_time:.4g}; the interfacial energy (ell = "
+                               f"{ell:g}, {ell * phi.shape[1]:.2g} cells per ell) makes them "
+                               f"well-posed, so refine N to check the answer converges")
+        elif res.spinodal:
             diag["spinodal_time"] = self.spinodal_time
             diag["message"] = (f"spinodal collapse: interior cells collapsed at grid scale "
                                f"from t={self.spinodal_time:.4g}; the solution depends on the "
