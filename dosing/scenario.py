@@ -150,6 +150,7 @@ def code_version() -> str:
 
 
 Step = tuple[float, float]
+RUN_BUDGET_S = 600.0  # wall time of one validation run (the default ladder's largest: ~65 s)
 
 
 @dataclass(frozen=True)
@@ -326,8 +327,29 @@ def _floats(values: Any, like: np.ndarray) -> np.ndarray:
     return arr * np.ones_like(like) if arr.size == 1 else arr
 
 
-def _simulate(sc: Scenario, horizon: float) -> tuple[Trajectory, dict[str, Any]]:
-    """One full-solver run of ``sc`` (a jump runs for ``horizon``)."""
+class WallBudget:
+    """A ``progress`` callback that stops a run past its wall-clock budget with a clear
+    SolverError (the solver calls it at least every 4096 steps), so no run can hang."""
+
+    def __init__(self, seconds: float, settings: SolverSettings) -> None:
+        self.seconds, self.settings = float(seconds), settings
+        self.started = time.perf_counter()
+
+    def __call__(self, fraction: float) -> None:
+        spent = time.perf_counter() - self.started
+        if spent > self.seconds:
+            s = self.settings
+            raise SolverError(
+                f"the full-solver run ({s.grid} grid, N = {s.n}, interfacial length "
+                f"{s.interfacial_length:g}) used its {self.seconds:.0f} s budget at "
+                f"{fraction:.0%} of the simulated time: this scenario is too stiff for these "
+                "settings (a larger interfacial_length needs fewer cells and steps)",
+                {"wall_seconds": spent, "fraction": fraction})
+
+
+def _simulate(sc: Scenario, horizon: float,
+              budget: float = RUN_BUDGET_S) -> tuple[Trajectory, dict[str, Any]]:
+    """One full-solver run of ``sc`` (a jump runs for ``horizon``) within ``budget`` s."""
     from solver.full import simulate
 
     s = sc.settings
@@ -335,7 +357,8 @@ def _simulate(sc: Scenario, horizon: float) -> tuple[Trajectory, dict[str, Any]]
     if s.interfacial_length > 0.0:  # the regularized model of issue 8
         extra["interfacial_length"] = s.interfacial_length
     res = simulate(sc.gel, sc.t_start, protocol=sc.steps(horizon), grid=s.grid, n=s.n,
-                   integrator=s.integrator, rtol=s.rtol, branch=sc.branch, **extra)
+                   integrator=s.integrator, rtol=s.rtol, branch=sc.branch,
+                   progress=WallBudget(budget, s), **extra)
     t = np.asarray(res.t, dtype=float)
     steps = {k: np.asarray(getattr(res, k, None) if getattr(res, k, None) is not None
                            else np.zeros(0), dtype=float)
@@ -352,19 +375,21 @@ def _simulate(sc: Scenario, horizon: float) -> tuple[Trajectory, dict[str, Any]]
 
 
 def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: float | None = None,
-                 need_time: float = 0.0, max_horizon: float = 64.0) -> tuple[dict, bytes]:
+                 need_time: float = 0.0, max_horizon: float = 64.0,
+                 budget: float = RUN_BUDGET_S) -> tuple[dict, bytes]:
     """Run the full solver for a scenario: plain data in, (metadata, npz blob) out.
 
     A jump is simulated for ``horizon``, extended (x4, up to ``max_horizon``) until a(t)
-    falls to ``need_radius`` and t reaches ``need_time``.  Top-level and free of shared
-    state, so process pools and Dask workers can run it.
+    falls to ``need_radius`` and t reaches ``need_time``; each run gets ``budget`` seconds
+    of wall time.  Top-level and free of shared state, so process pools and Dask workers
+    can run it.
     """
     sc = Scenario.from_dict(scenario)
     wall = time.perf_counter()
     h = float(horizon)
     runs = 0
     while True:
-        traj, diag = _simulate(sc, max(h, need_time))
+        traj, diag = _simulate(sc, max(h, need_time), budget)
         runs += 1
         if sc.protocol is not None or need_radius is None or traj.radius.min() <= need_radius:
             break

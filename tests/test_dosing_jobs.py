@@ -10,6 +10,7 @@ import pytest
 from dosing import DoseRequest, JobRunner, Planner, QueueFullError
 from dosing.jobs import default_executor
 from dosing.units import radius_after_dose
+from solver.gel import HHT
 
 
 def test_same_key_runs_once_while_unfinished() -> None:
@@ -104,3 +105,18 @@ def test_default_process_pool_runs_validations(tmp_path: Path) -> None:
             time.sleep(0.1)
         assert st.status == "done", st.error
         assert len(planner.cache) == 2
+
+
+def test_a_run_past_its_wall_budget_fails_clearly() -> None:
+    """No validation run can hang: past its budget the run stops with a SolverError that
+    names the settings (the solver reports progress at least every 4096 steps)."""
+    from dosing import Scenario, SolverSettings
+    from dosing.scenario import run_scenario
+    from solver.errors import SolverError
+
+    sc = Scenario(HHT, 304.0, 307.6, settings=SolverSettings(n=50, interfacial_length=0.0))
+    with pytest.raises(SolverError, match=r"used its 0 s budget .* too stiff") as err:
+        run_scenario(sc.to_dict(), budget=0.0)
+    assert err.value.diagnostics["wall_seconds"] >= 0.0
+    meta, _ = run_scenario(sc.to_dict(), horizon=0.5)  # the default budget: 600 s
+    assert meta["runs"] == 1
