@@ -46,7 +46,7 @@ import numpy as np
 from front_model import median_time
 from full_solver import dense_radius, max_error
 
-from solver.errors import NotApplicableError, ParameterError, SolverError
+from solver.errors import BudgetExceeded, NotApplicableError, ParameterError, SolverError
 from solver.front import fraction_radius, front_applicability, front_trajectory
 from solver.full import FullResult, simulate
 from solver.gel import Gel, preset
@@ -192,26 +192,6 @@ def gel_label(gel: Gel) -> str:
     return f"{gel.name} (Omega={gel.omega:g}{beta})"
 
 
-class GuardTripped(RuntimeError):
-    """A run stopped by the wall-clock guard."""
-
-
-class Guard:
-    """A ``progress`` callback that stops a run after ``seconds`` of wall time (a backstop
-    behind the solver's step budget, so that no report can hang)."""
-
-    def __init__(self, seconds: float, until: float) -> None:
-        self.seconds, self.until = seconds, until
-        self.started = time.perf_counter()
-
-    def __call__(self, fraction: float) -> None:
-        spent = time.perf_counter() - self.started
-        if spent > self.seconds:
-            raise GuardTripped(f"wall-clock guard: stopped after {spent:.0f} s at t = "
-                               f"{fraction * self.until:.4g} of {self.until:g} (the step budget "
-                               f"was not reached)")
-
-
 @dataclass
 class Outcome:
     """A full-solver run: its result (None on failure), median wall time, repeats, status
@@ -277,15 +257,15 @@ class Runner:
                     else ""))
         started = time.perf_counter()
         try:
-            res = simulate(**kwargs, progress=Guard(self.plan.guard_seconds, kwargs["until"]))
+            res = simulate(**kwargs, max_seconds=self.plan.guard_seconds)
+        except BudgetExceeded as exc:
+            wall = time.perf_counter() - started
+            self.log(f"  {label}: {exc}")
+            return Outcome(None, wall, 1, "guard", f"wall-clock guard: {exc}")
         except SolverError as exc:
             wall = time.perf_counter() - started
             self.log(f"  {label}: failed after {wall:.2f} s: {exc}")
             return Outcome(None, wall, 1, "failed", str(exc), dict(exc.diagnostics))
-        except GuardTripped as exc:
-            wall = time.perf_counter() - started
-            self.log(f"  {label}: {exc}")
-            return Outcome(None, wall, 1, "guard", str(exc))
         except Exception as exc:  # noqa: BLE001 - a crash is a finding, reported not raised
             wall = time.perf_counter() - started
             self.log(f"  {label}: CRASH {type(exc).__name__}: {exc}")

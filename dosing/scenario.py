@@ -16,7 +16,7 @@ import io
 import json
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -91,15 +91,12 @@ class SolverSettings:
         """True for the regularized model (ell > 0), False for the paper's."""
         return self.interfacial_length > 0.0
 
-    def on_grid(self, grid: str) -> SolverSettings:
-        """The same settings on another grid."""
-        return SolverSettings(grid, self.n, self.integrator, self.rtol, self.interfacial_length)
-
     def rungs(self) -> list[SolverSettings]:
         """The validation runs: the ladder ell / 2^k with n 2^k cells (k < RUNGS), or, for
         the paper's model, this grid and then the other one."""
         if not self.regularized:
-            return [self.on_grid(g) for g in (self.grid, *(g for g in GRIDS if g != self.grid))]
+            return [replace(self, grid=g)
+                    for g in (self.grid, *(g for g in GRIDS if g != self.grid))]
         scale = 1 << (RUNGS - 1)
         if not ELL_RANGE[0] * scale <= self.interfacial_length <= LADDER_TOP:
             raise ParameterError("settings.interfacial_length", self.interfacial_length,
@@ -327,38 +324,15 @@ def _floats(values: Any, like: np.ndarray) -> np.ndarray:
     return arr * np.ones_like(like) if arr.size == 1 else arr
 
 
-class WallBudget:
-    """A ``progress`` callback that stops a run past its wall-clock budget with a clear
-    SolverError (the solver calls it at least every 4096 steps), so no run can hang."""
-
-    def __init__(self, seconds: float, settings: SolverSettings) -> None:
-        self.seconds, self.settings = float(seconds), settings
-        self.started = time.perf_counter()
-
-    def __call__(self, fraction: float) -> None:
-        spent = time.perf_counter() - self.started
-        if spent > self.seconds:
-            s = self.settings
-            raise SolverError(
-                f"the full-solver run ({s.grid} grid, N = {s.n}, interfacial length "
-                f"{s.interfacial_length:g}) used its {self.seconds:.0f} s budget at "
-                f"{fraction:.0%} of the simulated time: this scenario is too stiff for these "
-                "settings (a larger interfacial_length needs fewer cells and steps)",
-                {"wall_seconds": spent, "fraction": fraction})
-
-
 def _simulate(sc: Scenario, horizon: float,
               budget: float = RUN_BUDGET_S) -> tuple[Trajectory, dict[str, Any]]:
     """One full-solver run of ``sc`` (a jump runs for ``horizon``) within ``budget`` s."""
     from solver.full import simulate
 
     s = sc.settings
-    extra: dict[str, Any] = {}
-    if s.interfacial_length > 0.0:  # the regularized model of issue 8
-        extra["interfacial_length"] = s.interfacial_length
     res = simulate(sc.gel, sc.t_start, protocol=sc.steps(horizon), grid=s.grid, n=s.n,
                    integrator=s.integrator, rtol=s.rtol, branch=sc.branch,
-                   progress=WallBudget(budget, s), **extra)
+                   interfacial_length=s.interfacial_length, max_seconds=budget)
     t = np.asarray(res.t, dtype=float)
     steps = {k: np.asarray(getattr(res, k, None) if getattr(res, k, None) is not None
                            else np.zeros(0), dtype=float)

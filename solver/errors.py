@@ -30,6 +30,10 @@ class SolverError(RuntimeError):
         super().__init__(message)
 
 
+class BudgetExceeded(SolverError):
+    """A run stopped by its wall-clock budget (``simulate(max_seconds=...)``)."""
+
+
 def require_finite_positive(field: str, value: float) -> float:
     """Return ``value`` as float if finite and > 0, else raise :class:`ParameterError`."""
     import math

@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from solver.errors import ParameterError, SolverError
+from solver.errors import BudgetExceeded, ParameterError, SolverError
 from solver.full import simulate
 from solver.gel import ANB, HHT
 
@@ -93,3 +93,15 @@ def test_bad_start_temperature() -> None:
     with pytest.raises(ParameterError) as err:
         simulate(ANB, 500, 308, until=0.1, n=40)
     assert err.value.field == "t_start"
+
+
+def test_wall_clock_budget_stops_a_run_with_a_clear_error() -> None:
+    with pytest.raises(BudgetExceeded, match=r"lagrangian grid, N = 60, interfacial length "
+                                             r"0\.02\) used its 0 s budget") as err:
+        simulate("ANB", 302, 308, until=0.05, grid="lagrangian", n=60,
+                 interfacial_length=0.02, max_seconds=0.0)
+    assert err.value.diagnostics["grid"] == "lagrangian" and "wall_seconds" in err.value.diagnostics
+    res = simulate("ANB", 302, 308, until=0.05, grid="lagrangian", n=60, max_seconds=600.0)
+    assert np.all(np.isfinite(res.radius))
+    with pytest.raises(ParameterError, match="max_seconds"):
+        simulate("ANB", 302, 308, until=0.05, n=60, max_seconds=-1.0)

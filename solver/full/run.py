@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..equilibrium import equilibrium
-from ..errors import ParameterError, SolverError
+from ..errors import BudgetExceeded, ParameterError, SolverError
 from ..gel import Gel, check_temperature, preset
 from . import front as fronts
 from .integrate import Segment, Stats, Workspace, run_explicit, run_implicit
@@ -102,7 +102,8 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
              rtol: float = 1e-6, atol: float = 1e-9, every: float | None = None,
              branch: str | None = None, initial: Initial = None, dt: float | None = None,
              max_steps: int | None = None, progress: Callable[[float], None] | None = None,
-             jacobian: str = "analytic", interfacial_length: float = 0.0) -> FullResult:
+             jacobian: str = "analytic", interfacial_length: float = 0.0,
+             max_seconds: float | None = None) -> FullResult:
     """Run the full poro-elastic model (eqs. PDE_Dimless to Boundary_Dimless).
 
     The gel starts from a uniform equilibrium at ``t_start`` (``branch``: default swollen
@@ -117,8 +118,10 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     ``interfacial_length`` ell (dry radii) adds the interfacial energy (ell^2/2)|grad_X J|^2
     (docs/interfacial.md); 0 is the paper's model, unchanged. The interface is about 10 ell
     wide: resolve it with n >= 2/ell cells (Lagrangian grid; the Eulerian grid needs several
-    times more, and uses the finite-difference Jacobian with the term). Raises ParameterError
-    for bad input and SolverError (with diagnostics) for numerical failure.
+    times more, and uses the finite-difference Jacobian with the term). ``max_seconds`` is a
+    wall-clock budget behind the step budget (checked at least every 4096 steps): past it the
+    run stops with BudgetExceeded, a SolverError. Raises ParameterError for bad input and
+    SolverError (with diagnostics) for numerical failure.
     """
     started = time.perf_counter()
     if isinstance(gel, str):
@@ -153,6 +156,9 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
         raise ParameterError("max_steps", max_steps, "a positive integer")
     if progress is not None and not callable(progress):
         raise ParameterError("progress", progress, "a callable taking the fraction done")
+    if max_seconds is not None and not (isinstance(max_seconds, (int, float))
+                                        and math.isfinite(max_seconds) and max_seconds >= 0.0):
+        raise ParameterError("max_seconds", max_seconds, "None or a finite number >= 0 (s)")
     total = float(sum(d for d, _ in steps))
     if every is None:
         every = total / DEFAULT_OUTPUTS
@@ -187,6 +193,9 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
         "jacobian": "fd" if jac_mode == JAC_FD else "analytic", "interfacial_length": ell,
         "gel": gel.to_dict(), "t_start": t_start, "branch": branch_used,
         "protocol": [list(s) for s in steps]}
+    if max_seconds is not None:
+        progress = _budgeted(progress, started, float(max_seconds), total, stats,
+                             f"{grid} grid, N = {n}, interfacial length {ell:g}")
     try:
         if integrator == "implicit":
             run_implicit(ws, y0, segments, out_times, collector, float(rtol), float(atol),
@@ -198,7 +207,7 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     except SolverError as exc:
         exc.diagnostics.update(diag)
         exc.diagnostics["wall_time"] = time.perf_counter() - started
-        if collector.spinodal_time is None:
+        if collector.spinodal_time is None or isinstance(exc, BudgetExceeded):
             raise
         exc.diagnostics["spinodal_time"] = collector.spinodal_time
         raise SolverError(f"{exc} (spinodal collapse detected from t="
@@ -210,6 +219,24 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
                 wall_time=time.perf_counter() - started)
     result = collector.result(diag, stats)
     return result
+
+
+def _budgeted(progress: Callable[[float], None] | None, started: float, seconds: float,
+              total: float, stats: Stats, what: str) -> Callable[[float], None]:
+    """``progress`` behind a wall-clock check: past ``seconds`` it raises BudgetExceeded."""
+
+    def tick(fraction: float) -> None:
+        spent = time.perf_counter() - started
+        if spent > seconds:
+            raise BudgetExceeded(
+                f"the full-solver run ({what}) used its {seconds:.0f} s budget at "
+                f"{fraction:.0%} of the simulated time (t = {fraction * total:.4g}, "
+                f"{stats.steps} steps): this scenario is too stiff for these settings",
+                {"wall_seconds": spent, "fraction": fraction, "steps": stats.steps})
+        if progress is not None:
+            progress(fraction)
+
+    return tick
 
 
 def _interfacial_length(value: Any) -> float:
