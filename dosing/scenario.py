@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from solver.crossing import first_fall
+from solver.crossing import first_fall, hermite_root
 from solver.errors import ParameterError, SolverError, require_finite_positive
 from solver.gel import Gel, check_temperature
 
@@ -265,9 +265,7 @@ class Trajectory:
             t0, y0 = after, self.radius_at(after)
             return _linear_cube(t0, y0, float(tt[j]), float(aa[j]), radius)
         if self.step_t.size >= 2 and tt[j] > tt[j - 1]:
-            from solver.full.result import _hermite_root  # the solver's own dense a(t)
-
-            return float(_hermite_root(tt[j - 1], tt[j], aa[j - 1], aa[j], self.step_rate[j - 1],
+            return float(hermite_root(tt[j - 1], tt[j], aa[j - 1], aa[j], self.step_rate[j - 1],
                                        self.step_rate[j], radius))
         return _linear_cube(float(tt[j - 1]), float(aa[j - 1]), float(tt[j]), float(aa[j]),
                             radius)

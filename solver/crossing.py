@@ -1,4 +1,5 @@
-"""Crossing times of sampled curves (shared by full-solver results and stored runs)."""
+"""Crossing times of sampled curves: first fall below a level, and the root of the cubic
+Hermite interpolant between two accepted steps (shared by full-solver results and stored runs)."""
 
 from __future__ import annotations
 
@@ -18,3 +19,24 @@ def first_fall(t: np.ndarray, values: np.ndarray, level: float) -> float:
         return float(t[j])
     return float(t[j - 1] + (values[j - 1] - level) / (values[j - 1] - values[j])
                  * (t[j] - t[j - 1]))
+
+
+def hermite_root(t0: float, t1: float, a0: float, a1: float, d0: float, d1: float,
+                 target: float) -> float:
+    """Crossing time of the cubic Hermite a(t) through ``target`` on [t0, t1] (bisection)."""
+    h = t1 - t0
+
+    def a(s: float) -> float:
+        return ((1 + 2 * s) * (1 - s) ** 2 * a0 + s * (1 - s) ** 2 * h * d0
+                + s * s * (3 - 2 * s) * a1 + s * s * (s - 1) * h * d1)
+
+    lo, hi = 0.0, 1.0
+    sign_lo = a(lo) - target
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        v = a(mid) - target
+        if (v > 0) == (sign_lo > 0) and v != 0.0:
+            lo, sign_lo = mid, v
+        else:
+            hi = mid
+    return t0 + 0.5 * (lo + hi) * h

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ..crossing import first_fall
+from ..crossing import first_fall, hermite_root
 
 _ARRAYS = ("t", "radius", "front", "jump", "phi", "coords", "temperature", "expelled_volume",
            "solid_error", "step_t", "step_radius", "step_rate", "step_edge")
@@ -32,27 +32,6 @@ def _clean(obj: Any) -> Any:
     if isinstance(obj, (list, tuple)):
         return [_clean(v) for v in obj]
     return obj
-
-
-def _hermite_root(t0: float, t1: float, a0: float, a1: float, d0: float, d1: float,
-                  target: float) -> float:
-    """Crossing time of the cubic Hermite a(t) through ``target`` on [t0, t1] (bisection)."""
-    h = t1 - t0
-
-    def a(s: float) -> float:
-        return ((1 + 2 * s) * (1 - s) ** 2 * a0 + s * (1 - s) ** 2 * h * d0
-                + s * s * (3 - 2 * s) * a1 + s * s * (s - 1) * h * d1)
-
-    lo, hi = 0.0, 1.0
-    sign_lo = a(lo) - target
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        v = a(mid) - target
-        if (v > 0) == (sign_lo > 0) and v != 0.0:
-            lo, sign_lo = mid, v
-        else:
-            hi = mid
-    return t0 + 0.5 * (lo + hi) * h
 
 
 @dataclass
@@ -115,7 +94,7 @@ class FullResult:
         k = int(idx[0])
         if t[k + 1] <= t[k]:
             return float(t[k])
-        return float(_hermite_root(t[k], t[k + 1], a[k], a[k + 1], d[k], d[k + 1], target))
+        return float(hermite_root(t[k], t[k + 1], a[k], a[k + 1], d[k], d[k + 1], target))
 
     def state_at(self, time: float) -> tuple[float, float, np.ndarray]:
         """(a, R_f, phi profile) at ``time``, interpolated linearly between outputs."""
