@@ -18,6 +18,7 @@ import functools
 import hashlib
 import json
 import threading
+import time
 from collections import OrderedDict
 from concurrent.futures import Executor, Future, ThreadPoolExecutor, wait
 from dataclasses import asdict, dataclass
@@ -332,6 +333,17 @@ class Planner:
         if why is not None:
             return ValidationStatus(vid, "failed", error=why)
         return ValidationStatus(vid, "done", result=rep)
+
+    def wait_validation(self, vid: str, timeout: float = 600.0,
+                        interval: float = 0.1) -> ValidationStatus:
+        """Poll :meth:`validation` until it is done or failed (TimeoutError after
+        ``timeout`` seconds)."""
+        end = time.monotonic() + timeout
+        while (st := self.validation(vid)).status not in ("done", "failed"):
+            if time.monotonic() > end:
+                raise TimeoutError(f"validation {vid} still {st.status} after {timeout:g} s")
+            time.sleep(interval)
+        return st
 
     # ------------------------------------------------------------------ schedules
     def schedule(self, req: ScheduleRequest) -> Any:

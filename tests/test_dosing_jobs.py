@@ -73,11 +73,8 @@ def test_planner_on_dask_distributed(tmp_path: Path) -> None:
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
         planner = Planner(cache_path=tmp_path / "dask.sqlite", executor=client.get_executor())
-        vid = planner.submit_validation(req)
-        end = time.monotonic() + 120
-        while (st := planner.validation(vid)).status not in ("done", "failed"):
-            assert time.monotonic() < end
-            time.sleep(0.05)
+        st = planner.wait_validation(planner.submit_validation(req), 120.0, 0.05)
+        vid = st.id
         assert st.status == "done", st.error
         planner.close()
     target = radius_after_dose(req.start_radius, 0.5)
@@ -98,11 +95,7 @@ def test_default_process_pool_runs_validations(tmp_path: Path) -> None:
     req = DoseRequest("HHT", 304, 307.6, dose_fraction=0.5,
                       settings=SolverSettings(n=50, interfacial_length=0.0))
     with Planner(cache_path=tmp_path / "pool.sqlite") as planner:
-        vid = planner.submit_validation(req)
-        end = time.monotonic() + 300
-        while (st := planner.validation(vid)).status not in ("done", "failed"):
-            assert time.monotonic() < end
-            time.sleep(0.1)
+        st = planner.wait_validation(planner.submit_validation(req), 300.0)
         assert st.status == "done", st.error
         assert len(planner.cache) == 2
 

@@ -43,16 +43,6 @@ def planner(tmp_path: Path, fake: FakeSolver):
     p.jobs.executor.shutdown()
 
 
-def _wait(planner: Planner, vid: str, timeout: float = 20.0):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        st = planner.validation(vid)
-        if st.status in ("done", "failed"):
-            return st
-        time.sleep(0.02)
-    raise AssertionError("validation did not finish")
-
-
 def test_smooth_jump_is_answered_by_the_ladder_limit(planner, fake) -> None:
     """Default truth: the ladder ell = 0.005, 0.0025, 0.00125 (N = 800, 1600, 3200) on the
     Lagrangian grid, extrapolated to ell -> 0; the fake's t(ell) = t0 (1 + 200 ell^1.5)."""
@@ -154,12 +144,12 @@ def test_submit_validation_returns_at_once_dedups_and_survives_restart(tmp_path:
     assert p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.8)) == vid
     assert p.validation(vid).status in ("pending", "running")
     fake.gate.set()
-    st = _wait(p, vid)
+    st = p.wait_validation(vid, 20.0, 0.02)
     assert st.status == "done" and st.result["time"] > 0
     assert [e["interfacial_length"] for e in st.result["runs"]] == [0.005, 0.0025, 0.00125]
     assert st.result["front_time_error"] is not None
     assert st.result["front_volume_error"] is not None
-    assert _wait(p, vid2).status == "done"
+    assert p.wait_validation(vid2, 20.0, 0.02).status == "done"
     assert len(fake.calls) == 3  # one run per rung served both doses
     p.close()
     p.jobs.executor.shutdown()
@@ -174,7 +164,7 @@ def test_submit_validation_returns_at_once_dedups_and_survives_restart(tmp_path:
 def test_failed_validation_reports_the_error(planner, fake) -> None:
     fake.fail = "boom: step budget exhausted"
     vid = planner.submit_validation(DoseRequest(**FRONT, dose_fraction=0.3))
-    st = _wait(planner, vid)
+    st = planner.wait_validation(vid, 20.0, 0.02)
     assert st.status == "failed" and "boom" in st.error
 
 
