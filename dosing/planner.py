@@ -80,6 +80,14 @@ def front_run(gel: Gel, t_start: float, t_end: float, branch: str, sharp: bool) 
     return front_trajectory(gel, t_start, t_end, branch=branch)
 
 
+@functools.lru_cache(maxsize=256)
+def validation_scenarios(gel: Gel, t_start: float, t_end: float, branch: str,
+                         settings: SolverSettings) -> tuple[Scenario, ...]:
+    """A jump's validation runs (memoised, so each run's cache key is computed once)."""
+    return tuple(Scenario(gel, t_start, t_end, branch=branch, settings=s)
+                 for s in settings.rungs())
+
+
 MODEL_NAMES = {"front": "the paper's step-function front model",
                "front-sharp": "the step-function front model with the sharp-interface front "
                               "condition (docs/interfacial.md, sec. 8)",
@@ -155,8 +163,8 @@ class Planner:
     def scenarios(self, req: DoseRequest | ScheduleRequest) -> list[Scenario]:
         """The jump's validation runs (``SolverSettings.rungs``): the ladder of interfacial
         lengths, or the paper's model on the truth grid and then the other grid."""
-        return [Scenario(req.gel, req.t_start, req.t_end, branch=req.branch, settings=s)
-                for s in req.settings.rungs()]
+        return list(validation_scenarios(req.gel, req.t_start, req.t_end, req.branch,
+                                         req.settings))
 
     def cached(self, sc: Scenario, need_radius: float | None = None,
                need_time: float = 0.0) -> Trajectory | None:

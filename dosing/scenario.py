@@ -189,7 +189,12 @@ class Scenario:
                 "code": code_version()}
 
     def key(self) -> str:
-        """The cache key: a digest of the canonical JSON of :meth:`key_dict`."""
+        """The cache key: a digest of the canonical JSON of :meth:`key_dict` (computed once:
+        a scenario is immutable, and a front answer asks for its runs' keys several times)."""
+        return self._key
+
+    @functools.cached_property
+    def _key(self) -> str:
         text = json.dumps(self.key_dict(), sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()[:32]
 
