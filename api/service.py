@@ -183,18 +183,9 @@ def to_schedule_request(body: s.ScheduleRequest) -> ScheduleRequest:
 def answerable_now(planner: Any, req: DoseRequest) -> bool:
     """True when ``planner.dose(req)`` needs no new full-solver run: the front model gives
     this dose, or every validation run's trajectory covering it is already cached."""
-    from dosing.planner import choose_model
-    from dosing.units import radius_after_dose
-
-    radius = radius_after_dose(req.start_radius, req.fraction)
-    model, _ = choose_model(req.gel, req.t_start, req.t_end, req.branch)
-    if model == "front":
-        try:
-            planner.front_time(req, radius)
-            return True
-        except (ValueError, NotApplicableError, SolverError):
-            pass
-    return all(planner.cached(sc, radius) is not None for sc in planner.scenarios(req))
+    radius, model, _, _ = planner.model_answer(req)
+    return model != "full" or all(planner.cached(sc, radius) is not None
+                                  for sc in planner.scenarios(req))
 
 
 def _poll(vid: str) -> dict[str, str]:

@@ -222,7 +222,7 @@ class Planner:
         fr = front_run(req.gel, req.t_start, req.t_end, req.branch, req.settings.regularized)
         return float(fr.time_to_radius(radius))
 
-    def _model_answer(self, req: DoseRequest) -> tuple[float, str, str, float | None]:
+    def model_answer(self, req: DoseRequest) -> tuple[float, str, str, float | None]:
         """(target radius, model, why, front-model time or None) for a dose request: the
         front model where the classifier allows and it reaches the dose, else the full one."""
         radius = radius_after_dose(req.start_radius, req.fraction)
@@ -238,7 +238,7 @@ class Planner:
 
     def dose(self, req: DoseRequest, validate: bool = False) -> DoseAnswer:
         """The actuation time for one dose (front model, or the full solver where needed)."""
-        radius, model, why, t_front = self._model_answer(req)
+        radius, model, why, t_front = self.model_answer(req)
         scs = self.scenarios(req)
         need_time = 0.0 if t_front is None else t_front
         if model == "full" or validate:
@@ -295,7 +295,7 @@ class Planner:
     def submit_validation(self, req: DoseRequest) -> str:
         """Queue the full-solver runs that check this dose; returns an id at once."""
         a0, f = req.start_radius, req.fraction
-        radius, _, _, t_front = self._model_answer(req)
+        radius, _, _, t_front = self.model_answer(req)
         scs = self.scenarios(req)
         keys = [sc.key() for sc in scs]
         vid = hashlib.sha256(json.dumps([keys, round(f, 12)]).encode()).hexdigest()[:24]
