@@ -26,7 +26,7 @@ import time
 
 import numpy as np
 
-from dosing.ladder import Limit, dose_limit
+from dosing.ladder import Limit, dose_limit, observed_order, richardson
 from solver.equilibrium import equilibrium
 from solver.front import front_trajectory
 from solver.front.result import fraction_radius
@@ -74,17 +74,6 @@ def _crossing(res: object, a: float) -> float:
         return float(res.time_to_radius(a))  # type: ignore[attr-defined]
     except ValueError:
         return math.nan
-
-
-def observed_order(v: list[float], ratio: float = 2.0) -> float:
-    """Order p from three values at h, h/ratio, h/ratio^2: |v0 - v1| / |v1 - v2| = ratio^p."""
-    d1, d2 = abs(v[-3] - v[-2]), abs(v[-2] - v[-1])
-    return math.log(d1 / d2, ratio) if d1 > 0 and d2 > 0 else math.nan
-
-
-def richardson(v: list[float], p: float, ratio: float = 2.0) -> float:
-    """Limit h -> 0 of the last two values with order p."""
-    return v[-1] - (v[-2] - v[-1]) / (ratio**p - 1.0)
 
 
 def section_grid(gels: list[str], quick: bool, all_eulerian: bool = False) -> None:

@@ -43,6 +43,18 @@ class Limit:
         return asdict(self)
 
 
+def observed_order(values: Sequence[float], ratio: float = 2.0) -> float:
+    """Order p from the last three values at h, h/ratio, h/ratio^2:
+    |v0 - v1| / |v1 - v2| = ratio^p (NaN when a difference vanishes)."""
+    d1, d2 = abs(values[-3] - values[-2]), abs(values[-2] - values[-1])
+    return math.log(d1 / d2, ratio) if d1 > 0 and d2 > 0 else math.nan
+
+
+def richardson(values: Sequence[float], order: float, ratio: float = 2.0) -> float:
+    """Limit h -> 0 from the last two values, with error ~ h^order."""
+    return values[-1] - (values[-2] - values[-1]) / (ratio**order - 1.0)
+
+
 def dose_limit(ells: Sequence[float], times: Sequence[float],
                delays: Sequence[float | None]) -> Limit:
     """The limit ell -> 0 of the dose ``times`` at ``ells``, given each run's nucleation
@@ -76,8 +88,8 @@ def extrapolate(ells: Sequence[float], times: Sequence[float]) -> Limit:
     if d2 == 0.0 and d1 == 0.0:
         return Limit(t2, 0.0, None, "the rungs agree exactly")
     if d1 * d2 > 0.0 and abs(d2) < abs(d1):
-        p = math.log(d1 / d2, ratio)
-        limit = t2 - d2 / (ratio**p - 1.0)
+        p = observed_order(times, ratio)
+        limit = richardson(times, p, ratio)
         if ORDER_RANGE[0] <= p <= ORDER_RANGE[1] and limit * t2 > 0.0:
             return Limit(limit, SAFETY * abs(limit - t2), p,
                          f"Richardson extrapolation with the observed order {p:.2f}")
