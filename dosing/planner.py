@@ -313,7 +313,12 @@ class Planner:
                        SolverError(f"no full-solver time: {failure(rep)}"))
         time = t_front if t_front is not None else rep["time"]
         est, explain = error_estimate(model, time, rep, req.fraction)
-        return build_answer(req, model, time, radius, est, explain, rep, scs[0].key(), why)
+        return self._answer(req, model, time, radius, est, explain, rep, scs[0].key(), why)
+
+    def _answer(self, req: DoseRequest, model: str, time: float, radius: float, est: float,
+                explain: str, validation: dict[str, Any] | None, key: str,
+                why: str) -> DoseAnswer:
+        return build_answer(req, model, time, radius, est, explain, validation, key, why)
 
     def sweep(self, grid: Any, validate: Any = (), progress: Any = None) -> Any:
         """A design map over ``grid`` (a ``dosing.sweep.SweepGrid``) on this planner's

@@ -28,7 +28,8 @@ from solver.gel import Gel
 from .jobs import QueueFullError
 from .request import DoseRequest, resolve_gel
 from .scenario import SolverSettings
-from .units import PhysicalConstants
+from .units import PhysicalConstants, timescale
+from .validation import error_estimate
 
 if TYPE_CHECKING:
     from .planner import Planner
@@ -60,6 +61,9 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "field": ("", "the input a failed point names"),
     "validation_id": ("", "full-solver validation queued for this point (poll "
                           "/v1/validations/{id})"),
+    "validation_status": ("", "pending, running, done or failed"),
+    "truth_time": ("tau", "the full solver's time for this dose, once validated"),
+    "front_time_error": ("1", "the front model's relative time error against it"),
 }
 
 
@@ -175,7 +179,8 @@ def answer_point(point: dict[str, Any]) -> dict[str, Any]:
         row.update(status="error", message=str(exc), field=exc.field)
         return row
     except NotApplicableError as exc:
-        row.update(status="needs-full", model="full", message=str(exc))
+        tau = timescale(req.bead_dry_radius_um, req.t_end, req.constants).seconds
+        row.update(status="needs-full", model="full", message=str(exc), timescale_seconds=tau)
         return row
     except (SolverError, ArithmeticError, ValueError) as exc:
         row.update(status="error", message=f"{type(exc).__name__}: {exc}")
@@ -293,6 +298,33 @@ def _queue_validations(planner: Planner, rows: list[dict[str, Any]],
         except (QueueFullError, ParameterError, SolverError) as exc:
             note = f"validation not queued: {exc}"
             row["message"] = f"{row['message']}; {note}" if row["message"] else note
+
+
+def fill_validations(result: SweepResult, planner: Planner) -> int:
+    """Poll the rows' validations on ``planner``; fill the truth's time and the front
+    model's error of those done (a 'needs-full' row takes the truth's time and seconds).
+    Returns how many are unfinished."""
+    unfinished = 0
+    for row in result.rows:
+        vid = row.get("validation_id")
+        if not vid or row.get("validation_status") in ("done", "failed"):
+            continue
+        st = planner.validation(vid)
+        row["validation_status"] = st.status
+        if st.status in ("pending", "running"):
+            unfinished += 1
+        elif st.status == "failed":
+            row["message"] = f"validation failed: {st.error}"
+        else:
+            rep = st.result or {}
+            row["truth_time"] = rep.get("time")
+            row["front_time_error"] = rep.get("front_time_error")
+            if row["status"] == "needs-full" and rep.get("time") is not None:
+                tau = row["timescale_seconds"]
+                est, _ = error_estimate("full", rep["time"], rep, row["dose_fraction"])
+                row.update(time=rep["time"], error_estimate=est,
+                           seconds=None if tau is None else rep["time"] * tau)
+    return unfinished
 
 
 def run_sweep(grid: SweepGrid, executor: Executor | None = None, planner: Planner | None = None,

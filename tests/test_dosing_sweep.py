@@ -15,7 +15,7 @@ import pytest
 from dosing_fakes import FakeSolver
 
 from dosing import DoseRequest, Planner
-from dosing.sweep import COLUMNS, SweepGrid, chunks, run_sweep
+from dosing.sweep import COLUMNS, SweepGrid, chunks, fill_validations, run_sweep
 from solver.errors import ParameterError
 
 # ANB from 302 K: 305 K is a smooth jump (full solver only), 308-310 K front jumps
@@ -142,8 +142,12 @@ def test_validations_are_queued_for_the_chosen_points(tmp_path: Path,
         assert ids[:2] != [None, None] and ids[2:] == [None, None]
         for vid in ids[:2]:
             assert p.wait_validation(vid, 30.0, 0.02).status == "done"
-        req = DoseRequest("ANB", 302.0, 305.0, dose_fraction=0.3, dry_radius_um=50.0)
-        assert p.dose(req).model == "full"  # now answered from the cache
+        assert fill_validations(res, p) == 0
+        req = DoseRequest("ANB", 302.0, 305.0, dose_fraction=0.2, dry_radius_um=50.0)
+        ans = p.dose(req)  # now answered from the cache: the same time as the filled row
+        row = res.rows[0]
+        assert (row["validation_status"], row["time"], row["seconds"], row["error_estimate"]) \
+            == ("done", ans.time, ans.seconds, ans.error_estimate)
         with pytest.raises(ParameterError):
             p.sweep(SweepGrid(t_ends=[308.0], dry_radii_um=[50.0], doses=[0.3]), validate=[5])
     pool.shutdown()
