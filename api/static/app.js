@@ -396,7 +396,14 @@ async function run(f) {
   }
   const a = dose.data;
   showAnswer(a, f.doses.length);
-  if (a.validation_id) poll(a.validation_id);
+  if (a.validation_id) {
+    // once validated, the same request is answered with the full solver's verdict
+    poll(a.validation_id, async (v) => {
+      if (v.status !== "done") return;
+      const again = await api("POST", "/v1/dose-time", doseBody(f, total, false));
+      if (again.status === 200) showAnswer(again.data, f.doses.length);
+    });
+  }
   let rows;
   if (f.doses.length > 1) {
     const body = { ...doseBody(f, undefined, false), doses: f.doses };
