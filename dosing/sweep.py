@@ -356,7 +356,8 @@ def run_sweep(grid: SweepGrid, executor: Executor | None = None, planner: Planne
         futs: dict[Future, list[dict[str, Any]]] = {
             executor.submit(answer_chunk, part): part for part in parts}
         for fut in as_completed(futs):
-            exc = fut.exception()
+            exc = (RuntimeError("the chunk was cancelled (executor shut down)")
+                   if fut.cancelled() else fut.exception())
             put(_chunk_failed(futs[fut], exc) if exc is not None else fut.result())
     table: list[dict[str, Any]] = [r for r in rows if r is not None]
     chosen = select(table, validate)

@@ -154,3 +154,23 @@ def test_validations_are_queued_for_the_chosen_points(tmp_path: Path,
     with pytest.raises(ParameterError) as err:
         run_sweep(SweepGrid(t_ends=[308.0], dry_radii_um=[50.0], doses=[0.3]), validate="all")
     assert err.value.field == "validate"
+
+
+def test_a_failing_executor_chunk_is_reported_not_raised() -> None:
+    """A chunk the executor loses (here: a worker raising) becomes error rows naming the
+    executor's failure; the other chunks' rows are complete."""
+    from concurrent.futures import Future
+
+    class Flaky(ThreadPoolExecutor):
+        def submit(self, fn, part, *a):  # noqa: ANN001, ANN202
+            if part[0]["t_end"] == 309.0:
+                fut: Future = Future()
+                fut.set_exception(OSError("worker lost"))
+                return fut
+            return super().submit(fn, part, *a)
+
+    with Flaky(1) as pool:
+        res = run_sweep(SweepGrid(t_ends=[308.0, 309.0], dry_radii_um=[50.0], doses=[0.3, 0.5]),
+                        executor=pool)
+    assert [r["status"] for r in res.rows] == ["answered", "answered", "error", "error"]
+    assert "OSError: worker lost" in res.rows[2]["message"]
