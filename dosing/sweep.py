@@ -18,7 +18,7 @@ import math
 import time
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import Executor, Future, as_completed
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from itertools import product
 from typing import TYPE_CHECKING, Any
 
@@ -40,7 +40,8 @@ CHUNK_SIZE = 256  # points per executor task at most (one jump per task)
 # name -> (unit, description); the row order of every table
 COLUMNS: dict[str, tuple[str, str]] = {
     "index": ("1", "point number, C order over gel, t_end, dry_radius_um, dose_fraction"),
-    "gel": ("", "gel name (preset or 'custom')"),
+    "gel_index": ("1", "which gel of the grid's gels"),
+    "gel": ("", "gel name (a preset, a preset with a parameter varied, or 'custom')"),
     "t_start": ("K", "start (loading) temperature"),
     "t_end": ("K", "end (actuation) temperature"),
     "dry_radius_um": ("um", "dry bead radius"),
@@ -149,6 +150,28 @@ class SweepGrid:
                 "shape": list(self.shape)}
 
 
+GEL_PARAMETERS = ("omega", "a0", "b0", "a1", "b1")
+
+
+def vary_gel(base: Gel | str, **axes: Sequence[float]) -> list[Gel]:
+    """Gels along parameter axes (eq. FloryParam), e.g. ``vary_gel("ANB", omega=[50, 100])``:
+    the product of the axes, each gel named after its base and values ('ANB omega=50')."""
+    gel = resolve_gel(base)
+    for name in axes:
+        if name not in GEL_PARAMETERS:
+            raise ParameterError("vary", name, f"one of {', '.join(GEL_PARAMETERS)}")
+    names = list(axes)
+    out = []
+    for values in product(*(_floats(n, axes[n]) for n in names)):
+        label = " ".join(f"{n}={v:g}" for n, v in zip(names, values, strict=True))
+        try:
+            out.append(replace(gel, **dict(zip(names, values, strict=True)),
+                               name=f"{gel.name} {label}".strip()))
+        except ParameterError as exc:
+            raise ParameterError(f"vary.{exc.field}", exc.value, exc.valid) from None
+    return out
+
+
 def point_request(point: dict[str, Any]) -> DoseRequest:
     """The dose request of one point (ParameterError names what is wrong with it)."""
     return DoseRequest(point["gel"], point["t_start"], point["t_end"],
@@ -159,7 +182,8 @@ def point_request(point: dict[str, Any]) -> DoseRequest:
 
 def _row(point: dict[str, Any]) -> dict[str, Any]:
     row = dict.fromkeys(COLUMNS)
-    row.update(index=point["index"], gel=point["gel"].get("name", "custom"),
+    row.update(index=point["index"], gel_index=point["gel_index"],
+               gel=point["gel"].get("name", "custom"),
                t_start=point["t_start"], t_end=point["t_end"],
                dry_radius_um=point["dry_radius_um"], dose_fraction=point["dose_fraction"])
     return row

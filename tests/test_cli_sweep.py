@@ -41,3 +41,16 @@ def test_sweep_writes_the_tables_and_the_plot(tmp_path: Path, capsys) -> None:  
     assert [r["status"] for r in rows] == [r["status"] for r in want.rows]
     assert {r["field"] for r in rows if r["status"] == "error"} == {"dose_fraction", "t_end"}
     assert out["png"].read_bytes()[:4] == b"\x89PNG"
+
+
+def test_vary_a_gel_parameter(tmp_path: Path) -> None:
+    out = tmp_path / "s.json"
+    rc = main(["sweep", "--gel", "ANB", "--gel", "HHT", "--vary", "omega=50,200", "--t-end",
+               "308", "--dry-radius-um", "50", "--dose", "0.5", "--json", str(out),
+               "--no-progress"])
+    assert rc == 0
+    rows = json.loads(out.read_text())["rows"]
+    assert [r["gel"] for r in rows] == ["ANB omega=50", "ANB omega=200", "HHT omega=50",
+                                        "HHT omega=200"]
+    assert main(["sweep", "--vary", "omega", "--t-end", "308", "--dry-radius-um", "50",
+                 "--dose", "0.5"]) == 2

@@ -15,7 +15,7 @@ import pytest
 from dosing_fakes import FakeSolver
 
 from dosing import DoseRequest, Planner
-from dosing.sweep import COLUMNS, SweepGrid, chunks, fill_validations, run_sweep
+from dosing.sweep import COLUMNS, SweepGrid, chunks, fill_validations, run_sweep, vary_gel
 from solver.errors import ParameterError
 
 # ANB from 302 K: 305 K is a smooth jump (full solver only), 308-310 K front jumps
@@ -86,8 +86,8 @@ def test_chunks_share_a_jump() -> None:
 
 def test_csv_and_json_carry_units(result) -> None:
     rows = list(csv.reader(io.StringIO(result.to_csv())))
-    assert rows[0][:6] == ["index [1]", "gel", "t_start [K]", "t_end [K]", "dry_radius_um [um]",
-                           "dose_fraction [1]"]
+    assert rows[0][:7] == ["index [1]", "gel_index [1]", "gel", "t_start [K]", "t_end [K]",
+                           "dry_radius_um [um]", "dose_fraction [1]"]
     assert "seconds [s]" in rows[0] and len(rows) == 19
     seconds = rows[0].index("seconds [s]")
     by_index = {int(r[0]): r for r in rows[1:]}
@@ -174,3 +174,27 @@ def test_a_failing_executor_chunk_is_reported_not_raised() -> None:
                         executor=pool)
     assert [r["status"] for r in res.rows] == ["answered", "answered", "error", "error"]
     assert "OSError: worker lost" in res.rows[2]["message"]
+
+
+def test_gel_parameters_are_an_axis() -> None:
+    """vary_gel: the product of parameter axes, each gel named by its values; a sweep over
+    them answers each gel as the planner answers that gel alone."""
+    from dosing.planner import front_time
+    from dosing.units import radius_after_dose
+    from solver.gel import ANB
+
+    gels = vary_gel("ANB", omega=[50.0, 200.0], b1=[-0.0569, -0.057])
+    assert [g.name for g in gels] == ["ANB omega=50 b1=-0.0569", "ANB omega=50 b1=-0.057",
+                                      "ANB omega=200 b1=-0.0569", "ANB omega=200 b1=-0.057"]
+    assert (gels[3].omega, gels[3].b1, gels[3].a0) == (200.0, -0.057, ANB.a0)
+    res = run_sweep(SweepGrid(t_ends=[308.0], dry_radii_um=[50.0], doses=[0.5], gels=gels))
+    assert [r["gel_index"] for r in res.rows] == [0, 1, 2, 3]
+    for gel, row in zip(gels, res.rows, strict=True):
+        req = DoseRequest(gel, 302.0, 308.0, dose_fraction=0.5)
+        assert row["time"] == front_time(req, radius_after_dose(req.start_radius, 0.5))
+    with pytest.raises(ParameterError) as err:
+        vary_gel("ANB", chi=[1.0])
+    assert err.value.field == "vary"
+    with pytest.raises(ParameterError) as err:
+        vary_gel("ANB", omega=[-1.0])
+    assert err.value.field == "vary.omega"

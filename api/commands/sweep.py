@@ -55,12 +55,31 @@ def _validate_arg(text: str | None) -> Any:
                              "'0,5,17'") from None
 
 
+def gels_from_args(presets: list[str] | None, vary: list[str] | None) -> list[Any]:
+    """The grid's gels: each preset, or each preset along the --vary axes."""
+    from dosing.sweep import vary_gel
+
+    names = presets or ["ANB"]
+    if not vary:
+        return list(names)
+    axes: dict[str, list[float]] = {}
+    for item in vary:
+        param, sep, text = item.partition("=")
+        if not sep:
+            raise ParameterError("--vary", item, "PARAM=AXIS, e.g. omega=50:200:4")
+        axes[param.strip()] = parse_axis(f"--vary {param.strip()}", text)
+    return [g for name in names for g in vary_gel(name, **axes)]
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the sub-command."""
     p = sub.add_parser("sweep", help="design map: actuation times over T_end x bead size x "
                                      "dose with the front model (CSV, JSON, heat maps)")
     p.add_argument("--gel", action="append", default=None,
                    help="preset gel, repeat for several (default ANB)")
+    p.add_argument("--vary", action="append", default=None, metavar="PARAM=AXIS",
+                   help="vary a gel parameter (omega, a0, b0, a1, b1) of each --gel over a "
+                        "list or range, e.g. omega=50:200:4; repeat for a product")
     p.add_argument("--t-start", type=float, default=302.0, help="start temperature in K")
     p.add_argument("--t-end", required=True, help="heating temperatures in K: list or range")
     p.add_argument("--dry-radius-um", required=True, help="dry bead radii in um: list or range")
@@ -84,7 +103,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", default=None, metavar="FILE", help="write the table as JSON "
                                                                "('-': stdout)")
     p.add_argument("--plot", default=None, metavar="FILE",
-                   help="heat maps of time and error (PNG, PDF or SVG; first gel)")
+                   help="heat maps of time and error (PNG, PDF or SVG)")
+    p.add_argument("--plot-gel", type=int, default=0, metavar="I",
+                   help="which gel of the grid to plot (default 0, the first)")
     p.add_argument("--cache", default=None, help="validation cache file")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func=run)
@@ -151,7 +172,8 @@ def run(args: argparse.Namespace) -> int:
                 else SolverSettings(interfacial_length=args.interfacial_length))
     grid = SweepGrid(t_ends=parse_axis("--t-end", args.t_end),
                      dry_radii_um=parse_axis("--dry-radius-um", args.dry_radius_um),
-                     doses=parse_axis("--dose", args.dose), gels=args.gel or ["ANB"],
+                     doses=parse_axis("--dose", args.dose),
+                     gels=gels_from_args(args.gel, args.vary),
                      t_start=args.t_start, branch=args.branch, settings=settings)
     validate = _validate_arg(args.validate)
     with ExitStack() as stack:
@@ -175,7 +197,9 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from api.plots.sweep import draw_sweep
 
-        print(f"wrote {draw_sweep(table, args.plot)}", file=sys.stderr)
+        if not 0 <= args.plot_gel < grid.shape[0]:
+            raise ParameterError("--plot-gel", args.plot_gel, f"0-{grid.shape[0] - 1}")
+        print(f"wrote {draw_sweep(table, args.plot, args.plot_gel)}", file=sys.stderr)
     counts = ", ".join(f"{v} {k}" for k, v in result.counts.items())
     print(f"{grid.size} points ({' x '.join(map(str, grid.shape))} gels x T_end x radius x "
           f"dose) in {result.seconds:.3f} s: {counts}", file=sys.stderr)
