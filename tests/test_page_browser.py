@@ -4,9 +4,9 @@ Chromium is Debian's (``.ci/run`` installs it when missing), driven by Playwrigh
 package with ``executable_path`` (no browser download).  The page must read back the JSON
 route's time for ANB 302 -> 308 K, 80 %, 50 um; an out-of-range temperature must show a
 message and send no request; a server error must be shown next to the field it names; a
-validation's progress is polled to its result.  Screenshots go to tests/artifacts/ (or
-$THERMOGEL_ARTIFACTS).  Without Chromium the test is skipped, except in CI (CI=true),
-where it fails.
+design map runs as a sweep job; a validation's progress is polled to its result.
+Screenshots go to tests/artifacts/ (or $THERMOGEL_ARTIFACTS).  Without Chromium the test
+is skipped, except in CI (CI=true), where it fails.
 """
 
 from __future__ import annotations
@@ -106,12 +106,36 @@ def test_page_in_headless_chromium(tmp_path: Path) -> None:
             assert page.inner_text("#err-interfacial_length").startswith("interfacial_length:")
             assert page.inner_text("#err-t_end") == ""
 
+            # a design map of the default axes (9 x 9 x 4): the table the sweep route gives
+            _fill(page, interfacial_length="0.005")
+            page.click("#sweep")
+            page.wait_for_selector("body[data-sweep=done]", timeout=120_000)
+            page.wait_for_function("document.getElementById('sweep-plot').complete && "
+                                   "document.getElementById('sweep-plot').naturalWidth > 0")
+            csv_url = page.get_attribute("#sweep-links a", "href")
+            table = httpx.get(url + csv_url.split("?")[0], timeout=60).json()["result"]
+            assert len(table["rows"]) == 9 * 9 * 4 and table["grid"]["t_ends"][0] == 307.5
+            assert "324 answered" in page.inner_text("#sweep-status")
+            sent.clear()
+            _fill(page, sweep_t_end="300, 380, 5")
+            page.click("#sweep")
+            page.wait_for_selector("body[data-sweep=invalid]")
+            assert "373.15" in page.inner_text("#err-sweep_t_end")
+            page.wait_for_timeout(300)
+            assert sent == []
+            _fill(page, sweep_t_end="307.5, 311.5, 9")
+
             # a validation, polled to its result (the coarsest ladder: ell = 0.01)
             _fill(page, interfacial_length="0.01")
             page.check("#validate")
             page.click("#plan")
             page.wait_for_selector("#validation-panel[data-status=done]", timeout=600_000)
             assert "Truth (regularized)" in page.inner_text("#validation-result")
+            page.wait_for_selector("body[data-validated]", timeout=60_000)  # asked again
+            ell = {**FRONT, "interfacial_length": 0.01}
+            again = httpx.post(f"{url}/v1/dose-time", json=ell, timeout=60).json()
+            assert again["validation"] is not None  # now answered with the verdict
+            assert page.inner_text("#answer-error") == f"± {100 * again['error_estimate']:.3g} %"
             page.screenshot(path=str(_artifacts() / "page-validated.png"), full_page=True)
             assert errors == []
         finally:

@@ -7,7 +7,9 @@ const $ = (id) => document.getElementById(id);
 const SVGNS = "http://www.w3.org/2000/svg";
 const FIELDS = ["t_start", "t_end", "dry_radius_um", "doses", "rests", "interfacial_length"];
 const LABELS = { t_start: "T_start", t_end: "T_end", dry_radius_um: "dry radius",
-  doses: "dose", rests: "rest", interfacial_length: "interfacial length" };
+  doses: "dose", rests: "rest", interfacial_length: "interfacial length",
+  sweep_t_end: "T_end", sweep_radius: "dry radius", sweep_doses: "dose" };
+const SWEEP_FIELDS = ["sweep_t_end", "sweep_radius", "sweep_doses"];
 let bounds = {};
 let requestCount = 0; // requests this page sent to /v1 (shown in the page state)
 let pollTimer = null;
@@ -251,6 +253,7 @@ function drawTimeline(rows, rests, tStart, tEnd, tau, curve) {
   const bot = panel(svg, { x: 55, y: 115, w: 445, h: 140 }, xl, [0, 100],
     tau ? "clock time (s)" : "clock time (units of τ)", "released (%)");
   polyline(svg, bot, relT, rel, { stroke: "#1f6fb2", id: "timeline-release" });
+  if (!curve) el("text", { x: 62, y: 128 }, svg, "release drawn linearly within each heating (no front-model curve)");
   let acc = 0;
   rows.forEach((r, i) => {
     acc += r.end - r.start + (i > 0 && i - 1 < rests.length ? rests[i - 1] : 0);
@@ -339,8 +342,10 @@ function showValidation(v, started) {
   const rows = (r.runs || []).map((e) => `<tr><td>${e.grid}</td><td>${e.n}</td><td>${fmt(e.interfacial_length)}</td>` +
     `<td>${fmt(e.time)}</td><td>${fmt(e.wall_seconds, 3)} s</td></tr>`).join("");
   $("validation-result").innerHTML =
-    `<p>Truth (${r.model}): t = <b>${fmt(r.time)}</b> τ ± ${pct(r.error)}; front model t = ${fmt(r.front_time)} τ, ` +
-    `time error ${pct(r.front_time_error)}, volume error ${pct(r.front_volume_error)}.</p>` +
+    `<p>Truth (${r.model}): t = <b>${fmt(r.time)}</b> τ ± ${pct(r.error)}` +
+    (r.front_time === null || r.front_time === undefined ? " (no front model on this jump).</p>" :
+      `; front model t = ${fmt(r.front_time)} τ, time error ${pct(r.front_time_error)}, ` +
+      `volume error ${pct(r.front_volume_error)}.</p>`) +
     `<table><tr><th>grid</th><th>N</th><th>ℓ</th><th>time (τ)</th><th>wall</th></tr>${rows}</table>`;
 }
 
@@ -396,14 +401,6 @@ async function run(f) {
   }
   const a = dose.data;
   showAnswer(a, f.doses.length);
-  if (a.validation_id) {
-    // once validated, the same request is answered with the full solver's verdict
-    poll(a.validation_id, async (v) => {
-      if (v.status !== "done") return;
-      const again = await api("POST", "/v1/dose-time", doseBody(f, total, false));
-      if (again.status === 200) showAnswer(again.data, f.doses.length);
-    });
-  }
   let rows;
   if (f.doses.length > 1) {
     const body = { ...doseBody(f, undefined, false), doses: f.doses };
@@ -432,7 +429,84 @@ async function run(f) {
     drawTimeline(rows, f.rests.length ? f.rests : [], f.t_start, f.t_end, tau, curve);
     scheduleTable(rows, tau);
   }
+  if (a.validation_id) {
+    // once validated, the same request is answered with the full solver's verdict
+    poll(a.validation_id, async (v) => {
+      if (v.status !== "done") return;
+      const again = await api("POST", "/v1/dose-time", doseBody(f, total, false));
+      if (again.status !== 200) return;
+      showAnswer(again.data, f.doses.length);
+      if (f.doses.length === 1) scheduleTable([{ ...rows[0], error_estimate: again.data.error_estimate }], tau);
+      document.body.dataset.validated = v.id;
+    });
+  }
   document.body.dataset.state = "answered";
+}
+
+// ----------------------------------------------------------------------------- design maps
+
+function axis(name, text, b, log, unit) {
+  // 'from, to, steps' as the list of values (log: geometric), each within the bounds
+  const parts = String(text).split(/[,;\s]+/).filter((p) => p !== "");
+  const steps = Number(parts[2]);
+  if (parts.length !== 3 || !Number.isInteger(steps) || steps < 1 || steps > b.maxItems)
+    return { error: `${LABELS[name]}: give from, to and a number of steps (1-${b.maxItems})` };
+  const lo = checkValue(name, parts[0], b, 1, unit);
+  if (lo.error) return lo;
+  const hi = checkValue(name, parts[1], b, 1, unit);
+  if (hi.error) return hi;
+  const out = [];
+  for (let i = 0; i < steps; i++) {
+    const w = steps === 1 ? 0 : i / (steps - 1);
+    out.push(log ? Math.exp(Math.log(lo.value) + w * (Math.log(hi.value) - Math.log(lo.value)))
+      : lo.value + w * (hi.value - lo.value));
+  }
+  return { value: out };
+}
+
+async function sweep(ev) {
+  ev.preventDefault();
+  for (const f of SWEEP_FIELDS) { $(`err-${f}`).textContent = ""; $(f).classList.remove("invalid"); }
+  $("sweep-error").textContent = "";
+  const main = readForm();
+  const tEnds = axis("sweep_t_end", $("sweep_t_end").value, bounds.sweep_t_ends, false, "K");
+  const radii = axis("sweep_radius", $("sweep_radius").value, bounds.sweep_radii, true, "µm");
+  const doses = checkList("sweep_doses", $("sweep_doses").value, bounds.sweep_doses, 100, "%");
+  let ok = main !== null;
+  for (const [name, r] of [["sweep_t_end", tEnds], ["sweep_radius", radii], ["sweep_doses", doses]]) {
+    if (r.error) { showError(name, r.error); ok = false; }
+  }
+  if (!ok) { document.body.dataset.sweep = "invalid"; return; }
+  const body = { gels: [main.gel], t_start: main.t_start, t_ends: tEnds.value,
+    dry_radii_um: radii.value, doses: doses.value, interfacial_length: main.interfacial_length };
+  const res = await api("POST", "/v1/sweep", body);
+  if (res.status !== 202) {
+    const detail = res.data && res.data.detail;
+    $("sweep-error").textContent = Array.isArray(detail) ?
+      detail.map((d) => `${fieldOf(d.loc).name}: ${d.msg}`).join("; ") : `HTTP ${res.status}: ${detail}`;
+    document.body.dataset.sweep = "server-error";
+    return;
+  }
+  document.body.dataset.sweep = "running";
+  const url = res.data.sweep_url;
+  const step = async () => {
+    const st = await api("GET", url);
+    if (st.status !== 200) { $("sweep-error").textContent = `HTTP ${st.status}`; return; }
+    const s = st.data;
+    $("sweep-bar").style.width = `${(100 * s.points_done / s.points).toFixed(0)}%`;
+    $("sweep-status").textContent = `${s.status}: ${s.points_done} of ${s.points} points`;
+    if (s.status === "failed") { $("sweep-error").textContent = s.error; return; }
+    if (s.status !== "done") { setTimeout(step, 300); return; }
+    const counts = Object.entries(s.result.counts).map(([k, v]) => `${v} ${k}`).join(", ");
+    $("sweep-status").textContent = `done: ${counts} in ${fmt(s.result.seconds, 3)} s`;
+    $("sweep-links").innerHTML = `Table: <a href="${url}?format=csv" download="sweep.csv">CSV</a> · ` +
+      `<a href="${url}" target="_blank">JSON with units</a>`;
+    const img = $("sweep-plot");
+    img.src = `${url}/plot.svg`;
+    img.hidden = false;
+    document.body.dataset.sweep = "done";
+  };
+  step();
 }
 
 async function init() {
@@ -444,6 +518,11 @@ async function init() {
     dry_radius_um: boundOf(dose.dry_radius_um), dose_fraction: boundOf(dose.dose_fraction),
     interfacial_length: boundOf(dose.interfacial_length), doses: boundOf(sched.doses),
     rests: boundOf(numberSchema(sched.rests).items || {}) };
+  const sw = sc.SweepRequest.properties;
+  const items = (p) => ({ ...boundOf(p.items), maxItems: p.maxItems });
+  bounds.sweep_t_ends = items(sw.t_ends);
+  bounds.sweep_radii = items(sw.dry_radii_um);
+  bounds.sweep_doses = items(sw.doses);
   for (const name of ["t_start", "t_end", "dry_radius_um", "interfacial_length"]) {
     $(name).title = bounds[name].description || "";
   }
@@ -461,6 +540,10 @@ async function init() {
   sel.addEventListener("change", showFolds);
   showFolds();
   $("plan-form").addEventListener("submit", plan);
+  $("sweep-form").addEventListener("submit", sweep);
+  for (const name of [...FIELDS, ...SWEEP_FIELDS]) {
+    $(name).addEventListener("input", () => { $(`err-${name}`).textContent = ""; $(name).classList.remove("invalid"); });
+  }
   document.body.dataset.state = "ready";
   document.body.dataset.requests = "0";
 }
