@@ -135,3 +135,19 @@ async def test_page_and_assets_are_served(raw) -> None:
     assert svg.status_code == 200 and svg.headers["content-type"] == "image/svg+xml"
     bad = await raw.get("/v1/phase-map.svg", params={"t_end": 400})
     assert bad.status_code == 422 and bad.json()["detail"][0]["loc"] == ["query", "t_end"]
+
+
+async def test_only_the_last_sweeps_are_kept(raw, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Finished tables are bounded in memory: a dropped sweep is a 404 until posted again."""
+    import api.routers.sweep as routes
+
+    monkeypatch.setattr(routes, "SWEEPS_KEPT", 1)
+    one = {**SWEEP, "doses": [0.3]}
+    first = (await raw.post("/v1/sweep", json=one)).json()["sweep_url"]
+    assert (await _done(raw, first))["status"] == "done"
+    second = (await raw.post("/v1/sweep", json={**one, "doses": [0.4]})).json()["sweep_url"]
+    assert (await _done(raw, second))["status"] == "done"
+    assert (await raw.get(first)).status_code == 404
+    again = (await raw.post("/v1/sweep", json=one)).json()["sweep_url"]
+    assert again == first and (await _done(raw, first))["result"]["counts"] == {
+        "needs-full": 2, "answered": 4}

@@ -13,6 +13,7 @@ from __future__ import annotations
 import hashlib
 import math
 import threading
+from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
 from typing import Annotated, Any, Literal
 
@@ -39,6 +40,7 @@ router = APIRouter(tags=["design maps"])
 MAX_SERVICE_POINTS = 20_000  # points in one sweep request (the CLI takes up to 100,000)
 SWEEP_QUEUE = 4  # sweeps queued or running before 429
 SWEEP_PREFIX = "sweep-"
+SWEEPS_KEPT = 32  # finished sweep tables kept in memory
 Temperature = Annotated[float, Field(ge=273.15, le=373.15)]
 Radius = Annotated[float, Field(gt=0.0, le=1.0e5)]
 Fraction = Annotated[float, Field(gt=0.0, le=1.0)]
@@ -129,13 +131,24 @@ class SweepStatus(BaseModel):
 
 
 class _Sweeps:
-    """The service's sweep jobs: one thread, a bounded queue, progress per job."""
+    """The service's sweep jobs: one thread, a bounded queue, progress per job, and the
+    last ``SWEEPS_KEPT`` finished tables (an older one is run again when asked again)."""
 
     def __init__(self) -> None:
         self.runner = JobRunner(ThreadPoolExecutor(1, thread_name_prefix="sweep"),
                                 max_pending=SWEEP_QUEUE)
         self.progress: dict[str, list[int]] = {}
+        self.results: OrderedDict[str, SweepResult] = OrderedDict()
         self.lock = threading.Lock()
+
+    def keep(self, key: str, result: SweepResult) -> None:
+        """Store a finished table, dropping the oldest beyond ``SWEEPS_KEPT``."""
+        with self.lock:
+            self.results[key] = result
+            self.results.move_to_end(key)
+            while len(self.results) > SWEEPS_KEPT:
+                old, _ = self.results.popitem(last=False)
+                self.progress.pop(old, None)
 
 
 _CREATE = threading.Lock()
@@ -163,14 +176,16 @@ def to_grid(body: SweepRequest) -> SweepGrid:
                      settings=SolverSettings(interfacial_length=body.interfacial_length))
 
 
-def _run(planner: Any, grid: SweepGrid, validate: Any, progress: list[int]) -> SweepResult:
+def _run(sweeps: _Sweeps, key: str, planner: Any, grid: SweepGrid, validate: Any,
+         progress: list[int]) -> None:
+    """The job: the sweep on the planner's executor, its table kept in ``sweeps``."""
     jobs = getattr(planner, "jobs", None)
 
     def step(n: int) -> None:
         progress[0] += n
 
-    return run_sweep(grid, executor=None if jobs is None else jobs.executor, planner=planner,
-                     validate=validate, progress=step)
+    sweeps.keep(key, run_sweep(grid, executor=None if jobs is None else jobs.executor,
+                               planner=planner, validate=validate, progress=step))
 
 
 def _submit(request: Request, body: SweepRequest) -> dict[str, Any]:
@@ -178,10 +193,12 @@ def _submit(request: Request, body: SweepRequest) -> dict[str, Any]:
     key = hashlib.sha256(body.model_dump_json().encode()).hexdigest()[:24]
     jobs = _sweeps(request)
     planner = request.app.state.service.planner
-    with jobs.lock:  # a sweep queued, running or done is not run again
-        if jobs.runner.state(key) in (None, "failed"):
+    with jobs.lock:  # a sweep queued, running or kept is not run again
+        state = jobs.runner.state(key)
+        if state in (None, "failed") or (state == "done" and key not in jobs.results):
             progress = jobs.progress[key] = [0, grid.size]
-            jobs.runner.submit(key, _run, planner, grid, body.validate_points, progress)
+            jobs.runner.submit(key, _run, jobs, key, planner, grid, body.validate_points,
+                               progress)
     vid = SWEEP_PREFIX + key
     return {"status": "pending", "sweep_id": vid, "sweep_url": f"/v1/sweeps/{vid}",
             "points": grid.size}
@@ -190,15 +207,17 @@ def _submit(request: Request, body: SweepRequest) -> dict[str, Any]:
 def _status(request: Request, sweep_id: str) -> dict[str, Any]:
     key = sweep_id[len(SWEEP_PREFIX):] if sweep_id.startswith(SWEEP_PREFIX) else None
     jobs = _sweeps(request)
-    state = None if key is None else jobs.runner.state(key)
-    if state is None:
-        raise UnknownValidationError(sweep_id)
-    done, total = jobs.progress[key]
+    with jobs.lock:
+        state = None if key is None else jobs.runner.state(key)
+        res = jobs.results.get(key) if state == "done" else None
+        progress = jobs.progress.get(key) if key is not None else None
+    if state is None or progress is None or (state == "done" and res is None):
+        raise UnknownValidationError(sweep_id)  # never seen, or dropped: post it again
+    done, total = progress
     out: dict[str, Any] = {"id": sweep_id, "status": state, "points": total,
                            "points_done": done}
     fut = jobs.runner.get(key)
-    if state == "done":
-        res: SweepResult = fut.result()
+    if res is not None:
         out["validations_unfinished"] = fill_validations(res, request.app.state.service.planner)
         out["result"] = res.to_dict()
     elif state == "failed":
