@@ -89,7 +89,7 @@ class SweepRequest(BaseModel):
 class SweepAccepted(BaseModel):
     """A queued sweep: poll ``sweep_url``."""
 
-    status: Literal["pending"] = "pending"
+    status: Literal["pending"] = Field("pending", description="'pending': poll sweep_url")
     sweep_id: str = Field(description="id of the sweep job")
     sweep_url: str = Field(description="path to poll")
     points: int = Field(description="points in the grid")
@@ -98,10 +98,10 @@ class SweepAccepted(BaseModel):
 class SweepColumn(BaseModel):
     """A column of the table."""
 
-    name: str
+    name: str = Field(description="column name (a key of every row)")
     unit: str = Field(description="unit: K, um, s, uL, tau (dimensionless time), 1 "
                                   "(a fraction), '' for text")
-    description: str
+    description: str = Field(description="what the column holds")
 
 
 class SweepTable(BaseModel):
@@ -111,7 +111,7 @@ class SweepTable(BaseModel):
 
     grid: dict[str, Any] = Field(description="the axes, with shape [gels, t_ends, radii, "
                                              "doses]")
-    columns: list[SweepColumn]
+    columns: list[SweepColumn] = Field(description="every column with its unit")
     rows: list[dict[str, Any]] = Field(description="one object per point, keys as columns")
     counts: dict[str, int] = Field(description="points per status")
     seconds: float = Field(description="wall time of the front-model sweep, s")
@@ -120,14 +120,14 @@ class SweepTable(BaseModel):
 class SweepStatus(BaseModel):
     """A sweep job's state; ``result`` once done."""
 
-    id: str
-    status: Literal["pending", "running", "done", "failed"]
+    id: str = Field(description="sweep id")
+    status: Literal["pending", "running", "done", "failed"] = Field(description="its state")
     points: int = Field(description="points in the grid")
     points_done: int = Field(description="points answered so far")
     validations_unfinished: int | None = Field(
         None, description="validations of this sweep still pending or running")
-    result: SweepTable | None = None
-    error: str | None = None
+    result: SweepTable | None = Field(None, description="when done: the table")
+    error: str | None = Field(None, description="when failed: why")
 
 
 class _Sweeps:
