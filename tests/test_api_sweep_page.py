@@ -130,11 +130,16 @@ async def test_page_and_assets_are_served(raw) -> None:
     assert (await raw.get("/static/app.css")).headers["content-type"].startswith("text/css")
     assert (await raw.get("/static/../http.py")).status_code == 404
     assert (await raw.get("/static/index.py")).status_code == 404
-    svg = await raw.get("/v1/phase-map.svg", params={"gel": "HHT", "t_start": 304,
+    svg = await raw.get("/v1/phase-map.svg", params={"base": "HHT", "t_start": 304,
                                                      "t_end": 308})
     assert svg.status_code == 200 and svg.headers["content-type"] == "image/svg+xml"
+    custom = await raw.get("/v1/phase-map.svg", params={"base": "ANB", "omega": 120})
+    assert custom.status_code == 200 and custom.content != (await raw.get(
+        "/v1/phase-map.svg", params={"base": "ANB"})).content
     bad = await raw.get("/v1/phase-map.svg", params={"t_end": 400})
     assert bad.status_code == 422 and bad.json()["detail"][0]["loc"] == ["query", "t_end"]
+    bad = await raw.get("/v1/phase-map.svg", params={"omega": -1})
+    assert bad.status_code == 422 and bad.json()["detail"][0]["loc"] == ["query", "omega"]
 
 
 async def test_only_the_last_sweeps_are_kept(raw, monkeypatch: pytest.MonkeyPatch) -> None:

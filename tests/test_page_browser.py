@@ -4,7 +4,8 @@ Chromium is Debian's (``.ci/run`` installs it when missing), driven by Playwrigh
 package with ``executable_path`` (no browser download).  The page must read back the JSON
 route's time for ANB 302 -> 308 K, 80 %, 50 um; an out-of-range temperature must show a
 message and send no request; a server error must be shown next to the field it names; a
-design map runs as a sweep job; a validation's progress is polled to its result.
+design map runs as a sweep job; a saved custom gel is answered as the JSON route answers
+its parameters; a validation's progress is polled to its result.
 Screenshots go to tests/artifacts/ (or $THERMOGEL_ARTIFACTS).  Without Chromium the test
 is skipped, except in CI (CI=true), where it fails.
 """
@@ -124,6 +125,25 @@ def test_page_in_headless_chromium(tmp_path: Path) -> None:
             page.wait_for_timeout(300)
             assert sent == []
             _fill(page, sweep_t_end="307.5, 311.5, 9")
+
+            # a saved custom gel: checked in the page, kept in the browser, sent as parameters
+            page.click("#custom-gel summary")
+            _fill(page, gel_name="soft ANB", gel_omega="-1")
+            sent.clear()
+            page.click("#save-gel")
+            assert "Omega" in page.inner_text("#err-gel_omega") and sent == []
+            _fill(page, gel_omega="120")
+            page.click("#save-gel")
+            page.wait_for_selector("body[data-gel=saved]")
+            assert page.input_value("#gel") == "saved:soft ANB"
+            page.click("#plan")
+            page.wait_for_selector("body[data-state=answered]", timeout=120_000)
+            soft = {"base": "ANB", "omega": 120.0, "a0": -12.947, "b0": 0.04496, "a1": 17.92,
+                    "b1": -0.0569}
+            want = httpx.post(f"{url}/v1/dose-time", json={**FRONT, "gel": soft}, timeout=60).json()
+            assert float(page.get_attribute("#answer-time", "data-value")) == want["time"]
+            page.click("#custom-gel summary")
+            page.select_option("#gel", "ANB")
 
             # a validation, polled to its result (the coarsest ladder: ell = 0.01)
             _fill(page, interfacial_length="0.01")

@@ -23,8 +23,8 @@ from ..schemas import (
     T_MIN,
     Branch,
     ErrorResponse,
+    GelParameters,
     GelSpec,
-    PresetName,
     check_interfacial_length,
     interfacial_length_field,
     temperature_field,
@@ -125,35 +125,37 @@ async def front_curve(body: FrontCurveRequest) -> dict[str, Any]:
     return await compute(front_curve_answer, body)
 
 
+class PhaseMapQuery(GelParameters):
+    """A gel (a preset, ``base``, with any parameter replaced) and the jump to draw."""
+
+    t_start: float = Field(302.0, ge=T_MIN, le=T_MAX, description="start temperature in K")
+    t_end: float = Field(308.0, ge=T_MIN, le=T_MAX, description="end temperature in K")
+    branch: Branch | None = Field(None, description="start branch (default swollen)")
+
+
 @functools.lru_cache(maxsize=32)
-def phase_map_svg(gel: str, t_start: float, t_end: float, branch: str | None) -> bytes:
-    """The phase map of a preset with the jump drawn (blocking; memoised)."""
+def phase_map_svg(query_json: str) -> bytes:
+    """The phase map of the query's gel with its jump drawn (blocking; memoised)."""
     from dosing.request import resolve_jump
-    from solver.gel import preset
 
     from ..plots.phase_map import draw_phase_map
+    from ..service import to_gel
 
-    g = preset(gel)
-    jump = resolve_jump(g, t_start, t_end, branch)
+    q = PhaseMapQuery.model_validate_json(query_json)
+    gel = to_gel(q)
+    jump = resolve_jump(gel, q.t_start, q.t_end, q.branch)
     buf = io.BytesIO()
-    draw_phase_map(g, buf, jump=(jump.t_start, jump.start_radius, jump.t_end,
-                                 jump.final_radius), fmt="svg", size=(6.0, 4.2))
+    draw_phase_map(gel, buf, jump=(jump.t_start, jump.start_radius, jump.t_end,
+                                   jump.final_radius), fmt="svg", size=(6.0, 4.2))
     return buf.getvalue()
 
 
 @router.get("/v1/phase-map.svg", response_class=Response, tags=["physics"],
             responses={200: {"content": {"image/svg+xml": {}}},
                        422: {"model": ErrorResponse, "description": "bad input"}})
-async def phase_map(
-        gel: Annotated[PresetName, Query(description="preset gel")] = "ANB",
-        t_start: Annotated[float, Query(ge=T_MIN, le=T_MAX,
-                                        description="start temperature in K")] = 302.0,
-        t_end: Annotated[float, Query(ge=T_MIN, le=T_MAX,
-                                      description="end temperature in K")] = 308.0,
-        branch: Annotated[Branch | None, Query(description="start branch")] = None,
-) -> Response:
+async def phase_map(query: Annotated[PhaseMapQuery, Query()]) -> Response:
     """The gel's phase map (paper fig. 3) with the jump T_start -> T_end drawn on it."""
     from ..http import compute
 
-    svg = await compute(phase_map_svg, gel, t_start, t_end, branch)
+    svg = await compute(phase_map_svg, query.model_dump_json())
     return Response(svg, media_type="image/svg+xml")

@@ -10,6 +10,12 @@ const LABELS = { t_start: "T_start", t_end: "T_end", dry_radius_um: "dry radius"
   doses: "dose", rests: "rest", interfacial_length: "interfacial length",
   sweep_t_end: "T_end", sweep_radius: "dry radius", sweep_doses: "dose" };
 const SWEEP_FIELDS = ["sweep_t_end", "sweep_radius", "sweep_doses"];
+const GEL_PARAMS = ["omega", "a0", "b0", "a1", "b1"];
+const GEL_FIELDS = ["gel_name", ...GEL_PARAMS.map((p) => `gel_${p}`)];
+const SAVED_KEY = "thermogel.gels";
+for (const p of GEL_PARAMS) LABELS[`gel_${p}`] = p === "omega" ? "Omega" : p.toUpperCase();
+LABELS.gel_name = "gel name";
+let presets = {}; // preset name -> its parameters (from /v1/gels)
 let bounds = {};
 let requestCount = 0; // requests this page sent to /v1 (shown in the page state)
 let pollTimer = null;
@@ -84,7 +90,7 @@ function showError(field, msg) {
 }
 
 function clearErrors() {
-  for (const f of FIELDS) {
+  for (const f of [...FIELDS, ...GEL_FIELDS]) {
     $(`err-${f}`).textContent = "";
     $(f).classList.remove("invalid");
   }
@@ -107,6 +113,10 @@ function fieldOf(loc) {
   const name = parts.length ? String(parts[0]) : "";
   if (name === "dose_fraction" || name === "doses") return { input: "doses", name: parts.join(".") };
   if (name === "rests") return { input: "rests", name: parts.join(".") };
+  if (name === "gel" && GEL_PARAMS.includes(String(parts[1]))) {
+    $("custom-gel").open = true;
+    return { input: `gel_${parts[1]}`, name: parts.join(".") };
+  }
   return { input: FIELDS.includes(name) ? name : null, name: parts.join(".") || "request" };
 }
 
@@ -276,7 +286,7 @@ function readForm() {
   // the request fields, or null after showing every input error (no request is sent)
   clearErrors();
   const b = bounds;
-  const out = { gel: $("gel").value };
+  const out = { gel: gelSpec() };
   let ok = true;
   const take = (name, r) => { if (r.error) { showError(name, r.error); ok = false; } else out[name] = r.value; };
   take("t_start", checkValue("t_start", $("t_start").value, b.t_start, 1, "K"));
@@ -384,7 +394,8 @@ async function run(f) {
   const total = f.doses.reduce((a, x) => a + x, 0);
   const phase = $("phase-map");
   phase.hidden = false;
-  phase.src = `/v1/phase-map.svg?gel=${f.gel}&t_start=${f.t_start}&t_end=${f.t_end}`;
+  const gq = typeof f.gel === "string" ? { base: f.gel } : f.gel;
+  phase.src = `/v1/phase-map.svg?${new URLSearchParams({ ...gq, t_start: f.t_start, t_end: f.t_end })}`;
   const [dose, curveRes] = await Promise.all([
     api("POST", "/v1/dose-time", doseBody(f, total, f.validate)),
     api("POST", "/v1/front-curve", { gel: f.gel, t_start: f.t_start, t_end: f.t_end,
@@ -509,6 +520,81 @@ async function sweep(ev) {
   step();
 }
 
+// ----------------------------------------------------------------------------- saved gels
+
+function savedGels() {
+  try { return JSON.parse(localStorage.getItem(SAVED_KEY) || "{}"); } catch (e) { return {}; }
+}
+
+function gelSpec() {
+  // the request's gel: a preset name, or a saved gel's parameters (GelParameters)
+  const v = $("gel").value;
+  if (!v.startsWith("saved:")) return v;
+  return savedGels()[v.slice(6)] || "ANB";
+}
+
+function gelOptions(selected) {
+  const sel = $("gel");
+  sel.innerHTML = "";
+  const add = (value, text, folds) => {
+    const o = document.createElement("option");
+    o.value = value; o.textContent = text;
+    if (folds !== undefined) o.dataset.folds = folds;
+    sel.appendChild(o);
+  };
+  for (const [name, p] of Object.entries(presets)) add(name, name, p.folds);
+  for (const name of Object.keys(savedGels())) add(`saved:${name}`, `${name} (saved)`);
+  if (selected) sel.value = selected;
+}
+
+function fillGel(base) {
+  const p = presets[base];
+  if (!p) return;
+  for (const k of GEL_PARAMS) $(`gel_${k}`).value = String(p.gel[k]);
+}
+
+function saveGel() {
+  for (const f of GEL_FIELDS) { $(`err-${f}`).textContent = ""; $(f).classList.remove("invalid"); }
+  const name = $("gel_name").value.trim();
+  let ok = true;
+  if (!name || Object.keys(presets).includes(name)) {
+    showError("gel_name", "gel name: give a name that is not a preset's"); ok = false;
+  }
+  const spec = { base: $("gel_base").value };
+  for (const k of GEL_PARAMS) {
+    const r = checkValue(`gel_${k}`, $(`gel_${k}`).value, bounds.gel[k]);
+    if (r.error) { showError(`gel_${k}`, r.error); ok = false; } else spec[k] = r.value;
+  }
+  if (!ok) { document.body.dataset.gel = "invalid"; return; }
+  const all = savedGels();
+  all[name] = spec;
+  localStorage.setItem(SAVED_KEY, JSON.stringify(all));
+  gelOptions(`saved:${name}`);
+  showFolds();
+  document.body.dataset.gel = "saved";
+}
+
+function deleteGel() {
+  const v = $("gel").value;
+  if (!v.startsWith("saved:")) return;
+  const all = savedGels();
+  delete all[v.slice(6)];
+  localStorage.setItem(SAVED_KEY, JSON.stringify(all));
+  gelOptions("ANB");
+  showFolds();
+}
+
+async function showFolds() {
+  const o = $("gel").selectedOptions[0];
+  if (!o) return;
+  if (o.dataset.folds !== undefined) { $("gel-folds").textContent = `folds: ${o.dataset.folds}`; return; }
+  const t = Number($("t_start").value);
+  const res = await api("POST", "/v1/equilibrium", { gel: gelSpec(), temperature: isFinite(t) ? t : 300 });
+  $("gel-folds").textContent = res.status === 200 ?
+    `folds: ${res.data.folds.map((x) => `${x.kind} at ${fmt(x.temperature, 5)} K`).join(", ") || "none in 273-373 K"}` :
+    "this saved gel is refused by the server: " + JSON.stringify(res.data.detail);
+}
+
 async function init() {
   const spec = await (await fetch("/openapi.json")).json();
   const sc = spec.components.schemas;
@@ -526,22 +612,22 @@ async function init() {
   for (const name of ["t_start", "t_end", "dry_radius_um", "interfacial_length"]) {
     $(name).title = bounds[name].description || "";
   }
+  bounds.gel = Object.fromEntries(GEL_PARAMS.map((k) => [k, boundOf(sc.GelParameters.properties[k])]));
   const gels = await (await fetch("/v1/gels")).json();
-  const sel = $("gel");
-  sel.innerHTML = "";
   for (const g of gels.gels) {
-    const o = document.createElement("option");
-    o.value = g.gel.name;
-    o.textContent = g.gel.name;
-    o.dataset.folds = g.folds.map((x) => `${x.kind} at ${fmt(x.temperature, 5)} K`).join(", ");
-    sel.appendChild(o);
+    presets[g.gel.name] = { gel: g.gel,
+      folds: g.folds.map((x) => `${x.kind} at ${fmt(x.temperature, 5)} K`).join(", ") };
   }
-  const showFolds = () => { $("gel-folds").textContent = `folds: ${sel.selectedOptions[0].dataset.folds}`; };
-  sel.addEventListener("change", showFolds);
+  gelOptions("ANB");
+  $("gel").addEventListener("change", showFolds);
   showFolds();
+  fillGel($("gel_base").value);
+  $("gel_base").addEventListener("change", () => fillGel($("gel_base").value));
+  $("save-gel").addEventListener("click", saveGel);
+  $("delete-gel").addEventListener("click", deleteGel);
   $("plan-form").addEventListener("submit", plan);
   $("sweep-form").addEventListener("submit", sweep);
-  for (const name of [...FIELDS, ...SWEEP_FIELDS]) {
+  for (const name of [...FIELDS, ...SWEEP_FIELDS, ...GEL_FIELDS]) {
     $(name).addEventListener("input", () => { $(`err-${name}`).textContent = ""; $(name).classList.remove("invalid"); });
   }
   document.body.dataset.state = "ready";
