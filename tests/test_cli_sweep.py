@@ -54,3 +54,20 @@ def test_vary_a_gel_parameter(tmp_path: Path) -> None:
                                         "HHT omega=200"]
     assert main(["sweep", "--vary", "omega", "--t-end", "308", "--dry-radius-um", "50",
                  "--dose", "0.5"]) == 2
+
+
+def test_validate_waits_and_fills_the_truth(tmp_path: Path) -> None:
+    """--validate needs-full: the smooth jump's points are validated (here on the fake full
+    solver, in this process) and the table carries the truth's time."""
+    from api_support import fake_full_solver
+
+    out = tmp_path / "s.json"
+    with fake_full_solver():
+        rc = main(["sweep", "--t-end", "305,308", "--dry-radius-um", "50", "--dose", "0.3",
+                   "--validate", "needs-full", "--cache", str(tmp_path / "c.sqlite"),
+                   "--json", str(out), "--no-progress"])
+    assert rc == 0
+    smooth, front = json.loads(out.read_text())["rows"]
+    assert smooth["status"] == "needs-full" and smooth["validation_status"] == "done"
+    assert smooth["time"] == smooth["truth_time"] and smooth["seconds"] > 0
+    assert front["status"] == "answered" and front["validation_id"] is None

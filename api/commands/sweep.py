@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
@@ -179,8 +180,9 @@ def run(args: argparse.Namespace) -> int:
     with ExitStack() as stack:
         executor = _executor(args, stack)
         planner = None
-        if validate:
-            planner = stack.enter_context(Planner(cache_path=args.cache, executor=executor))
+        if validate:  # full-solver runs on the sweep's executor, or on threads of this process
+            runs = executor or stack.enter_context(ThreadPoolExecutor(2))
+            planner = stack.enter_context(Planner(cache_path=args.cache, executor=runs))
         with tqdm(total=grid.size, desc="sweep", unit="point", disable=args.no_progress,
                   file=sys.stderr) as bar:
             result = run_sweep(grid, executor=executor, planner=planner, validate=validate,
