@@ -14,12 +14,17 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
+import subprocess
+import sys
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import httpx
 import pytest
-from api_support import ROOT, serve
+from api_support import ROOT, _server, free_port
 
 CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if Path("/usr/bin/chromium").exists()
                                         else None)
@@ -51,6 +56,24 @@ def _artifacts() -> Path:
     return out
 
 
+@contextmanager
+def _serve_gracefully(cache: Path) -> Iterator[str]:
+    """``thermogel serve`` on a free loopback port, stopped with SIGINT (uvicorn's shutdown
+    closes the planner and its worker processes; SIGKILL would orphan them)."""
+    port = free_port()
+    cmd = [sys.executable, "-m", "api.cli", "serve", "--port", str(port), "--cache", str(cache),
+           "--log-level", "warning", "--no-warmup"]
+    with _server(cmd, port, 240.0) as (url, proc):
+        try:
+            yield url
+        finally:
+            proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                pass  # _server kills it
+
+
 def _fill(page, **fields: str) -> None:  # noqa: ANN001
     for name, value in fields.items():
         page.fill(f"#{name}", value)
@@ -59,7 +82,7 @@ def _fill(page, **fields: str) -> None:  # noqa: ANN001
 @pytest.mark.slow  # a real server, a browser, and one coarse full-solver validation
 def test_page_in_headless_chromium(tmp_path: Path) -> None:
     sync_playwright = _need_browser()
-    with serve(tmp_path / "cache.sqlite", "--no-warmup") as url, \
+    with _serve_gracefully(tmp_path / "cache.sqlite") as url, \
             tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
         ctx = pw.chromium.launch_persistent_context(
             profile, executable_path=CHROMIUM, args=FLAGS, headless=True,
