@@ -26,6 +26,8 @@ from dosing import QueueFullError, UnknownValidationError
 from solver.errors import NotApplicableError, ParameterError, SolverError
 
 from . import schemas as s
+from .routers import page as page_routes
+from .routers import sweep as sweep_routes
 from .service import (
     ServiceState,
     classify_answer,
@@ -132,6 +134,8 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
     _install_error_handlers(app)
     _physics_routes(app)
     _dosing_routes(app)
+    app.include_router(sweep_routes.router)
+    app.include_router(page_routes.router)
     return app
 
 

@@ -99,6 +99,27 @@ def front_model_name(settings: SolverSettings) -> str:
     return "front-sharp" if settings.regularized else "front"
 
 
+def front_time(req: DoseRequest, radius: float) -> float:
+    """The front model's time to ``radius`` (raises where it does not apply)."""
+    fr = front_run(req.gel, req.t_start, req.t_end, req.branch, req.settings.regularized)
+    return float(fr.time_to_radius(radius))
+
+
+def model_answer(req: DoseRequest) -> tuple[float, str, str, float | None]:
+    """(target radius, model, why, front-model time or None) for a dose request: the
+    front model where the classifier allows and it reaches the dose, else the full one."""
+    radius = radius_after_dose(req.start_radius, req.fraction)
+    model, why = choose_model(req.gel, req.t_start, req.t_end, req.branch)
+    t_front = None
+    if model == "front":
+        model = front_model_name(req.settings)
+        try:
+            t_front = front_time(req, radius)
+        except (ValueError, NotApplicableError, SolverError) as exc:
+            model, why = "full", f"the front model cannot give this dose ({exc})"
+    return radius, model, why, t_front
+
+
 @dataclass
 class DoseAnswer:
     """How long to heat: dimensionless and in seconds, with the model and its error."""
@@ -142,6 +163,55 @@ class ValidationStatus:
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
         return asdict(self)
+
+
+def build_answer(req: DoseRequest, model: str, time: float, radius: float, est: float,
+                 explain: str, validation: dict[str, Any] | None, key: str,
+                 why: str) -> DoseAnswer:
+    """The answer from the model's time: radii, volumes, seconds, the truth and a note."""
+    a0 = req.start_radius
+    dry = req.bead_dry_radius_um
+    tau = timescale(dry, req.t_end, req.constants) if dry is not None else None
+    dv, sv = expelled_volume(a0, radius), stored_volume(a0)
+    behaviour = jump_class(req.gel, req.t_start, req.t_end, req.branch).behaviour
+    s = req.settings
+    truth = (f"the regularized model's sharp-interface limit ell -> 0 (validated at "
+             f"interfacial lengths {', '.join(f'{r.interfacial_length:g}' for r in s.rungs())}"
+             f", {s.grid} grid)" if s.regularized else
+             f"the paper's model, no interfacial energy ({s.grid} grid, N = {s.n})")
+    note = (f"{MODEL_NAMES[model]}: {why}. "
+            + ("Started from the initial equilibrium alone. " if model != "full" else "")
+            + f"Truth: {truth}. "
+            + ("" if validation else "No full-solver validation yet for this scenario.")
+            + "".join(f" The full solver ({e['grid']} grid, N = {e['n']}, ell = "
+                      f"{e['interfacial_length']:g}) reports: {e['warning']}."
+                      for e in (validation or {}).get("runs", []) if e.get("warning"))
+            + ("" if dry else " Give a bead size (dry_radius_um or swollen_radius_um) "
+               "for seconds and microlitres."))
+    return DoseAnswer(
+        model=model, interfacial_length=s.interfacial_length, truth=truth,
+        time=float(time),
+        seconds=None if tau is None else float(time) * tau.seconds,
+        timescale_seconds=None if tau is None else tau.seconds,
+        timescale_formula=SYMBOLIC_FORMULA if tau is None else tau.formula,
+        start_radius=a0, final_radius=radius,
+        final_radius_um=None if dry is None else radius * dry,
+        expelled_volume=dv, expelled_volume_ul=None if dry is None else volume_to_ul(dv, dry),
+        stored_volume=sv, stored_volume_ul=None if dry is None else volume_to_ul(sv, dry),
+        dose_fraction=req.fraction, error_estimate=est, error_explanation=explain,
+        validation=validation, scenario_key=key, behaviour=behaviour, note=note.strip())
+
+
+def front_answer(req: DoseRequest) -> DoseAnswer:
+    """The front model's answer alone, with its prior error estimate: no cache and no full
+    solver (a sweep point).  NotApplicableError where only the full solver answers."""
+    radius, model, why, t_front = model_answer(req)
+    if t_front is None:
+        raise NotApplicableError(f"needs the full solver: {why}")
+    est, explain = error_estimate(model, t_front, None, req.fraction)
+    key = validation_scenarios(req.gel, req.t_start, req.t_end, req.branch,
+                               req.settings)[0].key()
+    return build_answer(req, model, t_front, radius, est, explain, None, key, why)
 
 
 class Planner:
@@ -219,22 +289,11 @@ class Planner:
     # ------------------------------------------------------------------ doses
     def front_time(self, req: DoseRequest, radius: float) -> float:
         """The front model's time to ``radius`` (raises where it does not apply)."""
-        fr = front_run(req.gel, req.t_start, req.t_end, req.branch, req.settings.regularized)
-        return float(fr.time_to_radius(radius))
+        return front_time(req, radius)
 
     def model_answer(self, req: DoseRequest) -> tuple[float, str, str, float | None]:
-        """(target radius, model, why, front-model time or None) for a dose request: the
-        front model where the classifier allows and it reaches the dose, else the full one."""
-        radius = radius_after_dose(req.start_radius, req.fraction)
-        model, why = choose_model(req.gel, req.t_start, req.t_end, req.branch)
-        t_front = None
-        if model == "front":
-            model = front_model_name(req.settings)
-            try:
-                t_front = self.front_time(req, radius)
-            except (ValueError, NotApplicableError, SolverError) as exc:
-                model, why = "full", f"the front model cannot give this dose ({exc})"
-        return radius, model, why, t_front
+        """(target radius, model, why, front-model time or None): :func:`model_answer`."""
+        return model_answer(req)
 
     def dose(self, req: DoseRequest, validate: bool = False) -> DoseAnswer:
         """The actuation time for one dose (front model, or the full solver where needed)."""
@@ -259,37 +318,16 @@ class Planner:
     def _answer(self, req: DoseRequest, model: str, time: float, radius: float, est: float,
                 explain: str, validation: dict[str, Any] | None, key: str,
                 why: str) -> DoseAnswer:
-        a0 = req.start_radius
-        dry = req.bead_dry_radius_um
-        tau = timescale(dry, req.t_end, req.constants) if dry is not None else None
-        dv, sv = expelled_volume(a0, radius), stored_volume(a0)
-        behaviour = jump_class(req.gel, req.t_start, req.t_end, req.branch).behaviour
-        s = req.settings
-        truth = (f"the regularized model's sharp-interface limit ell -> 0 (validated at "
-                 f"interfacial lengths {', '.join(f'{r.interfacial_length:g}' for r in s.rungs())}"
-                 f", {s.grid} grid)" if s.regularized else
-                 f"the paper's model, no interfacial energy ({s.grid} grid, N = {s.n})")
-        note = (f"{MODEL_NAMES[model]}: {why}. "
-                + ("Started from the initial equilibrium alone. " if model != "full" else "")
-                + f"Truth: {truth}. "
-                + ("" if validation else "No full-solver validation yet for this scenario.")
-                + "".join(f" The full solver ({e['grid']} grid, N = {e['n']}, ell = "
-                          f"{e['interfacial_length']:g}) reports: {e['warning']}."
-                          for e in (validation or {}).get("runs", []) if e.get("warning"))
-                + ("" if dry else " Give a bead size (dry_radius_um or swollen_radius_um) "
-                   "for seconds and microlitres."))
-        return DoseAnswer(
-            model=model, interfacial_length=s.interfacial_length, truth=truth,
-            time=float(time),
-            seconds=None if tau is None else float(time) * tau.seconds,
-            timescale_seconds=None if tau is None else tau.seconds,
-            timescale_formula=SYMBOLIC_FORMULA if tau is None else tau.formula,
-            start_radius=a0, final_radius=radius,
-            final_radius_um=None if dry is None else radius * dry,
-            expelled_volume=dv, expelled_volume_ul=None if dry is None else volume_to_ul(dv, dry),
-            stored_volume=sv, stored_volume_ul=None if dry is None else volume_to_ul(sv, dry),
-            dose_fraction=req.fraction, error_estimate=est, error_explanation=explain,
-            validation=validation, scenario_key=key, behaviour=behaviour, note=note.strip())
+        return build_answer(req, model, time, radius, est, explain, validation, key, why)
+
+    def sweep(self, grid: Any, validate: Any = (), progress: Any = None) -> Any:
+        """A design map over ``grid`` (a ``dosing.sweep.SweepGrid``) on this planner's
+        executor, queueing full-solver validations for the points ``validate`` selects
+        (:func:`dosing.sweep.run_sweep`)."""
+        from .sweep import run_sweep
+
+        return run_sweep(grid, executor=self.jobs.executor, planner=self, validate=validate,
+                         progress=progress)
 
     # ------------------------------------------------------------------ validations
     def submit_validation(self, req: DoseRequest) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -28,9 +29,13 @@ def region_masks(gel: Gel, temps: np.ndarray, stretches: np.ndarray) -> tuple[np
     return spin, coex
 
 
-def draw_phase_map(gel: Gel, out: str | Path, t_min: float | None = None,
-                   t_max: float | None = None, lambda_max: float | None = None) -> Path:
-    """Draw fig. 3 for ``gel`` to ``out`` (PNG or PDF) and return the path."""
+def draw_phase_map(gel: Gel, out: str | Path | BinaryIO, t_min: float | None = None,
+                   t_max: float | None = None, lambda_max: float | None = None,
+                   jump: tuple[float, float, float, float] | None = None,
+                   fmt: str = "svg", size: tuple[float, float] = (6, 4.5)) -> Path | BinaryIO:
+    """Draw fig. 3 for ``gel`` to ``out`` (PNG or PDF; a file object gets ``fmt``) and
+    return it.  ``jump = (T_start, a0, T_end, a_final)`` draws the heating jump at fixed
+    stretch and the shrinking to the final equilibrium that follows it."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -45,7 +50,10 @@ def draw_phase_map(gel: Gel, out: str | Path, t_min: float | None = None,
     temps = np.linspace(t_min, t_max, 300)
     lams = np.linspace(1.0 + 1e-3, lam_hi, 220)
     spin, coex = region_masks(gel, temps, lams)
-    fig, ax = plt.subplots(figsize=(6, 4.5))
+    if jump is not None:
+        t_min = min(t_min, jump[0] - 1.0, jump[2] - 1.0)
+        t_max = max(t_max, jump[0] + 1.0, jump[2] + 1.0)
+    fig, ax = plt.subplots(figsize=size)
     ax.contourf(temps, lams, coex.astype(float), levels=[0.5, 1.5], colors=["#c6dbef"])
     ax.contourf(temps, lams, spin.astype(float), levels=[0.5, 1.5], colors=["#6baed6"])
     ax.contour(temps, lams, spin.astype(float), levels=[0.5], colors="k", linestyles="--",
@@ -59,6 +67,8 @@ def draw_phase_map(gel: Gel, out: str | Path, t_min: float | None = None,
     ax.plot(curve.temperature, lam_u, "C3-", lw=1, alpha=0.5, label="unstable equilibrium")
     for f in fl:
         ax.axvline(f.temperature, color="grey", lw=0.5)
+    if jump is not None:
+        _draw_jump(ax, *jump)
     ax.set_xlim(t_min, t_max)
     ax.set_ylim(1.0, lam_hi)
     ax.set_xlabel("temperature T (K)")
@@ -66,7 +76,21 @@ def draw_phase_map(gel: Gel, out: str | Path, t_min: float | None = None,
     ax.set_title(f"{gel.name}: equilibria, spinodal (dark) and coexistence (light) regions")
     ax.legend(loc="upper right", fontsize=8)
     fig.tight_layout()
-    out = Path(out)
-    fig.savefig(out, dpi=150)
+    if isinstance(out, (str, Path)):
+        out = Path(out)
+        fig.savefig(out, dpi=150)
+    else:
+        fig.savefig(out, dpi=150, format=fmt)
     plt.close(fig)
     return out
+
+
+def _draw_jump(ax: Any, t0: float, a0: float, t1: float, a1: float) -> None:
+    """The jump T_start -> T_end at the start stretch (arrow), then the bead's way to the
+    final equilibrium at T_end (dotted), with both equilibria marked."""
+    ax.annotate("", xy=(t1, a0), xytext=(t0, a0),
+                arrowprops={"arrowstyle": "->", "color": "k", "lw": 1.6})
+    ax.plot([t1, t1], [a0, a1], "k:", lw=1.4)
+    ax.plot([t0], [a0], "ko", ms=5)
+    ax.plot([t1], [a1], "k^", ms=6, label="jump and final state")
+    ax.text(t0, a0, f"  {t0:g} K", va="bottom", ha="left", fontsize=8)

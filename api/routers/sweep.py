@@ -1,0 +1,305 @@
+"""Design-map routes: ``POST /v1/sweep`` queues a sweep as a job (202 + Location), ``GET
+/v1/sweeps/{id}`` polls it (progress, then the table as JSON, or CSV with ``?format=csv``),
+``GET /v1/sweeps/{id}/plot.svg`` draws its heat maps.
+
+The sweep runs on a job thread of its own (the schedule jobs' pattern: a ``JobRunner`` on
+one thread, kept in memory) and spreads its chunks over the planner's executor, so a
+planner on a Dask cluster sweeps on the cluster.  Validations the request selects are the
+planner's own (poll /v1/validations/{id}); each poll of the sweep fills those done.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import threading
+from collections import OrderedDict
+from concurrent.futures import ThreadPoolExecutor
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Query, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import JSONResponse, Response
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from dosing import JobRunner, UnknownValidationError
+from dosing.sweep import COLUMNS, SweepGrid, SweepResult, fill_validations, run_sweep
+
+from ..schemas import (
+    Branch,
+    ConstantsIn,
+    ErrorResponse,
+    GelSpec,
+    check_interfacial_length,
+    interfacial_length_field,
+    temperature_field,
+)
+
+router = APIRouter(tags=["design maps"])
+
+MAX_SERVICE_POINTS = 20_000  # points in one sweep request (the CLI takes up to 100,000)
+SWEEP_QUEUE = 4  # sweeps queued or running before 429
+SWEEP_PREFIX = "sweep-"
+SWEEPS_KEPT = 32  # finished sweep tables kept in memory
+Temperature = Annotated[float, Field(ge=273.15, le=373.15)]
+Radius = Annotated[float, Field(gt=0.0, le=1.0e5)]
+Fraction = Annotated[float, Field(gt=0.0, le=1.0)]
+
+
+class SweepRequest(BaseModel):
+    """A design map: every combination of gels x T_end x dry radius x dose, answered with
+    the front model; full-solver validations queued for the points ``validate`` selects.
+    A point that fails on its own (a dose above what the gel can expel at that T_end) is a
+    row with status 'error' and its message."""
+
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
+        {"gels": ["ANB"], "t_start": 302.0, "t_ends": [308.0, 309.0, 310.0],
+         "dry_radii_um": [20.0, 50.0, 100.0], "doses": [0.3, 0.5, 0.8]}]})
+
+    gels: list[GelSpec] = Field(["ANB"], min_length=1, max_length=8,
+                                description="1-8 gels: preset names or custom parameters")
+    t_start: float = temperature_field("start (loading) temperature", 302.0)
+    t_ends: list[Temperature] = Field(
+        min_length=1, max_length=200, examples=[[308.0, 309.0, 310.0]],
+        description="1-200 end (actuation) temperatures in K, 273.15-373.15 each")
+    dry_radii_um: list[Radius] = Field(
+        min_length=1, max_length=200, examples=[[20.0, 50.0, 100.0]],
+        description="1-200 dry bead radii in micrometres, 0 < r <= 1e5 each")
+    doses: list[Fraction] = Field(
+        min_length=1, max_length=100, examples=[[0.3, 0.5, 0.8]],
+        description="1-100 doses, fractions of the stored fluid, 0 < f <= 1 each")
+    branch: Branch | None = Field(None, description="start branch (default swollen)")
+    constants: ConstantsIn | None = Field(None, description="timescale constants")
+    interfacial_length: float = interfacial_length_field()
+    validate_points: Literal["all", "needs-full"] | list[Annotated[int, Field(ge=0)]] = Field(
+        [], alias="validate", description="points whose full-solver validation to queue: "
+        "'needs-full' (those the front model cannot answer), 'all', or a list of indices")
+
+    _ell = field_validator("interfacial_length")(check_interfacial_length)
+
+    @model_validator(mode="after")
+    def _size(self) -> SweepRequest:
+        n = len(self.gels) * len(self.t_ends) * len(self.dry_radii_um) * len(self.doses)
+        if n > MAX_SERVICE_POINTS:
+            raise ValueError(f"at most {MAX_SERVICE_POINTS} points per sweep (this one has "
+                             f"{n}): split it, or run 'thermogel sweep' on a cluster")
+        return self
+
+
+class SweepAccepted(BaseModel):
+    """A queued sweep: poll ``sweep_url``."""
+
+    status: Literal["pending"] = Field("pending", description="'pending': poll sweep_url")
+    sweep_id: str = Field(description="id of the sweep job")
+    sweep_url: str = Field(description="path to poll")
+    points: int = Field(description="points in the grid")
+
+
+class SweepColumn(BaseModel):
+    """A column of the table."""
+
+    name: str = Field(description="column name (a key of every row)")
+    unit: str = Field(description="unit: K, um, s, uL, tau (dimensionless time), 1 "
+                                  "(a fraction), '' for text")
+    description: str = Field(description="what the column holds")
+
+
+class SweepTable(BaseModel):
+    """The table: the grid's axes, the columns with units, one row per point."""
+
+    model_config = ConfigDict(extra="allow")
+
+    grid: dict[str, Any] = Field(description="the axes, with shape [gels, t_ends, radii, "
+                                             "doses]")
+    columns: list[SweepColumn] = Field(description="every column with its unit")
+    rows: list[dict[str, Any]] = Field(description="one object per point, keys as columns")
+    counts: dict[str, int] = Field(description="points per status")
+    seconds: float = Field(description="wall time of the front-model sweep, s")
+
+
+class SweepStatus(BaseModel):
+    """A sweep job's state; ``result`` once done."""
+
+    id: str = Field(description="sweep id")
+    status: Literal["pending", "running", "done", "failed"] = Field(description="its state")
+    points: int = Field(description="points in the grid")
+    points_done: int = Field(description="points answered so far")
+    validations_unfinished: int | None = Field(
+        None, description="validations of this sweep still pending or running")
+    result: SweepTable | None = Field(None, description="when done: the table")
+    error: str | None = Field(None, description="when failed: why")
+
+
+class _Sweeps:
+    """The service's sweep jobs: one thread, a bounded queue, progress per job, and the
+    last ``SWEEPS_KEPT`` finished tables (an older one is run again when asked again)."""
+
+    def __init__(self) -> None:
+        self.runner = JobRunner(ThreadPoolExecutor(1, thread_name_prefix="sweep"),
+                                max_pending=SWEEP_QUEUE)
+        self.progress: dict[str, list[int]] = {}
+        self.results: OrderedDict[str, SweepResult] = OrderedDict()
+        self.lock = threading.Lock()
+
+    def keep(self, key: str, result: SweepResult) -> None:
+        """Store a finished table, dropping the oldest beyond ``SWEEPS_KEPT``."""
+        with self.lock:
+            self.results[key] = result
+            self.results.move_to_end(key)
+            while len(self.results) > SWEEPS_KEPT:
+                old, _ = self.results.popitem(last=False)
+                self.progress.pop(old, None)
+
+
+_CREATE = threading.Lock()
+
+
+def _sweeps(request: Request) -> _Sweeps:
+    with _CREATE:
+        jobs = getattr(request.app.state, "sweeps", None)
+        if jobs is None:
+            jobs = request.app.state.sweeps = _Sweeps()
+    return jobs
+
+
+def to_grid(body: SweepRequest) -> SweepGrid:
+    """The dosing grid of a request (gels as the service reads them)."""
+    from dosing import SolverSettings
+
+    from ..service import to_gel
+
+    return SweepGrid(t_ends=body.t_ends, dry_radii_um=body.dry_radii_um, doses=body.doses,
+                     gels=[to_gel(g) for g in body.gels], t_start=body.t_start,
+                     branch=body.branch,
+                     constants=None if body.constants is None
+                     else body.constants.model_dump(exclude_none=True),
+                     settings=SolverSettings(interfacial_length=body.interfacial_length))
+
+
+def _run(sweeps: _Sweeps, key: str, planner: Any, grid: SweepGrid, validate: Any,
+         progress: list[int]) -> None:
+    """The job: the sweep on the planner's executor, its table kept in ``sweeps``."""
+    jobs = getattr(planner, "jobs", None)
+
+    def step(n: int) -> None:
+        progress[0] += n
+
+    sweeps.keep(key, run_sweep(grid, executor=None if jobs is None else jobs.executor,
+                               planner=planner, validate=validate, progress=step))
+
+
+def _submit(request: Request, body: SweepRequest) -> dict[str, Any]:
+    grid = to_grid(body)  # ParameterError: 422 naming the field
+    key = hashlib.sha256(body.model_dump_json().encode()).hexdigest()[:24]
+    jobs = _sweeps(request)
+    planner = request.app.state.service.planner
+    with jobs.lock:  # a sweep queued, running or kept is not run again
+        state = jobs.runner.state(key)
+        if state in (None, "failed") or (state == "done" and key not in jobs.results):
+            progress = jobs.progress[key] = [0, grid.size]
+            jobs.runner.submit(key, _run, jobs, key, planner, grid, body.validate_points,
+                               progress)
+    vid = SWEEP_PREFIX + key
+    return {"status": "pending", "sweep_id": vid, "sweep_url": f"/v1/sweeps/{vid}",
+            "points": grid.size}
+
+
+def _status(request: Request, sweep_id: str) -> dict[str, Any]:
+    key = sweep_id[len(SWEEP_PREFIX):] if sweep_id.startswith(SWEEP_PREFIX) else None
+    jobs = _sweeps(request)
+    with jobs.lock:
+        state = None if key is None else jobs.runner.state(key)
+        res = jobs.results.get(key) if state == "done" else None
+        progress = jobs.progress.get(key) if key is not None else None
+    if state is None or progress is None or (state == "done" and res is None):
+        raise UnknownValidationError(sweep_id)  # never seen, or dropped: post it again
+    done, total = progress
+    out: dict[str, Any] = {"id": sweep_id, "status": state, "points": total,
+                           "points_done": done}
+    fut = jobs.runner.get(key)
+    if res is not None:
+        out["validations_unfinished"] = fill_validations(res, request.app.state.service.planner)
+        out["result"] = res.to_dict()
+    elif state == "failed":
+        exc = fut.exception()
+        out["error"] = f"{type(exc).__name__}: {exc}"
+    return out
+
+
+def _compute(fn: Any, *args: Any) -> Any:
+    from ..service import solver_guard
+
+    with solver_guard():
+        return fn(*args)
+
+
+@router.post("/v1/sweep", status_code=202, response_model=SweepAccepted,
+             responses={422: {"model": ErrorResponse, "description": "bad input; loc names it"},
+                        429: {"model": ErrorResponse, "description": "sweep queue full"}})
+async def sweep(body: SweepRequest, request: Request) -> JSONResponse:
+    """Queue a design map (front model for every point at once; validations for a subset)."""
+    out = await run_in_threadpool(_compute, _submit, request, body)
+    return JSONResponse(out, status_code=202, headers={"Location": out["sweep_url"]})
+
+
+@router.get("/v1/sweeps/{sweep_id}", response_model=SweepStatus,
+            responses={200: {"content": {"text/csv": {}},
+                             "description": "the job's state; with format=csv and done, the "
+                                            "table as CSV (headers 'name [unit]')"},
+                       404: {"model": ErrorResponse, "description": "unknown id"}})
+async def sweep_status(
+        sweep_id: str, request: Request,
+        format: Annotated[Literal["json", "csv"],  # noqa: A002 - the query parameter's name
+                          Query(description="'csv': the finished table as CSV")] = "json",
+) -> Any:
+    """A sweep's progress; when done, its table (JSON with units, or CSV)."""
+    out = await run_in_threadpool(_compute, _status, request, sweep_id)
+    if format == "csv" and out["status"] == "done":
+        res = SweepResult(out["result"]["grid"], out["result"]["rows"],
+                          out["result"]["seconds"])
+        return Response(res.to_csv(), media_type="text/csv")
+    return _finite(out)
+
+
+@router.get("/v1/sweeps/{sweep_id}/plot.svg", response_class=Response,
+            responses={200: {"content": {"image/svg+xml": {}}},
+                       404: {"model": ErrorResponse, "description": "unknown id"},
+                       409: {"model": ErrorResponse, "description": "not done yet"}})
+async def sweep_plot(
+        sweep_id: str, request: Request,
+        gel: Annotated[int, Query(ge=0, description="which gel of the grid")] = 0,
+) -> Response:
+    """Heat maps of the finished sweep: actuation time and its error over T_end x radius."""
+    out = await run_in_threadpool(_compute, _status, request, sweep_id)
+    if out["status"] != "done":
+        return JSONResponse({"detail": f"sweep {sweep_id} is {out['status']}"},
+                            status_code=409)
+    if gel >= out["result"]["grid"]["shape"][0]:
+        return JSONResponse({"detail": [{"loc": ["query", "gel"], "type": "value_error",
+                                         "msg": "gel index beyond the grid's gels"}]},
+                            status_code=422)
+    svg = await run_in_threadpool(_svg, out["result"], gel)
+    return Response(svg, media_type="image/svg+xml")
+
+
+def _svg(table: dict[str, Any], gel: int) -> bytes:
+    import io
+
+    from ..plots.sweep import draw_sweep
+
+    buf = io.BytesIO()
+    draw_sweep(table, buf, gel_index=gel)
+    return buf.getvalue()
+
+
+def _finite(obj: Any) -> Any:
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_finite(v) for v in obj]
+    return obj
+
+
+__all__ = ["COLUMNS", "router"]

@@ -1,0 +1,637 @@
+// thermogel planner page: plain JS over the service's JSON routes, plots as inline SVG.
+// Every input is checked against the bounds the server publishes in /openapi.json (one
+// definition); server errors are shown next to the field they name.
+"use strict";
+
+const $ = (id) => document.getElementById(id);
+const SVGNS = "http://www.w3.org/2000/svg";
+const FIELDS = ["t_start", "t_end", "dry_radius_um", "doses", "rests", "interfacial_length"];
+const LABELS = { t_start: "T_start", t_end: "T_end", dry_radius_um: "dry radius",
+  doses: "dose", rests: "rest", interfacial_length: "interfacial length",
+  sweep_t_end: "T_end", sweep_radius: "dry radius", sweep_doses: "dose" };
+const SWEEP_FIELDS = ["sweep_t_end", "sweep_radius", "sweep_doses"];
+const GEL_PARAMS = ["omega", "a0", "b0", "a1", "b1"];
+const GEL_FIELDS = ["gel_name", ...GEL_PARAMS.map((p) => `gel_${p}`)];
+const SAVED_KEY = "thermogel.gels";
+for (const p of GEL_PARAMS) LABELS[`gel_${p}`] = p === "omega" ? "Omega" : p.toUpperCase();
+LABELS.gel_name = "gel name";
+let presets = {}; // preset name -> its parameters (from /v1/gels)
+let bounds = {};
+let requestCount = 0; // requests this page sent to /v1 (shown in the page state)
+let pollTimer = null;
+
+// ----------------------------------------------------------------------------- helpers
+
+function fmt(x, digits = 4) {
+  if (x === null || x === undefined || !isFinite(x)) return "–";
+  const a = Math.abs(x);
+  if (a !== 0 && (a < 1e-3 || a >= 1e5)) return x.toExponential(digits - 1);
+  return Number(x.toPrecision(digits)).toString();
+}
+
+function pct(x) { return x === null || x === undefined ? "–" : `${fmt(100 * x, 3)} %`; }
+
+function numberSchema(schema) {
+  // the number member of a schema (nullable fields are anyOf [number, null])
+  if (!schema) return {};
+  if (schema.anyOf) return numberSchema(schema.anyOf.find((s) => s.type === "number" ||
+    s.type === "array") || {});
+  return schema;
+}
+
+function boundOf(schema) {
+  const s = numberSchema(schema);
+  return { min: s.minimum, max: s.maximum, exclMin: s.exclusiveMinimum,
+    exclMax: s.exclusiveMaximum, maxItems: s.maxItems, description: schema && schema.description };
+}
+
+function rangeText(b, scale, unit) {
+  const lo = b.min !== undefined ? `${fmt(b.min * scale, 6)} <= ` :
+    b.exclMin !== undefined ? `${fmt(b.exclMin * scale, 6)} < ` : "";
+  const hi = b.max !== undefined ? ` <= ${fmt(b.max * scale, 6)}` :
+    b.exclMax !== undefined ? ` < ${fmt(b.exclMax * scale, 6)}` : "";
+  return `${lo}value${hi}${unit ? " " + unit : ""}`;
+}
+
+function checkValue(name, text, b, scale = 1, unit = "") {
+  // a number within the server's bounds (scale: shown units per server unit), or an error
+  const t = String(text).trim().replace(/%$/, "");
+  const v = Number(t);
+  if (t === "" || !isFinite(v)) return { error: `${LABELS[name]}: a number is needed (${rangeText(b, scale, unit)})` };
+  const x = v / scale;
+  const bad = (b.min !== undefined && x < b.min) || (b.max !== undefined && x > b.max) ||
+    (b.exclMin !== undefined && x <= b.exclMin) || (b.exclMax !== undefined && x >= b.exclMax);
+  if (bad) return { error: `${LABELS[name]} = ${t}${unit ? " " + unit : ""} is out of range: ${rangeText(b, scale, unit)}` };
+  return { value: x };
+}
+
+function checkList(name, text, b, scale, unit) {
+  const parts = String(text).split(/[,;\s]+/).filter((p) => p !== "");
+  const out = [];
+  for (const p of parts) {
+    const r = checkValue(name, p, b, scale, unit);
+    if (r.error) return r;
+    out.push(r.value);
+  }
+  if (b.maxItems !== undefined && out.length > b.maxItems)
+    return { error: `${LABELS[name]}: at most ${b.maxItems} values` };
+  return { value: out };
+}
+
+function showError(field, msg) {
+  const el = $(`err-${field}`);
+  if (el) {
+    el.textContent = msg;
+    const input = $(field);
+    if (input) input.classList.add("invalid");
+  } else {
+    $("form-error").textContent = ($("form-error").textContent + " " + msg).trim();
+  }
+}
+
+function clearErrors() {
+  for (const f of [...FIELDS, ...GEL_FIELDS]) {
+    $(`err-${f}`).textContent = "";
+    $(f).classList.remove("invalid");
+  }
+  $("form-error").textContent = "";
+}
+
+async function api(method, path, body) {
+  requestCount += 1;
+  document.body.dataset.requests = String(requestCount);
+  const resp = await fetch(path, { method, headers: body ? { "Content-Type": "application/json" } : {},
+    body: body ? JSON.stringify(body) : undefined });
+  let data = null;
+  try { data = await resp.json(); } catch (e) { data = { detail: await resp.text() }; }
+  return { status: resp.status, data, headers: resp.headers };
+}
+
+function fieldOf(loc) {
+  // the page's input for a server error's loc: ['body', 'dose_fraction'] -> doses
+  const parts = (loc || []).filter((p) => !["body", "query", "custom", "preset"].includes(p));
+  const name = parts.length ? String(parts[0]) : "";
+  if (name === "dose_fraction" || name === "doses") return { input: "doses", name: parts.join(".") };
+  if (name === "rests") return { input: "rests", name: parts.join(".") };
+  if (name === "gel" && GEL_PARAMS.includes(String(parts[1]))) {
+    $("custom-gel").open = true;
+    return { input: `gel_${parts[1]}`, name: parts.join(".") };
+  }
+  return { input: FIELDS.includes(name) ? name : null, name: parts.join(".") || "request" };
+}
+
+function showServerError(res) {
+  if (res.status === 429) {
+    const retry = res.headers.get("Retry-After");
+    $("form-error").textContent = `The server's queue is full: try again in ${retry || "a few"} s.`;
+    return;
+  }
+  const detail = res.data && res.data.detail;
+  if (Array.isArray(detail)) {
+    for (const item of detail) {
+      const f = fieldOf(item.loc);
+      const msg = `${f.name}: ${item.msg}`;
+      if (f.input) showError(f.input, msg); else showError("form", msg);
+    }
+  } else {
+    $("form-error").textContent = `HTTP ${res.status}: ${detail || "error"}`;
+  }
+}
+
+// ----------------------------------------------------------------------------- SVG plots
+
+function el(tag, attrs, parent, text) {
+  const e = document.createElementNS(SVGNS, tag);
+  for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, v);
+  if (text !== undefined) e.textContent = text;
+  if (parent) parent.appendChild(e);
+  return e;
+}
+
+function ticks(lo, hi, n = 5) {
+  const span = hi - lo || 1;
+  const raw = span / n;
+  const mag = Math.pow(10, Math.floor(Math.log10(raw)));
+  const step = [1, 2, 2.5, 5, 10].map((m) => m * mag).find((s) => span / s <= n) || 10 * mag;
+  const out = [];
+  for (let v = Math.ceil(lo / step) * step; v <= hi + 1e-9 * span; v += step) out.push(Number(v.toPrecision(12)));
+  return out;
+}
+
+function panel(svg, box, xlim, ylim, xlabel, ylabel) {
+  // axes in box {x, y, w, h}; returns the scales
+  const sx = (x) => box.x + (x - xlim[0]) / (xlim[1] - xlim[0]) * box.w;
+  const sy = (y) => box.y + box.h - (y - ylim[0]) / (ylim[1] - ylim[0]) * box.h;
+  const g = el("g", { class: "axis" }, svg);
+  for (const t of ticks(ylim[0], ylim[1], 4)) {
+    el("line", { x1: box.x, x2: box.x + box.w, y1: sy(t), y2: sy(t), class: "grid" }, g);
+    el("text", { x: box.x - 4, y: sy(t) + 4, "text-anchor": "end" }, g, fmt(t, 3));
+  }
+  for (const t of ticks(xlim[0], xlim[1], 5)) {
+    el("line", { x1: sx(t), x2: sx(t), y1: box.y + box.h, y2: box.y + box.h + 4 }, g);
+    if (xlabel !== null) el("text", { x: sx(t), y: box.y + box.h + 15, "text-anchor": "middle" }, g, fmt(t, 3));
+  }
+  el("rect", { x: box.x, y: box.y, width: box.w, height: box.h, fill: "none", stroke: "#888" }, g);
+  if (xlabel) el("text", { x: box.x + box.w / 2, y: box.y + box.h + 30, "text-anchor": "middle" }, g, xlabel);
+  el("text", { x: 12, y: box.y + box.h / 2, transform: `rotate(-90 12 ${box.y + box.h / 2})`,
+    "text-anchor": "middle" }, g, ylabel);
+  return { sx, sy };
+}
+
+function polyline(svg, s, xs, ys, attrs) {
+  const pts = xs.map((x, i) => `${s.sx(x).toFixed(1)},${s.sy(ys[i]).toFixed(1)}`).join(" ");
+  return el("polyline", { points: pts, fill: "none", "stroke-width": 2, ...attrs }, svg);
+}
+
+function legend(svg, x, y, items) {
+  items.forEach((it, i) => {
+    el("line", { x1: x, x2: x + 18, y1: y + 14 * i, y2: y + 14 * i, stroke: it.color,
+      "stroke-width": 2, "stroke-dasharray": it.dash || "" }, svg);
+    el("text", { x: x + 22, y: y + 14 * i + 4 }, svg, it.label);
+  });
+}
+
+function clear(svg) { while (svg.firstChild) svg.removeChild(svg.firstChild); }
+
+function drawCurve(curve, marks, tau) {
+  // radius and front against time (seconds with a bead size), each dose marked
+  const svg = $("curve-plot");
+  clear(svg);
+  const k = tau || 1;
+  const t = curve.t.map((x) => x * k);
+  const tMax = Math.max(...marks.map((m) => m.time * k * 1.15), curve.t_stop * k * 0.25);
+  const keep = t.map((x, i) => i).filter((i) => t[i] <= tMax);
+  const ymax = curve.start_radius * 1.05;
+  const s = panel(svg, { x: 55, y: 12, w: 445, h: 235 }, [0, tMax], [0, ymax],
+    tau ? "time (s)" : "time (units of τ)", "radius (dry radii)");
+  polyline(svg, s, keep.map((i) => t[i]), keep.map((i) => curve.radius[i]), { stroke: "#1f6fb2", id: "curve-radius" });
+  polyline(svg, s, keep.map((i) => t[i]), keep.map((i) => curve.front[i]), { stroke: "#d9822b", "stroke-dasharray": "5 3" });
+  el("line", { x1: s.sx(0), x2: s.sx(tMax), y1: s.sy(curve.final_radius), y2: s.sy(curve.final_radius),
+    stroke: "#999", "stroke-dasharray": "2 3" }, svg);
+  for (const m of marks) {
+    const x = s.sx(m.time * k);
+    el("line", { x1: x, x2: x, y1: s.sy(0), y2: s.sy(ymax), stroke: "#b3261e", "stroke-width": 1.2, class: "dose-mark" }, svg);
+    el("circle", { cx: x, cy: s.sy(m.radius), r: 4, fill: "#b3261e" }, svg);
+    el("text", { x: x + 4, y: s.sy(m.radius) - 6 }, svg, m.label);
+  }
+  legend(svg, 330, 180, [{ color: "#1f6fb2", label: "bead radius a(t)" },
+    { color: "#d9822b", label: "front R_f(t)", dash: "5 3" },
+    { color: "#999", label: "equilibrium at T_end", dash: "2 3" }]);
+}
+
+function releaseAt(curve, time) {
+  // fraction of the stored fluid released by hold time t, from the front curve
+  const a0 = curve.start_radius;
+  let a = curve.radius[curve.radius.length - 1];
+  for (let i = 1; i < curve.t.length; i++) {
+    if (curve.t[i] >= time) {
+      const w = (time - curve.t[i - 1]) / (curve.t[i] - curve.t[i - 1]);
+      a = curve.radius[i - 1] + w * (curve.radius[i] - curve.radius[i - 1]);
+      break;
+    }
+  }
+  return (a0 ** 3 - a ** 3) / (a0 ** 3 - 1);
+}
+
+function drawTimeline(rows, rests, tStart, tEnd, tau, curve) {
+  // the protocol (heat at T_end, rest at T_start) and cumulative release against clock time
+  const svg = $("timeline-plot");
+  clear(svg);
+  const k = tau || 1;
+  const clockT = [0], temp = [tStart], relT = [0], rel = [0];
+  let clock = 0;
+  rows.forEach((r, i) => {
+    temp.push(tStart); clockT.push(clock); temp.push(tEnd); clockT.push(clock);
+    const n = 24;
+    for (let j = 1; j <= n; j++) {
+      const hold = r.start + (r.end - r.start) * j / n;
+      relT.push((clock + hold - r.start) * k);
+      rel.push(100 * (curve ? releaseAt(curve, hold) : r.cumulative_fraction * j / n +
+        (r.cumulative_fraction - r.dose_fraction) * (1 - j / n)));
+    }
+    clock += r.end - r.start;
+    clockT.push(clock); temp.push(tEnd); clockT.push(clock); temp.push(tStart);
+    const rest = i < rests.length ? rests[i] : 0;
+    if (rest > 0) { clock += rest; relT.push(clock * k); rel.push(rel[rel.length - 1]); }
+  });
+  const end = clock * 1.05 || 1;
+  clockT.push(end); temp.push(tStart);
+  relT.push(end * k); rel.push(rel[rel.length - 1]);
+  const xl = [0, end * k];
+  const top = panel(svg, { x: 55, y: 10, w: 445, h: 80 }, xl, [tStart - 1, tEnd + 1], null, "T (K)");
+  polyline(svg, top, clockT.map((x) => x * k), temp, { stroke: "#b3261e", id: "timeline-temperature" });
+  const bot = panel(svg, { x: 55, y: 115, w: 445, h: 140 }, xl, [0, 100],
+    tau ? "clock time (s)" : "clock time (units of τ)", "released (%)");
+  polyline(svg, bot, relT, rel, { stroke: "#1f6fb2", id: "timeline-release" });
+  if (!curve) el("text", { x: 62, y: 128 }, svg, "release drawn linearly within each heating (no front-model curve)");
+  let acc = 0;
+  rows.forEach((r, i) => {
+    acc += r.end - r.start + (i > 0 && i - 1 < rests.length ? rests[i - 1] : 0);
+    el("text", { x: bot.sx(acc * k) - 2, y: bot.sy(100 * r.cumulative_fraction) - 5, "text-anchor": "end" },
+      svg, `${fmt(100 * r.cumulative_fraction, 3)}%`);
+  });
+}
+
+function scheduleTable(rows, tau) {
+  const head = "<tr><th>dose</th><th>cumulative</th><th>heat for</th><th>error</th></tr>";
+  const body = rows.map((r) => `<tr><td>${pct(r.dose_fraction)}</td><td>${pct(r.cumulative_fraction)}</td>` +
+    `<td>${r.actuation_seconds !== null && r.actuation_seconds !== undefined ? fmt(r.actuation_seconds) + " s" :
+      fmt(r.actuation_time) + " τ"}</td><td>${pct(r.error_estimate)}</td></tr>`).join("");
+  $("schedule-table").innerHTML = `<table>${head}${body}</table>`;
+}
+
+// ----------------------------------------------------------------------------- the form
+
+function readForm() {
+  // the request fields, or null after showing every input error (no request is sent)
+  clearErrors();
+  const b = bounds;
+  const out = { gel: gelSpec() };
+  let ok = true;
+  const take = (name, r) => { if (r.error) { showError(name, r.error); ok = false; } else out[name] = r.value; };
+  take("t_start", checkValue("t_start", $("t_start").value, b.t_start, 1, "K"));
+  take("t_end", checkValue("t_end", $("t_end").value, b.t_end, 1, "K"));
+  if ($("dry_radius_um").value.trim() !== "")
+    take("dry_radius_um", checkValue("dry_radius_um", $("dry_radius_um").value, b.dry_radius_um, 1, "µm"));
+  take("interfacial_length", checkValue("interfacial_length", $("interfacial_length").value, b.interfacial_length));
+  const doses = checkList("doses", $("doses").value, { ...b.dose_fraction, maxItems: b.doses.maxItems }, 100, "%");
+  if (!doses.error && doses.value.length === 0) doses.error = "dose: give one dose, or several separated by commas";
+  take("doses", doses);
+  const rests = checkList("rests", $("rests").value, b.rests, 1, "τ");
+  take("rests", rests);
+  if (ok && out.rests.length && out.rests.length !== out.doses.length - 1) {
+    showError("rests", `rest: give ${out.doses.length - 1} rests (one between consecutive doses), or none`);
+    ok = false;
+  }
+  if (ok && out.doses.reduce((a, x) => a + x, 0) > 1) {
+    showError("doses", "dose: the doses add up to more than 100 % of the stored fluid");
+    ok = false;
+  }
+  out.validate = $("validate").checked;
+  return ok ? out : null;
+}
+
+function doseBody(f, fraction, validate) {
+  const body = { gel: f.gel, t_start: f.t_start, t_end: f.t_end, dose_fraction: fraction,
+    interfacial_length: f.interfacial_length };
+  if (f.dry_radius_um !== undefined) body.dry_radius_um = f.dry_radius_um;
+  if (validate) body.validate = true;
+  return body;
+}
+
+function showAnswer(a, total) {
+  $("answer-panel").hidden = false;
+  const secs = $("answer-seconds");
+  secs.textContent = a.seconds !== null && a.seconds !== undefined ? `${fmt(a.seconds)} s` : `${fmt(a.time)} τ`;
+  secs.dataset.value = a.seconds === null || a.seconds === undefined ? "" : String(a.seconds);
+  const t = $("answer-time");
+  t.textContent = `(t = ${fmt(a.time)} in units of τ${total > 1 ? `; all ${total} doses` : ""})`;
+  t.dataset.value = String(a.time);
+  $("answer-model").textContent = `${a.model} (${a.behaviour})`;
+  $("answer-error").textContent = `± ${pct(a.error_estimate)}`;
+  $("answer-release").textContent = `${pct(a.dose_fraction)} of the stored fluid` +
+    (a.expelled_volume_ul !== null && a.expelled_volume_ul !== undefined ?
+      `: ${fmt(a.expelled_volume_ul)} µL of ${fmt(a.stored_volume_ul)} µL; radius ${fmt(a.start_radius)} → ${fmt(a.final_radius)} dry radii (${fmt(a.final_radius_um)} µm)` :
+      `; radius ${fmt(a.start_radius)} → ${fmt(a.final_radius)} dry radii`);
+  $("answer-tau").textContent = a.timescale_seconds ? `${fmt(a.timescale_seconds)} s` : "give a bead size";
+  $("answer-error-parts").textContent = a.error_explanation || "";
+  $("answer-note").textContent = `${a.truth ? "Truth: " + a.truth + ". " : ""}${a.note || ""}`;
+}
+
+function showValidation(v, started) {
+  $("validation-panel").hidden = false;
+  const widths = { pending: "15%", running: "55%", done: "100%", failed: "100%" };
+  $("validation-bar").style.width = widths[v.status] || "5%";
+  $("validation-bar").style.background = v.status === "failed" ? "#b3261e" : "";
+  const secs = ((Date.now() - started) / 1000).toFixed(0);
+  $("validation-status").textContent = `validation ${v.id}: ${v.status} (${secs} s)`;
+  $("validation-panel").dataset.status = v.status;
+  if (v.status === "failed") $("validation-result").textContent = v.error || "failed";
+  if (v.status !== "done" || !v.result) return;
+  const r = v.result;
+  const rows = (r.runs || []).map((e) => `<tr><td>${e.grid}</td><td>${e.n}</td><td>${fmt(e.interfacial_length)}</td>` +
+    `<td>${fmt(e.time)}</td><td>${fmt(e.wall_seconds, 3)} s</td></tr>`).join("");
+  $("validation-result").innerHTML =
+    `<p>Truth (${r.model}): t = <b>${fmt(r.time)}</b> τ ± ${pct(r.error)}` +
+    (r.front_time === null || r.front_time === undefined ? " (no front model on this jump).</p>" :
+      `; front model t = ${fmt(r.front_time)} τ, time error ${pct(r.front_time_error)}, ` +
+      `volume error ${pct(r.front_volume_error)}.</p>`) +
+    `<table><tr><th>grid</th><th>N</th><th>ℓ</th><th>time (τ)</th><th>wall</th></tr>${rows}</table>`;
+}
+
+function poll(vid, onDone) {
+  const started = Date.now();
+  if (pollTimer) clearTimeout(pollTimer);
+  const step = async () => {
+    const res = await api("GET", `/v1/validations/${encodeURIComponent(vid)}`);
+    if (res.status !== 200) { showServerError(res); return; }
+    showValidation(res.data, started);
+    if (res.data.status === "done" || res.data.status === "failed") { if (onDone) onDone(res.data); return; }
+    pollTimer = setTimeout(step, 1000);
+  };
+  step();
+}
+
+async function plan(ev) {
+  if (ev) ev.preventDefault();
+  const f = readForm();
+  if (!f) { document.body.dataset.state = "invalid"; return; }
+  document.body.dataset.state = "busy";
+  $("plan").disabled = true;
+  $("busy").textContent = "planning…";
+  try {
+    await run(f);
+  } catch (e) {
+    $("form-error").textContent = `The page could not reach the service: ${e}`;
+    document.body.dataset.state = "error";
+  } finally {
+    $("plan").disabled = false;
+    $("busy").textContent = "";
+  }
+}
+
+async function run(f) {
+  const total = f.doses.reduce((a, x) => a + x, 0);
+  const phase = $("phase-map");
+  phase.hidden = false;
+  const gq = typeof f.gel === "string" ? { base: f.gel } : f.gel;
+  phase.src = `/v1/phase-map.svg?${new URLSearchParams({ ...gq, t_start: f.t_start, t_end: f.t_end })}`;
+  const [dose, curveRes] = await Promise.all([
+    api("POST", "/v1/dose-time", doseBody(f, total, f.validate)),
+    api("POST", "/v1/front-curve", { gel: f.gel, t_start: f.t_start, t_end: f.t_end,
+      interfacial_length: f.interfacial_length })]);
+  if (dose.status >= 400) { showServerError(dose); document.body.dataset.state = "server-error"; return; }
+  const curve = curveRes.status === 200 ? curveRes.data : null;
+  $("curve-msg").textContent = curve ? "" : (curveRes.data.detail || []).map((d) => d.msg).join("; ");
+  if (dose.status === 202) {
+    $("answer-panel").hidden = true;
+    $("form-error").textContent = "This jump needs the full solver: validating, the answer follows.";
+    poll(dose.data.validation_id, () => plan());
+    document.body.dataset.state = "pending";
+    return;
+  }
+  const a = dose.data;
+  showAnswer(a, f.doses.length);
+  let rows;
+  if (f.doses.length > 1) {
+    const body = { ...doseBody(f, undefined, false), doses: f.doses };
+    delete body.dose_fraction;
+    if (f.rests.length) body.rests = f.rests;
+    const sch = await api("POST", "/v1/schedule", body);
+    if (sch.status >= 400) { showServerError(sch); document.body.dataset.state = "server-error"; return; }
+    rows = sch.data.status === "answered" ? sch.data.hold : null;
+  } else {
+    rows = [{ dose_fraction: a.dose_fraction, cumulative_fraction: a.dose_fraction, start: 0, end: a.time,
+      actuation_time: a.time, actuation_seconds: a.seconds, error_estimate: a.error_estimate }];
+  }
+  const tau = a.timescale_seconds;
+  if (curve) {
+    let cum = 0;
+    const marks = (rows || []).map((r) => {
+      cum = r.cumulative_fraction;
+      const a0 = curve.start_radius;
+      return { time: r.end, radius: Math.cbrt(a0 ** 3 - cum * (a0 ** 3 - 1)), label: pct(cum) };
+    });
+    drawCurve(curve, marks, tau);
+  } else {
+    clear($("curve-plot"));
+  }
+  if (rows) {
+    drawTimeline(rows, f.rests.length ? f.rests : [], f.t_start, f.t_end, tau, curve);
+    scheduleTable(rows, tau);
+  }
+  if (a.validation_id) {
+    // once validated, the same request is answered with the full solver's verdict
+    poll(a.validation_id, async (v) => {
+      if (v.status !== "done") return;
+      const again = await api("POST", "/v1/dose-time", doseBody(f, total, false));
+      if (again.status !== 200) return;
+      showAnswer(again.data, f.doses.length);
+      if (f.doses.length === 1) scheduleTable([{ ...rows[0], error_estimate: again.data.error_estimate }], tau);
+      document.body.dataset.validated = v.id;
+    });
+  }
+  document.body.dataset.state = "answered";
+}
+
+// ----------------------------------------------------------------------------- design maps
+
+function axis(name, text, b, log, unit) {
+  // 'from, to, steps' as the list of values (log: geometric), each within the bounds
+  const parts = String(text).split(/[,;\s]+/).filter((p) => p !== "");
+  const steps = Number(parts[2]);
+  if (parts.length !== 3 || !Number.isInteger(steps) || steps < 1 || steps > b.maxItems)
+    return { error: `${LABELS[name]}: give from, to and a number of steps (1-${b.maxItems})` };
+  const lo = checkValue(name, parts[0], b, 1, unit);
+  if (lo.error) return lo;
+  const hi = checkValue(name, parts[1], b, 1, unit);
+  if (hi.error) return hi;
+  const out = [];
+  for (let i = 0; i < steps; i++) {
+    const w = steps === 1 ? 0 : i / (steps - 1);
+    out.push(log ? Math.exp(Math.log(lo.value) + w * (Math.log(hi.value) - Math.log(lo.value)))
+      : lo.value + w * (hi.value - lo.value));
+  }
+  return { value: out };
+}
+
+async function sweep(ev) {
+  ev.preventDefault();
+  for (const f of SWEEP_FIELDS) { $(`err-${f}`).textContent = ""; $(f).classList.remove("invalid"); }
+  $("sweep-error").textContent = "";
+  const main = readForm();
+  const tEnds = axis("sweep_t_end", $("sweep_t_end").value, bounds.sweep_t_ends, false, "K");
+  const radii = axis("sweep_radius", $("sweep_radius").value, bounds.sweep_radii, true, "µm");
+  const doses = checkList("sweep_doses", $("sweep_doses").value, bounds.sweep_doses, 100, "%");
+  let ok = main !== null;
+  for (const [name, r] of [["sweep_t_end", tEnds], ["sweep_radius", radii], ["sweep_doses", doses]]) {
+    if (r.error) { showError(name, r.error); ok = false; }
+  }
+  if (!ok) { document.body.dataset.sweep = "invalid"; return; }
+  const body = { gels: [main.gel], t_start: main.t_start, t_ends: tEnds.value,
+    dry_radii_um: radii.value, doses: doses.value, interfacial_length: main.interfacial_length };
+  const res = await api("POST", "/v1/sweep", body);
+  if (res.status !== 202) {
+    const detail = res.data && res.data.detail;
+    $("sweep-error").textContent = Array.isArray(detail) ?
+      detail.map((d) => `${fieldOf(d.loc).name}: ${d.msg}`).join("; ") : `HTTP ${res.status}: ${detail}`;
+    document.body.dataset.sweep = "server-error";
+    return;
+  }
+  document.body.dataset.sweep = "running";
+  const url = res.data.sweep_url;
+  const step = async () => {
+    const st = await api("GET", url);
+    if (st.status !== 200) { $("sweep-error").textContent = `HTTP ${st.status}`; return; }
+    const s = st.data;
+    $("sweep-bar").style.width = `${(100 * s.points_done / s.points).toFixed(0)}%`;
+    $("sweep-status").textContent = `${s.status}: ${s.points_done} of ${s.points} points`;
+    if (s.status === "failed") { $("sweep-error").textContent = s.error; return; }
+    if (s.status !== "done") { setTimeout(step, 300); return; }
+    const counts = Object.entries(s.result.counts).map(([k, v]) => `${v} ${k}`).join(", ");
+    $("sweep-status").textContent = `done: ${counts} in ${fmt(s.result.seconds, 3)} s`;
+    $("sweep-links").innerHTML = `Table: <a href="${url}?format=csv" download="sweep.csv">CSV</a> · ` +
+      `<a href="${url}" target="_blank">JSON with units</a>`;
+    const img = $("sweep-plot");
+    img.src = `${url}/plot.svg`;
+    img.hidden = false;
+    document.body.dataset.sweep = "done";
+  };
+  step();
+}
+
+// ----------------------------------------------------------------------------- saved gels
+
+function savedGels() {
+  try { return JSON.parse(localStorage.getItem(SAVED_KEY) || "{}"); } catch (e) { return {}; }
+}
+
+function gelSpec() {
+  // the request's gel: a preset name, or a saved gel's parameters (GelParameters)
+  const v = $("gel").value;
+  if (!v.startsWith("saved:")) return v;
+  return savedGels()[v.slice(6)] || "ANB";
+}
+
+function gelOptions(selected) {
+  const sel = $("gel");
+  sel.innerHTML = "";
+  const add = (value, text, folds) => {
+    const o = document.createElement("option");
+    o.value = value; o.textContent = text;
+    if (folds !== undefined) o.dataset.folds = folds;
+    sel.appendChild(o);
+  };
+  for (const [name, p] of Object.entries(presets)) add(name, name, p.folds);
+  for (const name of Object.keys(savedGels())) add(`saved:${name}`, `${name} (saved)`);
+  if (selected) sel.value = selected;
+}
+
+function fillGel(base) {
+  const p = presets[base];
+  if (!p) return;
+  for (const k of GEL_PARAMS) $(`gel_${k}`).value = String(p.gel[k]);
+}
+
+function saveGel() {
+  for (const f of GEL_FIELDS) { $(`err-${f}`).textContent = ""; $(f).classList.remove("invalid"); }
+  const name = $("gel_name").value.trim();
+  let ok = true;
+  if (!name || Object.keys(presets).includes(name)) {
+    showError("gel_name", "gel name: give a name that is not a preset's"); ok = false;
+  }
+  const spec = { base: $("gel_base").value };
+  for (const k of GEL_PARAMS) {
+    const r = checkValue(`gel_${k}`, $(`gel_${k}`).value, bounds.gel[k]);
+    if (r.error) { showError(`gel_${k}`, r.error); ok = false; } else spec[k] = r.value;
+  }
+  if (!ok) { document.body.dataset.gel = "invalid"; return; }
+  const all = savedGels();
+  all[name] = spec;
+  localStorage.setItem(SAVED_KEY, JSON.stringify(all));
+  gelOptions(`saved:${name}`);
+  showFolds();
+  document.body.dataset.gel = "saved";
+}
+
+function deleteGel() {
+  const v = $("gel").value;
+  if (!v.startsWith("saved:")) return;
+  const all = savedGels();
+  delete all[v.slice(6)];
+  localStorage.setItem(SAVED_KEY, JSON.stringify(all));
+  gelOptions("ANB");
+  showFolds();
+}
+
+async function showFolds() {
+  const o = $("gel").selectedOptions[0];
+  if (!o) return;
+  if (o.dataset.folds !== undefined) { $("gel-folds").textContent = `folds: ${o.dataset.folds}`; return; }
+  const t = Number($("t_start").value);
+  const res = await api("POST", "/v1/equilibrium", { gel: gelSpec(), temperature: isFinite(t) ? t : 300 });
+  $("gel-folds").textContent = res.status === 200 ?
+    `folds: ${res.data.folds.map((x) => `${x.kind} at ${fmt(x.temperature, 5)} K`).join(", ") || "none in 273-373 K"}` :
+    "this saved gel is refused by the server: " + JSON.stringify(res.data.detail);
+}
+
+async function init() {
+  const spec = await (await fetch("/openapi.json")).json();
+  const sc = spec.components.schemas;
+  const dose = sc.DoseTimeRequest.properties;
+  const sched = sc.ScheduleRequest.properties;
+  bounds = { t_start: boundOf(dose.t_start), t_end: boundOf(dose.t_end),
+    dry_radius_um: boundOf(dose.dry_radius_um), dose_fraction: boundOf(dose.dose_fraction),
+    interfacial_length: boundOf(dose.interfacial_length), doses: boundOf(sched.doses),
+    rests: boundOf(numberSchema(sched.rests).items || {}) };
+  const sw = sc.SweepRequest.properties;
+  const items = (p) => ({ ...boundOf(p.items), maxItems: p.maxItems });
+  bounds.sweep_t_ends = items(sw.t_ends);
+  bounds.sweep_radii = items(sw.dry_radii_um);
+  bounds.sweep_doses = items(sw.doses);
+  for (const name of ["t_start", "t_end", "dry_radius_um", "interfacial_length"]) {
+    $(name).title = bounds[name].description || "";
+  }
+  bounds.gel = Object.fromEntries(GEL_PARAMS.map((k) => [k, boundOf(sc.GelParameters.properties[k])]));
+  const gels = await (await fetch("/v1/gels")).json();
+  for (const g of gels.gels) {
+    presets[g.gel.name] = { gel: g.gel,
+      folds: g.folds.map((x) => `${x.kind} at ${fmt(x.temperature, 5)} K`).join(", ") };
+  }
+  gelOptions("ANB");
+  $("gel").addEventListener("change", showFolds);
+  showFolds();
+  fillGel($("gel_base").value);
+  $("gel_base").addEventListener("change", () => fillGel($("gel_base").value));
+  $("save-gel").addEventListener("click", saveGel);
+  $("delete-gel").addEventListener("click", deleteGel);
+  $("plan-form").addEventListener("submit", plan);
+  $("sweep-form").addEventListener("submit", sweep);
+  for (const name of [...FIELDS, ...SWEEP_FIELDS, ...GEL_FIELDS]) {
+    $(name).addEventListener("input", () => { $(`err-${name}`).textContent = ""; $(name).classList.remove("invalid"); });
+  }
+  document.body.dataset.state = "ready";
+  document.body.dataset.requests = "0";
+}
+
+init().catch((e) => { $("form-error").textContent = `The page could not load the service's bounds: ${e}`; });

@@ -1,0 +1,185 @@
+"""The planner page in headless Chromium against a real ``thermogel serve`` (issue 17).
+
+Chromium is Debian's (``.ci/run`` installs it when missing), driven by Playwright's Python
+package with ``executable_path`` (no browser download).  The page must read back the JSON
+route's time for ANB 302 -> 308 K, 80 %, 50 um; an out-of-range temperature must show a
+message and send no request; a server error must be shown next to the field it names; a
+design map runs as a sweep job; a saved custom gel is answered as the JSON route answers
+its parameters; a validation's progress is polled to its result.
+Screenshots go to tests/artifacts/ (or $THERMOGEL_ARTIFACTS).  Without Chromium the test
+is skipped, except in CI (CI=true), where it fails.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import httpx
+import pytest
+from api_support import ROOT, _server, free_port
+
+CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if Path("/usr/bin/chromium").exists()
+                                        else None)
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+FRONT = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.8,
+         "dry_radius_um": 50.0}
+
+
+def _need_browser() -> object:
+    """Playwright's sync API, or a skip (a failure in CI) when it cannot run here."""
+    in_ci = os.environ.get("CI") == "true"
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        if in_ci:
+            pytest.fail("playwright is not installed (the test extra brings it)")
+        pytest.skip("playwright is not installed")
+    if CHROMIUM is None:
+        if in_ci:
+            pytest.fail("chromium is not installed (.ci/run installs Debian's package)")
+        pytest.skip("chromium is not installed (apt-get install chromium)")
+    return sync_playwright
+
+
+def _artifacts() -> Path:
+    out = Path(os.environ.get("THERMOGEL_ARTIFACTS", ROOT / "tests" / "artifacts"))
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+@contextmanager
+def _serve_gracefully(cache: Path) -> Iterator[str]:
+    """``thermogel serve`` on a free loopback port, stopped with SIGINT (uvicorn's shutdown
+    closes the planner and its worker processes; SIGKILL would orphan them)."""
+    port = free_port()
+    cmd = [sys.executable, "-m", "api.cli", "serve", "--port", str(port), "--cache", str(cache),
+           "--log-level", "warning", "--no-warmup"]
+    with _server(cmd, port, 240.0) as (url, proc):
+        try:
+            yield url
+        finally:
+            proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                pass  # _server kills it
+
+
+def _fill(page, **fields: str) -> None:  # noqa: ANN001
+    for name, value in fields.items():
+        page.fill(f"#{name}", value)
+
+
+@pytest.mark.slow  # a real server, a browser, and one coarse full-solver validation
+def test_page_in_headless_chromium(tmp_path: Path) -> None:
+    sync_playwright = _need_browser()
+    with _serve_gracefully(tmp_path / "cache.sqlite") as url, \
+            tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
+        ctx = pw.chromium.launch_persistent_context(
+            profile, executable_path=CHROMIUM, args=FLAGS, headless=True,
+            viewport={"width": 1400, "height": 1000})
+        try:
+            page = ctx.new_page()
+            errors: list[str] = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            sent: list[str] = []
+            page.on("request", lambda r: sent.append(r.url) if "/v1/" in r.url else None)
+            page.goto(url + "/")
+            page.wait_for_selector("body[data-state=ready]", timeout=60_000)
+
+            # the acceptance request, read back against the JSON route
+            page.select_option("#gel", "ANB")
+            _fill(page, t_start="302", t_end="308", doses="80", dry_radius_um="50")
+            page.click("#plan")
+            page.wait_for_selector("body[data-state=answered]", timeout=120_000)
+            want = httpx.post(f"{url}/v1/dose-time", json=FRONT, timeout=60).json()
+            assert float(page.get_attribute("#answer-time", "data-value")) == want["time"]
+            assert float(page.get_attribute("#answer-seconds", "data-value")) == want["seconds"]
+            assert page.inner_text("#answer-seconds") == f"{want['seconds']:.4g} s"
+            assert want["error_explanation"] in page.inner_text("#answer-error-parts")
+            assert page.locator("#curve-radius").count() == 1  # the front curve is drawn
+            assert page.locator(".dose-mark").count() == 1
+            assert page.locator("#timeline-release").count() == 1
+            page.wait_for_function("document.getElementById('phase-map').complete && "
+                                   "document.getElementById('phase-map').naturalWidth > 0")
+            page.screenshot(path=str(_artifacts() / "page.png"), full_page=True)
+
+            # out of range: a message naming the field, and no request at all
+            sent.clear()
+            _fill(page, t_end="400")
+            page.click("#plan")
+            page.wait_for_selector("body[data-state=invalid]")
+            msg = page.inner_text("#err-t_end")
+            assert "T_end" in msg and "373.15" in msg
+            page.wait_for_timeout(500)
+            assert sent == []
+
+            # within the page's bounds but refused by the server: shown at the field
+            _fill(page, t_end="308", interfacial_length="0.001")
+            page.click("#plan")
+            page.wait_for_selector("body[data-state=server-error]", timeout=60_000)
+            assert page.inner_text("#err-interfacial_length").startswith("interfacial_length:")
+            assert page.inner_text("#err-t_end") == ""
+
+            # a design map of the default axes (9 x 9 x 4): the table the sweep route gives
+            _fill(page, interfacial_length="0.005")
+            page.click("#sweep")
+            page.wait_for_selector("body[data-sweep=done]", timeout=120_000)
+            page.wait_for_function("document.getElementById('sweep-plot').complete && "
+                                   "document.getElementById('sweep-plot').naturalWidth > 0")
+            csv_url = page.get_attribute("#sweep-links a", "href")
+            table = httpx.get(url + csv_url.split("?")[0], timeout=60).json()["result"]
+            assert len(table["rows"]) == 9 * 9 * 4 and table["grid"]["t_ends"][0] == 307.5
+            assert "324 answered" in page.inner_text("#sweep-status")
+            sent.clear()
+            _fill(page, sweep_t_end="300, 380, 5")
+            page.click("#sweep")
+            page.wait_for_selector("body[data-sweep=invalid]")
+            assert "373.15" in page.inner_text("#err-sweep_t_end")
+            page.wait_for_timeout(300)
+            assert sent == []
+            _fill(page, sweep_t_end="307.5, 311.5, 9")
+
+            # a saved custom gel: checked in the page, kept in the browser, sent as parameters
+            page.click("#custom-gel summary")
+            _fill(page, gel_name="soft ANB", gel_omega="-1")
+            sent.clear()
+            page.click("#save-gel")
+            assert "Omega" in page.inner_text("#err-gel_omega") and sent == []
+            _fill(page, gel_omega="120")
+            page.click("#save-gel")
+            page.wait_for_selector("body[data-gel=saved]")
+            assert page.input_value("#gel") == "saved:soft ANB"
+            page.click("#plan")
+            page.wait_for_selector("body[data-state=answered]", timeout=120_000)
+            soft = {"base": "ANB", "omega": 120.0, "a0": -12.947, "b0": 0.04496, "a1": 17.92,
+                    "b1": -0.0569}
+            want = httpx.post(f"{url}/v1/dose-time", json={**FRONT, "gel": soft}, timeout=60).json()
+            assert float(page.get_attribute("#answer-time", "data-value")) == want["time"]
+            page.click("#custom-gel summary")
+            page.select_option("#gel", "ANB")
+
+            # a validation, polled to its result (the coarsest ladder: ell = 0.01)
+            _fill(page, interfacial_length="0.01")
+            page.check("#validate")
+            page.click("#plan")
+            page.wait_for_selector("#validation-panel[data-status=done]", timeout=600_000)
+            assert "Truth (regularized)" in page.inner_text("#validation-result")
+            page.wait_for_selector("body[data-validated]", timeout=60_000)  # asked again
+            ell = {**FRONT, "interfacial_length": 0.01}
+            again = httpx.post(f"{url}/v1/dose-time", json=ell, timeout=60).json()
+            assert again["validation"] is not None  # now answered with the verdict
+            assert page.inner_text("#answer-error") == f"± {100 * again['error_estimate']:.3g} %"
+            page.screenshot(path=str(_artifacts() / "page-validated.png"), full_page=True)
+            assert errors == []
+        finally:
+            ctx.close()
