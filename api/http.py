@@ -132,6 +132,9 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
     _install_error_handlers(app)
     _physics_routes(app)
     _dosing_routes(app)
+    from api.routers.fit import router as fit_router
+
+    app.include_router(fit_router)
     return app
 
 

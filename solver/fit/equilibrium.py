@@ -50,6 +50,7 @@ INTERNAL = ("log_omega", "chi0_ref", "b0", "chi1_ref", "b1", "log_scale")
 SIZE_POWER = {"radius": 1, "diameter": 1, "volume_ratio": 3}
 OMEGA_RANGE = (1.0, 1.0e5)
 LAMBDA_CAP = 30.0  # largest stretch a fitted scale may imply
+MAX_POINTS = 5000  # the nearest-point search holds points x stretch-grid arrays
 BAD = 1.0e4  # residual (in sigmas) of a point where the model has no finite temperature
 
 
@@ -78,6 +79,8 @@ class SwellingData:
             raise ParameterError("size_kind", self.kind, "radius, diameter or volume_ratio")
         t = np.asarray(self.temperature, dtype=float).ravel()
         y = np.asarray(self.size, dtype=float).ravel()
+        if t.size > MAX_POINTS:
+            raise ParameterError("data", f"{t.size} points", f"at most {MAX_POINTS} points")
         if t.size != y.size:
             raise ParameterError("size", f"{y.size} values", f"{t.size} values (one per "
                                  "temperature)")

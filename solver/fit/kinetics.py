@@ -19,7 +19,7 @@ from scipy.optimize import least_squares
 
 from ..errors import ParameterError
 from ..gel import BETA_RANGE
-from .equilibrium import SIZE_POWER
+from .equilibrium import MAX_POINTS, SIZE_POWER
 from .result import (
     CONFIDENCE,
     RELATIVE_WARN,
@@ -50,6 +50,8 @@ class KineticsData:
             raise ParameterError("size_kind", self.kind, "radius, diameter or volume_ratio")
         t = np.asarray(self.time, dtype=float).ravel()
         y = np.asarray(self.size, dtype=float).ravel()
+        if t.size > MAX_POINTS:
+            raise ParameterError("data", f"{t.size} points", f"at most {MAX_POINTS} points")
         if t.size != y.size:
             raise ParameterError("size", f"{y.size} values", f"{t.size} values (one per time)")
         for name, v in (("time_s", t), (self.kind, y)):

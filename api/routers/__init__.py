@@ -1,0 +1,1 @@
+"""Routers added to the app by ``app.include_router`` in ``api.http.create_app``."""
