@@ -3,7 +3,7 @@
 The dose time t(theta) of the front model (milliseconds per answer) is a function of the
 fitted equilibrium parameters theta; with their covariance Sigma the delta method gives
 var t = g Sigma g^T, g = dt/dtheta by central differences in the fit's own (internal)
-parametrisation.  ``sample_dose_times`` is the brute-force check: t at parameter vectors
+parametrisation; the interval is t exp(+-1.96 sd(t)/t) (normal in log t).  ``sample_dose_times`` is the brute-force check: t at parameter vectors
 drawn from N(theta, Sigma).  A kinetics fit adds tau's relative uncertainty to the seconds
 when the request uses its k0.  This interval is about the gel's parameters, beside the
 model's numerical error estimate (``DoseAnswer.error_estimate``).
@@ -73,9 +73,11 @@ def dose_time_interval(record: dict[str, Any], gel: Gel, t_start: float, t_end: 
             return {"method": "delta", "time": None,
                     "note": f"the front model fails within the parameters' uncertainty ({exc})"}
     se = float(math.sqrt(max(grad @ cov @ grad, 0.0)))
+    rel = Z95 * se / t0  # in log t: a time is positive and its spread skewed to the right
     return {"method": "delta", "confidence": 0.95, "time_center": t0, "time_stderr": se,
-            "time": [t0 - Z95 * se, t0 + Z95 * se], "relative_half_width": Z95 * se / t0,
-            "note": "from the covariance of the swelling fit (delta method, front model)"}
+            "time": [t0 * math.exp(-rel), t0 * math.exp(rel)], "relative_half_width": rel,
+            "note": "from the covariance of the swelling fit (delta method in log t, front "
+                    "model)"}
 
 
 def sample_dose_times(record: dict[str, Any], gel: Gel, t_start: float, t_end: float,
@@ -115,14 +117,14 @@ def attach_parameter_interval(req: Any, answer: Any) -> Any:
         kin = (rec.get("kinetics") or {}).get("fit") or {}
         k0, k0_iv = kin.get("k0_m2"), kin.get("k0_interval_m2")
         if k0 and k0_iv and abs(req.constants.permeability_m2 / k0 - 1.0) < 1e-6:
-            rel_k = 0.5 * (k0_iv[1] - k0_iv[0]) / k0
+            rel_k = 0.5 * math.log(k0_iv[1] / k0_iv[0])
             rel = math.hypot(rel, rel_k)
             iv["note"] += "; seconds include the kinetics fit's k0 uncertainty"
         elif k0:
             iv["note"] += (f"; the kinetics fit's k0 = {k0:.4g} m^2 is not the one used "
                            f"(constants.permeability_m2 = {req.constants.permeability_m2:.4g})")
         s = answer.seconds
-        iv["seconds"] = [s * (1.0 - rel), s * (1.0 + rel)]
+        iv["seconds"] = [s * math.exp(-rel), s * math.exp(rel)]
         iv["seconds_relative_half_width"] = rel
     answer.parameter_interval = iv
     return answer

@@ -46,7 +46,7 @@ def test_diameter_and_volume_ratio_give_the_same_gel() -> None:
     fv = fit_equilibrium(v, size_rel_sigma=0.03)  # 1% in radius is 3% in volume
     fv.parameters["scale"] **= 1.0 / 3.0  # a volume's scale is the dry volume
     for k in fr.names:  # equal to first order in the noise: far inside the uncertainty
-        assert abs(fv.parameters[k] - fr.parameters[k]) < 0.1 * fr.stderr[k], k
+        assert abs(fv.parameters[k] - fr.parameters[k]) < 0.2 * fr.stderr[k], k
 
 
 @pytest.mark.slow
