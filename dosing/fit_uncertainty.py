@@ -3,7 +3,8 @@
 The dose time t(theta) of the front model (milliseconds per answer) is a function of the
 fitted equilibrium parameters theta; with their covariance Sigma the delta method gives
 var t = g Sigma g^T, g = dt/dtheta by central differences in the fit's own (internal)
-parametrisation; the interval is t exp(+-1.96 sd(t)/t) (normal in log t).  ``sample_dose_times`` is the brute-force check: t at parameter vectors
+parametrisation; the interval is t exp(+-1.96 sd(t)/t) (normal in log t).
+``sample_dose_times`` is the brute-force check: t at parameter vectors
 drawn from N(theta, Sigma).  A kinetics fit adds tau's relative uncertainty to the seconds
 when the request uses its k0.  This interval is about the gel's parameters, beside the
 model's numerical error estimate (``DoseAnswer.error_estimate``).
