@@ -140,6 +140,13 @@ def model_slope(gel: Gel | _Coeffs, stretch: np.ndarray) -> np.ndarray:
         return -(dc * d - c * dd) / (d * d)
 
 
+def _temperature_and_slope(gel: Gel | _Coeffs, stretch: np.ndarray) -> tuple[np.ndarray, ...]:
+    """T(lambda) and dT/dlambda from one evaluation of c, d and their derivatives."""
+    c, d, dc, dd = _parts(gel, stretch)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return -c / d, -(dc * d - c * dd) / (d * d)
+
+
 def stretch_grid(n: int = 1500) -> np.ndarray:
     """Stretches on which the curve is tabulated before each point's nearest point is refined."""
     return 1.0 + np.geomspace(1e-7, LAMBDA_CAP - 1.0, n)
@@ -170,14 +177,14 @@ def distances(coef: Gel | _Coeffs, scale: float, data: SwellingData, sigma_t: fl
     lam = grid[j]
     lo = grid[np.maximum(j - 1, 0)]
     hi = grid[np.minimum(j + 1, grid.size - 1)]
-    for _ in range(5):
-        tm, dt = model_temperature(coef, lam), model_slope(coef, lam)
+    for _ in range(4):
+        tm, dt = _temperature_and_slope(coef, lam)
         ru, rv = (tm - t) / sigma_t, (scale * lam**m - y) / sigma_y
         ju, jv = dt / sigma_t, m * scale * lam ** (m - 1) / sigma_y
         step = (ru * ju + rv * jv) / (ju * ju + jv * jv)
         step = np.where(np.isfinite(step), step, 0.0)
         lam = np.clip(lam - step, lo, hi)
-    tm, dt = model_temperature(coef, lam), model_slope(coef, lam)
+    tm, dt = _temperature_and_slope(coef, lam)
     ru, rv = (tm - t) / sigma_t, (scale * lam**m - y) / sigma_y
     ju, jv = dt / sigma_t, m * scale * lam ** (m - 1) / sigma_y
     d = np.sqrt(ru * ru + rv * rv)
@@ -228,7 +235,7 @@ def _scale_bounds(data: SwellingData) -> tuple[float, float]:
 
 
 def global_starts(data: SwellingData, t_ref: float, sigma_t: float, sigma_y: np.ndarray,
-                  n_omega: int = 16, n_scale: int = 24) -> list[tuple[float, np.ndarray]]:
+                  n_omega: int = 12, n_scale: int = 20) -> list[tuple[float, np.ndarray]]:
     """Every grid node's linear start as (orthogonal cost, internal vector), best first."""
     lo, hi = _scale_bounds(data)
     ymin = float(data.size.min())
