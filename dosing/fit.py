@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from solver.errors import NotApplicableError, ParameterError
+from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.fit import FitResult, SwellingData, fit_equilibrium, fit_gel
 from solver.fit.equilibrium import SIZE_POWER
 from solver.fit.kinetics import KineticsData, RadiusModel, fit_kinetics
@@ -46,9 +46,16 @@ def _read_table(source: str | Path, what: str, first: str) -> tuple[dict[str, np
         p = Path(source)
         if not p.is_file():
             raise ParameterError("file", str(source), "a readable CSV file")
-        text = p.read_text(encoding="utf-8-sig")
-    rows = [r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r)
-            and not r[0].lstrip().startswith("#")]
+        try:
+            text = p.read_text(encoding="utf-8-sig")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ParameterError("file", str(source), "a readable UTF-8 CSV file",
+                                 str(exc)) from None
+    try:
+        rows = [r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r)
+                and not r[0].lstrip().startswith("#")]
+    except csv.Error as exc:
+        raise ParameterError("file", str(source)[:80], "a CSV file", str(exc)) from None
     if not rows:
         raise ParameterError("file", "empty", f"a CSV with a header row ({first}, one of "
                              f"{', '.join(SIZE_COLUMNS)})")
@@ -112,8 +119,11 @@ def fit_swelling(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma: f
                  fixed: Mapping[str, float] | None = None, n_starts: int = 6) -> FitResult:
     """Fit Omega, A0, B0, A1, B1 and the size scale (``solver.fit.fit_equilibrium``); the
     result's ``extra`` carries the fitted gel."""
-    res = fit_equilibrium(data, sigma_t=sigma_t, size_rel_sigma=size_rel_sigma, fixed=fixed,
-                          n_starts=n_starts)
+    try:
+        res = fit_equilibrium(data, sigma_t=sigma_t, size_rel_sigma=size_rel_sigma,
+                              fixed=fixed, n_starts=n_starts)
+    except (np.linalg.LinAlgError, ArithmeticError) as exc:
+        raise SolverError(f"the swelling fit failed numerically: {exc}") from exc
     try:
         res.extra["gel"] = fit_gel(res).to_dict()
     except ParameterError as exc:  # a fit at a bound can leave an invalid gel
@@ -228,6 +238,8 @@ def fit_shrinking(data: KineticsData, gel: Gel | str | dict[str, Any], t_start: 
                                beta=beta if fit_beta else None, size_rel_sigma=size_rel_sigma)
         except NotApplicableError as exc:
             raise ParameterError("model", name, "'full' for this jump", str(exc)) from exc
+        except (np.linalg.LinAlgError, ArithmeticError) as exc:
+            raise SolverError(f"the kinetics fit failed numerically: {exc}") from exc
     finally:
         if owned is not None:
             owned.close()

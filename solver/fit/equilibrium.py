@@ -240,8 +240,8 @@ def global_starts(data: SwellingData, t_ref: float, sigma_t: float, sigma_y: np.
     lo, hi = _scale_bounds(data)
     ymin = float(data.size.min())
     # the smallest point's stretch (y_min / scale)^(1/m): dense near 1, where dry states sit
-    lam_min = 1.0 + np.geomspace(2e-3, (ymin / math.exp(lo)) ** (1.0 / data.power) - 1.0,
-                                 n_scale)
+    top = max((ymin / math.exp(lo)) ** (1.0 / data.power) - 1.0, 4e-3)
+    lam_min = 1.0 + np.geomspace(2e-3, top, n_scale)
     scales = ymin / lam_min**data.power
     grid = stretch_grid(300)
     out = []
