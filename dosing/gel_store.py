@@ -36,9 +36,9 @@ def check_name(name: str) -> str:
     if not isinstance(name, str) or not NAME_RE.match(name):
         raise ParameterError("name", name, "1-64 characters: letters, digits, '_', '.', '-' "
                              "(starting with a letter or digit)")
-    if name.upper() in PRESETS:
+    if name.upper() in PRESETS or name == "custom":
         raise ParameterError("name", name, "a name other than the presets "
-                             + ", ".join(sorted(PRESETS)))
+                             + ", ".join(sorted(PRESETS)) + " and 'custom'")
     return name
 
 
@@ -129,7 +129,7 @@ def lookup(name: str, store: GelStore | None = None) -> Gel:
 
 def record_for(gel: Gel, store: GelStore | None = None) -> dict[str, Any] | None:
     """The stored record of a gel that came from the store (same name and parameters)."""
-    if gel.name.upper() in PRESETS or not NAME_RE.match(gel.name):
+    if gel.name.upper() in PRESETS or gel.name == "custom" or not NAME_RE.match(gel.name):
         return None
     st = store or GelStore()
     if not st.path(gel.name).exists():

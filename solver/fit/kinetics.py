@@ -187,7 +187,7 @@ def _report(data: KineticsData, names: list[str], res, unpack, scale: float | No
         else:
             iv = [v - tq * sd_x[i], v + tq * sd_x[i]]
         params[k] = float(vals[k])
-        intervals[k] = iv if np.all(np.isfinite(iv)) else None
+        intervals[k] = [float(iv[0]), float(iv[1])] if np.all(np.isfinite(iv)) else None
         stderr[k] = finite_or_none(math.sqrt(max(cov[i, i], 0.0)))
         half = 0.5 * (iv[1] - iv[0])
         if not math.isfinite(half) or half > RELATIVE_WARN * abs(vals[k]):
