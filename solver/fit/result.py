@@ -103,15 +103,22 @@ def correlation(cov: np.ndarray) -> np.ndarray:
 
 def correlation_warnings(names: Sequence[str], corr: np.ndarray,
                          threshold: float = CORRELATION_WARN, what: str = "") -> list[str]:
-    """A warning for each pair with |r| > threshold (``what`` names the parametrisation)."""
-    out = []
-    for i in range(len(names)):
-        for j in range(i + 1, len(names)):
-            if abs(corr[i, j]) > threshold:
-                out.append(f"{names[i]} and {names[j]} are strongly correlated "
-                           f"(r = {corr[i, j]:+.4f}{what}): this data pins down a combination "
-                           "of them, not each one; consider fixing one")
-    return out
+    """Warnings for pairs with |r| > threshold (``what`` names the parametrisation): one per
+    pair when there are few, else one naming the least determined combination."""
+    pairs = [(names[i], names[j], float(corr[i, j])) for i in range(len(names))
+             for j in range(i + 1, len(names)) if abs(corr[i, j]) > threshold]
+    if len(pairs) <= 3:
+        return [f"{a} and {b} are strongly correlated (r = {r:+.4f}{what}): this data pins "
+                "down a combination of them, not each one; consider fixing one"
+                for a, b, r in pairs]
+    w, v = np.linalg.eigh(corr)
+    weak = v[:, 0]
+    order = np.argsort(-np.abs(weak))
+    combo = " ".join(f"{weak[i]:+.2f} {names[i]}" for i in order if abs(weak[i]) > 0.1)
+    first = [names[i].removeprefix("log_") for i in order[:2]]
+    return [f"{len(pairs)} parameter pairs are strongly correlated (|r| > {threshold}{what}): "
+            f"the data do not determine the combination {combo} (standardised; correlation "
+            f"eigenvalue {w[0]:.1e}); consider fixing {' or '.join(first)}"]
 
 
 def finite_or_none(x: float) -> float | None:
