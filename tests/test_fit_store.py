@@ -47,6 +47,17 @@ def test_stored_gel_round_trips_and_resolves_by_name(store, fitted) -> None:
     assert lookup("anb").name == "ANB"
 
 
+def test_schedule_and_simulate_take_the_name(store, capsys) -> None:
+    from api.cli import main
+    from dosing import ScheduleRequest
+
+    req = ScheduleRequest("mygel", 300.0, 310.0, doses=(0.2, 0.2), rests=(0.5,))
+    assert req.gel.name == "mygel"
+    assert main(["simulate", "--gel", "mygel", "--t-start", "300", "--t-end", "310",
+                 "--until", "0.002", "--n", "40", "--json"]) == 0
+    assert '"mygel"' in capsys.readouterr().out
+
+
 def test_unknown_name_lists_presets_and_stored(store) -> None:
     with pytest.raises(ParameterError) as exc:
         resolve_gel("nosuch")
