@@ -99,16 +99,22 @@ class KineticsFitRequest(_In):
     )
     t_start: float = Field(description="start temperature, K")
     t_end: float = Field(description="jump temperature, K")
-    branch: Literal["swollen", "shrunken"] | None = None
+    branch: Literal["swollen", "shrunken"] | None = Field(
+        None, description="start branch at T_start (default swollen when heating)")
     dry_radius_um: float | None = Field(None, gt=0, description="dry bead radius, um")
     swollen_radius_um: float | None = Field(None, gt=0, description="bead radius at T_start")
-    viscosity_pa_s: float | Literal["water"] = 1.0e-3
-    polymer_volume_m3: float = Field(3.0e-25, gt=0)
-    model: Literal["auto", "front", "front-sharp", "full"] = "auto"
-    fit_beta: bool = False
-    beta: float | None = Field(None, gt=0, lt=10)
+    viscosity_pa_s: float | Literal["water"] = Field(
+        1.0e-3, description="fluid viscosity in Pa s, or 'water' (water at T_end), for k0")
+    polymer_volume_m3: float = Field(3.0e-25, gt=0, description="Omega_p in m^3, for k0")
+    model: Literal["auto", "front", "front-sharp", "full"] = Field(
+        "auto", description="model of the curve: the front models (milliseconds), the full "
+        "solver (one run per beta), or auto (the planner's choice)")
+    fit_beta: bool = Field(False, description="also fit beta of k = phi/(1-phi)^beta "
+                           "(model 'full' only)")
+    beta: float | None = Field(None, gt=0, lt=10, description="permeability exponent, "
+                               "0 < beta < 10: fixed, or the start of its fit")
     interfacial_length: float | None = Field(None, ge=0, description="full solver's ell")
-    size_rel_sigma: float = Field(0.01, gt=0)
+    size_rel_sigma: float = Field(0.01, gt=0, description="relative size noise")
 
 
 class FitJobResponse(BaseModel):
@@ -116,12 +122,12 @@ class FitJobResponse(BaseModel):
 
     model_config = ConfigDict(extra="allow")
 
-    id: str
-    kind: Literal["swelling", "kinetics"]
-    status: Literal["pending", "running", "done", "failed"]
-    status_url: str
+    id: str = Field(description="the job id")
+    kind: Literal["swelling", "kinetics"] = Field(description="which fit")
+    status: Literal["pending", "running", "done", "failed"] = Field(description="job state")
+    status_url: str = Field(description="where to poll")
     result: dict[str, Any] | None = Field(
         None,
         description="the fit report: parameters, intervals (95%), rms_residual_K, warnings, ...",
     )
-    error: str | None = None
+    error: str | None = Field(None, description="why a failed fit failed")
