@@ -26,6 +26,7 @@ from dosing import QueueFullError, UnknownValidationError
 from solver.errors import NotApplicableError, ParameterError, SolverError
 
 from . import schemas as s
+from .routers import fit as fit_routes
 from .routers import page as page_routes
 from .routers import sweep as sweep_routes
 from .service import (
@@ -136,6 +137,7 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
     _dosing_routes(app)
     app.include_router(sweep_routes.router)
     app.include_router(page_routes.router)
+    app.include_router(fit_routes.router)
     return app
 
 

@@ -145,6 +145,7 @@ class DoseAnswer:
     scenario_key: str
     behaviour: str
     note: str
+    parameter_interval: dict[str, Any] | None = None  # a fitted gel's (dosing.fit_uncertainty)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
@@ -313,7 +314,10 @@ class Planner:
                        SolverError(f"no full-solver time: {failure(rep)}"))
         time = t_front if t_front is not None else rep["time"]
         est, explain = error_estimate(model, time, rep, req.fraction)
-        return self._answer(req, model, time, radius, est, explain, rep, scs[0].key(), why)
+        ans = self._answer(req, model, time, radius, est, explain, rep, scs[0].key(), why)
+        from .fit_uncertainty import attach_parameter_interval
+
+        return attach_parameter_interval(req, ans)
 
     def _answer(self, req: DoseRequest, model: str, time: float, radius: float, est: float,
                 explain: str, validation: dict[str, Any] | None, key: str,

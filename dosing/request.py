@@ -15,7 +15,7 @@ from typing import Any
 
 from solver.equilibrium import equilibrium, nearest_stable
 from solver.errors import ParameterError, require_finite_positive
-from solver.gel import Gel, check_temperature, preset
+from solver.gel import Gel, check_temperature
 
 from .scenario import TRUTH, SolverSettings
 from .units import PhysicalConstants, stored_volume, ul_to_volume, volume_to_ul
@@ -24,11 +24,14 @@ BRANCHES = ("swollen", "shrunken")
 
 
 def resolve_gel(value: Gel | str | dict[str, Any]) -> Gel:
-    """A Gel from a Gel, a preset name or a parameter dict (field ``gel``)."""
+    """A Gel from a Gel, a preset name, a stored fitted gel's name (``dosing.gel_store``)
+    or a parameter dict (field ``gel``)."""
     if isinstance(value, Gel):
         return value
     if isinstance(value, str):
-        return preset(value)
+        from .gel_store import lookup
+
+        return lookup(value)
     if isinstance(value, dict):
         try:
             return Gel.from_dict(value)

@@ -139,7 +139,7 @@ def code_version() -> str:
     root = Path(solver.__file__).parent
     h = hashlib.sha256()
     for p in sorted(root.rglob("*.py")):
-        if p.relative_to(root).parts[0] in ("front", "front.py"):  # the reduced model
+        if p.relative_to(root).parts[0] in ("front", "front.py", "fit"):  # not the full solver
             continue
         h.update(p.relative_to(root).as_posix().encode())
         h.update(p.read_bytes())

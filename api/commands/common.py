@@ -8,13 +8,14 @@ import math
 import sys
 from typing import Any
 
-from solver.gel import Gel, Permeability, preset
+from solver.gel import Gel, Permeability
 
 
 def add_gel_options(p: argparse.ArgumentParser) -> None:
     """--gel PRESET or a custom gel (--omega --a0 --b0 --a1 --b1); --beta: k = phi/(1-phi)^beta."""
     g = p.add_argument_group("gel")
-    g.add_argument("--gel", default="ANB", help="preset gel: ANB or HHT (default ANB)")
+    g.add_argument("--gel", default="ANB", help="preset gel (ANB or HHT) or a stored fitted "
+                   "gel's name (thermogel fit ... --save NAME); default ANB")
     for name in ("omega", "a0", "b0", "a1", "b1"):
         g.add_argument(f"--{name}", type=float, default=None,
                        help=f"custom gel parameter {name} (overrides the preset)")
@@ -24,7 +25,9 @@ def add_gel_options(p: argparse.ArgumentParser) -> None:
 
 def gel_from_args(args: argparse.Namespace) -> Gel:
     """The gel the options describe: the preset, with any custom parameter replacing its own."""
-    base = preset(args.gel)
+    from dosing.gel_store import lookup
+
+    base = lookup(args.gel)
     fields = {n: getattr(args, n) for n in ("omega", "a0", "b0", "a1", "b1")}
     custom = {k: v for k, v in fields.items() if v is not None}
     perm = Permeability("power", args.beta) if args.beta is not None else base.permeability

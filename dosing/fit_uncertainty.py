@@ -1,0 +1,131 @@
+"""The parameter uncertainty of a fitted gel carried to a dose time.
+
+The dose time t(theta) of the front model (milliseconds per answer) is a function of the
+fitted equilibrium parameters theta; with their covariance Sigma the delta method gives
+var t = g Sigma g^T, g = dt/dtheta by central differences in the fit's own (internal)
+parametrisation; the interval is t exp(+-1.96 sd(t)/t) (normal in log t).
+``sample_dose_times`` is the brute-force check: t at parameter vectors
+drawn from N(theta, Sigma).  A kinetics fit adds tau's relative uncertainty to the seconds
+when the request uses its k0.  This interval is about the gel's parameters, beside the
+model's numerical error estimate (``DoseAnswer.error_estimate``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from solver.equilibrium import equilibrium
+from solver.errors import NotApplicableError, ParameterError, SolverError
+from solver.fit.equilibrium import gel_from_internal
+from solver.gel import Gel
+
+from .units import radius_after_dose
+
+Z95 = 1.959963984540054
+
+
+def _internal(record: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, float]:
+    fit = (record.get("swelling") or {}).get("fit") or {}
+    internal = fit.get("internal")
+    if not internal:
+        raise ParameterError("gel", record.get("name"), "a stored gel with a swelling fit")
+    return (np.array(internal["values"], dtype=float),
+            np.array(internal["covariance"], dtype=float), float(internal["t_ref"]))
+
+
+def dose_time(gel: Gel, t_start: float, t_end: float, branch: str, fraction: float,
+              sharp: bool) -> float:
+    """The front model's dimensionless time to release ``fraction`` of the stored fluid."""
+    from .planner import front_run
+
+    a0 = equilibrium(gel, t_start, branch).stretch
+    fr = front_run(gel, t_start, t_end, branch, sharp)
+    return float(fr.time_to_radius(radius_after_dose(a0, fraction)))
+
+
+def _time_at(q: np.ndarray, t_ref: float, base: Gel, args: tuple) -> float:
+    g = gel_from_internal(q, t_ref, name=base.name).with_permeability(
+        base.permeability.law, base.permeability.beta)
+    return dose_time(g, *args)
+
+
+def dose_time_interval(record: dict[str, Any], gel: Gel, t_start: float, t_end: float,
+                       branch: str, fraction: float, sharp: bool) -> dict[str, Any]:
+    """Delta-method 95% interval of the dose time from the fit's covariance (module doc)."""
+    q, cov, t_ref = _internal(record)
+    args = (t_start, t_end, branch, fraction, sharp)
+    t0 = _time_at(q, t_ref, gel, args)
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    if np.any(sd > 1e3):
+        return {"method": "delta", "time": None, "note": "some fitted parameters are not "
+                "identifiable (unbounded intervals): no dose-time interval; fix them in the fit"}
+    grad = np.zeros(q.size)
+    for j in np.nonzero(sd > 0.0)[0]:
+        h = 0.1 * sd[j]
+        qp, qm = q.copy(), q.copy()
+        qp[j] += h
+        qm[j] -= h
+        try:
+            grad[j] = (_time_at(qp, t_ref, gel, args) - _time_at(qm, t_ref, gel, args)) / (2 * h)
+        except (ParameterError, NotApplicableError, SolverError) as exc:
+            return {"method": "delta", "time": None,
+                    "note": f"the front model fails within the parameters' uncertainty ({exc})"}
+    se = float(math.sqrt(max(grad @ cov @ grad, 0.0)))
+    rel = Z95 * se / t0  # in log t: a time is positive and its spread skewed to the right
+    return {"method": "delta", "confidence": 0.95, "time_center": t0, "time_stderr": se,
+            "time": [t0 * math.exp(-rel), t0 * math.exp(rel)], "relative_half_width": rel,
+            "note": "from the covariance of the swelling fit (delta method in log t, front "
+                    "model)"}
+
+
+def sample_dose_times(record: dict[str, Any], gel: Gel, t_start: float, t_end: float,
+                      branch: str, fraction: float, sharp: bool, n: int = 200,
+                      seed: int = 0) -> tuple[np.ndarray, int]:
+    """Dose times at ``n`` parameter vectors drawn from the fit's normal approximation, and
+    how many draws had no answer (the front model did not apply)."""
+    q, cov, t_ref = _internal(record)
+    rng = np.random.default_rng(seed)
+    draws = rng.multivariate_normal(q, cov, size=n, method="eigh")
+    out, failed = [], 0
+    for qq in draws:
+        try:
+            out.append(_time_at(qq, t_ref, gel, (t_start, t_end, branch, fraction, sharp)))
+        except (ParameterError, NotApplicableError, SolverError, ValueError):
+            failed += 1
+    return np.array(out), failed
+
+
+def attach_parameter_interval(req: Any, answer: Any) -> Any:
+    """Set ``answer.parameter_interval`` for a dose of a stored fitted gel (front model
+    answers only; the full solver is too slow to differentiate per request)."""
+    from .gel_store import record_for
+
+    rec = record_for(req.gel)
+    if rec is None or not (rec.get("swelling") or {}).get("fit"):
+        return answer
+    if answer.model == "full":
+        answer.parameter_interval = {"method": "delta", "time": None, "note": "the parameter "
+                                     "interval needs the front model; this dose uses the full "
+                                     "solver"}
+        return answer
+    iv = dose_time_interval(rec, req.gel, req.t_start, req.t_end, req.branch, req.fraction,
+                            req.settings.regularized)
+    if iv.get("time") is not None and answer.seconds is not None:
+        rel = iv["relative_half_width"]
+        kin = (rec.get("kinetics") or {}).get("fit") or {}
+        k0, k0_iv = kin.get("k0_m2"), kin.get("k0_interval_m2")
+        if k0 and k0_iv and abs(req.constants.permeability_m2 / k0 - 1.0) < 1e-6:
+            rel_k = 0.5 * math.log(k0_iv[1] / k0_iv[0])
+            rel = math.hypot(rel, rel_k)
+            iv["note"] += "; seconds include the kinetics fit's k0 uncertainty"
+        elif k0:
+            iv["note"] += (f"; the kinetics fit's k0 = {k0:.4g} m^2 is not the one used "
+                           f"(constants.permeability_m2 = {req.constants.permeability_m2:.4g})")
+        s = answer.seconds
+        iv["seconds"] = [s * math.exp(-rel), s * math.exp(rel)]
+        iv["seconds_relative_half_width"] = rel
+    answer.parameter_interval = iv
+    return answer

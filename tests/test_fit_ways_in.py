@@ -1,0 +1,121 @@
+"""`thermogel fit swelling|kinetics` and POST /v1/fit/* (issue 14)."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import time
+
+import httpx
+import numpy as np
+import pytest
+
+from api.cli import main
+from api.http import create_app
+from dosing.fit import front_radius_model
+from dosing.units import timescale
+from solver.fit.synthetic import synthetic_swelling
+from solver.gel import HHT
+
+REPORT_KEYS = {"parameters", "intervals", "rms_residual_K", "warnings", "transitions",
+               "correlation", "covariance", "success"}
+
+
+@pytest.fixture
+def env(tmp_path, monkeypatch):
+    monkeypatch.setenv("THERMOGEL_GELS", str(tmp_path / "gels"))
+    monkeypatch.setenv("THERMOGEL_CACHE", str(tmp_path / "v.sqlite"))
+    return tmp_path
+
+
+def _swelling_csv(path, seed: int = 3):
+    d = synthetic_swelling(HHT, scale=41.27, seed=seed)
+    path.write_text("temperature_K,radius\n" + "".join(
+        f"{t:.4f},{y:.5f}\n" for t, y in zip(d.temperature, d.size, strict=True)))
+    return path
+
+
+def _kinetics_csv(path):
+    curve = front_radius_model(HHT, 300.0, 310.0, "swollen")(None)
+    tau = timescale(40.0, 310.0).seconds
+    td = np.linspace(0.0, 0.02, 30)
+    y = 40.0 * curve(td) * (1 + 0.01 * np.random.default_rng(0).standard_normal(td.size))
+    path.write_text("time_s,radius\n" + "".join(
+        f"{t * tau:.5f},{v:.5f}\n" for t, v in zip(td, y, strict=True)))
+    return path, tau
+
+
+def test_cli_fit_save_and_dose_by_name(env, capsys) -> None:
+    csv = _swelling_csv(env / "s.csv")
+    png = env / "fit.png"
+    assert main(["fit", "swelling", str(csv), "--json", "--save", "beads1",
+                 "--plot", str(png)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert REPORT_KEYS <= set(out)
+    assert set(out["parameters"]) == {"omega", "a0", "b0", "a1", "b1", "scale"}
+    assert png.stat().st_size > 10_000 and (env / "fit_phase_map.png").exists()
+    assert (env / "gels" / "beads1.json").exists()
+    kcsv, tau = _kinetics_csv(env / "k.csv")
+    assert main(["fit", "kinetics", str(kcsv), "--gel", "beads1", "--t-start", "300",
+                 "--t-end", "310", "--dry-radius-um", "40", "--json", "--save",
+                 "beads1"]) == 0
+    kin = json.loads(capsys.readouterr().out)
+    assert kin["model"] == "front-sharp" and kin["intervals"]["tau"][0] > 0
+    rec = json.loads((env / "gels" / "beads1.json").read_text())
+    assert rec["swelling"] and rec["kinetics"]  # the kinetics fit kept the swelling one
+    assert main(["dose", "--gel", "beads1", "--t-start", "300", "--t-end", "310",
+                 "--fraction", "0.5", "--dry-radius-um", "40", "--json"]) == 0
+    dose = json.loads(capsys.readouterr().out)
+    assert dose["parameter_interval"]["time"][0] < dose["time"]
+    assert main(["equilibrium", "--gel", "beads1", "--temperature", "305"]) == 0
+    assert "beads1 at 305 K" in capsys.readouterr().out
+
+
+def test_cli_bad_csv_is_exit_2_naming_the_column(env, capsys) -> None:
+    bad = env / "b.csv"
+    bad.write_text("temp,radius\n300,1\n")
+    assert main(["fit", "swelling", str(bad)]) == 2
+    assert "unknown column name(s) 'temp'" in capsys.readouterr().err
+    assert main(["dose", "--gel", "nosuch", "--t-start", "300", "--t-end", "310",
+                 "--fraction", "0.5"]) == 2
+    assert "stored fitted gel" in capsys.readouterr().err
+
+
+@pytest.fixture
+def anyio_backend() -> str:
+    return "asyncio"
+
+
+@pytest.mark.anyio
+async def test_http_fit_is_a_job(env) -> None:
+    d = synthetic_swelling(HHT, scale=0.4127, seed=3)
+    body = {"temperature_K": d.temperature.tolist(), "radius": d.size.tolist(),
+            "save": "webgel"}
+    app = create_app(warm=False, cache_path=str(env / "v.sqlite"))
+    async with app.router.lifespan_context(app):
+        transport = httpx.ASGITransport(app=app)
+        async with httpx.AsyncClient(base_url="http://t", transport=transport) as c:
+            r = await c.post("/v1/fit/swelling", json=body)
+            assert r.status_code == 202
+            url = r.headers["location"]
+            deadline = time.monotonic() + 60
+            while (j := (await c.get(url)).json())["status"] not in ("done", "failed"):
+                assert time.monotonic() < deadline
+                await asyncio.sleep(0.1)
+            assert j["status"] == "done", j
+            assert REPORT_KEYS <= set(j["result"])
+            r = await c.post("/v1/fit/swelling", json={**body, "radius": [-1.0] * 30})
+            assert r.status_code == 422 and "sizes > 0" in r.text
+            r = await c.post("/v1/fit/swelling", json={**body, "radios": body["radius"]})
+            assert r.status_code == 422 and "radios" in r.text
+            r = await c.post("/v1/fit/swelling", json={**body, "temperature_K": [300.0] * 3,
+                                                       "radius": [1.0] * 3})
+            assert r.status_code == 422 and "points" in r.text
+            assert (await c.get("/v1/fit/jobs/swelling-nope")).status_code == 404
+            kin = {"time_s": [0, 100, 200, 400, 800, 1600, 3200, 6400],
+                   "radius": [100, 95, 90, 80, 70, 60, 55, 55], "gel": "webgel",
+                   "t_start": 300.0, "t_end": 310.0}
+            r = await c.post("/v1/fit/kinetics", json=kin)
+            assert r.status_code == 202
+            r = await c.post("/v1/fit/kinetics", json={**kin, "gel": "nosuch"})
+            assert r.status_code == 422 and "webgel" in r.text
