@@ -88,8 +88,8 @@ def default_executor(max_workers: int | None = None) -> ProcessPoolExecutor:
 def stop_executor(executor: Executor) -> None:
     """Cancel queued work and stop ``executor`` now: a process pool's workers are
     terminated and joined (work in flight is abandoned; its lease lapses)."""
+    procs = list((getattr(executor, "_processes", None) or {}).values())  # gone after shutdown
     executor.shutdown(wait=False, cancel_futures=True)
-    procs = list((getattr(executor, "_processes", None) or {}).values())
     for p in procs:
         if p.is_alive():
             p.terminate()
@@ -343,3 +343,8 @@ class JobRunner:
                 stop_executor(ex)
         for entry in held:
             self._release(entry)
+        if not wait:  # nobody waits forever on work that was abandoned
+            with self._lock:
+                unfinished = [e.outer for e in self._jobs.values() if not e.outer.done()]
+            for fut in unfinished:
+                self._settle(fut, error=RuntimeError("the job runner was shut down"))
