@@ -120,7 +120,13 @@ class ValidationCache:
             con.execute(f"PRAGMA busy_timeout={int(BUSY_TIMEOUT_S * 1000)}")
             self._local.con = con
             with self._lock:
-                self._connections.append((threading.current_thread(), con))
+                alive = []
+                for thread, old in self._connections:  # threads come and go (thread pools)
+                    if thread.is_alive():
+                        alive.append((thread, old))
+                    else:
+                        old.close()
+                self._connections = [*alive, (threading.current_thread(), con)]
         return con
 
     def _write(self, sql: str, params: tuple[Any, ...]) -> int:

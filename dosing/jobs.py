@@ -120,7 +120,7 @@ class Job:
     fetch: Callable[[], Any] | None = None
 
 
-@dataclass
+@dataclass(eq=False)  # compared by identity
 class _Entry:
     job: Job
     group: str
@@ -151,6 +151,8 @@ class JobRunner:
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._heartbeat: threading.Thread | None = None
+        self._waiting: list[_Entry] = []  # held elsewhere: polled by one waiter thread
+        self._waiter: threading.Thread | None = None
 
     @property
     def executor(self) -> Executor:
@@ -226,8 +228,12 @@ class JobRunner:
         if self._claim(entry):
             return
         entry.remote = True
-        threading.Thread(target=self._wait_remote, args=(entry,), daemon=True,
-                         name=f"lease-wait-{entry.job.key[:8]}").start()
+        with self._lock:
+            self._waiting.append(entry)
+            if self._waiter is None and not self._stop.is_set():
+                self._waiter = threading.Thread(target=self._wait_remote, daemon=True,
+                                                name="lease-waiter")
+                self._waiter.start()
 
     def _claim(self, entry: _Entry) -> bool:
         """Claim the lease and start the job (or take a result that appeared meanwhile);
@@ -249,20 +255,31 @@ class JobRunner:
         fetch = entry.job.fetch
         return None if fetch is None else fetch()
 
-    def _wait_remote(self, entry: _Entry) -> None:
-        """Poll for another process's result; take the job over when its lease lapses."""
+    def _poll_remote(self, entry: _Entry) -> bool:
+        """One look at a job held elsewhere: True once it is settled or taken over."""
         try:
-            while not self._stop.is_set():
-                found = self._fetch(entry)
-                if found is not None:
-                    self._settle(entry.outer, result=found)
-                    return
-                if self._claim(entry):
-                    return
-                self._stop.wait(WAIT_POLL_SECONDS)
-            self._settle(entry.outer, error=RuntimeError("the job runner was shut down"))
+            found = self._fetch(entry)
+            if found is not None:
+                self._settle(entry.outer, result=found)
+                return True
+            return self._claim(entry)
         except Exception as exc:  # noqa: BLE001 - reported through the future
             self._settle(entry.outer, error=exc)
+            return True
+
+    def _wait_remote(self) -> None:
+        """Poll the jobs other processes hold for their results; take a job over when its
+        lease lapses."""
+        while not self._stop.wait(WAIT_POLL_SECONDS):
+            with self._lock:
+                waiting = list(self._waiting)
+            finished = [e for e in waiting if e.outer.done() or self._poll_remote(e)]
+            with self._lock:
+                self._waiting = [e for e in self._waiting if e not in finished]
+        with self._lock:
+            waiting, self._waiting = self._waiting, []
+        for entry in waiting:
+            self._settle(entry.outer, error=RuntimeError("the job runner was shut down"))
 
     def _run(self, entry: _Entry) -> None:
         try:

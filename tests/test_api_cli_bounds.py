@@ -22,8 +22,8 @@ JUMP = ["--t-start", "302", "--t-end", "308"]
     (["dose", *JUMP, "--fraction", "0.5", "--k0-m2", "1"], "--k0-m2"),
     (["dose", *JUMP, "--fraction", "0.5", "--dry-radius-um", "1e9"], "--dry-radius-um"),
     (["dose", "--t-start", "302", "--t-end", "400", "--fraction", "0.5"], "--t-end"),
-    (["dose", *JUMP, "--fraction", "0.5", "--interfacial-length", "0.5"],
-     "--interfacial-length"),
+    (["dose", *JUMP, "--fraction", "0.5", "--interfacial-length", "0.5"],  # SolverSettings'
+     "settings.interfacial_length"),                                      # (moves with --n)
     (["schedule", *JUMP, "--doses", *["0.00001"] * 10_000, "--no-check", "--no-correct"],
      "--doses"),
     (["schedule", *JUMP, "--doses", "0.3", "0.3", "--tolerance", "0.5"], "--tolerance"),

@@ -87,8 +87,10 @@ def check_bounds(model: Any, values: dict[str, Any]) -> None:
         value = err.get("input")
         if isinstance(value, (list, tuple)) and len(value) > 8:
             value = f"{len(value)} values"
-        raise ParameterError(_flag(tuple(err.get("loc", ()))), value,
-                             msg[0].lower() + msg[1:] + " (the HTTP service's bound)") from None
+        loc = tuple(err.get("loc", ()))
+        field = ".".join(str(p) for p in loc if p not in ("custom", "preset"))
+        raise ParameterError(_flag(loc), value, msg[0].lower() + msg[1:],
+                             f"the HTTP service's bound on {field}") from None
 
 
 def gel_bounds(args: argparse.Namespace) -> dict[str, Any] | None:
