@@ -216,7 +216,11 @@ class JobRunner:
                 started.append(entry)
             futures = [self._jobs[j.key].outer for j in jobs]
         for entry in started:
-            self._start(entry)
+            try:
+                self._start(entry)
+            except Exception as exc:  # noqa: BLE001 - e.g. the lease store is unreachable
+                self._release(entry)
+                self._settle(entry.outer, error=exc)
         return futures
 
     def _start(self, entry: _Entry) -> None:
