@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 from fastapi import FastAPI, Request
@@ -71,7 +71,6 @@ class Rule:
     extra: Callable[[Exception], dict[str, Any]] = lambda e: {}
     headers: Callable[[Exception], dict[str, str]] = lambda e: {}
     plain: bool = False  # detail is the message string, not a list of items
-    meta: dict[str, Any] = field(default_factory=dict)
 
 
 def _retry(exc: Exception) -> dict[str, str]:
@@ -79,7 +78,7 @@ def _retry(exc: Exception) -> dict[str, str]:
     return {"Retry-After": str(max(1, math.ceil(seconds)))}
 
 
-# the table: most specific class first is not needed (Starlette walks the MRO)
+# the table (a subclass such as BudgetExceeded finds its base: the MRO is walked)
 ERRORS: dict[type[Exception], Rule] = {
     ParameterError: Rule(422, "parameter_error", loc=lambda e: loc_of(e.field),
                          extra=lambda e: {"valid": e.valid}),
