@@ -1,7 +1,8 @@
 """Python client of the planner service (httpx): ``Client`` (sync) and ``AsyncClient``.
 
 One method per route, each taking the request model (or a dict, or keyword fields) and
-returning the same pydantic models the server uses (:mod:`api.schemas`).  An error answer
+returning the same pydantic models the server uses (:mod:`api.schemas`); a 202 (work
+queued) is a :class:`~api.schemas.PendingResponse` with the id to poll.  An error answer
 (404, 422, 429, 5xx) raises :class:`ApiError` with the status, the detail (422: a list
 naming the fields) and, for 429, the Retry-After seconds::
 
@@ -60,7 +61,8 @@ def _body(req: BaseModel | dict[str, Any] | None, fields: dict[str, Any]) -> dic
 
 
 def _answer(resp: httpx.Response, model: type[M]) -> M:
-    """Parse a 2xx answer into ``model``; raise :class:`ApiError` otherwise."""
+    """Parse a 200 answer into ``model`` (a 202 into PendingResponse); raise
+    :class:`ApiError` for an error answer."""
     if resp.status_code >= 400:
         try:
             detail = resp.json().get("detail", resp.text)
@@ -68,6 +70,8 @@ def _answer(resp: httpx.Response, model: type[M]) -> M:
             detail = resp.text
         retry = resp.headers.get("Retry-After")
         raise ApiError(resp.status_code, detail, float(retry) if retry else None)
+    if resp.status_code == 202:
+        return s.PendingResponse.model_validate(resp.json())  # type: ignore[return-value]
     return model.model_validate(resp.json())
 
 
@@ -96,12 +100,12 @@ class _Routes:
         return self._call("POST", "/v1/classify", body, s.ClassifyResponse)
 
     def dose_time(self, req: s.DoseTimeRequest | dict | None = None, **fields: Any) -> Any:
-        """POST /v1/dose-time -> DoseTimeResponse (status 'answered' or 'pending')."""
+        """POST /v1/dose-time -> DoseTimeResponse, or PendingResponse (202)."""
         body = _body(req, fields)
         return self._call("POST", "/v1/dose-time", body, s.DoseTimeResponse)
 
     def schedule(self, req: s.ScheduleRequest | dict | None = None, **fields: Any) -> Any:
-        """POST /v1/schedule -> ScheduleResponse."""
+        """POST /v1/schedule -> ScheduleResponse, or PendingResponse (202: a job)."""
         body = _body(req, fields)
         return self._call("POST", "/v1/schedule", body, s.ScheduleResponse)
 

@@ -6,12 +6,13 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from api.schemas import RequestModel
+
 SIZE_FIELDS = ("radius", "diameter", "volume_ratio")
 MAX_POINTS = 2000
 
 
-class _In(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+class _In(RequestModel):
 
     radius: list[float] | None = Field(
         None, max_length=MAX_POINTS, description="bead radius, any unit"

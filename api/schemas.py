@@ -55,10 +55,29 @@ def temperature_field(what: str, example: float) -> Any:
                  description=f"{what} in K; liquid water, {T_MIN}-{T_MAX} K")
 
 
-class _Model(BaseModel):
-    """Base: unknown fields are rejected (a typo is a 422, not a silent default)."""
+def _positive_zero(value: Any) -> Any:
+    """-0.0 -> 0.0, also inside lists and dicts (a request never echoes a negative zero)."""
+    if isinstance(value, float):
+        return value + 0.0  # IEEE: -0.0 + 0.0 == +0.0
+    if isinstance(value, list):
+        return [_positive_zero(v) for v in value]
+    return value
 
-    model_config = ConfigDict(extra="forbid")
+
+class RequestModel(BaseModel):
+    """Base of requests: strict and finite.
+
+    Unknown fields are rejected (a typo is a 422, not a silent default); no coercion
+    (``"0.8"`` is not a number, ``"yes"`` not a boolean); NaN, +-Infinity and overflowing
+    literals such as ``1e309`` are refused by every float field; -0.0 becomes 0.0.
+    """
+
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+    @field_validator("*")
+    @classmethod
+    def _no_negative_zero(cls, value: Any) -> Any:
+        return _positive_zero(value)
 
 
 class _Out(BaseModel):
@@ -69,7 +88,7 @@ class _Out(BaseModel):
 
 # ----------------------------------------------------------------------------- gels
 
-class GelParameters(_Model):
+class GelParameters(RequestModel):
     """A custom gel: a preset with any of its parameters replaced (eq. FloryParam)."""
 
     base: PresetName = Field("ANB", description="preset whose parameters fill any left unset")
@@ -156,7 +175,7 @@ class GelsResponse(_Out):
 
 # ----------------------------------------------------------------------------- physics
 
-class EquilibriumRequest(_Model):
+class EquilibriumRequest(RequestModel):
     """Every free-swelling equilibrium of a gel at one temperature (eq. EqlEqn)."""
 
     gel: GelSpec = "ANB"
@@ -185,7 +204,7 @@ class EquilibriumResponse(_Out):
     folds: list[FoldOut] = Field(description="folds in 273.15-373.15 K, ascending in T")
 
 
-class ClassifyRequest(_Model):
+class ClassifyRequest(RequestModel):
     """What an instant temperature jump T_start -> T_end does to a uniform bead."""
 
     gel: GelSpec = "ANB"
@@ -216,7 +235,7 @@ class ClassifyResponse(_Out):
 
 # ----------------------------------------------------------------------------- dosing
 
-class ConstantsIn(_Model):
+class ConstantsIn(RequestModel):
     """Constants of the timescale tau = eta Omega_p R^2 / (k0 k_B T_end) (eq. timescale, R the
     dry radius); unset fields keep the paper's values."""
 
@@ -241,7 +260,7 @@ class ConstantsIn(_Model):
         return v
 
 
-class DoseTimeRequest(_Model):
+class DoseTimeRequest(RequestModel):
     """How long to hold a bead at T_end to release a dose.
 
     Give exactly one dose (``dose_fraction``, ``dose_volume_ul``, or ``drug_mass_ug`` with
@@ -345,46 +364,55 @@ class ValidationReport(_Out):
         None, description="front model's relative volume error against the truth's run")
 
 
-class DoseTimeResponse(_Out):
-    """The actuation time for a dose (``status`` 'answered'), or a validation id to poll
-    (``status`` 'pending', HTTP 202) when the scenario needs a full-solver run not yet
-    cached; once that validation is done the same request is answered at once."""
+class PendingResponse(_Out):
+    """HTTP 202: the request needs full-solver work not yet done; poll ``validation_url``
+    (a dose: once that validation is done, the same request is answered at once)."""
 
-    status: Literal["answered", "pending"] = Field(
-        description="'answered': the fields below hold the answer; 'pending': the scenario "
-                    "needs the full solver, poll validation_url, then ask again")
-    model: Literal["front-sharp", "front", "full"] | None = Field(
-        None, description="'front-sharp' (reduced front model with the sharp-interface front "
-                          "condition, milliseconds), 'front' (the paper's reduced model, with "
-                          "interfacial_length 0) or 'full' (PDE solver)")
-    interfacial_length: float | None = Field(
-        None, description="interfacial length of the truth, dry radii (0: the paper's model)")
-    truth: str | None = Field(None, description="what the answer is checked against, in words")
-    behaviour: str | None = Field(
-        None, description="the jump's class: 'front', 'delayed_front', 'smooth', 'spinodal'")
-    time: float | None = Field(None, description="actuation time, dimensionless (units of tau)")
+    status: Literal["pending"] = Field("pending", description="always 'pending'")
+    validation_id: str = Field(description="id to poll at /v1/validations/{id}")
+    validation_url: str = Field(description="path of the validation to poll")
+    note: str = Field(description="what is queued and what to do next, in words")
+
+
+class DoseTimeResponse(_Out):
+    """HTTP 200: the actuation time for a dose (the front model, or the full solver's
+    cached runs).  A dose needing a new full-solver run is a :class:`PendingResponse`."""
+
+    status: Literal["answered"] = Field("answered", description="always 'answered'")
+    model: Literal["front-sharp", "front", "full"] = Field(
+        description="'front-sharp' (reduced front model with the sharp-interface front "
+                    "condition, milliseconds), 'front' (the paper's reduced model, with "
+                    "interfacial_length 0) or 'full' (PDE solver)")
+    interfacial_length: float = Field(
+        description="interfacial length of the truth, dry radii (0: the paper's model)")
+    truth: str = Field(description="what the answer is checked against, in words")
+    behaviour: str = Field(
+        description="the jump's class: 'front', 'delayed_front', 'smooth', 'spinodal'")
+    time: float = Field(description="actuation time, dimensionless (units of tau), >= 0")
     seconds: float | None = Field(None, description="actuation time in s (with a bead size)")
     timescale_seconds: float | None = Field(None, description="tau in s (eq. timescale)")
-    timescale_formula: str | None = Field(None, description="how tau was computed")
-    start_radius: float | None = Field(None, description="radius at T_start, dry radii")
-    final_radius: float | None = Field(None, description="radius after the dose, dry radii")
+    timescale_formula: str = Field(description="how tau was computed")
+    start_radius: float = Field(description="radius at T_start, dry radii")
+    final_radius: float = Field(description="radius after the dose, dry radii")
     final_radius_um: float | None = Field(None, description="radius after the dose in um")
-    expelled_volume: float | None = Field(
-        None, description="expelled fluid volume in dry-radius^3 units")
+    expelled_volume: float = Field(
+        description="expelled fluid volume in dry-radius^3 units")
     expelled_volume_ul: float | None = Field(None, description="expelled volume in uL")
-    stored_volume: float | None = Field(
-        None, description="stored fluid (4 pi/3)(a0^3 - 1) in dry-radius^3 units")
+    stored_volume: float = Field(
+        description="stored fluid (4 pi/3)(a0^3 - 1) in dry-radius^3 units")
     stored_volume_ul: float | None = Field(None, description="stored fluid in uL")
-    dose_fraction: float | None = Field(None, description="dose / stored fluid, 0-1")
-    error_estimate: float | None = Field(
-        None, description="estimated relative error of the time, dimensionless")
-    error_explanation: str | None = Field(None, description="the error estimate in words")
+    dose_fraction: float = Field(description="dose / stored fluid, 0-1")
+    error_estimate: float = Field(
+        description="estimated relative error of the time, dimensionless")
+    error_explanation: str = Field(description="the error estimate in words")
     validation: ValidationReport | None = Field(
         None, description="the full solver's verdict when already known")
-    scenario_key: str | None = Field(None, description="key of the dimensionless scenario")
-    note: str | None = Field(None, description="caveats, in words")
-    validation_id: str | None = Field(None, description="id to poll at /v1/validations/{id}")
-    validation_url: str | None = Field(None, description="path of the validation to poll")
+    scenario_key: str = Field(description="key of the dimensionless scenario")
+    note: str = Field(description="caveats, in words")
+    validation_id: str | None = Field(
+        None, description="with validate: id of the queued validation, poll "
+                          "/v1/validations/{id}")
+    validation_url: str | None = Field(None, description="with validate: path to poll")
 
 
 class ValidationResponse(_Out):
@@ -405,7 +433,7 @@ Rest = Annotated[float, Field(ge=0.0, le=1.0e3)]
 RestSeconds = Annotated[float, Field(ge=0.0, le=1.0e7)]
 
 
-class ScheduleRequest(_Model):
+class ScheduleRequest(RequestModel):
     """Several doses released one after another, resting at T_start between heatings.
 
     Answered at once under the hold assumption (the paper's reading: one continuous heating,
@@ -452,30 +480,28 @@ class ScheduleRequest(_Model):
 
 
 class ScheduleResponse(_Out):
-    """A schedule's actuation times under each reading, with the delivered volumes."""
+    """HTTP 200: a schedule's actuation times under each reading, with the delivered
+    volumes.  A schedule needing the full solver is a :class:`PendingResponse` (a job)."""
 
-    status: Literal["answered", "pending"] = Field(
-        "answered", description="'pending': a job was queued, poll validation_url")
-    model: str | None = Field(None, description="which model(s) gave the hold times")
-    doses: list[float] | None = Field(None, description="the doses, fractions of stored fluid")
-    rests: list[float] | None = Field(None, description="the rests, dimensionless")
-    hold: list[dict[str, Any]] | None = Field(
-        None, description="per dose under the hold assumption: start, end and actuation_time "
-                          "(dimensionless), actuation_seconds, error_estimate")
+    status: Literal["answered"] = Field("answered", description="always 'answered'")
+    model: str = Field(description="which model(s) gave the hold times")
+    doses: list[float] = Field(description="the doses, fractions of stored fluid")
+    rests: list[float] = Field(description="the rests, dimensionless")
+    hold: list[dict[str, Any]] = Field(
+        description="per dose under the hold assumption: start, end and actuation_time "
+                    "(dimensionless), actuation_seconds, error_estimate")
     protocol_check: dict[str, Any] | None = Field(
         None, description="the hold times simulated as heat/rest steps: delivered_fractions, "
                           "relative_errors, rest_uptake_fractions")
     corrected: dict[str, Any] | None = Field(
         None, description="actuation times meeting every dose within the tolerance")
-    start_radius: float | None = Field(None, description="radius at T_start, dry radii")
-    stored_volume: float | None = Field(None, description="stored fluid, dry-radius^3 units")
+    start_radius: float = Field(description="radius at T_start, dry radii")
+    stored_volume: float = Field(description="stored fluid, dry-radius^3 units")
     stored_volume_ul: float | None = Field(None, description="stored fluid in uL")
     timescale_seconds: float | None = Field(None, description="tau in s")
-    timescale_formula: str | None = Field(None, description="how tau was computed")
-    scenario_key: str | None = Field(None, description="key of the dimensionless scenario")
-    note: str | None = Field(None, description="caveats, in words")
-    validation_id: str | None = Field(None, description="id of the queued job")
-    validation_url: str | None = Field(None, description="path of the job to poll")
+    timescale_formula: str = Field(description="how tau was computed")
+    scenario_key: str = Field(description="key of the dimensionless scenario")
+    note: str = Field(description="caveats, in words")
 
 
 # ----------------------------------------------------------------------------- service
@@ -499,10 +525,13 @@ class ErrorItem(_Out):
     loc: list[str | int] = Field(description="where: ['body', field, ...] or ['path', name]")
     msg: str = Field(description="what is wrong, with the valid range")
     type: str = Field(description="kind of error")
+    input: str | float | int | bool | None = Field(
+        None, description="an excerpt of the offending value (strings cut to "
+                          "80 characters, containers summarised, NaN/Infinity as text)")
 
 
 class ErrorResponse(_Out):
-    """An error answer (422, 404, 429)."""
+    """An error answer (404, 413, 422, 429, 503)."""
 
     detail: list[ErrorItem] | str = Field(
         description="the problems (422: each names its field in loc), or a message")

@@ -2,8 +2,9 @@
 
 Blocking, FastAPI-free functions (the routes run them in the threadpool): conversions from
 the API's pydantic models (:mod:`api.schemas`) to ``solver`` and ``dosing`` objects, the
-choice between answering a dose at once and queueing a full-solver validation, schedule
-jobs, and the state the routes share.  No physics here.
+choice between answering a dose at once and queueing a full-solver validation (an answer
+dict, or :class:`Pending` for a 202), schedule jobs (stored in the cache, so they survive
+a restart and run once across servers), and the state the routes share.  No physics here.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from dosing import (
     SolverSettings,
     UnknownValidationError,
 )
+from dosing.jobs import DEFAULT_LEASE_SECONDS
 from solver.equilibrium import equilibria, folds
 from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.gel import PRESETS, Gel, Permeability, preset
@@ -105,6 +107,24 @@ def solver_guard() -> Iterator[None]:
 # ----------------------------------------------------------------------------- state
 
 @dataclass
+class Pending:
+    """A request queued as full-solver work: HTTP 202 with the id to poll."""
+
+    validation_id: str
+    note: str
+
+    @property
+    def validation_url(self) -> str:
+        """Path to poll."""
+        return f"/v1/validations/{self.validation_id}"
+
+    def to_dict(self) -> dict[str, str]:
+        """The 202 body (schemas.PendingResponse)."""
+        return {"status": "pending", "validation_id": self.validation_id,
+                "validation_url": self.validation_url, "note": self.note}
+
+
+@dataclass
 class ServiceState:
     """What the routes share: the planner (owned or lent), the warm-up report."""
 
@@ -113,13 +133,19 @@ class ServiceState:
     warmup: WarmupReport | None = None
     options: dict[str, Any] = field(default_factory=dict)
     _schedules: JobRunner | None = None
+    _schedule_pool: ThreadPoolExecutor | None = None
 
     @property
     def schedules(self) -> JobRunner:
-        """Schedule jobs: one thread (their full-solver runs go to the planner's executor)."""
+        """Schedule jobs: one thread (their full-solver runs go to the planner's executor),
+        leased on the planner's cache so that one server runs each job."""
         if self._schedules is None:
-            pool = ThreadPoolExecutor(1, thread_name_prefix="schedule")
-            self._schedules = JobRunner(pool, max_pending=SCHEDULE_QUEUE)
+            self._schedule_pool = ThreadPoolExecutor(1, thread_name_prefix="schedule")
+            cache = getattr(self.planner, "cache", None)
+            lease = float(self.options.get("lease_seconds") or DEFAULT_LEASE_SECONDS)
+            self._schedules = JobRunner(self._schedule_pool, max_pending=SCHEDULE_QUEUE,
+                                        leases=cache, lease_seconds=lease,
+                                        what="schedule jobs")
         return self._schedules
 
     def start(self, warm: bool) -> None:
@@ -133,7 +159,7 @@ class ServiceState:
     def describe(self) -> dict[str, Any]:
         """Cache path and queue state for /health (empty for a stand-in planner)."""
         p = self.planner
-        if p is None or not hasattr(p, "jobs"):
+        if p is None or not hasattr(p, "jobs") or not hasattr(p, "cache"):
             return {}
         return {"cache": str(p.cache.path), "cached_trajectories": len(p.cache),
                 "validations_unfinished": p.jobs.pending(), "max_pending": p.jobs.max_pending,
@@ -143,8 +169,10 @@ class ServiceState:
         """Drop queued schedule jobs (``wait``: join the running one); close the planner if
         this service created it."""
         if self._schedules is not None:
-            self._schedules.executor.shutdown(wait=wait, cancel_futures=True)
-            self._schedules = None
+            self._schedules.shutdown(wait=False)
+            if self._schedule_pool is not None:
+                self._schedule_pool.shutdown(wait=wait, cancel_futures=True)
+            self._schedules = self._schedule_pool = None
         if self.owns_planner and self.planner is not None:
             self.planner.close()
             self.planner = None
@@ -188,52 +216,93 @@ def answerable_now(planner: Any, req: DoseRequest) -> bool:
                                   for sc in planner.scenarios(req))
 
 
-def _poll(vid: str) -> dict[str, str]:
-    return {"validation_id": vid, "validation_url": f"/v1/validations/{vid}"}
+DOSE_PENDING_NOTE = (
+    "This scenario needs the full solver (no front model applies and no run is cached yet). "
+    "Poll validation_url; once it is done, send the same request again: it is then answered "
+    "at once from the cache.")
+SCHEDULE_PENDING_NOTE = "The schedule needs the full solver; poll validation_url for the result."
 
 
-def dose_time(planner: Any, body: s.DoseTimeRequest) -> tuple[int, dict[str, Any]]:
-    """(HTTP status, answer): 200 from the front model or the cache, else 202 and an id."""
+def dose_time(planner: Any, body: s.DoseTimeRequest) -> dict[str, Any] | Pending:
+    """The answer (front model or cache; 200), or :class:`Pending` with a validation id."""
     req = to_dose_request(body)
     if not answerable_now(planner, req):
-        vid = planner.submit_validation(req)
-        return 202, {"status": "pending", **_poll(vid), "note": (
-            "This scenario needs the full solver (no front model applies and no run is cached "
-            "yet). Poll validation_url; once it is done, send the same request again: it is "
-            "then answered at once from the cache.")}
+        return Pending(planner.submit_validation(req), DOSE_PENDING_NOTE)
     out = {"status": "answered", **planner.dose(req).to_dict()}
     if body.validate_full:
-        out.update(_poll(planner.submit_validation(req)))
-    return 200, out
+        queued = Pending(planner.submit_validation(req), "")
+        out.update(validation_id=queued.validation_id, validation_url=queued.validation_url)
+    return out
 
 
-def schedule(state: ServiceState, body: s.ScheduleRequest) -> tuple[int, dict[str, Any]]:
-    """200 with the hold schedule when nothing needs a new full-solver run, else 202 + id."""
+def _schedule_job(state: ServiceState, job_id: str, body: dict[str, Any]) -> dict[str, Any]:
+    """Run a stored schedule job and store its outcome (in the job thread)."""
+    planner = state.planner
+    try:
+        req = to_schedule_request(s.ScheduleRequest.model_validate(body))
+        result = planner.schedule(req).to_dict()
+    except Exception as exc:
+        planner.cache.finish_job(job_id, "failed", error=f"{type(exc).__name__}: {exc}")
+        raise
+    planner.cache.finish_job(job_id, "done", result=result)
+    return result
+
+
+def _finished_job(state: ServiceState, job_id: str) -> dict[str, Any] | None:
+    """The stored job if another process finished it, else None (a lease waiter's fetch)."""
+    row = state.planner.cache.get_job(job_id)
+    return row if row is not None and row["status"] != "pending" else None
+
+
+def _start_schedule(state: ServiceState, job_id: str, body: dict[str, Any]) -> None:
+    """Queue a stored schedule job here, unless it is queued or running already."""
+    if state.schedules.state(job_id) in ("pending", "running"):
+        return
+    state.schedules.submit(job_id, _schedule_job, state, job_id, body,
+                           fetch=lambda: _finished_job(state, job_id))
+
+
+def schedule(state: ServiceState, body: s.ScheduleRequest) -> dict[str, Any] | Pending:
+    """The hold schedule (200) when nothing needs a new full-solver run, else a stored job
+    (:class:`Pending`)."""
     req = to_schedule_request(body)
     planner = state.planner
     quick = not (req.check_protocol or req.correct) and all(
         answerable_now(planner, req.dose_request(c)) for c in accumulate(req.doses))
     if quick:
-        return 200, {"status": "answered", **planner.schedule(req).to_dict()}
+        return {"status": "answered", **planner.schedule(req).to_dict()}
     key = hashlib.sha256(body.model_dump_json().encode()).hexdigest()[:24]
-    state.schedules.submit(key, planner.schedule, req)
-    return 202, {"status": "pending", **_poll(SCHEDULE_PREFIX + key), "note": (
-        "The schedule needs the full solver; poll validation_url for the result.")}
+    job_id = SCHEDULE_PREFIX + key
+    stored = body.model_dump(mode="json", by_alias=True)
+    row = planner.cache.get_job(job_id)
+    if row is None or row["status"] == "failed":  # new, or asked again after a failure
+        _start_schedule(state, job_id, stored)  # admitted (or QueueFullError) first
+        if row is None:
+            planner.cache.put_job(job_id, "schedule", stored)
+        else:
+            planner.cache.finish_job(job_id, "pending")
+    elif row["status"] == "pending":
+        _start_schedule(state, job_id, row["request"])
+    return Pending(job_id, SCHEDULE_PENDING_NOTE)
 
 
 def validation(state: ServiceState, vid: str) -> dict[str, Any]:
-    """A dose validation from the planner (persistent), or a schedule job (in memory)."""
+    """A dose validation from the planner, or a schedule job (both persistent); an
+    unfinished schedule job nobody here runs (a restart) is queued again."""
     if not vid.startswith(SCHEDULE_PREFIX):
         return {"kind": "dose", **state.planner.validation(vid).to_dict()}
-    key = vid[len(SCHEDULE_PREFIX):]
-    status = state.schedules.state(key)
-    if status is None:
+    row = state.planner.cache.get_job(vid)
+    if row is None:
         raise UnknownValidationError(vid)
-    out: dict[str, Any] = {"id": vid, "kind": "schedule", "status": status}
-    fut = state.schedules.get(key)
-    if status == "done":
-        out["result"] = fut.result().to_dict()
-    elif status == "failed":
-        exc = fut.exception()
-        out["error"] = f"{type(exc).__name__}: {exc}"
+    out: dict[str, Any] = {"id": vid, "kind": "schedule", "status": row["status"]}
+    if row["status"] == "pending":
+        _start_schedule(state, vid, row["request"])
+        out["status"] = state.schedules.state(vid) or "pending"
+        if out["status"] in ("done", "failed"):  # finished just now
+            row = state.planner.cache.get_job(vid) or row
+            out["status"] = row["status"]
+    if out["status"] == "done":
+        out["result"] = row["result"]
+    elif out["status"] == "failed":
+        out["error"] = row["error"] or "failed"
     return out

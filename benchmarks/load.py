@@ -16,7 +16,8 @@ Doses (10-85 % of the stored fluid), bead sizes (10-200 um) and the gel (ANB 302
 HHT 304->308 K: front-model scenarios) vary per request.  The client is a minimal
 HTTP/1.1 keep-alive client on asyncio streams, so that it costs far less CPU than the
 server it measures.  Prints throughput, latency percentiles and every non-2xx answer or
-transport error::
+transport error; a 429 (queue full) is reported as such, with the server's message, not
+raised::
 
     .venv/bin/python benchmarks/load.py                    # 2,000 requests, 32 connections
     .venv/bin/python benchmarks/load.py --url http://127.0.0.1:8000   # an existing server
@@ -59,11 +60,14 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-def start_server(cache: Path, workers: int) -> tuple[subprocess.Popen, str]:
+def start_server(cache: Path, workers: int,
+                 max_pending: int | None = None) -> tuple[subprocess.Popen, str]:
     """``thermogel serve`` on a free loopback port; returns once /health answers 200."""
     port = free_port()
     cmd = [sys.executable, "-m", "api.cli", "serve", "--port", str(port), "--cache", str(cache),
            "--workers", str(workers), "--log-level", "warning"]
+    if max_pending is not None:
+        cmd += ["--max-pending", str(max_pending)]
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                             text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
     url = f"http://127.0.0.1:{port}"
@@ -179,24 +183,30 @@ async def run_load(url: str, bodies: list[dict], concurrency: int,
     wall = time.perf_counter() - t_begin
     await asyncio.gather(*(c.close() for c in conns))
     lat = np.array(latencies)
-    errors = sum(v for k, v in statuses.items() if not k.startswith("2"))
+    errors = sum(v for k, v in statuses.items() if not k.startswith("2") and k != "429")
     return {"mode": "closed loop" if rate is None else f"paced at {rate:.0f} req/s",
             "requests": len(latencies), "concurrency": concurrency, "wall_s": wall,
             "throughput_rps": len(latencies) / wall, "p50_ms": float(np.percentile(lat, 50)),
             "p90_ms": float(np.percentile(lat, 90)), "p99_ms": float(np.percentile(lat, 99)),
-            "max_ms": float(lat.max()), "errors": errors, "statuses": dict(statuses)}
+            "max_ms": float(lat.max()), "errors": errors, "queue_full_429": statuses["429"],
+            "statuses": dict(statuses)}
 
 
-def queue_validations(url: str) -> list[str]:
-    """Queue the full-solver validations that run while the load is on; their ids."""
-    ids = []
+def queue_validations(url: str) -> tuple[list[str], list[str]]:
+    """Queue the full-solver validations that run while the load is on: their ids, and
+    the refusals (a 429 when the queue is full: reported, not raised)."""
+    ids, refused = [], []
     with httpx.Client(base_url=url, timeout=60.0) as c:
         for body in VALIDATIONS:
             r = c.post("/v1/dose-time", json=body)
+            if r.status_code == 429:
+                refused.append(f"429 (retry after {r.headers.get('retry-after')} s): "
+                               f"{r.json().get('detail')}")
+                continue
             r.raise_for_status()
             if r.json().get("validation_id"):
                 ids.append(r.json()["validation_id"])
-    return ids
+    return ids, refused
 
 
 def validation_states(url: str, ids: list[str]) -> dict[str, str]:
@@ -209,8 +219,8 @@ def _print(res: dict) -> None:
     print(f"{res['mode']}: {res['requests']} dose-time requests over {res['concurrency']} "
           f"connections in {res['wall_s']:.2f} s = {res['throughput_rps']:.0f} req/s; "
           f"latency p50 {res['p50_ms']:.1f} ms, p90 {res['p90_ms']:.1f} ms, "
-          f"p99 {res['p99_ms']:.1f} ms, max {res['max_ms']:.1f} ms; errors {res['errors']} "
-          f"{res['statuses']}")
+          f"p99 {res['p99_ms']:.1f} ms, max {res['max_ms']:.1f} ms; errors {res['errors']}, "
+          f"429 (queue full) {res['queue_full_429']} {res['statuses']}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -222,6 +232,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="paced phase arrival rate, req/s (default: half the closed-loop rate)")
     p.add_argument("--warmup", type=int, default=200, help="requests sent first, not counted")
     p.add_argument("--workers", type=int, default=1, help="uvicorn workers of the server")
+    p.add_argument("--max-pending", type=int, default=None,
+                   help="the started server's validation queue (default: its own)")
     p.add_argument("--url", default=None, help="an already running server (else one starts)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--json", action="store_true")
@@ -235,8 +247,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         url = args.url
         if url is None:
-            proc, url = start_server(Path(tmp.name) / "cache.sqlite", args.workers)
-        ids = queue_validations(url)
+            proc, url = start_server(Path(tmp.name) / "cache.sqlite", args.workers,
+                                     args.max_pending)
+        ids, refused = queue_validations(url)
         if args.warmup > 0:
             asyncio.run(run_load(url, payloads(args.warmup, args.seed + 1), args.concurrency))
         closed = asyncio.run(run_load(url, payloads(args.requests, args.seed), args.concurrency))
@@ -254,11 +267,14 @@ def main(argv: list[str] | None = None) -> int:
                 proc.wait()
         tmp.cleanup()
     if args.json:
-        print(json.dumps({"closed_loop": closed, "paced": paced, "validations": states}))
+        print(json.dumps({"closed_loop": closed, "paced": paced, "validations": states,
+                          "validations_refused": refused}))
     else:
         _print(closed)
         _print(paced)
         print(f"validations queued meanwhile: {states}")
+        for why in refused:
+            print(f"validation refused: {why}")
     return 1 if closed["errors"] or paced["errors"] else 0
 
 

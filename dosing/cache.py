@@ -6,18 +6,24 @@ process killed mid-write leaves the file readable with every committed row intac
 WAL is rolled back on the next open).  Each thread gets its own connection, each process
 opens its own, so concurrent readers and writers are safe.  A row holds the trajectory
 as an ``.npz`` blob plus its JSON metadata (scenario, horizon, diagnostics).  A second
-table records validation requests, so ids survive a restart.
+table records validation requests, so ids survive a restart; a third, the leases, makes
+each scenario computed once across processes sharing the file (a claim with an expiry,
+renewed while its holder works, taken over once it lapses or its holder's process is
+gone); a fourth stores jobs (schedule checks): their request, state and result.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import socket
 import sqlite3
 import threading
 import time
 from pathlib import Path
 from typing import Any
+
+from solver.errors import ParameterError
 
 from .scenario import Trajectory
 
@@ -36,7 +42,42 @@ CREATE TABLE IF NOT EXISTS validations (
     record TEXT NOT NULL,
     created REAL NOT NULL
 );
+CREATE TABLE IF NOT EXISTS leases (
+    key TEXT PRIMARY KEY,
+    owner TEXT NOT NULL,
+    expires REAL NOT NULL
+);
+CREATE TABLE IF NOT EXISTS jobs (
+    id TEXT PRIMARY KEY,
+    kind TEXT NOT NULL,
+    request TEXT NOT NULL,
+    status TEXT NOT NULL,
+    result TEXT,
+    error TEXT,
+    created REAL NOT NULL,
+    updated REAL NOT NULL
+);
 """
+JOB_STATES = ("pending", "done", "failed")
+CACHE_VALID = "a writable SQLite file whose directory exists or can be created"
+
+
+def _owner_gone(owner: str) -> bool:
+    """True when a lease owner ('host:pid:tag') is a process of this host that has ended."""
+    host, _, rest = owner.partition(":")
+    pid_text = rest.partition(":")[0]
+    if host != socket.gethostname() or not pid_text.isdigit():
+        return False
+    pid = int(pid_text)
+    if pid == os.getpid():
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except OSError:  # exists (another user's) or cannot tell
+        return False
+    return False
 
 
 def default_path() -> Path:
@@ -52,12 +93,22 @@ class ValidationCache:
 
     def __init__(self, path: str | os.PathLike[str] | None = None) -> None:
         self.path = Path(path).expanduser() if path is not None else default_path()
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         self._local = threading.local()
         self._lock = threading.Lock()
-        self._connections: list[sqlite3.Connection] = []
-        con = self._con()
-        con.executescript(_SCHEMA)
+        self._connections: list[tuple[threading.Thread, sqlite3.Connection]] = []
+        try:
+            if self.path.is_dir():
+                raise sqlite3.OperationalError("it is a directory")
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            con = self._con()
+            con.executescript(_SCHEMA)
+            con.execute("BEGIN IMMEDIATE")  # a read-only file fails here, not mid-request
+            con.execute("ROLLBACK")
+        except (sqlite3.Error, OSError) as exc:
+            self.close()
+            err = ParameterError("cache", str(self.path), CACHE_VALID, f"cannot open it: {exc}")
+            err.reason = f"cannot open it: {exc}"
+            raise err from None
 
     def _con(self) -> sqlite3.Connection:
         con = getattr(self._local, "con", None)
@@ -69,18 +120,26 @@ class ValidationCache:
             con.execute(f"PRAGMA busy_timeout={int(BUSY_TIMEOUT_S * 1000)}")
             self._local.con = con
             with self._lock:
-                self._connections.append(con)
+                alive = []
+                for thread, old in self._connections:  # threads come and go (thread pools)
+                    if thread.is_alive():
+                        alive.append((thread, old))
+                    else:
+                        old.close()
+                self._connections = [*alive, (threading.current_thread(), con)]
         return con
 
-    def _write(self, sql: str, params: tuple[Any, ...]) -> None:
+    def _write(self, sql: str, params: tuple[Any, ...]) -> int:
+        """One statement in its own write transaction; the number of rows it changed."""
         con = self._con()
         con.execute("BEGIN IMMEDIATE")
         try:
-            con.execute(sql, params)
+            changed = con.execute(sql, params).rowcount
         except BaseException:
             con.execute("ROLLBACK")
             raise
         con.execute("COMMIT")
+        return changed
 
     # trajectories ---------------------------------------------------------------------
     def put(self, key: str, meta: dict[str, Any], blob: bytes) -> None:
@@ -122,6 +181,12 @@ class ValidationCache:
             return None
         return Trajectory.from_npz(bytes(row[1]), json.loads(row[0]))
 
+    def get_raw(self, key: str) -> tuple[dict[str, Any], bytes] | None:
+        """(metadata, npz blob) as stored, or None (no decoding)."""
+        row = self._con().execute("SELECT meta, data FROM trajectories WHERE key = ?",
+                                  (key,)).fetchone()
+        return None if row is None else (json.loads(row[0]), bytes(row[1]))
+
     def meta(self, key: str) -> dict[str, Any] | None:
         """The metadata alone (no blob decoding), or None."""
         row = self._con().execute("SELECT meta FROM trajectories WHERE key = ?",
@@ -151,19 +216,92 @@ class ValidationCache:
                                   (vid,)).fetchone()
         return None if row is None else json.loads(row[0])
 
+    # leases (dosing.jobs.Leases) -------------------------------------------------------
+    def claim(self, key: str, owner: str, seconds: float) -> bool:
+        """Take the lease on ``key`` for ``seconds`` if it is free, expired, ours, or held
+        by a process of this host that has ended; True if we hold it now."""
+        con = self._con()
+        now = time.time()
+        con.execute("BEGIN IMMEDIATE")
+        try:
+            row = con.execute("SELECT owner, expires FROM leases WHERE key = ?",
+                              (key,)).fetchone()
+            free = row is None or row[0] == owner or row[1] < now or _owner_gone(row[0])
+            if free:
+                con.execute("INSERT OR REPLACE INTO leases (key, owner, expires) "
+                            "VALUES (?, ?, ?)", (key, owner, now + seconds))
+        except BaseException:
+            con.execute("ROLLBACK")
+            raise
+        con.execute("COMMIT")
+        return free
+
+    def renew(self, keys: list[str] | tuple[str, ...], owner: str, seconds: float) -> None:
+        """Extend our leases on ``keys`` to ``seconds`` from now (one transaction)."""
+        con = self._con()
+        con.execute("BEGIN IMMEDIATE")
+        try:
+            con.executemany("UPDATE leases SET expires = ? WHERE key = ? AND owner = ?",
+                            [(time.time() + seconds, k, owner) for k in keys])
+        except BaseException:
+            con.execute("ROLLBACK")
+            raise
+        con.execute("COMMIT")
+
+    def release(self, key: str, owner: str) -> None:
+        """Drop our lease on ``key`` (another owner's is left alone)."""
+        self._write("DELETE FROM leases WHERE key = ? AND owner = ?", (key, owner))
+
+    def lease(self, key: str) -> tuple[str, float] | None:
+        """(owner, expiry time) of the lease on ``key``, or None."""
+        row = self._con().execute("SELECT owner, expires FROM leases WHERE key = ?",
+                                  (key,)).fetchone()
+        return None if row is None else (str(row[0]), float(row[1]))
+
+    # jobs -----------------------------------------------------------------------------
+    def put_job(self, job_id: str, kind: str, request: dict[str, Any]) -> bool:
+        """Record a job (state 'pending') unless it is there; True if it was new."""
+        now = time.time()
+        return self._write("INSERT OR IGNORE INTO jobs (id, kind, request, status, created, "
+                           "updated) VALUES (?, ?, ?, 'pending', ?, ?)",
+                           (job_id, kind, json.dumps(request), now, now)) > 0
+
+    def finish_job(self, job_id: str, status: str, result: dict[str, Any] | None = None,
+                   error: str | None = None) -> None:
+        """Store a job's outcome: 'done' with its result, or 'failed' with why."""
+        if status not in JOB_STATES:
+            raise ValueError(f"status must be one of {JOB_STATES}")
+        self._write("UPDATE jobs SET status = ?, result = ?, error = ?, updated = ? "
+                    "WHERE id = ?", (status, None if result is None else json.dumps(result),
+                                     error, time.time(), job_id))
+
+    def get_job(self, job_id: str) -> dict[str, Any] | None:
+        """The job: id, kind, request, status, result, error; or None."""
+        row = self._con().execute("SELECT id, kind, request, status, result, error FROM jobs "
+                                  "WHERE id = ?", (job_id,)).fetchone()
+        if row is None:
+            return None
+        return {"id": row[0], "kind": row[1], "request": json.loads(row[2]), "status": row[3],
+                "result": None if row[4] is None else json.loads(row[4]), "error": row[5]}
+
     # housekeeping --------------------------------------------------------------------
     def integrity(self) -> str:
         """SQLite's integrity check ('ok' when the file is sound)."""
         return str(self._con().execute("PRAGMA integrity_check").fetchone()[0])
 
     def close(self) -> None:
-        """Close every connection this object opened."""
+        """Close the connections of this thread and of threads that have ended; a live
+        thread's connection is only let go (closing it under a running statement could
+        crash), so it closes when that thread drops it.  Using the cache afterwards opens
+        new connections."""
+        me = threading.current_thread()
         with self._lock:
-            for con in self._connections:
-                try:
-                    con.close()
-                except sqlite3.Error:
-                    pass
+            for thread, con in self._connections:
+                if thread is me or not thread.is_alive():
+                    try:
+                        con.close()
+                    except sqlite3.Error:
+                        pass
             self._connections.clear()
         self._local = threading.local()
 

@@ -29,7 +29,7 @@ from solver.gel import Gel
 from solver.phase import JumpClass, classify_jump
 
 from .cache import ValidationCache
-from .jobs import JobRunner
+from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner
 from .request import DoseRequest, ScheduleRequest
 from .scenario import Scenario, SolverSettings, Trajectory, run_scenario
 from .units import (
@@ -219,13 +219,17 @@ class Planner:
     """Plans doses and schedules; keeps full-solver validations in a persistent cache.
 
     ``executor`` is any ``concurrent.futures.Executor`` (default: a process pool); full
-    solver runs are deduplicated by scenario key and at most ``max_pending`` are queued.
+    solver runs are deduplicated by scenario key, also across processes sharing the cache
+    file (a lease per run, lapsing ``lease_seconds`` after its holder stops renewing it),
+    and at most ``max_pending`` validations (each admitted with all its runs) are queued.
     """
 
     def __init__(self, cache_path: str | None = None, executor: Executor | None = None,
-                 max_pending: int = 64, horizon: float = DEFAULT_HORIZON) -> None:
+                 max_pending: int = 64, horizon: float = DEFAULT_HORIZON,
+                 lease_seconds: float = DEFAULT_LEASE_SECONDS) -> None:
         self.cache = ValidationCache(cache_path)
-        self.jobs = JobRunner(executor, max_pending)
+        self.jobs = JobRunner(executor, max_pending, leases=self.cache,
+                              lease_seconds=lease_seconds)
         self.horizon = float(horizon)
         self._mem: OrderedDict[str, Trajectory] = OrderedDict()
         self._mem_lock = threading.Lock()
@@ -258,13 +262,28 @@ class Planner:
         meta, blob = fut.result()
         self.cache.put_if_longer(meta["key"], meta, blob)
 
+    def _fetch(self, sc: Scenario, need_radius: float | None,
+               need_time: float) -> tuple[dict[str, Any], bytes] | None:
+        """(meta, blob) of a stored run covering the need (one another process stored)."""
+        raw = self.cache.get_raw(sc.key())
+        if raw is None or not _covers(Trajectory.from_npz(raw[1], raw[0]), sc, need_radius,
+                                      need_time):
+            return None
+        return raw
+
+    def _job(self, sc: Scenario, need_radius: float | None, need_time: float) -> Job:
+        """The full-solver run for ``sc`` as a job: past the stored horizon (x4)."""
+        meta = self.cache.meta(sc.key())
+        horizon = self.horizon if meta is None else 4.0 * float(meta.get("horizon", 0.0))
+        return Job(sc.key(), run_scenario,
+                   (sc.to_dict(), max(horizon, self.horizon), need_radius, need_time),
+                   on_done=self._store,
+                   fetch=functools.partial(self._fetch, sc, need_radius, need_time))
+
     def submit(self, sc: Scenario, need_radius: float | None = None,
                need_time: float = 0.0) -> Future:
         """Queue the full-solver run for ``sc`` (deduplicated by key); returns its future."""
-        meta = self.cache.meta(sc.key())
-        horizon = self.horizon if meta is None else 4.0 * float(meta.get("horizon", 0.0))
-        return self.jobs.submit(sc.key(), run_scenario, sc.to_dict(), max(horizon, self.horizon),
-                                need_radius, need_time, on_done=self._store)
+        return self.jobs.submit_group(sc.key(), [self._job(sc, need_radius, need_time)])[0]
 
     def trajectory(self, sc: Scenario, need_radius: float | None = None,
                    need_time: float = 0.0) -> Trajectory:
@@ -281,7 +300,13 @@ class Planner:
 
     def _trajectories(self, scs: list[Scenario], need_radius: float,
                       need_time: float) -> list[Trajectory | BaseException]:
-        """The runs' trajectories, run concurrently; a failure is returned, not raised."""
+        """The runs' trajectories, run concurrently; a failure is returned, not raised.
+        The runs not stored yet are admitted to the queue together (or none is)."""
+        todo = [sc for sc in scs if self.cached(sc, need_radius, need_time) is None]
+        if todo:
+            group = hashlib.sha256(json.dumps([sc.key() for sc in scs]).encode()).hexdigest()
+            self.jobs.submit_group(group[:24], [self._job(sc, need_radius, need_time)
+                                                for sc in todo])
         with ThreadPoolExecutor(len(scs)) as pool:
             futs = [pool.submit(self.trajectory, sc, need_radius, need_time) for sc in scs]
             wait(futs)
@@ -312,7 +337,7 @@ class Planner:
         if model == "full" and rep["time"] is None:
             raise next((t for t in trajs if isinstance(t, BaseException)),
                        SolverError(f"no full-solver time: {failure(rep)}"))
-        time = t_front if t_front is not None else rep["time"]
+        time = max(0.0, t_front if t_front is not None else rep["time"])  # tiny doses: -1e-17
         est, explain = error_estimate(model, time, rep, req.fraction)
         ans = self._answer(req, model, time, radius, est, explain, rep, scs[0].key(), why)
         from .fit_uncertainty import attach_parameter_interval
@@ -343,28 +368,29 @@ class Planner:
         vid = hashlib.sha256(json.dumps([keys, round(f, 12)]).encode()).hexdigest()[:24]
         record = {"scenarios": [sc.to_dict() for sc in scs], "keys": keys, "start_radius": a0,
                   "target_radius": radius, "fraction": f, "front_time": t_front}
+        self._advance(record, vid)  # admitted whole or not at all (QueueFullError)
         if self.cache.get_validation(vid) is None:
             self.cache.put_validation(vid, record)
-        self._advance(record)
         return vid
 
-    def _advance(self, record: dict[str, Any]) -> tuple[list[Any], list[str]]:
+    def _advance(self, record: dict[str, Any], vid: str) -> tuple[list[Any], list[str]]:
         """Per run: a covering trajectory, an exception, or None and its job state in the
-        second list (submitting what is neither cached nor queued)."""
+        second list (submitting what is neither cached nor queued, as one group ``vid``)."""
         need_r, need_t = record["target_radius"], record["front_time"] or 0.0
+        scs = [Scenario.from_dict(scd) for scd in record["scenarios"]]
+        trajs = [self.cached(sc, need_r, need_t) for sc in scs]
+        todo = [sc for sc, traj in zip(scs, trajs, strict=True) if traj is None
+                and self.jobs.state(sc.key()) not in ("pending", "running", "failed")]
+        if todo:  # never run, or short of the dose
+            self.jobs.submit_group(vid, [self._job(sc, need_r, need_t) for sc in todo])
         out: list[Any] = []
         states = []
-        for scd in record["scenarios"]:
-            sc = Scenario.from_dict(scd)
-            traj = self.cached(sc, need_r, need_t)
+        for sc, traj in zip(scs, trajs, strict=True):
             state = None if traj is not None else self.jobs.state(sc.key())
             if state == "failed":
                 traj = self.jobs.get(sc.key()).exception() or RuntimeError("cancelled")
             elif traj is None:
-                if state not in ("pending", "running"):  # never run, or short of the dose
-                    self.submit(sc, need_r, need_t)
-                    state = self.jobs.state(sc.key()) or "pending"
-                states.append(state)
+                states.append(state or "pending")
             out.append(traj)
         return out, states
 
@@ -373,7 +399,7 @@ class Planner:
         record = self.cache.get_validation(vid)
         if record is None:
             raise UnknownValidationError(vid)
-        trajs, states = self._advance(record)
+        trajs, states = self._advance(record, vid)
         if states:
             return ValidationStatus(vid, "running" if "running" in states else "pending")
         scs = [Scenario.from_dict(d) for d in record["scenarios"]]

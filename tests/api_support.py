@@ -42,26 +42,40 @@ def free_port() -> int:
 
 @contextmanager
 def serve(cache: Path, *extra: str, timeout: float = 240.0) -> Iterator[str]:
-    """Run ``thermogel serve`` on a loopback port; yield its base URL; SIGKILL it after."""
-    port = free_port()
-    with _server([sys.executable, "-m", "api.cli", "serve", "--port", str(port), "--cache",
-                  str(cache), "--log-level", "warning", *extra], port, timeout) as (url, _):
+    """Run ``thermogel serve`` on a loopback port; yield its base URL; stop it after
+    (SIGTERM: a graceful shutdown that stops the planner's pool; SIGKILL if it hangs)."""
+    with serve_process(cache, *extra, timeout=timeout) as (url, _):
         yield url
 
 
 @contextmanager
-def fake_server(cache: Path, delay: float, timeout: float = 60.0) -> Iterator[tuple[str, object]]:
-    """The service with fake full-solver jobs (tests/api_fake_server.py); yields (url, proc)."""
+def serve_process(cache: Path, *extra: str,
+                  timeout: float = 240.0) -> Iterator[tuple[str, subprocess.Popen]]:
+    """:func:`serve` yielding (url, process)."""
     port = free_port()
-    script = Path(__file__).with_name("api_fake_server.py")
-    with _server([sys.executable, str(script), str(port), str(cache), str(delay)], port,
-                 timeout) as pair:
+    with _server([sys.executable, "-m", "api.cli", "serve", "--port", str(port), "--cache",
+                  str(cache), "--log-level", "warning", *extra], port, timeout,
+                 graceful=True) as pair:
         yield pair
 
 
 @contextmanager
-def _server(cmd: list[str], port: int, timeout: float) -> Iterator[tuple[str, object]]:
-    """Start ``cmd`` (a server on ``port``), wait for /health, SIGKILL it afterwards."""
+def fake_server(cache: Path, delay: float, timeout: float = 60.0,
+                *extra: str) -> Iterator[tuple[str, object]]:
+    """The service with fake full-solver jobs (tests/api_fake_server.py, ``extra`` its
+    options); yields (url, proc)."""
+    port = free_port()
+    script = Path(__file__).with_name("api_fake_server.py")
+    with _server([sys.executable, str(script), str(port), str(cache), str(delay), *extra],
+                 port, timeout) as pair:
+        yield pair
+
+
+@contextmanager
+def _server(cmd: list[str], port: int, timeout: float,
+            graceful: bool = False) -> Iterator[tuple[str, object]]:
+    """Start ``cmd`` (a server on ``port``), wait for /health; afterwards SIGKILL it (or
+    SIGTERM first when ``graceful``)."""
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)
@@ -70,6 +84,12 @@ def _server(cmd: list[str], port: int, timeout: float) -> Iterator[tuple[str, ob
         wait_healthy(url, proc, timeout)
         yield url, proc
     finally:
+        if graceful and proc.poll() is None:
+            proc.terminate()
+            try:
+                proc.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                pass
         proc.kill()
         proc.wait(timeout=10)
         if proc.stderr:
@@ -97,21 +117,27 @@ def wait_healthy(url: str, proc: subprocess.Popen, timeout: float) -> None:
 class SlowFakeSolver(FakeSolver):
     """The dosing tests' closed-form fake of ``solver.full.simulate``, taking ``delay`` s."""
 
-    def __init__(self, delay: float = 0.0) -> None:
+    def __init__(self, delay: float = 0.0, calls_log: Path | None = None) -> None:
         super().__init__()
         self.delay = delay
+        self.calls_log = calls_log
 
     def __call__(self, *args: object, **kwargs: object) -> object:
+        if self.calls_log is not None:  # one line per run, appended atomically (O_APPEND)
+            with open(self.calls_log, "a") as f:
+                f.write(f"{os.getpid()} {kwargs.get('grid')} {kwargs.get('n')} "
+                        f"{kwargs.get('interfacial_length')}\n")
         time.sleep(self.delay)
         return super().__call__(*args, **kwargs)
 
 
 @contextmanager
-def fake_full_solver(delay: float = 0.0) -> Iterator[SlowFakeSolver]:
+def fake_full_solver(delay: float = 0.0,
+                     calls_log: Path | None = None) -> Iterator[SlowFakeSolver]:
     """Replace ``solver.full`` by the fake while the block runs.  The planner's
     ``run_scenario`` imports ``simulate`` when it runs, so a planner on a thread executor
     (:func:`fake_planner`) runs every full-solver job on the fake, in milliseconds."""
-    fake = SlowFakeSolver(delay)
+    fake = SlowFakeSolver(delay, calls_log)
     with pytest.MonkeyPatch.context() as mp:
         mp.setitem(sys.modules, "solver.full", fake.module())
         yield fake

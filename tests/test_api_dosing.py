@@ -145,15 +145,26 @@ async def test_unknown_validation_is_404(clients) -> None:
 
 
 async def test_full_queue_is_429_with_retry_after(tmp_path) -> None:
+    """max_pending counts validations (issue 15, D4: it counted solver runs, so a
+    three-run validation could be admitted in part): one validation, all three of its
+    runs, fills a queue of one; the next is refused whole, naming what is full."""
     with fake_full_solver(delay=1.0), \
-            fake_planner(tmp_path / "c.sqlite", max_pending=3) as planner:
+            fake_planner(tmp_path / "c.sqlite", max_pending=1) as planner:
         async with asgi(create_app(planner=planner, warm=False)) as (_, raw):
             r1 = await raw.post("/v1/dose-time", json=SMOOTH)  # three rungs: the queue is full
             r2 = await raw.post("/v1/dose-time", json={**SMOOTH, "t_start": 300.5})
             assert r1.status_code == 202
             assert r2.status_code == 429 and int(r2.headers["retry-after"]) >= 1
+            assert "validations queue is full" in r2.json()["detail"]
+            assert "(at most 1)" in r2.json()["detail"]
             r3 = await raw.post("/v1/dose-time", json=SMOOTH)  # the same scenario: deduplicated
             assert r3.status_code == 202
+            assert planner.jobs.pending() == 1
+            v = await raw.get(r1.json()["validation_url"])
+            assert v.status_code == 200
+            # the refused validation left nothing queued behind
+            assert all(planner.jobs.state(sc.key()) is None for sc in planner.scenarios(
+                DoseRequest(**{**SMOOTH, "t_start": 300.5})))
 
 
 async def test_blocking_work_never_blocks_the_event_loop(tmp_path, fake) -> None:

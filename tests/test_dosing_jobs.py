@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from dosing import DoseRequest, JobRunner, Planner, QueueFullError
-from dosing.jobs import default_executor
+from dosing import DoseRequest, JobRunner, Planner, QueueFullError, ValidationCache
+from dosing.jobs import Job, default_executor
 from dosing.units import radius_after_dose
 from solver.gel import HHT
 
@@ -115,3 +115,106 @@ def test_a_run_past_its_wall_budget_fails_clearly() -> None:
     assert diag["wall_seconds"] > 0.0 and 0.0 <= diag["fraction"] < 1.0  # stopped mid-run
     meta, _ = run_scenario(sc.to_dict(), horizon=0.5)  # the default budget: 600 s
     assert meta["runs"] == 1
+
+
+# ----------------------------------------------------------------------------- issue 15
+
+def test_a_group_is_admitted_whole_or_not_at_all() -> None:
+    """D4: max_pending counts groups (validations); a group that does not fit is refused
+    with nothing of it queued, and the message says what is full."""
+    gate = threading.Event()
+    with ThreadPoolExecutor(4) as ex:
+        runner = JobRunner(ex, max_pending=1, what="validations")
+        jobs = [Job(k, gate.wait, (10,)) for k in ("r1", "r2", "r3")]
+        futs = runner.submit_group("v1", jobs)
+        assert len(futs) == 3 and runner.pending() == 1
+        with pytest.raises(QueueFullError, match=r"validations queue is full: 1 validations"):
+            runner.submit_group("v2", [Job("r4", gate.wait, (10,)), Job("r5", gate.wait, (10,))])
+        assert runner.state("r4") is None and runner.state("r5") is None
+        again = runner.submit_group("v3", [Job("r1", gate.wait, (10,))])  # all deduplicated
+        assert again[0] is futs[0]
+        gate.set()
+        assert all(f.result(10) for f in futs)
+
+
+def _leased(path: Path, lease: float) -> tuple[ValidationCache, JobRunner, ThreadPoolExecutor]:
+    cache = ValidationCache(path)
+    pool = ThreadPoolExecutor(2)
+    return cache, JobRunner(pool, leases=cache, lease_seconds=lease), pool
+
+
+def test_a_live_holder_keeps_its_lease_and_the_other_takes_its_result(tmp_path: Path) -> None:
+    """D5: two runners (two servers) on one cache: the second waits for the first's
+    result (renewed lease, run 4x longer than the lease), computing nothing itself."""
+    calls: list[str] = []
+    store: dict[str, int] = {}
+
+    def work(who: str) -> int:
+        calls.append(who)
+        time.sleep(1.2)
+        return 42
+
+    cache_a, a, pool_a = _leased(tmp_path / "c.sqlite", 0.3)
+    cache_b, b, pool_b = _leased(tmp_path / "c.sqlite", 0.3)
+    fetch = lambda: store.get("k")  # noqa: E731 - where the holder stores its result
+    fa = a.submit("k", work, "a", on_done=lambda f: store.update(k=f.result()), fetch=fetch)
+    time.sleep(0.1)
+    fb = b.submit("k", work, "b", fetch=fetch)
+    assert b.state("k") == "running"
+    assert fa.result(10) == 42 and fb.result(10) == 42
+    assert calls == ["a"]
+    assert cache_a.lease("k") is None  # released once stored
+    for r, p, c in ((a, pool_a, cache_a), (b, pool_b, cache_b)):
+        r.shutdown()
+        p.shutdown()
+        c.close()
+
+
+def test_an_expired_lease_is_taken_over(tmp_path: Path) -> None:
+    """D5: a holder that stopped renewing (another host's crashed server) loses its lease
+    when it expires; the waiting runner then computes the job itself."""
+    cache, runner, pool = _leased(tmp_path / "c.sqlite", 5.0)
+    assert cache.claim("k", "elsewhere:1:dead", 0.8)
+    assert not cache.claim("k", runner.owner, 5.0)
+    t0 = time.monotonic()
+    fut = runner.submit("k", lambda: "mine", fetch=lambda: None)
+    assert runner.state("k") == "running"  # someone else's, as far as we know
+    assert fut.result(10) == "mine"
+    assert 0.5 <= time.monotonic() - t0 < 5.0
+    runner.shutdown()
+    pool.shutdown()
+    cache.close()
+
+
+def test_a_dead_local_holder_is_taken_over_at_once(tmp_path: Path) -> None:
+    """A lease whose owner is a process of this host that has ended is free at once (a
+    restart after kill -9 does not wait for the expiry)."""
+    import socket
+    import subprocess
+    import sys
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    cache = ValidationCache(tmp_path / "c.sqlite")
+    assert cache.claim("k", f"{socket.gethostname()}:{dead}:x", 3600.0)
+    assert cache.claim("k", "me:1:y", 60.0)
+    assert cache.lease("k")[0] == "me:1:y"
+    cache.close()
+
+
+def test_stop_executor_ends_the_pool_workers() -> None:
+    """D3: the planner's own pool is stopped, its workers terminated, on close."""
+    import psutil
+
+    runner = JobRunner(max_pending=4)
+    fut = runner.submit("k", time.sleep, 30.0)
+    deadline = time.monotonic() + 60
+    while not (procs := list(runner.executor._processes.values())) and \
+            time.monotonic() < deadline:
+        time.sleep(0.05)
+    pids = [p.pid for p in procs]
+    assert pids and all(psutil.pid_exists(p) for p in pids)
+    runner.shutdown(wait=False)
+    assert fut.exception(10) is not None
+    assert not any(psutil.pid_exists(p) and psutil.Process(p).status() != "zombie"
+                   for p in pids)

@@ -171,9 +171,14 @@ def test_failed_validation_reports_the_error(planner, fake) -> None:
 def test_queue_is_bounded(tmp_path: Path, fake) -> None:
     fake.gate = threading.Event()
     p = _planner(tmp_path / "c.sqlite", max_pending=1)
+    first = DoseRequest(**FRONT, dose_fraction=0.3)
+    p.submit_validation(first)  # one validation: all three rungs admitted
+    assert [p.jobs.state(sc.key()) is not None for sc in p.scenarios(first)] == [True] * 3
+    other = DoseRequest(**{**FRONT, "t_start": 301.0}, dose_fraction=0.3)
     with pytest.raises(QueueFullError) as err:
-        p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.3))  # three rungs, room for one
+        p.submit_validation(other)  # room for one validation: refused whole
     assert err.value.retry_after > 0
+    assert all(p.jobs.state(sc.key()) is None for sc in p.scenarios(other))
     fake.gate.set()
     p.close()
     p.jobs.executor.shutdown()

@@ -8,6 +8,7 @@ import math
 import sys
 from typing import Any
 
+from solver.errors import ParameterError
 from solver.gel import Gel, Permeability
 
 
@@ -24,9 +25,15 @@ def add_gel_options(p: argparse.ArgumentParser) -> None:
 
 
 def gel_from_args(args: argparse.Namespace) -> Gel:
-    """The gel the options describe: the preset, with any custom parameter replacing its own."""
+    """The gel the options describe: a preset or stored gel, with any custom parameter
+    replacing its own (bounded as the HTTP service bounds them)."""
     from dosing.gel_store import lookup
 
+    spec = gel_bounds(args)
+    if spec:
+        from api.schemas import GelParameters
+
+        check_bounds(GelParameters, spec)
     base = lookup(args.gel)
     fields = {n: getattr(args, n) for n in ("omega", "a0", "b0", "a1", "b1")}
     custom = {k: v for k, v in fields.items() if v is not None}
@@ -55,3 +62,57 @@ def print_json(obj: Any) -> None:
     """Print one strict JSON object on stdout."""
     json.dump(_clean(obj), sys.stdout, indent=None)
     sys.stdout.write("\n")
+
+
+# ----------------------------------------------------------------------------- bounds
+
+# CLI flag of each request field whose name differs ("--" + the name with dashes otherwise)
+FLAGS = {"dose_fraction": "--fraction", "dose_volume_ul": "--volume-ul",
+         "viscosity_pa_s": "--viscosity", "permeability_m2": "--k0-m2"}
+
+
+def _flag(loc: tuple[Any, ...]) -> str:
+    names = [p for p in loc if isinstance(p, str) and p not in ("body", "custom", "preset")]
+    name = names[-1] if names else "input"
+    return FLAGS.get(name, "--" + name.replace("_", "-"))
+
+
+def check_bounds(model: Any, values: dict[str, Any]) -> None:
+    """Validate CLI values with the HTTP request model (:mod:`api.schemas`: one definition
+    of every bound); the first violation is a ParameterError naming the CLI flag."""
+    from pydantic import ValidationError
+
+    try:
+        model.model_validate({k: v for k, v in values.items() if v is not None})
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        msg = str(err.get("msg", "invalid"))
+        value = err.get("input")
+        if isinstance(value, (list, tuple)) and len(value) > 8:
+            value = f"{len(value)} values"
+        loc = tuple(err.get("loc", ()))
+        field = ".".join(str(p) for p in loc if p not in ("custom", "preset"))
+        raise ParameterError(_flag(loc), value, msg[0].lower() + msg[1:],
+                             f"the HTTP service's bound on {field}") from None
+
+
+def gel_bounds(args: argparse.Namespace) -> dict[str, Any] | None:
+    """The custom gel options as the HTTP gel object (None: no custom parameter)."""
+    spec = {n: getattr(args, n) for n in ("omega", "a0", "b0", "a1", "b1")}
+    spec = {k: v for k, v in spec.items() if v is not None}
+    if args.beta is not None:
+        spec.update(permeability="power", beta=args.beta)
+    return spec or None
+
+
+def checked_cache(path: str | None) -> str | None:
+    """``path`` if the validation cache can be opened there (a ParameterError naming
+    ``--cache`` otherwise: a directory, a read-only file, not a database)."""
+    from dosing.cache import ValidationCache, default_path
+
+    try:
+        ValidationCache(path).close()
+    except ParameterError as exc:
+        raise ParameterError("--cache", path or str(default_path()), exc.valid,
+                             getattr(exc, "reason", "")) from None
+    return path

@@ -9,7 +9,14 @@ from typing import Any
 
 from solver.errors import ParameterError
 
-from .common import add_gel_options, gel_from_args, print_json
+from .common import (
+    add_gel_options,
+    check_bounds,
+    checked_cache,
+    gel_bounds,
+    gel_from_args,
+    print_json,
+)
 
 
 def _viscosity(text: str) -> float | str:
@@ -51,6 +58,18 @@ def add_planning_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
+def planning_values(args: argparse.Namespace) -> dict[str, Any]:
+    """The options ``dose`` and ``schedule`` share, as HTTP request fields (for bounds)."""
+    return {"gel": gel_bounds(args), "t_start": args.t_start, "t_end": args.t_end,
+            "branch": args.branch, "dry_radius_um": args.dry_radius_um,
+            "swollen_radius_um": args.swollen_radius_um,
+            "constants": {"viscosity_pa_s": args.viscosity,
+                          "polymer_volume_m3": args.polymer_volume_m3,
+                          "permeability_m2": args.k0_m2}}
+    # --interfacial-length is left to SolverSettings: with --n (which HTTP does not offer)
+    # its valid range moves with the grid
+
+
 def planning_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     """Request keyword arguments shared by ``dose`` and ``schedule``."""
     from dosing import PhysicalConstants, SolverSettings
@@ -89,8 +108,14 @@ def _wrap(text: str) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Print the answer."""
+    from api.schemas import DoseTimeRequest
     from dosing import DoseRequest, plan_dose
 
+    check_bounds(DoseTimeRequest, {
+        **planning_values(args), "dose_fraction": args.fraction,
+        "dose_volume_ul": args.volume_ul, "drug_mass_ug": args.drug_mass_ug,
+        "concentration_ug_per_ul": args.concentration_ug_per_ul})
+    checked_cache(args.cache)
     req = DoseRequest(dose_fraction=args.fraction, dose_volume_ul=args.volume_ul,
                       drug_mass_ug=args.drug_mass_ug,
                       concentration_ug_per_ul=args.concentration_ug_per_ul,

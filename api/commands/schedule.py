@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from .common import print_json
-from .dose import _wrap, add_planning_options, planning_kwargs
+from .common import check_bounds, checked_cache, print_json
+from .dose import _wrap, add_planning_options, planning_kwargs, planning_values
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -35,8 +35,13 @@ def _row(label: str, values: list[float], fmt: str = "{:.4g}") -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Print the schedule."""
+    from api.schemas import ScheduleRequest as HttpSchedule
     from dosing import ScheduleRequest, plan_schedule
 
+    check_bounds(HttpSchedule, {**planning_values(args), "doses": args.doses,
+                                "rests": args.rests, "rests_seconds": args.rests_seconds,
+                                "tolerance": args.tolerance})
+    checked_cache(args.cache)
     rests = args.rests
     if rests is None and args.rests_seconds is None:
         rests = [0.0] * (len(args.doses) - 1)

@@ -23,7 +23,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="uvicorn worker processes, each with its own planner on the same "
                         "cache file (default 1)")
     p.add_argument("--max-pending", type=int, default=None,
-                   help="validations queued or running before 429 (default: the planner's)")
+                   help="validations (each with all its runs) queued or running before 429 "
+                        "(default: the planner's, 64)")
+    p.add_argument("--max-body-bytes", type=int, default=None,
+                   help="request bodies over this size are refused with 413 before they are "
+                        "read (default 1 MiB)")
+    p.add_argument("--lease-seconds", type=float, default=None,
+                   help="how long a crashed server's claim on a run outlives it before "
+                        "another server on the same cache takes the run over (default 30)")
     p.add_argument("--log-level", default="info",
                    choices=["critical", "error", "warning", "info", "debug"])
     p.add_argument("--no-warmup", action="store_true",
@@ -40,6 +47,12 @@ def configure_env(args: argparse.Namespace) -> None:
         os.environ["THERMOGEL_CACHE"] = os.path.abspath(args.cache)
     if args.max_pending is not None:
         os.environ["THERMOGEL_MAX_PENDING"] = str(args.max_pending)
+    if args.max_body_bytes is not None:
+        os.environ["THERMOGEL_MAX_BODY"] = str(args.max_body_bytes)
+    if args.lease_seconds is not None:
+        os.environ["THERMOGEL_LEASE_SECONDS"] = str(args.lease_seconds)
+    if args.workers > 1:  # its worker processes end themselves if this one is killed
+        os.environ["THERMOGEL_SUPERVISOR_PID"] = str(os.getpid())
     os.environ["THERMOGEL_WARMUP"] = "0" if args.no_warmup else "1"
 
 
@@ -67,8 +80,17 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError("--port", args.port, "0-65535")
     if args.workers < 1:
         raise ParameterError("--workers", args.workers, "an integer >= 1")
+    if args.max_pending is not None and args.max_pending < 1:
+        raise ParameterError("--max-pending", args.max_pending, "an integer >= 1")
+    if args.max_body_bytes is not None and args.max_body_bytes < 1:
+        raise ParameterError("--max-body-bytes", args.max_body_bytes, "an integer >= 1")
+    if args.lease_seconds is not None and not 0.1 <= args.lease_seconds <= 3600:
+        raise ParameterError("--lease-seconds", args.lease_seconds, "0.1-3600 s")
     if args.warmup_only:
         return warm_only()
+    from .common import checked_cache
+
+    checked_cache(args.cache)
     configure_env(args)
     import uvicorn
 

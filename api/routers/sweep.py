@@ -30,10 +30,12 @@ from ..schemas import (
     ConstantsIn,
     ErrorResponse,
     GelSpec,
+    RequestModel,
     check_interfacial_length,
     interfacial_length_field,
     temperature_field,
 )
+from .compute import compute
 
 router = APIRouter(tags=["design maps"])
 
@@ -46,7 +48,7 @@ Radius = Annotated[float, Field(gt=0.0, le=1.0e5)]
 Fraction = Annotated[float, Field(gt=0.0, le=1.0)]
 
 
-class SweepRequest(BaseModel):
+class SweepRequest(RequestModel):
     """A design map: every combination of gels x T_end x dry radius x dose, answered with
     the front model; full-solver validations queued for the points ``validate`` selects.
     A point that fails on its own (a dose above what the gel can expel at that T_end) is a
@@ -226,19 +228,12 @@ def _status(request: Request, sweep_id: str) -> dict[str, Any]:
     return out
 
 
-def _compute(fn: Any, *args: Any) -> Any:
-    from ..service import solver_guard
-
-    with solver_guard():
-        return fn(*args)
-
-
 @router.post("/v1/sweep", status_code=202, response_model=SweepAccepted,
              responses={422: {"model": ErrorResponse, "description": "bad input; loc names it"},
                         429: {"model": ErrorResponse, "description": "sweep queue full"}})
 async def sweep(body: SweepRequest, request: Request) -> JSONResponse:
     """Queue a design map (front model for every point at once; validations for a subset)."""
-    out = await run_in_threadpool(_compute, _submit, request, body)
+    out = await compute(_submit, request, body)
     return JSONResponse(out, status_code=202, headers={"Location": out["sweep_url"]})
 
 
@@ -253,7 +248,7 @@ async def sweep_status(
                           Query(description="'csv': the finished table as CSV")] = "json",
 ) -> Any:
     """A sweep's progress; when done, its table (JSON with units, or CSV)."""
-    out = await run_in_threadpool(_compute, _status, request, sweep_id)
+    out = await compute(_status, request, sweep_id)
     if format == "csv" and out["status"] == "done":
         res = SweepResult(out["result"]["grid"], out["result"]["rows"],
                           out["result"]["seconds"])
@@ -270,7 +265,7 @@ async def sweep_plot(
         gel: Annotated[int, Query(ge=0, description="which gel of the grid")] = 0,
 ) -> Response:
     """Heat maps of the finished sweep: actuation time and its error over T_end x radius."""
-    out = await run_in_threadpool(_compute, _status, request, sweep_id)
+    out = await compute(_status, request, sweep_id)
     if out["status"] != "done":
         return JSONResponse({"detail": f"sweep {sweep_id} is {out['status']}"},
                             status_code=409)

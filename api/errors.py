@@ -1,0 +1,135 @@
+"""Exceptions to HTTP answers: one table, one handler.
+
+Every error answer has the shape ``{"detail": [{"loc", "msg", "type", ...}]}`` (a 429 and
+a 413 carry a message string): ``loc`` names the field (``['body', 'doses', 1]``) or the
+path parameter.  Validation errors echo at most a short excerpt of the offending input,
+never the input itself: an excerpt is always strict JSON (NaN and Infinity as text), so a
+non-finite number cannot turn a 422 into a 500.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+
+from dosing import QueueFullError, UnknownValidationError
+from solver.errors import NotApplicableError, ParameterError, SolverError
+
+RETRY_AFTER_SECONDS = 5
+MAX_ERRORS = 20  # validation errors reported per answer
+EXCERPT_CHARS = 80
+
+
+class ServiceUnavailable(RuntimeError):
+    """The planner is not ready (start-up not finished, or shut down)."""
+
+
+def loc_of(name: str | None, root: str = "body") -> list[str | int]:
+    """[root, ...] from a dotted field name with indices: 'doses[1]' -> body, doses, 1."""
+    out: list[str | int] = [root]
+    for part in re.findall(r"[^.\[\]]+", name or ""):
+        out.append(int(part) if part.isdigit() else part)
+    return out
+
+
+def excerpt(value: Any) -> str | float | int | bool | None:
+    """A short, strict-JSON stand-in for an input value."""
+    if value is None or isinstance(value, (bool, int)):
+        return value if not isinstance(value, int) or abs(value) < 10**15 else str(value)[:24]
+    if isinstance(value, float):
+        return value if math.isfinite(value) else str(value)
+    if isinstance(value, str):
+        return value if len(value) <= EXCERPT_CHARS else value[:EXCERPT_CHARS] + "..."
+    if isinstance(value, (list, tuple)):
+        return f"a list of {len(value)} items"
+    if isinstance(value, dict):
+        keys = ", ".join(map(str, list(value)[:8]))
+        return (f"an object with keys {keys}" + (", ..." if len(value) > 8 else ""))[
+            :EXCERPT_CHARS]
+    return type(value).__name__
+
+
+def _item(loc: list[str | int], msg: str, kind: str, **extra: Any) -> dict[str, Any]:
+    return {"loc": loc, "msg": msg, "type": kind, **extra}
+
+
+@dataclass(frozen=True)
+class Rule:
+    """How one exception class answers: status, error kind, where and what."""
+
+    status: int
+    kind: str
+    loc: Callable[[Exception], list[str | int]] = lambda e: ["body"]
+    msg: Callable[[Exception], str] = str
+    extra: Callable[[Exception], dict[str, Any]] = lambda e: {}
+    headers: Callable[[Exception], dict[str, str]] = lambda e: {}
+    plain: bool = False  # detail is the message string, not a list of items
+
+
+def _retry(exc: Exception) -> dict[str, str]:
+    seconds = getattr(exc, "retry_after", RETRY_AFTER_SECONDS)
+    return {"Retry-After": str(max(1, math.ceil(seconds)))}
+
+
+# the table (a subclass such as BudgetExceeded finds its base: the MRO is walked)
+ERRORS: dict[type[Exception], Rule] = {
+    ParameterError: Rule(422, "parameter_error", loc=lambda e: loc_of(e.field),
+                         extra=lambda e: {"valid": e.valid}),
+    NotApplicableError: Rule(422, "not_applicable",
+                             loc=lambda e: loc_of(getattr(e, "field", None))),
+    SolverError: Rule(422, "solver_error",
+                      msg=lambda e: f"the solver could not answer this scenario: {e}"),
+    QueueFullError: Rule(429, "queue_full", headers=_retry, plain=True),
+    UnknownValidationError: Rule(
+        404, "not_found", loc=lambda e: ["path", "validation_id"],
+        msg=lambda e: f"no validation with id {e.args[0]!r}"),
+    ServiceUnavailable: Rule(503, "unavailable", plain=True,
+                             headers=lambda e: {"Retry-After": str(RETRY_AFTER_SECONDS)}),
+}
+
+
+def rule_for(exc: Exception) -> Rule | None:
+    """The table's rule for ``exc`` (its class or nearest base), or None."""
+    for cls in type(exc).__mro__:
+        if cls in ERRORS:
+            return ERRORS[cls]
+    return None
+
+
+def error_response(exc: Exception) -> JSONResponse:
+    """The answer to a table exception."""
+    rule = rule_for(exc)
+    assert rule is not None, type(exc)
+    detail: Any = (rule.msg(exc) if rule.plain else
+                   [_item(rule.loc(exc), rule.msg(exc), rule.kind, **rule.extra(exc))])
+    return JSONResponse({"detail": detail}, status_code=rule.status, headers=rule.headers(exc))
+
+
+async def _table_handler(_: Request, exc: Exception) -> JSONResponse:
+    return error_response(exc)
+
+
+async def _validation_handler(_: Request, exc: Exception) -> JSONResponse:
+    """422 for pydantic's errors: loc, msg, type and an excerpt of the input (no echo)."""
+    errors = list(exc.errors())  # type: ignore[attr-defined]
+    items = [_item(list(e.get("loc", ["body"])), str(e.get("msg", "invalid")),
+                   str(e.get("type", "value_error")), input=excerpt(e.get("input")))
+             for e in errors[:MAX_ERRORS]]
+    if len(errors) > MAX_ERRORS:
+        items.append(_item(["body"], f"{len(errors) - MAX_ERRORS} more errors not shown",
+                           "truncated"))
+    return JSONResponse({"detail": items}, status_code=422)
+
+
+def install(app: FastAPI) -> None:
+    """Register the table's handler for each of its classes, and the 422 handler."""
+    for cls in ERRORS:
+        app.add_exception_handler(cls, _table_handler)
+    app.add_exception_handler(RequestValidationError, _validation_handler)

@@ -1,0 +1,42 @@
+"""Dosing routes: one dose's actuation time, a multi-dose schedule (200, or 202 + id)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter
+from fastapi.responses import JSONResponse
+
+from .. import schemas as s
+from ..deps import PlannerDep, StateDep
+from ..service import Pending, dose_time, schedule
+from .compute import compute
+
+router = APIRouter(prefix="/v1", tags=["dosing"])
+
+_FULL = {"model": s.ErrorResponse, "description": "queue full: the message says which"}
+
+
+def answer_or_pending(out: dict[str, Any] | Pending) -> Any:
+    """An answer (200, the route's model), or 202 with the poll fields and a Location."""
+    if not isinstance(out, Pending):
+        return out
+    return JSONResponse(s.PendingResponse(**out.to_dict()).model_dump(), status_code=202,
+                        headers={"Location": out.validation_url})
+
+
+@router.post("/dose-time", response_model=s.DoseTimeResponse, responses={
+    202: {"model": s.PendingResponse, "description": "needs the full solver: poll "
+                                                     "validation_url, then ask again"},
+    429: _FULL})
+async def dose(body: s.DoseTimeRequest, planner: PlannerDep) -> Any:
+    """How long to heat a bead to release a dose (front model at once, or 202)."""
+    return answer_or_pending(await compute(dose_time, planner, body))
+
+
+@router.post("/schedule", response_model=s.ScheduleResponse, responses={
+    202: {"model": s.PendingResponse, "description": "queued as a job: poll validation_url"},
+    429: _FULL})
+async def schedule_route(body: s.ScheduleRequest, state: StateDep, _: PlannerDep) -> Any:
+    """A multi-dose schedule: hold times at once; protocol check and correction as a job."""
+    return answer_or_pending(await compute(schedule, state, body))
