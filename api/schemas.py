@@ -21,6 +21,8 @@ from pydantic import (
     model_validator,
 )
 
+from .drug_schemas import DrugIn  # the optional drug of the dose and schedule requests
+
 T_MIN = 273.15  # K, same bounds as solver.gel.check_temperature
 T_MAX = 373.15
 # interfacial length of the validation truth (dosing.scenario: DEFAULT_INTERFACIAL_LENGTH,
@@ -278,6 +280,7 @@ class DoseTimeRequest(_Model):
     constants: ConstantsIn | None = Field(
         None, description="timescale constants (default: the paper's values)")
     interfacial_length: float = interfacial_length_field()
+    drug: DrugIn | None = Field(None, description="a drug in the pore fluid: doses are drug")
     validate_full: bool = Field(
         False, alias="validate",
         description="also queue a full-solver validation of this dose (poll "
@@ -443,6 +446,7 @@ class ScheduleRequest(_Model):
     tolerance: float = Field(0.01, gt=0.0, le=0.2,
                              description="relative tolerance of the corrected doses, 0-0.2")
     interfacial_length: float = interfacial_length_field()
+    drug: DrugIn | None = Field(None, description="a drug in the pore fluid: doses are drug")
 
     _ell = field_validator("interfacial_length")(check_interfacial_length)
 

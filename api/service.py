@@ -194,6 +194,9 @@ def _poll(vid: str) -> dict[str, str]:
 
 def dose_time(planner: Any, body: s.DoseTimeRequest) -> tuple[int, dict[str, Any]]:
     """(HTTP status, answer): 200 from the front model or the cache, else 202 and an id."""
+    if body.drug is not None:  # a drug dose (api/drug_service.py)
+        from . import drug_service
+        return drug_service.dose_time(planner, body, to_gel)
     req = to_dose_request(body)
     if not answerable_now(planner, req):
         vid = planner.submit_validation(req)
@@ -209,6 +212,9 @@ def dose_time(planner: Any, body: s.DoseTimeRequest) -> tuple[int, dict[str, Any
 
 def schedule(state: ServiceState, body: s.ScheduleRequest) -> tuple[int, dict[str, Any]]:
     """200 with the hold schedule when nothing needs a new full-solver run, else 202 + id."""
+    if body.drug is not None:  # a drug schedule (api/drug_service.py)
+        from . import drug_service
+        return drug_service.schedule(state, body, to_gel)
     req = to_schedule_request(body)
     planner = state.planner
     quick = not (req.check_protocol or req.correct) and all(
