@@ -9,7 +9,8 @@ relative to the solid, same units per time) is the constant Q_k = -d(r_{k+1}^3)/
 volume c_i = m_i / w_i.  Fluxes out of cell i:
 advective Q_i c_upwind (the medium side carries K c_med), diffusive
 G_i (c_i - c_{i+1}) with the conductance of the two half cells in series,
-G = 3 r^2 / ((r - rc_i) / (phi_i D_i) + (rc_{i+1} - r) / (phi_{i+1} D_{i+1})) and
+G = 3 r^2 / ((r - rc_i) / (phi_i D_i) + (rc_{i+1} - r) / (phi_{i+1} D_{i+1})) (frozen
+over each sample interval at its midpoint geometry) and
 D = D0 f(phi) (module ``hindrance``), and at the edge G_e (c_{n-1} - K c_med) with
 G_e = 3 a^2 phi_{n-1} D_{n-1} / (a - rc_{n-1}).  c_med = M / V_med (0 for a perfect sink).
 Every flux enters two rows with opposite signs, so the column sums of the operator vanish
@@ -38,13 +39,39 @@ OK, BUDGET, BAD = 0, 1, 2
 
 
 @njit(cache=True)
-def operator(r3, dw, qrate, d0, code, sieve, yfree, kpart, vmed, lo, di, up, fw, fl):  # noqa: ANN001, ANN201
+def conductances(r3, dw, d0, code, sieve, yfree, g):  # noqa: ANN001, ANN201
+    """Diffusive conductances at node volumes ``r3``: g[k] through node k+1 (k < n-1, between
+    cells k and k+1; the two half cells in series) and g[n-1] at the edge (the last half
+    cell).  Units of volume (4 pi R^3 / 3) per time and per unit concentration."""
+    n = dw.size
+    cond_prev = 0.0
+    rc_prev = 0.0
+    for i in range(n):
+        vol = r3[i + 1] - r3[i]
+        phi = (vol - dw[i]) / vol
+        rc = np.cbrt(0.5 * (r3[i] + r3[i + 1]))
+        cond = phi * d0 * hindrance_factor(phi, code, sieve, yfree) if phi > 0.0 else 0.0
+        if i > 0:
+            rf = np.cbrt(r3[i])
+            g[i - 1] = 0.0
+            if cond_prev > 0.0 and cond > 0.0:
+                g[i - 1] = 3.0 * rf * rf / ((rf - rc_prev) / cond_prev + (rc - rf) / cond)
+        cond_prev = cond
+        rc_prev = rc
+    a_edge = np.cbrt(r3[n])
+    g[n - 1] = 3.0 * a_edge * a_edge * cond_prev / (a_edge - rc_prev) if cond_prev > 0.0 \
+        else 0.0
+
+
+@njit(cache=True)
+def operator(r3, dw, qrate, g, kpart, vmed, lo, di, up, fw, fl):  # noqa: ANN001, ANN201
     """The tridiagonal operator L (dm/dt = L m) at node volumes ``r3`` (n + 1 values from the
-    centre, r3[0] = 0) and node flux rates ``qrate`` (Q at node k+1 in qrate[k]).
+    centre, r3[0] = 0), node flux rates ``qrate`` (Q at node k+1 in qrate[k]) and
+    conductances ``g`` (:func:`conductances`).
 
     lo[i] = L[i+1, i], di[i] = L[i, i], up[i] = L[i, i+1] (n + 1 unknowns, the last the
     released mass).  ``vmed`` <= 0 means a perfect sink.  ``fw`` (cell fluid volumes) and
-    ``fl`` (the edge's advective and diffusive rates per unit c_{n-1} and per unit M) are
+    ``fl`` (the edge's advective and diffusive rates per unit m_{n-1} and per unit M) are
     returned for the mechanism split.  False if a cell has no fluid.
     """
     n = dw.size
@@ -52,51 +79,30 @@ def operator(r3, dw, qrate, d0, code, sieve, yfree, kpart, vmed, lo, di, up, fw,
         lo[i] = 0.0
         di[i] = 0.0
         up[i] = 0.0
-    cond_prev = 0.0
-    rc_prev = 0.0
     for i in range(n):
-        vol = r3[i + 1] - r3[i]
-        w = vol - dw[i]
+        w = r3[i + 1] - r3[i] - dw[i]
         if not (w > 0.0):
             return False
         fw[i] = w
-        phi = w / vol
-        rc = np.cbrt(0.5 * (r3[i] + r3[i + 1]))
-        cond = phi * d0 * hindrance_factor(phi, code, sieve, yfree)
-        if i > 0:
-            # diffusion through node i (between cells i-1 and i)
-            rf = np.cbrt(r3[i])
-            g = 0.0
-            if cond_prev > 0.0 and cond > 0.0:
-                g = 3.0 * rf * rf / ((rf - rc_prev) / cond_prev + (rc - rf) / cond)
-            a, b = g / fw[i - 1], g / w
-            di[i - 1] -= a
-            up[i - 1] += b
-            lo[i - 1] += a
-            di[i] -= b
-        cond_prev = cond
-        rc_prev = rc
     inv_v = 1.0 / vmed if vmed > 0.0 else 0.0
-    # advection through the interior nodes 1..n-1 (Q of node k+1 is qrate[k])
+    # diffusion and advection through the interior nodes 1..n-1
     for k in range(n - 1):
+        a, b = g[k] / fw[k], g[k] / fw[k + 1]
         q = qrate[k]
         if q >= 0.0:
-            a = q / fw[k]
-            di[k] -= a
-            lo[k] += a
+            a += q / fw[k]
         else:
-            b = -q / fw[k + 1]
-            up[k] += b
-            di[k + 1] -= b
+            b -= q / fw[k + 1]
+        di[k] -= a
+        lo[k] += a
+        up[k] += b
+        di[k + 1] -= b
     # the edge: diffusion and advection between cell n-1 and the medium (unknown n)
-    a_edge = np.cbrt(r3[n])
-    rc_last = np.cbrt(0.5 * (r3[n - 1] + r3[n]))
-    g = 3.0 * a_edge * a_edge * cond_prev / (a_edge - rc_last) if cond_prev > 0.0 else 0.0
     q = qrate[n - 1]
     adv_c = q / fw[n - 1] if q >= 0.0 else 0.0  # outflow per unit m_{n-1}
     adv_m = -q * kpart * inv_v if q < 0.0 else 0.0  # inflow of K c_med, per unit M
-    dif_c = g / fw[n - 1]
-    dif_m = g * kpart * inv_v
+    dif_c = g[n - 1] / fw[n - 1]
+    dif_m = g[n - 1] * kpart * inv_v
     di[n - 1] -= adv_c + dif_c
     lo[n - 1] += adv_c + dif_c
     up[n - 1] += adv_m + dif_m
@@ -166,6 +172,7 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
     up1 = np.zeros(size)
     r3 = np.zeros(n + 1)
     q = np.zeros(n)
+    gf = np.zeros(n)
     fw = np.zeros(n)
     fl = np.zeros(4)
     fl1 = np.zeros(4)
@@ -198,7 +205,11 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
             continue
         for i in range(n):
             q[i] = -(s3[k + 1, i + 1] - s3[k, i + 1]) / span
+        if d0 > 0.0:  # frozen at the interval's midpoint (second order in the sample spacing)
+            _geometry(s3[k], s3[k + 1], 0.5, r3)
+            conductances(r3, dw, d0, code, sieve, yfree, gf)
         t = ta
+        fresh = False  # f0, g0 hold L(t) m at this t (the last accepted step's f1, g1)
         while t < tb:
             if counters[0] >= max_steps:
                 return BUDGET
@@ -207,17 +218,18 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
             if last:
                 hh = tb - t
             dh = D_COEF * hh
-            # f0 at t
-            _geometry(s3[k], s3[k + 1], (t - ta) / span, r3)
-            vm = vmed0 + (a3_0 - r3[n]) if vmed0 > 0.0 else 0.0
-            if not operator(r3, dw, q, d0, code, sieve, yfree, kpart, vm, lo, di, up, fw, fl):
-                return BAD
-            _apply(lo, di, up, m, f0)
-            g0 = fl[0] * m[n - 1] + fl[1] * m[n]
+            if not fresh:  # f0 at t
+                _geometry(s3[k], s3[k + 1], (t - ta) / span, r3)
+                vm = vmed0 + (a3_0 - r3[n]) if vmed0 > 0.0 else 0.0
+                if not operator(r3, dw, q, gf, kpart, vm, lo, di, up, fw, fl):
+                    return BAD
+                _apply(lo, di, up, m, f0)
+                g0 = fl[0] * m[n - 1] + fl[1] * m[n]
+                fresh = True
             # stage 1: trapezoid to t + gamma h
             _geometry(s3[k], s3[k + 1], (t + GAMMA * hh - ta) / span, r3)
             vm = vmed0 + (a3_0 - r3[n]) if vmed0 > 0.0 else 0.0
-            if not operator(r3, dw, q, d0, code, sieve, yfree, kpart, vm, lo, di, up, fw, fl):
+            if not operator(r3, dw, q, gf, kpart, vm, lo, di, up, fw, fl):
                 return BAD
             for i in range(size):
                 rhs[i] = m[i] + dh * f0[i]
@@ -230,8 +242,7 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
             tt = t + hh
             _geometry(s3[k], s3[k + 1], min(1.0, (tt - ta) / span), r3)
             vm = vmed0 + (a3_0 - r3[n]) if vmed0 > 0.0 else 0.0
-            if not operator(r3, dw, q, d0, code, sieve, yfree, kpart, vm, lo1, di1, up1, fw,
-                            fl1):
+            if not operator(r3, dw, q, gf, kpart, vm, lo1, di1, up1, fw, fl1):
                 return BAD
             for i in range(size):
                 rhs[i] = A_U * u[i] + A_N * m[i]
@@ -255,6 +266,8 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
                 adv = A_U * adv_g + A_N * adv + dh * g1
                 for i in range(size):
                     m[i] = y1[i]
+                    f0[i] = f1[i]
+                g0 = g1
                 t = tb if last else tt
                 counters[0] += 1
                 fac = 4.0 if norm == 0.0 else min(4.0, max(0.2, 0.9 * norm ** (-1.0 / 3.0)))
