@@ -380,6 +380,10 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
             "cells): during each rest the bead leaks drug by diffusion and takes up drug-free "
             "medium, which dilutes the fluid the next heating expels. The corrected times "
             f"meet each drug dose within {req.tolerance:.0%} on the same solver.")
+    if "front" in model and s.regularized:
+        note += (" With D0 = 0 the hold times are the front model's sharp-interface limit "
+                 "(ell -> 0) while the protocol runs use the ladder's coarsest ell, whose front "
+                 "first has to nucleate at the edge: part of the correction is that delay.")
     return DrugScheduleAnswer(
         model=model, doses=list(req.fractions),
         doses_ug=None if load is None else [f * load for f in req.fractions], load_ug=load,
