@@ -188,3 +188,16 @@ def test_dose_command_drug_above_the_load_exits_2(tmp_path, capsys) -> None:
                "--rests", "0.5", "--drug-diffusivity-cm2-s", "0", "--cache",
                str(tmp_path / "c.sqlite")])
     assert rc == 2 and "doses" in capsys.readouterr().err
+
+
+def test_release_plot_and_file(tmp_path) -> None:
+    from api.plots.release import draw_release
+    from solver.solute import ReleaseResult, Solute, simulate_release
+
+    _, rel = simulate_release("ANB", 302, Solute(diffusivity=2.0),
+                              protocol=[(0.02, 308), (0.05, 302)], n=100, samples=200)
+    png = draw_release(rel, tmp_path / "rel.png", tau_seconds=2205.0, doses=[0.2])
+    assert png.stat().st_size > 10_000
+    back = ReleaseResult.load(rel.save(tmp_path / "rel.npz"))
+    assert np.array_equal(back.released_fraction, rel.released_fraction)
+    assert back.mass_balance_error == rel.mass_balance_error < BALANCE
