@@ -234,6 +234,13 @@ def _reading(run: _Runner, rel: Any, durations: Sequence[float]) -> dict[str, An
     if load is not None:
         out.update(delivered_ug=[d * load for d in drug], rest_leak_ug=[x * load for x in leaks],
                    leaked_before_heating_ug=before * load)
+        vol, dry = req.drug.release_volume_ul, req.bead_dry_radius_um
+        if vol is not None and dry is not None:  # the medium grows by the expelled fluid
+            unit = volume_to_ul(4.0 * math.pi / 3.0, dry)
+            out["medium_concentration_ug_per_ul"] = [
+                at(rel.released_fraction, e) * load / (vol + unit * (req.start_radius**3
+                                                                      - at(a3, e)))
+                for _, e in win]
     return out
 
 

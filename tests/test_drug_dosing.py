@@ -121,6 +121,13 @@ def test_anb_drug_schedule_of_a_protein(planner) -> None:
                               dry_radius_um=50, settings=SETTINGS)
     ans = plan_drug_schedule(planner, req)
     cor = _check(ans, [0.3] * 3)
+    # the same schedule into 1 uL of medium (1000 bead volumes: nearly a sink)
+    finite = DrugScheduleRequest("ANB", 302, 308, DrugModel(**{**PROTEIN.to_dict(),
+                                                                "release_volume_ul": 1.0}),
+                                 doses=[0.3] * 3, rests=[0.5, 0.5], dry_radius_um=50,
+                                 settings=SETTINGS, correct=False)
+    conc = plan_drug_schedule(planner, finite).protocol_check["medium_concentration_ug_per_ul"]
+    assert len(conc) == 3 and 0.3 / 1.01 < conc[0] < 0.3 and np.all(np.diff(conc) > 0)
     leaks = cor["rest_leak_fractions"]
     assert leaks[0] > 0.03  # the re-swelling edge lets it out during the first rest
     assert any("rest 1 leaks" in w for w in ans.warnings)  # more than a tenth of the dose
@@ -135,6 +142,7 @@ def test_a_leaky_drug_cannot_meet_its_later_doses(planner) -> None:
                               settings=SETTINGS, check_protocol=False)
     ans = plan_drug_schedule(planner, req)
     assert not ans.corrected["met"] and len(ans.corrected["actuation_times"]) == 1
+    assert "medium_concentration_ug_per_ul" not in ans.corrected  # a perfect sink
     assert any("no actuation time meets dose 2" in w for w in ans.warnings)
 
 
