@@ -20,6 +20,7 @@ import json
 import math
 import threading
 import time
+import weakref
 from collections import OrderedDict
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -436,3 +437,16 @@ class DrugRuns:
     def close(self) -> None:
         """Close this object's connections to the cache file."""
         self.cache.close()
+
+
+_RUNS: weakref.WeakKeyDictionary[Any, DrugRuns] = weakref.WeakKeyDictionary()
+_RUNS_LOCK = threading.Lock()
+
+
+def runs_for(planner: Any) -> DrugRuns:
+    """The planner's drug runs (one per planner, kept while the planner lives)."""
+    with _RUNS_LOCK:
+        runs = _RUNS.get(planner)
+        if runs is None:
+            runs = _RUNS[planner] = DrugRuns(planner)
+        return runs

@@ -16,9 +16,11 @@ import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from solver.errors import ParameterError, SolverError, require_finite_positive
+import numpy as np
 
-from .drug import DrugModel, DrugRuns, DrugScenario, drug_settings, leak_time
+from solver.errors import ParameterError, require_finite_positive
+
+from .drug import DrugModel, DrugRuns, DrugScenario, drug_settings, leak_time, runs_for
 from .request import DoseRequest, Jump, _resolve_scenario
 from .units import PhysicalConstants, timescale, volume_to_ul
 
@@ -195,7 +197,7 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
         fluid = planner.dose(req.fluid_request(req.fraction))
         return DrugDoseAnswer(
             model=fluid.model, time=fluid.time, seconds=fluid.seconds,
-            leaked_before_heating=0.0, leaked_before_heating_ug=ug(0.0) if load else None,
+            leaked_before_heating=0.0, leaked_before_heating_ug=ug(0.0),
             squeezed_fraction=req.fraction, diffused_fraction=0.0,
             mechanism=mechanism(1.0, 0.0), fluid_fraction=req.fraction,
             medium_concentration_ug_per_ul=_conc(req, req.fraction, fluid.final_radius),
@@ -204,7 +206,7 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
                   "to fluid on one heating, exactly, so this is the fluid answer "
                   f"({fluid.model}) for the same fraction; nothing leaks while it waits at "
                   "T_start. " + fluid.note), **common)
-    runs = runs or DrugRuns(planner)
+    runs = runs or runs_for(planner)
     horizon = DEFAULT_HORIZON
     while True:
         steps = ((req.lead, req.t_start),) if req.lead > 0.0 else ()
@@ -248,8 +250,6 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
 
 
 def _a3_at(rel: Any, t: float) -> float:
-    import numpy as np
-
     return float(np.interp(t, rel.t, rel.radius**3))
 
 
@@ -264,4 +264,4 @@ def _conc(req: DrugDoseRequest, released: float, radius: float) -> float | None:
     return released * req.load_ug / (v + grown)
 
 
-__all__ = ["DrugDoseAnswer", "DrugDoseRequest", "SolverError", "plan_drug_dose"]
+__all__ = ["DrugDoseAnswer", "DrugDoseRequest", "plan_drug_dose"]

@@ -25,7 +25,7 @@ from typing import Any
 
 from solver.errors import ParameterError, SolverError, require_finite_positive
 
-from .drug import DrugModel, DrugRuns, DrugScenario, drug_settings, leak_time
+from .drug import DrugModel, DrugRuns, DrugScenario, drug_settings, leak_time, runs_for
 from .drug_dose import resolve_wait
 from .protocol import heat_cool_protocol, windows
 from .request import Jump, ScheduleRequest, _resolve_scenario
@@ -331,7 +331,7 @@ def _seconds(res: dict[str, Any] | None, tau: float | None) -> None:
 def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
                        runs: DrugRuns | None = None) -> DrugScheduleAnswer:
     """Plan ``req``: hold times, the protocol check and the corrected schedule."""
-    runs = runs or DrugRuns(planner)
+    runs = runs or runs_for(planner)
     run = _Runner(planner, req, runs)
     solute = req.solute
     dry = req.bead_dry_radius_um

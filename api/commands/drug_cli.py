@@ -113,7 +113,7 @@ def run_drug_schedule(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any
 def _plot(planner: Any, req: Any, ans: Any, path: str) -> None:
     """Cumulative drug through the corrected (else the checked) protocol."""
     from api.plots.release import draw_schedule_release
-    from dosing.drug import DrugRuns, DrugScenario, drug_settings
+    from dosing.drug import DrugScenario, drug_settings, runs_for
 
     res = ans.corrected if ans.corrected and ans.corrected.get("actuation_times") \
         else ans.protocol_check
@@ -121,5 +121,5 @@ def _plot(planner: Any, req: Any, ans: Any, path: str) -> None:
         raise ParameterError("plot", path, "used with the protocol check or the correction")
     sc = DrugScenario(req.gel, req.t_start, tuple(tuple(s) for s in res["protocol"]),
                       req.solute, req.branch, drug_settings(req.settings))
-    rel = DrugRuns(planner).run(sc)
+    rel = runs_for(planner).run(sc)
     print(f"wrote {draw_schedule_release(ans.to_dict(), rel, path)}")
