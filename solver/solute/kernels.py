@@ -234,8 +234,7 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
             for i in range(size):
                 rhs[i] = m[i] + dh * f0[i]
             _solve(lo, di, up, dh, rhs, u, cp)
-            for i in range(size):
-                fg[i] = (u[i] - rhs[i]) / dh
+            _apply(lo, di, up, u, fg)  # L u: its entries sum to 0 (not (u - rhs) / dh)
             gg = fl[0] * u[n - 1] + fl[1] * u[n]
             adv_g = adv + dh * (g0 + gg)
             # stage 2: BDF2 to t + h
@@ -247,8 +246,7 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
             for i in range(size):
                 rhs[i] = A_U * u[i] + A_N * m[i]
             _solve(lo1, di1, up1, dh, rhs, y1, cp)
-            for i in range(size):
-                f1[i] = (y1[i] - rhs[i]) / dh
+            _apply(lo1, di1, up1, y1, f1)
             g1 = fl1[0] * y1[n - 1] + fl1[1] * y1[n]
             # filtered error estimate
             for i in range(size):
