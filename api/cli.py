@@ -13,7 +13,7 @@ import sys
 from solver.errors import NotApplicableError, ParameterError, SolverError
 
 COMMANDS = ["equilibrium", "classify", "phase_map", "serve", "front", "dose", "schedule",
-            "simulate", "plot", "bench", "sweep", "fit"]
+            "simulate", "plot", "bench", "sweep", "fit", "release"]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -24,6 +24,7 @@ import httpx
 from pydantic import BaseModel
 
 from . import schemas as s
+from .drug_schemas import DrugDoseResponse, DrugScheduleResponse
 
 M = TypeVar("M", bound=BaseModel)
 DEFAULT_URL = "http://127.0.0.1:8000"
@@ -60,6 +61,10 @@ def _body(req: BaseModel | dict[str, Any] | None, fields: dict[str, Any]) -> dic
     return {k: v for k, v in merged.items() if v is not None}
 
 
+_DRUG_ANSWERS: dict[type, type] = {s.DoseTimeResponse: DrugDoseResponse,
+                                   s.ScheduleResponse: DrugScheduleResponse}
+
+
 def _answer(resp: httpx.Response, model: type[M]) -> M:
     """Parse a 200 answer into ``model`` (a 202 into PendingResponse); raise
     :class:`ApiError` for an error answer."""
@@ -72,7 +77,10 @@ def _answer(resp: httpx.Response, model: type[M]) -> M:
         raise ApiError(resp.status_code, detail, float(retry) if retry else None)
     if resp.status_code == 202:
         return s.PendingResponse.model_validate(resp.json())  # type: ignore[return-value]
-    return model.model_validate(resp.json())
+    data = resp.json()
+    if isinstance(data, dict) and data.get("drug") is True:  # a drug answer (api.drug_schemas)
+        model = _DRUG_ANSWERS.get(model, model)  # type: ignore[assignment]
+    return model.model_validate(data)
 
 
 class _Routes:

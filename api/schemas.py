@@ -21,6 +21,8 @@ from pydantic import (
     model_validator,
 )
 
+from .drug_schemas import DrugIn  # the optional drug of the dose and schedule requests
+
 T_MIN = 273.15  # K, same bounds as solver.gel.check_temperature
 T_MAX = 373.15
 # interfacial length of the validation truth (dosing.scenario: DEFAULT_INTERFACIAL_LENGTH,
@@ -297,6 +299,7 @@ class DoseTimeRequest(RequestModel):
     constants: ConstantsIn | None = Field(
         None, description="timescale constants (default: the paper's values)")
     interfacial_length: float = interfacial_length_field()
+    drug: DrugIn | None = Field(None, description="a drug in the pore fluid: doses are drug")
     validate_full: bool = Field(
         False, alias="validate",
         description="also queue a full-solver validation of this dose (poll "
@@ -471,6 +474,7 @@ class ScheduleRequest(RequestModel):
     tolerance: float = Field(0.01, gt=0.0, le=0.2,
                              description="relative tolerance of the corrected doses, 0-0.2")
     interfacial_length: float = interfacial_length_field()
+    drug: DrugIn | None = Field(None, description="a drug in the pore fluid: doses are drug")
 
     _ell = field_validator("interfacial_length")(check_interfacial_length)
 

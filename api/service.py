@@ -34,6 +34,7 @@ from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.gel import PRESETS, Gel, Permeability, preset
 from solver.phase import classify_jump
 
+from . import drug_service
 from . import schemas as s
 from .warmup import WarmupReport, warm_up
 
@@ -224,7 +225,10 @@ SCHEDULE_PENDING_NOTE = "The schedule needs the full solver; poll validation_url
 
 
 def dose_time(planner: Any, body: s.DoseTimeRequest) -> dict[str, Any] | Pending:
-    """The answer (front model or cache; 200), or :class:`Pending` with a validation id."""
+    """The answer (front model or cache; 200), or :class:`Pending` with a validation id;
+    a dose with a drug is answered by :mod:`api.drug_service`."""
+    if body.drug is not None:
+        return drug_service.dose_answer(planner, body, to_gel)
     req = to_dose_request(body)
     if not answerable_now(planner, req):
         return Pending(planner.submit_validation(req), DOSE_PENDING_NOTE)
@@ -235,12 +239,27 @@ def dose_time(planner: Any, body: s.DoseTimeRequest) -> dict[str, Any] | Pending
     return out
 
 
+def _schedule_result(planner: Any, body: s.ScheduleRequest) -> dict[str, Any]:
+    """The whole schedule (blocking): fluid, or drug with a ``drug``."""
+    if body.drug is not None:
+        return drug_service.schedule_result(planner, body, to_gel)
+    return planner.schedule(to_schedule_request(body)).to_dict()
+
+
+def _schedule_is_quick(planner: Any, body: s.ScheduleRequest) -> bool:
+    """True when nothing in the schedule needs a new full-solver run."""
+    if body.drug is not None:
+        return drug_service.schedule_is_quick(body, to_gel)
+    req = to_schedule_request(body)
+    return not (req.check_protocol or req.correct) and all(
+        answerable_now(planner, req.dose_request(c)) for c in accumulate(req.doses))
+
+
 def _schedule_job(state: ServiceState, job_id: str, body: dict[str, Any]) -> dict[str, Any]:
     """Run a stored schedule job and store its outcome (in the job thread)."""
     planner = state.planner
     try:
-        req = to_schedule_request(s.ScheduleRequest.model_validate(body))
-        result = planner.schedule(req).to_dict()
+        result = _schedule_result(planner, s.ScheduleRequest.model_validate(body))
     except Exception as exc:
         planner.cache.finish_job(job_id, "failed", error=f"{type(exc).__name__}: {exc}")
         raise
@@ -265,12 +284,9 @@ def _start_schedule(state: ServiceState, job_id: str, body: dict[str, Any]) -> N
 def schedule(state: ServiceState, body: s.ScheduleRequest) -> dict[str, Any] | Pending:
     """The hold schedule (200) when nothing needs a new full-solver run, else a stored job
     (:class:`Pending`)."""
-    req = to_schedule_request(body)
     planner = state.planner
-    quick = not (req.check_protocol or req.correct) and all(
-        answerable_now(planner, req.dose_request(c)) for c in accumulate(req.doses))
-    if quick:
-        return {"status": "answered", **planner.schedule(req).to_dict()}
+    if _schedule_is_quick(planner, body):
+        return {"status": "answered", **_schedule_result(planner, body)}
     key = hashlib.sha256(body.model_dump_json().encode()).hexdigest()[:24]
     job_id = SCHEDULE_PREFIX + key
     stored = body.model_dump(mode="json", by_alias=True)

@@ -111,7 +111,17 @@ def representative_workload(planner: Any = None) -> list[Callable[[], Any]]:
     if planner is not None:
         work.append(lambda: _front_dose(planner))
     work.append(_tiny_full_runs)
+    work.append(_tiny_drug_run)
     return work
+
+
+def _tiny_drug_run() -> None:
+    """A few steps of the solute on a tiny run (the drug's kernels, solver/solute)."""
+    from solver.gel import ANB
+    from solver.solute import Solute, simulate_release
+
+    simulate_release(ANB, 302.0, Solute(diffusivity=1.0), protocol=[(1.0e-4, 308.0)], n=20,
+                     samples=10, rtol=1.0e-3)
 
 
 def _tiny_full_runs() -> None:

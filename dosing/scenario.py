@@ -133,14 +133,15 @@ PAPER = SolverSettings(interfacial_length=0.0)  # the paper's model: Eulerian gr
 
 @functools.cache
 def code_version() -> str:
-    """Digest of the solver sources a full-solver run depends on (not the front model)."""
+    """Digest of the solver sources a full-solver run depends on (not the front model, nor
+    the passive solute, which never changes the mechanics: drug runs key on it themselves)."""
     import solver
 
     root = Path(solver.__file__).parent
     h = hashlib.sha256()
     for p in sorted(root.rglob("*.py")):
-        if p.relative_to(root).parts[0] in ("front", "front.py", "fit"):  # not the full solver
-            continue
+        if p.relative_to(root).parts[0] in ("front", "front.py", "fit", "solute"):
+            continue  # not the full solver
         h.update(p.relative_to(root).as_posix().encode())
         h.update(p.read_bytes())
     return h.hexdigest()[:16]

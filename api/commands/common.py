@@ -77,15 +77,20 @@ def _flag(loc: tuple[Any, ...]) -> str:
     return FLAGS.get(name, "--" + name.replace("_", "-"))
 
 
-def check_bounds(model: Any, values: dict[str, Any]) -> None:
+def check_bounds(model: Any, values: dict[str, Any], partial: bool = False) -> None:
     """Validate CLI values with the HTTP request model (:mod:`api.schemas`: one definition
-    of every bound); the first violation is a ParameterError naming the CLI flag."""
+    of every bound); the first violation is a ParameterError naming the CLI flag.
+    ``partial``: check only the values given (a required field the CLI fills another way,
+    e.g. ``--doses-ug`` for ``doses``, is not an error here)."""
     from pydantic import ValidationError
 
     try:
         model.model_validate({k: v for k, v in values.items() if v is not None})
     except ValidationError as exc:
-        err = exc.errors()[0]
+        errors = [e for e in exc.errors() if not (partial and e.get("type") == "missing")]
+        if not errors:
+            return
+        err = errors[0]
         msg = str(err.get("msg", "invalid"))
         value = err.get("input")
         if isinstance(value, (list, tuple)) and len(value) > 8:

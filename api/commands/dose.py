@@ -17,6 +17,8 @@ from .common import (
     gel_from_args,
     print_json,
 )
+from .drug_cli import add_wait_options, run_drug_dose
+from .drug_options import add_drug_options, drug_from_args
 
 
 def _viscosity(text: str) -> float | str:
@@ -88,7 +90,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("dose", help="actuation time to release a dose")
     add_planning_options(p)
     d = p.add_mutually_exclusive_group(required=True)
-    d.add_argument("--fraction", type=float, help="dose as a fraction of the stored fluid")
+    d.add_argument("--fraction", type=float, help="dose as a fraction of the stored fluid "
+                   "(with a drug option: of the loaded drug)")
     d.add_argument("--volume-ul", type=float, help="dose volume in uL (needs a bead size)")
     d.add_argument("--drug-mass-ug", type=float,
                    help="drug mass in ug (needs --concentration-ug-per-ul and a bead size)")
@@ -99,6 +102,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--plot", default=None, metavar="PNG",
                    help="with --validate: draw the validation (dose time against ell, the "
                         "limit and the answer) to this file (needs matplotlib)")
+    add_drug_options(p)
+    add_wait_options(p)
     p.set_defaults(func=run)
 
 
@@ -116,6 +121,9 @@ def run(args: argparse.Namespace) -> int:
         "dose_volume_ul": args.volume_ul, "drug_mass_ug": args.drug_mass_ug,
         "concentration_ug_per_ul": args.concentration_ug_per_ul})
     checked_cache(args.cache)
+    drug = drug_from_args(args)
+    if drug is not None:
+        return run_drug_dose(args, drug, planning_kwargs(args))
     req = DoseRequest(dose_fraction=args.fraction, dose_volume_ul=args.volume_ul,
                       drug_mass_ug=args.drug_mass_ug,
                       concentration_ug_per_ul=args.concentration_ug_per_ul,

@@ -4,8 +4,12 @@ from __future__ import annotations
 
 import argparse
 
+from solver.errors import ParameterError
+
 from .common import check_bounds, checked_cache, print_json
 from .dose import _wrap, add_planning_options, planning_kwargs, planning_values
+from .drug_cli import add_wait_options, run_drug_schedule
+from .drug_options import add_drug_options, drug_from_args
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -13,8 +17,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("schedule", help="multi-dose schedule: hold times, protocol check, "
                                         "corrected times")
     add_planning_options(p)
-    p.add_argument("--doses", type=float, nargs="+", required=True,
-                   help="doses as fractions of the stored fluid, e.g. 0.3 0.3 0.3")
+    dd = p.add_mutually_exclusive_group(required=True)
+    dd.add_argument("--doses", type=float, nargs="+",
+                    help="doses as fractions of the stored fluid, e.g. 0.3 0.3 0.3 (with a "
+                         "drug option: of the loaded drug)")
+    dd.add_argument("--doses-ug", type=float, nargs="+",
+                    help="with a drug: doses in ug (needs --load-ug)")
     r = p.add_mutually_exclusive_group()
     r.add_argument("--rests", type=float, nargs="*", default=None,
                    help="rests at T_start between doses, dimensionless (one fewer than doses)")
@@ -26,6 +34,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="skip the corrected (shooting) schedule")
     p.add_argument("--tolerance", type=float, default=0.01,
                    help="relative tolerance of each dose in the corrected schedule (0.01)")
+    p.add_argument("--plot", default=None, metavar="PNG",
+                   help="with a drug: cumulative drug through the corrected protocol")
+    add_drug_options(p)
+    add_wait_options(p)
     p.set_defaults(func=run)
 
 
@@ -40,8 +52,15 @@ def run(args: argparse.Namespace) -> int:
 
     check_bounds(HttpSchedule, {**planning_values(args), "doses": args.doses,
                                 "rests": args.rests, "rests_seconds": args.rests_seconds,
-                                "tolerance": args.tolerance})
+                                "tolerance": args.tolerance}, partial=args.doses is None)
     checked_cache(args.cache)
+    drug = drug_from_args(args)
+    if drug is not None or args.doses_ug is not None:
+        return run_drug_schedule(args, drug or drug_from_args(args, always=True),
+                                 planning_kwargs(args))
+    if args.plot:
+        raise ParameterError("plot", args.plot, "used with a drug option (e.g. "
+                             "--drug-diffusivity-cm2-s)")
     rests = args.rests
     if rests is None and args.rests_seconds is None:
         rests = [0.0] * (len(args.doses) - 1)

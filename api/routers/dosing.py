@@ -9,6 +9,7 @@ from fastapi.responses import JSONResponse
 
 from .. import schemas as s
 from ..deps import PlannerDep, StateDep
+from ..drug_schemas import DrugDoseResponse, DrugScheduleResponse
 from ..service import Pending, dose_time, schedule
 from .compute import compute
 
@@ -25,7 +26,7 @@ def answer_or_pending(out: dict[str, Any] | Pending) -> Any:
                         headers={"Location": out.validation_url})
 
 
-@router.post("/dose-time", response_model=s.DoseTimeResponse, responses={
+@router.post("/dose-time", response_model=s.DoseTimeResponse | DrugDoseResponse, responses={
     202: {"model": s.PendingResponse, "description": "needs the full solver: poll "
                                                      "validation_url, then ask again"},
     429: _FULL})
@@ -34,7 +35,8 @@ async def dose(body: s.DoseTimeRequest, planner: PlannerDep) -> Any:
     return answer_or_pending(await compute(dose_time, planner, body))
 
 
-@router.post("/schedule", response_model=s.ScheduleResponse, responses={
+@router.post("/schedule", response_model=s.ScheduleResponse | DrugScheduleResponse,
+             responses={
     202: {"model": s.PendingResponse, "description": "queued as a job: poll validation_url"},
     429: _FULL})
 async def schedule_route(body: s.ScheduleRequest, state: StateDep, _: PlannerDep) -> Any:

@@ -1,0 +1,125 @@
+"""Drug doses and schedules on the command line (``dose`` / ``schedule`` with drug options)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from solver.errors import ParameterError
+
+from .common import print_json
+
+
+def add_wait_options(p: argparse.ArgumentParser) -> None:
+    """Time in the medium at T_start before the first heating (drug doses)."""
+    w = p.add_mutually_exclusive_group()
+    w.add_argument("--wait", type=float, default=None,
+                   help="with a drug: time at T_start before heating, dimensionless (default 0)")
+    w.add_argument("--wait-seconds", type=float, default=None,
+                   help="with a drug: the wait in seconds (needs a bead size)")
+
+
+def _planner(args: argparse.Namespace) -> Any:
+    from concurrent.futures import ThreadPoolExecutor
+
+    from dosing import Planner
+
+    return Planner(cache_path=args.cache, executor=ThreadPoolExecutor(2))
+
+
+def run_drug_dose(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any]) -> int:
+    """``thermogel dose`` with a drug: the actuation time for a drug dose."""
+    from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
+
+    if args.volume_ul is not None:
+        raise ParameterError("volume_ul", args.volume_ul, "None with a drug (give --fraction "
+                             "of the load or --drug-mass-ug)")
+    if args.concentration_ug_per_ul is not None:
+        raise ParameterError("concentration_ug_per_ul", args.concentration_ug_per_ul,
+                             "None with a drug (give --load-ug or "
+                             "--loading-concentration-ug-per-ul)")
+    req = DrugDoseRequest(drug=drug, dose_fraction=args.fraction, drug_mass_ug=args.drug_mass_ug,
+                          wait=args.wait, wait_seconds=args.wait_seconds, **kwargs)
+    planner = _planner(args)
+    try:
+        ans = plan_drug_dose(planner, req)
+    finally:
+        planner.close()
+    if args.json:
+        print_json(ans.to_dict())
+        return 0
+    mass = "" if ans.dose_ug is None else f" = {ans.dose_ug:.4g} ug"
+    secs = "" if ans.seconds is None else f" = {ans.seconds:.4g} s"
+    print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K: release "
+          f"{ans.dose_fraction:.1%} of the loaded drug{mass}")
+    print(f"  {ans.model}: heat for t = {ans.time:.4g} (dimensionless){secs}, after waiting "
+          f"{ans.wait:.4g} at T_start")
+    print(f"  leaked before heating: {ans.leaked_before_heating:.4g} of the load; at T_start "
+          f"the bead leaks 10% in {ans.leak_time_10pct:.4g} tau"
+          + ("" if ans.leak_time_10pct_seconds is None
+             else f" ({ans.leak_time_10pct_seconds:.4g} s)"))
+    print(f"  mechanism: {ans.mechanism}; fluid expelled meanwhile {ans.fluid_fraction:.4g} of "
+          f"the stored fluid; D_eff = {ans.effective_diffusivity_cm2_s:.3g} cm^2/s")
+    if ans.medium_concentration_ug_per_ul is not None:
+        print(f"  release medium concentration {ans.medium_concentration_ug_per_ul:.4g} ug/uL")
+    print(f"  {ans.note}")
+    return 0
+
+
+def run_drug_schedule(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any]) -> int:
+    """``thermogel schedule`` with a drug: doses in drug, leakage per rest, warnings."""
+    from dosing.drug_schedule import DrugScheduleRequest, plan_drug_schedule
+
+    rests = args.rests
+    if rests is None and args.rests_seconds is None:
+        n = len(args.doses or args.doses_ug or [])
+        rests = [0.0] * max(n - 1, 0)
+    req = DrugScheduleRequest(drug=drug, doses=args.doses, doses_ug=args.doses_ug, rests=rests,
+                              rests_seconds=args.rests_seconds, wait=args.wait,
+                              wait_seconds=args.wait_seconds, check_protocol=not args.no_check,
+                              correct=not args.no_correct, tolerance=args.tolerance, **kwargs)
+    planner = _planner(args)
+    try:
+        ans = plan_drug_schedule(planner, req)
+        if getattr(args, "plot", None):
+            _plot(planner, req, ans, args.plot)
+    finally:
+        planner.close()
+    if args.json:
+        print_json(ans.to_dict())
+        return 0
+    from .schedule import _row
+
+    print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K, drug doses "
+          f"{', '.join(f'{d:.3g}' for d in ans.doses)} of the load, rests "
+          f"{', '.join(f'{r:.4g}' for r in ans.rests) or '-'} (dimensionless)")
+    print(_row(f"hold ({ans.model}):", [h["actuation_time"] for h in ans.hold]))
+    for name, res in (("protocol check", ans.protocol_check), ("corrected", ans.corrected)):
+        if not res or not res.get("actuation_times"):
+            continue
+        print(_row(f"{name}: actuation times", res["actuation_times"]))
+        print(_row("  drug delivered (of the load)", res["delivered_fractions"]))
+        print(_row("  ... squeezed out", res["squeezed_fractions"]))
+        print(_row("  fluid delivered (of stored)", res["fluid_fractions"]))
+        print(_row("  leaked in each rest", res["rest_leak_fractions"] or [0.0]))
+        if res.get("actuation_seconds"):
+            print(_row("  actuation seconds", res["actuation_seconds"]))
+    for w in ans.warnings:
+        print(f"  WARNING: {w}")
+    print(f"  {ans.note}")
+    return 0
+
+
+def _plot(planner: Any, req: Any, ans: Any, path: str) -> None:
+    """Cumulative drug through the corrected (else the checked) protocol."""
+    from api.plots.release import draw_schedule_release
+    from dosing.drug import DrugScenario, drug_settings, runs_for
+
+    res = ans.corrected if ans.corrected and ans.corrected.get("actuation_times") \
+        else ans.protocol_check
+    if not res:
+        raise ParameterError("plot", path, "used with the protocol check or the correction")
+    sc = DrugScenario(req.gel, req.t_start, tuple(tuple(s) for s in res["protocol"]),
+                      req.solute, req.branch, drug_settings(req.settings))
+    rel = runs_for(planner).run(sc)
+    print(f"wrote {draw_schedule_release(ans.to_dict(), rel, path)}")

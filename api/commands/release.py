@@ -1,0 +1,129 @@
+"""``thermogel release``: a temperature protocol with the drug (full solver + solute)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+from solver.errors import ParameterError
+
+from .common import add_gel_options, gel_from_args, print_json
+from .dose import _viscosity
+from .drug_options import add_drug_options, drug_from_args
+from .simulate import _protocol
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the sub-command."""
+    p = sub.add_parser("release", help="drug released by a temperature protocol: full solver "
+                                       "with the drug carried by the pore fluid")
+    add_gel_options(p)
+    p.add_argument("--t-start", type=float, required=True, help="start (loading) temperature, K")
+    p.add_argument("--t-end", type=float, default=None, help="end temperature in K (one jump)")
+    p.add_argument("--until", type=float, default=None,
+                   help="dimensionless duration of the jump (with --t-end)")
+    p.add_argument("--protocol", type=_protocol, default=None, metavar="D:T,...",
+                   help="temperature steps instead of --t-end/--until, e.g. 0.05:308,0.5:302")
+    p.add_argument("--branch", choices=["swollen", "shrunken"], default=None,
+                   help="start branch (default: swollen when heating, shrunken when cooling)")
+    p.add_argument("--dry-radius-um", type=float, default=None,
+                   help="dry bead radius in um (for seconds and a release volume)")
+    c = p.add_argument_group("timescale constants (eq. timescale; tau at the hottest step)")
+    c.add_argument("--viscosity", type=_viscosity, default=1.0e-3,
+                   help="fluid viscosity in Pa s, or 'water' (default 1e-3)")
+    c.add_argument("--polymer-volume-m3", type=float, default=3.0e-25, help="Omega_p in m^3")
+    c.add_argument("--k0-m2", type=float, default=8.0e-20, help="k0 in m^2")
+    add_drug_options(p, required=True)
+    p.add_argument("--n", type=int, default=400, help="Lagrangian cells (default 400)")
+    p.add_argument("--interfacial-length", type=float, default=0.01, metavar="L",
+                   help="interfacial length ell in dry radii (default 0.01; 0: the paper's "
+                        "model on the Lagrangian grid)")
+    p.add_argument("--rtol", type=float, default=1e-5, help="mechanics tolerance (1e-5)")
+    p.add_argument("--samples", type=int, default=2000,
+                   help="mechanics samples the drug is integrated on (default 2000)")
+    p.add_argument("--out", default=None, help="save the release result to this .npz file")
+    p.add_argument("--plot", default=None, metavar="PNG",
+                   help="draw cumulative release and concentration profiles (matplotlib)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--profiles", action="store_true", help="with --json: include the profiles")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Simulate, then print (or JSON) the release."""
+    from dosing.units import PhysicalConstants, timescale
+    from solver.equilibrium import equilibrium
+    from solver.gel import check_temperature
+    from solver.solute import simulate_release
+
+    if args.protocol is None and (args.t_end is None or args.until is None):
+        raise ParameterError("t_end/until", None, "both --t-end and --until, or --protocol")
+    gel = gel_from_args(args)
+    temps = [T for _, T in args.protocol] if args.protocol else [args.t_end]
+    t_ref = check_temperature(max(temps), "t_end")
+    constants = PhysicalConstants(args.viscosity, args.polymer_volume_m3, args.k0_m2)
+    branch = args.branch or ("swollen" if temps[0] >= args.t_start else "shrunken")
+    a0 = equilibrium(gel, check_temperature(args.t_start, "t_start"), branch).stretch
+    drug = drug_from_args(args, always=True)
+    solute = drug.solute(a0, t_ref, constants, args.dry_radius_um)
+    res, rel = simulate_release(gel, args.t_start, solute, t_end=args.t_end, until=args.until,
+                                protocol=args.protocol, n=args.n, branch=args.branch,
+                                interfacial_length=args.interfacial_length, rtol=args.rtol,
+                                samples=args.samples)
+    tau = timescale(args.dry_radius_um, t_ref, constants) if args.dry_radius_um else None
+    d_gel = constants.diffusivity(t_ref) * 1e4
+    d_eff = rel.effective_diffusivity * d_gel
+    saved = rel.save(args.out) if args.out else None
+    if args.plot:
+        from api.plots.release import draw_release
+
+        print(f"wrote {draw_release(rel, args.plot, tau and tau.seconds)}")
+    out = {"t": rel.t, "seconds": None if tau is None else rel.t * tau.seconds,
+           "released_fraction": rel.released_fraction,
+           "squeezed_fraction": rel.advected_fraction,
+           "expelled_fraction": rel.expelled_fraction, "radius": rel.radius,
+           "in_gel_fraction": rel.in_gel_fraction,
+           "effective_diffusivity_cm2_s": d_eff,
+           "drug_diffusivity_cm2_s": drug.d0_cm2_s(t_ref, constants),
+           "gel_diffusivity_cm2_s": d_gel, "timescale_seconds": tau and tau.seconds,
+           "solute": solute.to_dict(), "mass_balance_error": rel.mass_balance_error,
+           "mechanics_seconds": res.diagnostics.get("wall_time"),
+           "solute_seconds": rel.diagnostics.get("wall_time")}
+    if args.release_volume_ul is not None:
+        out["medium_concentration_ug_per_ul"] = _medium(rel, drug, args, a0)
+    if saved is not None:
+        out["file"] = str(saved)
+    if args.json:
+        if args.profiles:
+            out.update(profile_t=rel.profile_t, profiles=rel.profiles,
+                       profile_radii=rel.profile_radii)
+        print_json(out)
+        return 0
+    secs = "" if tau is None else f", tau = {tau.seconds:.4g} s"
+    print(f"{gel.name} from {args.t_start:g} K: drug D0 = {out['drug_diffusivity_cm2_s']:.3g} "
+          f"cm^2/s, hindered to {d_eff:.3g} cm^2/s at the start (gel's D = {d_gel:.3g})"
+          f"{secs}; mass balance {rel.mass_balance_error:.1e}")
+    print("       t   released  squeezed  expelled fluid")
+    for k in np.unique(np.linspace(0, rel.t.size - 1, 11).astype(int)):
+        print(f"  {rel.t[k]:8.4f}  {rel.released_fraction[k]:8.4f}  "
+              f"{rel.advected_fraction[k]:8.4f}  {rel.expelled_fraction[k]:8.4f}")
+    if saved is not None:
+        print(f"wrote {saved}")
+    return 0
+
+
+def _medium(rel: object, drug: object, args: argparse.Namespace, a0: float) -> list | None:
+    """Concentration in the finite release volume, ug/uL (needs the load)."""
+    from dosing.units import volume_to_ul
+
+    if args.dry_radius_um is None:
+        return None
+    stored = volume_to_ul(4.0 * math.pi / 3.0 * (a0**3 - 1.0), args.dry_radius_um)
+    load = drug.load(stored)  # type: ignore[attr-defined]
+    if load is None:
+        return None
+    grown = volume_to_ul(4.0 * math.pi / 3.0 * (a0**3 - rel.radius**3),  # type: ignore[attr-defined]
+                         args.dry_radius_um)
+    return (rel.released_fraction * load / (args.release_volume_ul + grown)).tolist()  # type: ignore[attr-defined]

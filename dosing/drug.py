@@ -1,0 +1,452 @@
+"""The drug: physical parameters, their dimensionless solute, and full-solver drug runs.
+
+A drug is a passive solute in the pore fluid (solver/solute).  Its diffusivity in water D0
+(cm^2/s, or from a Stokes-Einstein radius) is scaled by the gel's own D = R^2 / tau =
+k0 k_B T_end / (eta Omega_p) (eq. timescale), so one dimensionless run serves every bead
+size; the hindrance D0 f(phi) is Lustig & Peppas' free-volume law with the sieving of a
+mesh of size xi (given at the swollen start state, affine: xi ~ J^(1/3)), or Ogston's, or
+none.  A drug run is the full solver (Lagrangian grid, outputs at every protocol boundary
+and densely between them) followed by the solute on its cells; runs are cached per
+dimensionless drug scenario in the planner's SQLite file (own table, so nothing of the
+validation cache is touched).
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import io
+import json
+import math
+import threading
+import time
+import weakref
+from collections import OrderedDict
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from solver.errors import ParameterError, SolverError
+from solver.gel import Gel
+from solver.solute import Hindrance, ReleaseResult, Solute, crank_sphere
+
+from .cache import ValidationCache
+from .scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
+from .units import BOLTZMANN, UM3_PER_UL, PhysicalConstants
+
+# mechanics samples per unit time (at least MIN_SAMPLES per step): benchmarks/drug.py measures
+# the released fraction within 3e-3 of the load (1e-3 with sieving) at a cost <= 1.5 x
+SAMPLES_PER_TAU = 2000
+MIN_SAMPLES = 200
+D_RANGE_CM2_S = (0.0, 1e-3)
+HINDRANCE_LAWS = ("free-volume", "ogston", "none")
+DRUG_ARRAYS = ("t", "radius", "released_fraction", "advected_fraction", "expelled_fraction",
+               "in_gel_fraction", "medium_concentration", "temperature", "profile_t",
+               "profiles", "profile_radii")
+
+
+def _opt_positive(name: str, value: Any) -> float | None:
+    if value is None:
+        return None
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        x = math.nan
+    if isinstance(value, bool) or not (math.isfinite(x) and x > 0.0):
+        raise ParameterError(name, value, "a finite number > 0")
+    return x
+
+
+@dataclass(frozen=True)
+class DrugModel:
+    """A drug dissolved in the pore fluid, in physical units (validated on construction).
+
+    ``diffusivity_cm2_s`` D0 in water (0: carried by the fluid alone), or
+    ``solute_radius_nm`` (D0 from Stokes-Einstein, kT / (6 pi eta r_s), at T_end with the
+    constants' viscosity); ``hindrance`` law; ``mesh_size_nm`` of the swollen gel at T_start
+    (free-volume sieving 1 - r_s / xi; needs a solute radius, given or from D0),
+    ``fiber_radius_nm`` (Ogston), ``free_volume_y`` Y; ``partition`` K = c_pore / c_medium;
+    ``release_volume_ul`` of a well-mixed medium (None: a perfect sink); ``load_ug`` drug per
+    bead, or ``loading_concentration_ug_per_ul`` of the loading solution (the pore fluid
+    holds K times it).
+    """
+
+    diffusivity_cm2_s: float | None = None
+    solute_radius_nm: float | None = None
+    hindrance: str = "free-volume"
+    mesh_size_nm: float | None = None
+    fiber_radius_nm: float | None = None
+    free_volume_y: float = 1.0
+    partition: float = 1.0
+    release_volume_ul: float | None = None
+    load_ug: float | None = None
+    loading_concentration_ug_per_ul: float | None = None
+
+    def __post_init__(self) -> None:
+        d = self.diffusivity_cm2_s
+        if d is not None:
+            try:
+                x = float(d)
+            except (TypeError, ValueError):
+                x = math.nan
+            if isinstance(d, bool) or not (math.isfinite(x)
+                                           and D_RANGE_CM2_S[0] <= x <= D_RANGE_CM2_S[1]):
+                raise ParameterError("drug.diffusivity_cm2_s", d,
+                                     f"a finite number {D_RANGE_CM2_S[0]:g} <= D0 <= "
+                                     f"{D_RANGE_CM2_S[1]:g} cm^2/s (0: no diffusion)")
+            object.__setattr__(self, "diffusivity_cm2_s", x)
+        for name in ("solute_radius_nm", "mesh_size_nm", "fiber_radius_nm", "release_volume_ul",
+                     "load_ug", "loading_concentration_ug_per_ul"):
+            object.__setattr__(self, name, _opt_positive(f"drug.{name}", getattr(self, name)))
+        if self.hindrance not in HINDRANCE_LAWS:
+            raise ParameterError("drug.hindrance", self.hindrance,
+                                 " or ".join(map(repr, HINDRANCE_LAWS)))
+        y = _opt_positive("drug.free_volume_y", self.free_volume_y)
+        if y is None or y > 100.0:
+            raise ParameterError("drug.free_volume_y", self.free_volume_y, "0 < Y <= 100")
+        object.__setattr__(self, "free_volume_y", y)
+        k = _opt_positive("drug.partition", self.partition)
+        if k is None or not 1e-6 <= k <= 1e6:
+            raise ParameterError("drug.partition", self.partition, "1e-6 <= K <= 1e6 (> 0)")
+        object.__setattr__(self, "partition", k)
+        if self.load_ug is not None and self.loading_concentration_ug_per_ul is not None:
+            raise ParameterError("drug.loading_concentration_ug_per_ul",
+                                 self.loading_concentration_ug_per_ul,
+                                 "None when drug.load_ug is given (give one of them)")
+        if self.hindrance == "ogston" and self.fiber_radius_nm is None:
+            raise ParameterError("drug.fiber_radius_nm", None,
+                                 "a finite number > 0 (nm) for Ogston's law")
+
+    # ------------------------------------------------------------------ physical values
+    def d0_cm2_s(self, t_end: float, constants: PhysicalConstants) -> float:
+        """D0 in water: given, or Stokes-Einstein from the solute radius, or 0."""
+        if self.diffusivity_cm2_s is not None:
+            return float(self.diffusivity_cm2_s)
+        if self.solute_radius_nm is not None:
+            eta = constants.viscosity(t_end)
+            return BOLTZMANN * t_end / (6.0 * math.pi * eta * self.solute_radius_nm * 1e-9) * 1e4
+        return 0.0
+
+    def solute_radius(self, t_end: float, constants: PhysicalConstants) -> float | None:
+        """r_s in nm: given, or Stokes-Einstein from D0 (None without either)."""
+        if self.solute_radius_nm is not None:
+            return self.solute_radius_nm
+        d = self.d0_cm2_s(t_end, constants)
+        if d <= 0.0:
+            return None
+        return BOLTZMANN * t_end / (6.0 * math.pi * constants.viscosity(t_end) * d * 1e-4) * 1e9
+
+    def hindrance_law(self, start_radius: float, t_end: float,
+                      constants: PhysicalConstants) -> Hindrance:
+        """The dimensionless law: free-volume sieve r_s / xi_dry = a0 r_s / xi_start."""
+        if self.hindrance == "none":
+            return Hindrance("none")
+        rs = self.solute_radius(t_end, constants)
+        if self.hindrance == "ogston":
+            if rs is None:
+                raise ParameterError("drug.solute_radius_nm", None,
+                                     "a finite number > 0 (nm; or D0 > 0) for Ogston's law")
+            return Hindrance("ogston", sieve=min(rs / self.fiber_radius_nm, 100.0))
+        sieve = 0.0
+        if self.mesh_size_nm is not None:
+            if rs is None:
+                raise ParameterError("drug.solute_radius_nm", None, "a finite number > 0 "
+                                     "(nm; or D0 > 0) for the sieving by drug.mesh_size_nm")
+            sieve = min(start_radius * rs / self.mesh_size_nm, 100.0)
+        return Hindrance("free-volume", sieve=sieve, y=self.free_volume_y)
+
+    def load(self, stored_fluid_ul: float | None) -> float | None:
+        """The drug per bead in ug (given, or K c_loading x the stored fluid), or None."""
+        if self.load_ug is not None:
+            return self.load_ug
+        if self.loading_concentration_ug_per_ul is not None and stored_fluid_ul is not None:
+            return self.partition * self.loading_concentration_ug_per_ul * stored_fluid_ul
+        return None
+
+    def solute(self, start_radius: float, t_end: float, constants: PhysicalConstants,
+               dry_radius_um: float | None) -> Solute:
+        """The dimensionless solute (D0 in units of the gel's R^2 / tau, volumes in
+        4 pi R^3 / 3); a release volume needs the bead size and must hold the bead."""
+        d_gel = constants.diffusivity(t_end) * 1e4  # cm^2/s
+        vol = None
+        if self.release_volume_ul is not None:
+            if dry_radius_um is None:
+                raise ParameterError("dry_radius_um", None, "a finite number > 0 (um; or "
+                                     "swollen_radius_um) to use drug.release_volume_ul")
+            unit = 4.0 * math.pi / 3.0 * dry_radius_um**3 / UM3_PER_UL  # uL
+            vol = self.release_volume_ul / unit
+            if not vol > start_radius**3:
+                raise ParameterError("drug.release_volume_ul", self.release_volume_ul,
+                                     f"> {start_radius**3 * unit:.4g} uL (the swollen bead's "
+                                     "volume: the medium must hold the bead)")
+        return Solute(diffusivity=self.d0_cm2_s(t_end, constants) / d_gel,
+                      hindrance=self.hindrance_law(start_radius, t_end, constants),
+                      partition=self.partition, release_volume=vol)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form."""
+        return asdict(self)
+
+    @classmethod
+    def from_any(cls, value: DrugModel | dict[str, Any]) -> DrugModel:
+        """A DrugModel from itself or a dict of its fields."""
+        if isinstance(value, DrugModel):
+            return value
+        if isinstance(value, dict):
+            try:
+                return cls(**value)
+            except TypeError as exc:
+                raise ParameterError("drug", value, f"a dict of {', '.join(asdict(cls()))}"
+                                     ) from exc
+        raise ParameterError("drug", value, "a DrugModel or a dict of its fields")
+
+
+def leak_time(solute: Solute, start_radius: float, fraction: float = 0.1) -> float:
+    """Dimensionless time a bead sitting at T_start (no flow, uniform) needs to leak
+    ``fraction`` of its load into a perfect sink: Crank's series with D0 f(phi0) (exact for
+    the isothermal bead; inf without diffusion)."""
+    phi0 = 1.0 - 1.0 / start_radius**3
+    d = solute.diffusivity * float(solute.hindrance.factor(phi0))
+    if d <= 0.0:
+        return math.inf
+    lo, hi = 0.0, start_radius**2 / d
+    while crank_sphere(np.array([hi]), d, start_radius)[0] < fraction:
+        hi *= 2.0
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        if crank_sphere(np.array([mid]), d, start_radius)[0] < fraction:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+# ---------------------------------------------------------------------- drug runs
+
+def drug_settings(settings: SolverSettings) -> SolverSettings:
+    """The mechanics of a drug run: the settings' own on the Lagrangian grid (the solute
+    lives on its cells); the paper's model keeps its N there."""
+    return settings if settings.grid == "lagrangian" else replace(settings, grid="lagrangian")
+
+
+@dataclass(frozen=True)
+class DrugScenario:
+    """A dimensionless drug run: a protocol from the start state, and the solute."""
+
+    gel: Gel
+    t_start: float
+    protocol: tuple[Step, ...]
+    solute: Solute
+    branch: str = "swollen"
+    settings: SolverSettings = field(default_factory=SolverSettings)
+
+    def mechanics(self) -> Scenario:
+        """The mechanical scenario (on the Lagrangian grid)."""
+        return Scenario(self.gel, self.t_start, protocol=self.protocol, branch=self.branch,
+                        settings=drug_settings(self.settings))
+
+    def key(self) -> str:
+        """Cache key: the mechanics' key dict plus the solute and the drug code's version."""
+        return self._key
+
+    @functools.cached_property
+    def _key(self) -> str:
+        d = {"kind": "drug", "mechanics": self.mechanics().key_dict(),
+             "solute": self.solute.to_dict(), "samples": SAMPLES_PER_TAU,
+             "min_samples": MIN_SAMPLES, "drug_code": drug_code_version()}
+        text = json.dumps(d, sort_keys=True, separators=(",", ":"))
+        return "drug-" + hashlib.sha256(text.encode()).hexdigest()[:32]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data for a worker process."""
+        return {"mechanics": self.mechanics().to_dict(), "solute": self.solute.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> DrugScenario:
+        """Inverse of :meth:`to_dict`."""
+        m = Scenario.from_dict(d["mechanics"])
+        return cls(m.gel, m.t_start, m.protocol, Solute.from_dict(d["solute"]), m.branch,
+                   m.settings)
+
+
+@functools.cache
+def drug_code_version() -> str:
+    """Digest of the solute sources and this module (with the mechanics' code version)."""
+    import solver.solute
+
+    h = hashlib.sha256(code_version().encode())
+    for p in sorted(Path(solver.solute.__file__).parent.glob("*.py")) + [Path(__file__)]:
+        h.update(p.name.encode())
+        h.update(p.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
+                      settings: SolverSettings, budget: float = RUN_BUDGET_S) -> Any:
+    """The mechanics of a protocol, one ``simulate`` per step (each continues from the last
+    state, so every protocol boundary is an output), sampled densely; one FullResult."""
+    from solver.full import FullResult, simulate
+
+    s = drug_settings(settings)
+    started = time.perf_counter()
+    parts = []
+    prev = None
+    t0 = 0.0
+    for duration, temp in steps:
+        if duration <= 0.0:
+            continue
+        k = max(MIN_SAMPLES, int(math.ceil(duration * SAMPLES_PER_TAU)))
+        left = budget - (time.perf_counter() - started)
+        res = simulate(gel, t_start, protocol=[(duration, temp)], grid=s.grid, n=s.n,
+                       integrator=s.integrator, rtol=s.rtol, every=duration / k,
+                       branch=branch if prev is None else None, initial=prev,
+                       interfacial_length=s.interfacial_length, max_seconds=max(left, 1.0))
+        parts.append((t0, res))
+        prev = res
+        t0 += duration
+    if not parts:
+        raise ParameterError("protocol", steps, "at least one step of positive duration")
+    cat = {name: np.concatenate([getattr(r, name) for _, r in parts])
+           for name in ("radius", "front", "jump", "phi", "temperature", "solid_error")}
+    t = np.concatenate([r.t + off for off, r in parts])
+    first = parts[0][1]
+    a = cat["radius"]
+    diag = dict(first.diagnostics)
+    diag.update(protocol=[list(x) for x in steps], wall_time=time.perf_counter() - started,
+                steps=sum(int(r.diagnostics.get("steps", 0)) for _, r in parts))
+    return FullResult(t=t, radius=a, front=cat["front"], jump=cat["jump"], phi=cat["phi"],
+                      coords=first.coords, temperature=cat["temperature"],
+                      expelled_volume=4.0 * np.pi / 3.0 * (a[0] ** 3 - a**3),
+                      solid_error=cat["solid_error"], diagnostics=diag)
+
+
+def run_drug_scenario(scenario: dict[str, Any], budget: float = RUN_BUDGET_S
+                      ) -> tuple[dict[str, Any], bytes]:
+    """A drug run: plain data in, (metadata, npz blob) out (for any executor)."""
+    from solver.solute import release
+
+    sc = DrugScenario.from_dict(scenario)
+    wall = time.perf_counter()
+    res = simulate_protocol(sc.gel, sc.t_start, list(sc.protocol), sc.branch, sc.settings, budget)
+    mech = time.perf_counter() - wall
+    rel = release(res, sc.solute)
+    meta = {"key": sc.key(), "scenario": sc.to_dict(), "mechanics_seconds": mech,
+            "solute_seconds": time.perf_counter() - wall - mech,
+            "mass_balance_error": rel.mass_balance_error,
+            "effective_diffusivity": rel.effective_diffusivity,
+            "solute_steps": rel.diagnostics.get("steps"), "created": time.time()}
+    return meta, to_npz(rel)
+
+
+def to_npz(rel: ReleaseResult) -> bytes:
+    """A release result's arrays as an .npz blob."""
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **{k: np.asarray(getattr(rel, k), dtype=float)
+                                for k in DRUG_ARRAYS})
+    return buf.getvalue()
+
+
+def from_npz(blob: bytes, meta: dict[str, Any]) -> ReleaseResult:
+    """Inverse of :func:`to_npz` (scalars from the metadata)."""
+    with np.load(io.BytesIO(blob)) as z:
+        arrays = {k: np.array(z[k]) for k in DRUG_ARRAYS}
+    return ReleaseResult(**arrays, mass_balance_error=float(meta.get("mass_balance_error", 0.0)),
+                         effective_diffusivity=float(meta.get("effective_diffusivity", 0.0)),
+                         diagnostics=dict(meta))
+
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS drug_runs (
+    key TEXT PRIMARY KEY,
+    meta TEXT NOT NULL,
+    data BLOB NOT NULL,
+    created REAL NOT NULL
+);
+"""
+
+
+class DrugCache(ValidationCache):
+    """Drug runs in the validation cache's SQLite file, in a table of their own."""
+
+    def __init__(self, path: str | Path | None = None) -> None:
+        super().__init__(path)
+        self._con().executescript(_SCHEMA)
+
+    def put_run(self, key: str, meta: dict[str, Any], blob: bytes) -> None:
+        """Store a drug run (one atomic transaction)."""
+        import sqlite3
+
+        self._write("INSERT OR REPLACE INTO drug_runs (key, meta, data, created) "
+                    "VALUES (?, ?, ?, ?)", (key, json.dumps(meta), sqlite3.Binary(blob),
+                                            time.time()))
+
+    def get_run(self, key: str) -> ReleaseResult | None:
+        """The stored drug run, or None."""
+        row = self._con().execute("SELECT meta, data FROM drug_runs WHERE key = ?",
+                                  (key,)).fetchone()
+        return None if row is None else from_npz(bytes(row[1]), json.loads(row[0]))
+
+
+class DrugRuns:
+    """Drug runs for a planner: memory, then the cache file, then its executor."""
+
+    def __init__(self, planner: Any) -> None:
+        self.planner = planner
+        self.cache = DrugCache(planner.cache.path)
+        self._mem: OrderedDict[str, ReleaseResult] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def cached(self, sc: DrugScenario) -> ReleaseResult | None:
+        """The stored run, or None (no computation)."""
+        key = sc.key()
+        with self._lock:
+            hit = self._mem.get(key)
+        if hit is None:
+            hit = self.cache.get_run(key)
+            if hit is not None:
+                self._remember(key, hit)
+        return hit
+
+    def _remember(self, key: str, rel: ReleaseResult) -> None:
+        with self._lock:
+            self._mem[key] = rel
+            self._mem.move_to_end(key)
+            while len(self._mem) > 32:
+                self._mem.popitem(last=False)
+
+    def run(self, sc: DrugScenario) -> ReleaseResult:
+        """The drug run for ``sc`` (blocking; cached)."""
+        hit = self.cached(sc)
+        if hit is not None:
+            return hit
+
+        def store(fut: Any) -> None:
+            meta, blob = fut.result()
+            self.cache.put_run(meta["key"], meta, blob)
+
+        meta, blob = self.planner.jobs.submit(sc.key(), run_drug_scenario, sc.to_dict(),
+                                              on_done=store).result()
+        rel = from_npz(blob, meta)
+        if rel.mass_balance_error > 1e-10:
+            raise SolverError(f"drug run lost mass: {rel.mass_balance_error:.3g}", meta)
+        self._remember(sc.key(), rel)
+        return rel
+
+    def close(self) -> None:
+        """Close this object's connections to the cache file."""
+        self.cache.close()
+
+
+_RUNS: weakref.WeakKeyDictionary[Any, DrugRuns] = weakref.WeakKeyDictionary()
+_RUNS_LOCK = threading.Lock()
+
+
+def runs_for(planner: Any) -> DrugRuns:
+    """The planner's drug runs (one per planner, kept while the planner lives)."""
+    with _RUNS_LOCK:
+        runs = _RUNS.get(planner)
+        if runs is None:
+            runs = _RUNS[planner] = DrugRuns(planner)
+        return runs

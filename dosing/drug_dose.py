@@ -1,0 +1,267 @@
+"""A dose of drug (not of fluid): the actuation time that releases a drug mass.
+
+The bead, loaded uniformly in equilibrium at T_start, may sit in the release medium at
+T_start for ``wait`` before heating (it leaks by diffusion meanwhile), then is heated at
+T_end until the drug released during the heating reaches the dose.  Without diffusion
+(D0 = 0) a single heating of a uniformly loaded bead releases drug in proportion to
+fluid, exactly (every expelled parcel carries the loaded concentration), so the planner's
+fluid answer is the drug answer (the reduced model, milliseconds).  With diffusion the full
+solver answers (a drug run, cached): no reduced model of hindered diffusion through the
+front model's shell is offered.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from solver.errors import ParameterError, require_finite_positive
+
+from .drug import DrugModel, DrugRuns, DrugScenario, drug_settings, leak_time, runs_for
+from .request import DoseRequest, Jump, _resolve_scenario
+from .units import PhysicalConstants, timescale, volume_to_ul
+
+MAX_HORIZON = 64.0
+DEFAULT_HORIZON = 0.5
+
+
+def resolve_drug_amount(name_fraction: str, fraction: float | None, name_mass: str,
+                        mass: float | None, load_ug: float | None) -> float:
+    """A dose as a fraction of the load: given, or a drug mass over the load; 0 < f < 1."""
+    if (fraction is None) == (mass is None):
+        raise ParameterError(name_fraction, fraction,
+                             f"exactly one of {name_fraction} (of the load) or {name_mass}")
+    if mass is not None:
+        m = require_finite_positive(name_mass, mass)
+        if load_ug is None:
+            raise ParameterError("drug.load_ug", None, f"a finite number > 0 (ug per bead; or "
+                                 f"drug.loading_concentration_ug_per_ul with a bead size) to "
+                                 f"turn {name_mass} into a fraction of the load")
+        if not m < load_ug:
+            raise ParameterError(name_mass, mass, f"0 < {name_mass} < {load_ug:.4g} ug",
+                                 "the dose must be smaller than the drug loaded in the bead")
+        return m / load_ug
+    f = require_finite_positive(name_fraction, fraction)
+    if not f < 1.0:
+        raise ParameterError(name_fraction, fraction, "0 < fraction < 1 of the loaded drug",
+                             "the dose must be smaller than the drug loaded in the bead")
+    return f
+
+
+@dataclass(frozen=True)
+class DrugDoseRequest:
+    """One drug dose: ``dose_fraction`` of the loaded drug, or ``drug_mass_ug`` (needs the
+    load); ``wait`` (tau) or ``wait_seconds`` at T_start in the medium before heating."""
+
+    gel: Any
+    t_start: float
+    t_end: float
+    drug: DrugModel | dict[str, Any]
+    dose_fraction: float | None = None
+    drug_mass_ug: float | None = None
+    wait: float | None = None
+    wait_seconds: float | None = None
+    dry_radius_um: float | None = None
+    swollen_radius_um: float | None = None
+    constants: PhysicalConstants | dict[str, Any] | None = None
+    branch: str | None = None
+    settings: Any = None
+    jump: Jump = field(init=False, repr=False, compare=False)
+    bead_dry_radius_um: float | None = field(init=False, repr=False, compare=False)
+    fraction: float = field(init=False, repr=False, compare=False)
+    load_ug: float | None = field(init=False, repr=False, compare=False)
+    lead: float = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        jump, dry = _resolve_scenario(self)
+        drug = DrugModel.from_any(self.drug)
+        object.__setattr__(self, "drug", drug)
+        stored_ul = None if dry is None else volume_to_ul(jump.stored_volume, dry)
+        load = drug.load(stored_ul)
+        object.__setattr__(self, "load_ug", load)
+        object.__setattr__(self, "fraction", resolve_drug_amount(
+            "dose_fraction", self.dose_fraction, "drug_mass_ug", self.drug_mass_ug, load))
+        object.__setattr__(self, "lead", resolve_wait(self.wait, self.wait_seconds, dry,
+                                                      self.t_end, self.constants))
+        self.solute  # noqa: B018 - validates the release volume against the bead
+
+    @property
+    def start_radius(self) -> float:
+        """a(0): the equilibrium stretch at T_start."""
+        return self.jump.start_radius
+
+    @property
+    def solute(self) -> Any:
+        """The dimensionless solute of this request."""
+        return self.drug.solute(self.start_radius, self.t_end, self.constants,
+                                self.bead_dry_radius_um)
+
+    def fluid_request(self, fraction: float) -> DoseRequest:
+        """The fluid dose of the same bead and jump."""
+        return DoseRequest(self.gel, self.t_start, self.t_end, dose_fraction=fraction,
+                           dry_radius_um=self.bead_dry_radius_um, constants=self.constants,
+                           branch=self.branch, settings=self.settings)
+
+
+def resolve_wait(wait: float | None, wait_seconds: float | None, dry: float | None,
+                 t_end: float, constants: PhysicalConstants) -> float:
+    """The time at T_start before the first heating, in tau (0 by default)."""
+    if wait is not None and wait_seconds is not None:
+        raise ParameterError("wait_seconds", wait_seconds, "None when wait is given")
+    name, value = ("wait", wait) if wait_seconds is None else ("wait_seconds", wait_seconds)
+    if value is None:
+        return 0.0
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        x = math.nan
+    if isinstance(value, bool) or not (math.isfinite(x) and 0.0 <= x <= 1e4):
+        raise ParameterError(name, value, "a finite number 0-1e4")
+    if name == "wait_seconds":
+        if dry is None:
+            raise ParameterError("dry_radius_um", None, "a finite number > 0 (um) to turn "
+                                 "wait_seconds into tau units")
+        x /= timescale(dry, t_end, constants).seconds
+    return x
+
+
+@dataclass
+class DrugDoseAnswer:
+    """How long to heat for a drug dose, what leaked before, and how it came out."""
+
+    model: str
+    time: float
+    seconds: float | None
+    dose_fraction: float
+    dose_ug: float | None
+    load_ug: float | None
+    wait: float
+    leaked_before_heating: float
+    leaked_before_heating_ug: float | None
+    leak_time_10pct: float
+    leak_time_10pct_seconds: float | None
+    squeezed_fraction: float
+    diffused_fraction: float
+    mechanism: str
+    fluid_fraction: float
+    medium_concentration_ug_per_ul: float | None
+    effective_diffusivity_cm2_s: float
+    drug_diffusivity_cm2_s: float
+    mass_balance_error: float
+    timescale_seconds: float | None
+    fluid_answer: dict[str, Any] | None
+    scenario_key: str | None
+    note: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form (JSON-ready)."""
+        return asdict(self)
+
+
+def mechanism(squeezed: float, diffused: float) -> str:
+    """'squeezed out' or 'diffused' (the larger share), with the split in words."""
+    total = squeezed + diffused
+    if total <= 0.0:
+        return "none"
+    share = squeezed / total
+    return (f"squeezed out ({share:.0%} with the expelled fluid)" if share >= 0.5
+            else f"diffused ({1 - share:.0%} by diffusion through the edge)")
+
+
+def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = None
+                   ) -> DrugDoseAnswer:
+    """The actuation time for a drug dose (see the module docstring)."""
+    solute = req.solute
+    c = req.constants
+    dry = req.bead_dry_radius_um
+    tau = timescale(dry, req.t_end, c).seconds if dry is not None else None
+    d0 = req.drug.d0_cm2_s(req.t_end, c)
+    d_gel = c.diffusivity(req.t_end) * 1e4
+    phi0 = 1.0 - 1.0 / req.start_radius**3
+    d_eff = d0 * float(solute.hindrance.factor(phi0))
+    t10 = leak_time(solute, req.start_radius)
+    load = req.load_ug
+
+    def ug(x: float) -> float | None:
+        return None if load is None else x * load
+
+    common = dict(dose_fraction=req.fraction, dose_ug=ug(req.fraction), load_ug=load,
+                  wait=req.lead, leak_time_10pct=t10,
+                  leak_time_10pct_seconds=None if tau is None or math.isinf(t10) else t10 * tau,
+                  effective_diffusivity_cm2_s=d_eff, drug_diffusivity_cm2_s=d0,
+                  timescale_seconds=tau)
+    if solute.diffusivity == 0.0:
+        fluid = planner.dose(req.fluid_request(req.fraction))
+        return DrugDoseAnswer(
+            model=fluid.model, time=fluid.time, seconds=fluid.seconds,
+            leaked_before_heating=0.0, leaked_before_heating_ug=ug(0.0),
+            squeezed_fraction=req.fraction, diffused_fraction=0.0,
+            mechanism=mechanism(1.0, 0.0), fluid_fraction=req.fraction,
+            medium_concentration_ug_per_ul=_conc(req, req.fraction, fluid.final_radius),
+            mass_balance_error=0.0, fluid_answer=fluid.to_dict(), scenario_key=None,
+            note=("No diffusion (D0 = 0): a uniformly loaded bead releases drug in proportion "
+                  "to fluid on one heating, exactly, so this is the fluid answer "
+                  f"({fluid.model}) for the same fraction; nothing leaks while it waits at "
+                  "T_start. " + fluid.note), **common)
+    runs = runs or runs_for(planner)
+    horizon = DEFAULT_HORIZON
+    while True:
+        steps = ((req.lead, req.t_start),) if req.lead > 0.0 else ()
+        sc = DrugScenario(req.gel, req.t_start, (*steps, (horizon, req.t_end)), solute,
+                          req.branch, drug_settings(req.settings))
+        rel = runs.run(sc)
+        try:
+            t_hit = rel.time_to_release(req.fraction, after=req.lead)
+            break
+        except ValueError:
+            if horizon >= MAX_HORIZON:
+                most = rel.released_fraction[-1] - rel.released_at(req.lead)
+                name = "dose_fraction" if req.drug_mass_ug is None else "drug_mass_ug"
+                raise ParameterError(
+                    name, getattr(req, name), f"below {most:.4f} of the load"
+                    + (f" ({most * load:.4g} ug)" if load else ""),
+                    f"after waiting {req.lead:.4g} tau, heating for {horizon:g} tau releases "
+                    "at most that") from None
+            horizon *= 4.0
+    before = rel.released_at(req.lead)
+    squeezed = rel.advected_at(t_hit) - rel.advected_at(req.lead)
+    fluid = (float(rel.radius[0]) ** 3 - _a3_at(rel, t_hit)) / (req.start_radius**3 - 1.0)
+    time = t_hit - req.lead
+    conc = _conc(req, rel.released_at(t_hit), _a3_at(rel, t_hit) ** (1.0 / 3.0))
+    s = drug_settings(req.settings)
+    return DrugDoseAnswer(
+        model="full", time=time, seconds=None if tau is None else time * tau,
+        leaked_before_heating=before, leaked_before_heating_ug=ug(before),
+        squeezed_fraction=squeezed, diffused_fraction=req.fraction - squeezed,
+        mechanism=mechanism(squeezed, req.fraction - squeezed), fluid_fraction=fluid,
+        medium_concentration_ug_per_ul=conc, mass_balance_error=rel.mass_balance_error,
+        fluid_answer=None, scenario_key=sc.key(),
+        note=(f"Full solver ({s.grid} grid, N = {s.n}, interfacial length "
+              f"{s.interfacial_length:g}) with the drug on its cells: D0 = {d0:.3g} cm^2/s "
+              f"({solute.diffusivity:.3g} x the gel's {d_gel:.3g}), hindered by "
+              f"{solute.hindrance.law} (sieve {solute.hindrance.sieve:.3g}, Y "
+              f"{solute.hindrance.y:g}) to {d_eff:.3g} cm^2/s in the start state; partition "
+              f"{solute.partition:g}; "
+              + ("a perfect sink" if solute.release_volume is None else "a well-mixed medium")
+              + f". At T_start the bead leaks 10% of its load in {t10:.3g} tau."), **common)
+
+
+def _a3_at(rel: Any, t: float) -> float:
+    return float(np.interp(t, rel.t, rel.radius**3))
+
+
+def _conc(req: DrugDoseRequest, released: float, radius: float) -> float | None:
+    """Concentration in a finite release volume (ug/uL) once ``released`` of the load is out
+    (the medium volume grows by the expelled fluid)."""
+    v = req.drug.release_volume_ul
+    if v is None or req.load_ug is None or req.bead_dry_radius_um is None:
+        return None
+    dry = req.bead_dry_radius_um
+    grown = volume_to_ul(4.0 * math.pi / 3.0 * (req.start_radius**3 - radius**3), dry)
+    return released * req.load_ug / (v + grown)
+
+
+__all__ = ["DrugDoseAnswer", "DrugDoseRequest", "plan_drug_dose"]

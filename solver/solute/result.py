@@ -1,0 +1,105 @@
+"""ReleaseResult: the plain-data outcome of a solute run (arrays plus diagnostics)."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..full.result import _clean
+
+_ARRAYS = ("t", "radius", "released_fraction", "advected_fraction", "expelled_fraction",
+           "in_gel_fraction", "medium_concentration", "temperature", "profile_t", "profiles",
+           "profile_radii")
+
+
+@dataclass
+class ReleaseResult:
+    """A passive solute carried by the pore fluid (module ``transport``), dimensionless.
+
+    Per mechanics sample t: radius a(t), ``released_fraction`` of the loaded solute now in
+    the medium (its ``advected_fraction`` part crossed the edge with the fluid: squeezed
+    out; the rest diffused), ``expelled_fraction`` of the stored fluid (a0^3 - a^3) /
+    (a0^3 - 1) (negative while the gel takes up fluid), ``in_gel_fraction``,
+    ``medium_concentration`` (per loaded mass and per volume of 4 pi R^3 / 3; 0 for a perfect
+    sink) and temperature.  ``profiles`` (len(profile_t), n): pore concentrations c / c0
+    (c0 the loaded concentration) at cell-centre radii ``profile_radii``.
+    ``mass_balance_error`` is max |in gel + released - 1| over the run.
+    """
+
+    t: np.ndarray
+    radius: np.ndarray
+    released_fraction: np.ndarray
+    advected_fraction: np.ndarray
+    expelled_fraction: np.ndarray
+    in_gel_fraction: np.ndarray
+    medium_concentration: np.ndarray
+    temperature: np.ndarray
+    profile_t: np.ndarray
+    profiles: np.ndarray
+    profile_radii: np.ndarray
+    mass_balance_error: float = 0.0
+    effective_diffusivity: float = 0.0
+    diagnostics: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def diffused_fraction(self) -> np.ndarray:
+        """The released solute that left by diffusion (released minus advected)."""
+        return self.released_fraction - self.advected_fraction
+
+    def released_at(self, time: float) -> float:
+        """Released fraction at ``time`` (linear between samples)."""
+        return float(np.interp(time, self.t, self.released_fraction))
+
+    def advected_at(self, time: float) -> float:
+        """Advected (squeezed-out) part of the released fraction at ``time``."""
+        return float(np.interp(time, self.t, self.advected_fraction))
+
+    def time_to_release(self, amount: float, after: float = 0.0) -> float:
+        """First time >= ``after`` at which released(t) - released(after) reaches ``amount``
+        (linear between samples); ValueError if never."""
+        base = self.released_at(after)
+        i0 = int(np.searchsorted(self.t, after, side="right"))
+        rel = self.released_fraction[i0:] - base
+        hit = np.nonzero(rel >= amount)[0]
+        if hit.size == 0:
+            raise ValueError(f"a release of {amount:.6g} is not reached by t = "
+                             f"{self.t[-1]:.6g} (at most {float(rel.max(initial=0.0)):.6g})")
+        j = i0 + int(hit[0])
+        t0, r0 = (after, 0.0) if j == i0 else (float(self.t[j - 1]),
+                                               float(self.released_fraction[j - 1] - base))
+        t1, r1 = float(self.t[j]), float(self.released_fraction[j] - base)
+        return t1 if r1 == r0 else t0 + (amount - r0) / (r1 - r0) * (t1 - t0)
+
+    def to_json_dict(self, profiles: bool = True) -> dict[str, Any]:
+        """JSON-ready dict (NaN -> None); ``profiles=False`` drops the profiles."""
+        out: dict[str, Any] = {}
+        for name in _ARRAYS:
+            if name in ("profiles", "profile_radii") and not profiles:
+                continue
+            out[name] = getattr(self, name)
+        out["mass_balance_error"] = self.mass_balance_error
+        out["effective_diffusivity"] = self.effective_diffusivity
+        out["diagnostics"] = self.diagnostics
+        return _clean(out)
+
+    def save(self, path: str | Path) -> Path:
+        """Write to an .npz file (arrays plus scalars and diagnostics as JSON)."""
+        p = Path(path)
+        arrays = {name: np.asarray(getattr(self, name)) for name in _ARRAYS}
+        extra = {"mass_balance_error": self.mass_balance_error,
+                 "effective_diffusivity": self.effective_diffusivity,
+                 "diagnostics": self.diagnostics}
+        np.savez_compressed(p, extra=np.array(json.dumps(_clean(extra))), **arrays)
+        return p if p.suffix == ".npz" else p.with_name(p.name + ".npz")
+
+    @classmethod
+    def load(cls, path: str | Path) -> ReleaseResult:
+        """Read a file written by :meth:`save`."""
+        with np.load(Path(path), allow_pickle=False) as data:
+            kwargs: dict[str, Any] = {k: np.array(data[k]) for k in _ARRAYS if k in data}
+            kwargs.update(json.loads(str(data["extra"])))
+        return cls(**kwargs)

@@ -1,0 +1,201 @@
+"""The solute carried by the pore fluid: parameters, validation, and the run on a mechanics
+result (the kernels are in ``kernels``).
+
+The solute is passive: it does not change the mechanics, so it is integrated after the
+mechanical run on the Lagrangian cells, from the run's samples of the node volumes.  In the
+dry coordinate the fluid fluxes follow from continuity alone, so advection is exactly
+conservative; diffusion uses the physical face areas and distances of r(rho, t).  Units as
+in the paper: lengths by the dry radius R, time by tau (eq. timescale), so the diffusivity is
+in units of the gel's D = R^2 / tau; volumes in 4 pi R^3 / 3.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import ParameterError, SolverError
+from ..full.result import FullResult
+from .hindrance import Hindrance, hindrance_factor
+from .kernels import BAD, BUDGET, release_run
+from .result import ReleaseResult
+
+D_MAX = 1e8  # solute diffusivity / gel diffusivity
+K_RANGE = (1e-6, 1e6)
+MAX_PROFILES = 201
+DEFAULT_RTOL = 1e-6
+MAX_STEPS = 5_000_000
+
+
+def _number(name: str, value: Any) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        x = math.nan
+    if isinstance(value, bool) or not math.isfinite(x):
+        raise ParameterError(name, value, "a finite number")
+    return x
+
+
+@dataclass(frozen=True)
+class Solute:
+    """A passive solute, dimensionless: ``diffusivity`` D0 in the pore fluid (units of the
+    gel's R^2 / tau; 0 allowed: carried by the fluid alone), the ``hindrance`` law
+    D = D0 f(phi), the equilibrium ``partition`` K = c_pore / c_medium, and the
+    ``release_volume`` of a well-mixed medium at t = 0 (units of 4 pi R^3 / 3; None: a
+    perfect sink).  Loading: uniform in the pore fluid at the start state."""
+
+    diffusivity: float = 0.0
+    hindrance: Hindrance = field(default_factory=Hindrance)
+    partition: float = 1.0
+    release_volume: float | None = None
+
+    def __post_init__(self) -> None:
+        d = _number("diffusivity", self.diffusivity)
+        if not 0.0 <= d <= D_MAX:
+            raise ParameterError("diffusivity", self.diffusivity,
+                                 f"0 <= D0 <= {D_MAX:g} (units of the gel's R^2/tau)")
+        object.__setattr__(self, "diffusivity", d)
+        h = self.hindrance
+        if isinstance(h, dict):
+            h = Hindrance(**h)
+        if not isinstance(h, Hindrance):
+            raise ParameterError("hindrance", h, "a Hindrance or a dict of its fields")
+        object.__setattr__(self, "hindrance", h)
+        k = _number("partition", self.partition)
+        if not K_RANGE[0] <= k <= K_RANGE[1]:
+            raise ParameterError("partition", self.partition,
+                                 f"{K_RANGE[0]:g} <= K <= {K_RANGE[1]:g} (> 0)")
+        object.__setattr__(self, "partition", k)
+        if self.release_volume is not None:
+            v = _number("release_volume", self.release_volume)
+            if not v > 0.0:
+                raise ParameterError("release_volume", self.release_volume,
+                                     "None (a perfect sink) or a volume > 0")
+            object.__setattr__(self, "release_volume", v)
+
+    def diffusivity_at(self, phi: float | np.ndarray) -> float | np.ndarray:
+        """The hindered diffusivity D0 f(phi)."""
+        return self.diffusivity * self.hindrance.factor(phi)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form."""
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> Solute:
+        """Inverse of :meth:`to_dict`."""
+        d = dict(d)
+        d["hindrance"] = Hindrance(**d.get("hindrance", {}))
+        return cls(**d)
+
+
+def node_volumes(res: FullResult) -> np.ndarray:
+    """r_k^3 at every node (k = 0..n, r_0 = 0) and output, from a Lagrangian run's phi."""
+    if res.grid != "lagrangian":
+        raise ParameterError("grid", res.grid, "'lagrangian' (the solute lives on the dry "
+                             "coordinate's cells)")
+    n = res.coords.size
+    dw = np.diff((np.arange(n + 1) / n) ** 3)
+    s3 = np.zeros((res.t.size, n + 1))
+    s3[:, 1:] = np.cumsum(dw[None, :] / (1.0 - res.phi), axis=1)
+    return s3
+
+
+def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
+            profiles: int = 51, max_steps: int = MAX_STEPS) -> ReleaseResult:
+    """Integrate the solute through the mechanics samples of ``res`` (Lagrangian grid).
+
+    The solute starts uniform in the pore fluid of the first sample (the loaded bead in
+    equilibrium, loaded mass 1), enters and leaves with the fluid (upwind), diffuses with
+    D0 f(phi) and leaves at the edge into the medium (kernels module).  The samples should
+    be dense enough for the fluid's motion (``simulate(..., every=...)``); the time steps
+    adapt within them to ``rtol``.  ``profiles`` concentration profiles are kept at evenly
+    spread samples.
+    """
+    if not isinstance(solute, Solute):
+        raise ParameterError("solute", solute, "a Solute")
+    if not (isinstance(rtol, (int, float)) and 1e-12 <= rtol <= 1e-2):
+        raise ParameterError("rtol", rtol, "1e-12 <= rtol <= 1e-2")
+    started = time.perf_counter()
+    s3 = node_volumes(res)
+    ts = np.asarray(res.t, dtype=float)
+    n = s3.shape[1] - 1
+    dw = np.diff((np.arange(n + 1) / n) ** 3)
+    a3 = s3[:, n]
+    w0 = a3[0] - 1.0
+    vol = solute.release_volume
+    if vol is not None and vol <= a3[0]:
+        raise ParameterError("release_volume", vol, f"> {a3[0]:.6g} (the swollen bead's "
+                             "volume, units of 4 pi R^3/3): the medium must hold the bead")
+    m = np.zeros(n + 1)
+    m[:n] = (s3[0, 1:] - s3[0, :-1] - dw) / w0
+    m[:n] /= m[:n].sum()
+    k_prof = max(2, min(int(profiles), MAX_PROFILES, ts.size))
+    picks = np.unique(np.round(np.linspace(0, ts.size - 1, k_prof)).astype(np.int64))
+    prof_idx = np.full(ts.size, -1, dtype=np.int64)
+    prof_idx[picks] = np.arange(picks.size)
+    out_prof = np.zeros((picks.size, n))
+    rel = np.zeros(ts.size)
+    adv = np.zeros(ts.size)
+    h = solute.hindrance
+    par = np.array([solute.diffusivity, float(h.code), h.sieve, h.y, solute.partition])
+    counters = np.zeros(2, dtype=np.int64)
+    gel = np.zeros(ts.size)
+    status = release_run(ts, s3, dw, -1.0 if vol is None else float(vol), par, m, rel, adv,
+                         gel, out_prof, prof_idx, float(rtol), int(max_steps), counters)
+    if status == BUDGET:
+        raise SolverError(f"solute transport: step budget exhausted ({max_steps} steps)",
+                          {"steps": int(counters[0])})
+    if status == BAD:
+        raise SolverError("solute transport: unphysical state (a cell without fluid or a "
+                          "non-finite error)", {"steps": int(counters[0])})
+    balance = float(np.max(np.abs(gel + rel - 1.0)))
+    if vol is None:
+        conc = np.zeros(ts.size)
+    else:
+        conc = rel / (vol + (a3[0] - a3))
+    phi0 = float(res.phi[0].mean())
+    radii = np.cbrt(0.5 * (s3[picks, 1:] + s3[picks, :-1]))
+    diag = {"steps": int(counters[0]), "rejected": int(counters[1]), "rtol": rtol,
+            "samples": int(ts.size), "n": n, "solute": solute.to_dict(),
+            "wall_time": time.perf_counter() - started}
+    return ReleaseResult(
+        t=ts.copy(), radius=np.asarray(res.radius, dtype=float).copy(),
+        released_fraction=rel, advected_fraction=adv,
+        expelled_fraction=(a3[0] - a3) / w0, in_gel_fraction=gel,
+        medium_concentration=conc, temperature=np.asarray(res.temperature, dtype=float).copy(),
+        profile_t=ts[picks].copy(), profiles=out_prof * w0, profile_radii=radii,
+        mass_balance_error=balance,
+        effective_diffusivity=float(solute.diffusivity * hindrance_factor(
+            phi0, h.code, h.sieve, h.y)),
+        diagnostics=diag)
+
+
+def simulate_release(gel: Any, t_start: float, solute: Solute, *, t_end: float | None = None,
+                     until: float | None = None,
+                     protocol: Sequence[tuple[float, float]] | None = None, n: int = 200,
+                     interfacial_length: float = 0.0, samples: int = 2000,
+                     rtol: float = 1e-6, solute_rtol: float = DEFAULT_RTOL,
+                     profiles: int = 51, **kw: Any) -> tuple[FullResult, ReleaseResult]:
+    """The mechanical run (Lagrangian grid, ``samples`` outputs) and the solute on it."""
+    from ..full import simulate
+
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not (
+            10 <= samples <= 100_000):
+        raise ParameterError("samples", samples, "an integer 10-100000")
+    if protocol is not None:
+        total = float(sum(float(d) for d, _ in protocol))
+    elif until is not None:
+        total = _number("until", until)
+    else:
+        total = math.nan
+    every = total / samples if math.isfinite(total) and total > 0 else None
+    res = simulate(gel, t_start, t_end, until=until, protocol=protocol, grid="lagrangian",
+                   n=n, rtol=rtol, interfacial_length=interfacial_length, every=every, **kw)
+    return res, release(res, solute, rtol=solute_rtol, profiles=profiles)

@@ -1,0 +1,97 @@
+"""The ``drug`` field of the dose and schedule routes (api/drug_schemas.py, drug_service.py)."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import pytest
+from api_support import asgi
+
+from api.http import create_app
+from dosing import Planner
+from dosing.drug import DrugCache
+
+pytestmark = pytest.mark.anyio
+
+DOSE = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.3,
+        "dry_radius_um": 50.0, "interfacial_length": 0.01}
+
+
+@pytest.fixture
+def anyio_backend() -> str:
+    return "asyncio"
+
+
+@pytest.fixture
+def planner(tmp_path):
+    p = Planner(cache_path=tmp_path / "cache.sqlite", executor=ThreadPoolExecutor(1))
+    yield p
+    p.close()
+    p.jobs.executor.shutdown(wait=True)
+
+
+@pytest.fixture
+async def clients(planner):
+    async with asgi(create_app(planner=planner, warm=False)) as pair:
+        yield pair
+
+
+async def test_drug_dose_answers(clients) -> None:
+    _, raw = clients
+    r = await raw.post("/v1/dose-time", json={**DOSE, "drug": {"load_ug": 2.0}})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["drug"] is True and body["dose_ug"] == pytest.approx(0.6)
+    assert body["mechanism"].startswith("squeezed out") and body["model"] == "front-sharp"
+    r = await raw.post("/v1/dose-time", json={**DOSE, "drug": {
+        "diffusivity_cm2_s": 1e-7, "mesh_size_nm": 23.0, "load_ug": 1.0, "wait": 0.001}})
+    assert r.status_code == 200, r.text
+    got = r.json()
+    assert got["model"] == "full" and got["leaked_before_heating"] > 0.0
+    assert got["effective_diffusivity_cm2_s"] < 1e-8  # sieved by the mesh
+
+
+@pytest.mark.parametrize("drug,extra,loc", [
+    ({"diffusivity_cm2_s": -1e-7}, {}, ["body", "drug", "diffusivity_cm2_s"]),
+    ({"diffusivity_cm2_s": 1.0}, {}, ["body", "drug", "diffusivity_cm2_s"]),
+    ({"partition": 0.0}, {}, ["body", "drug", "partition"]),
+    ({"release_volume_ul": 1e-5}, {}, ["body", "drug", "release_volume_ul"]),
+    ({"load_ug": 1.0}, {"dose_fraction": None, "drug_mass_ug": 1.5}, ["body", "drug_mass_ug"]),
+    ({"load_ug": 1.0}, {"dose_fraction": 1.0}, ["body", "dose_fraction"]),
+    ({"hindrance": "magic"}, {}, ["body", "drug", "hindrance"]),
+])
+async def test_bad_drug_is_422_naming_the_field(clients, planner, drug, extra, loc) -> None:
+    _, raw = clients
+    cache = DrugCache(planner.cache.path)
+    before = (len(planner.cache), cache.integrity())
+    body = {k: v for k, v in {**DOSE, **extra, "drug": drug}.items() if v is not None}
+    r = await raw.post("/v1/dose-time", json=body)
+    assert r.status_code == 422, r.text
+    assert r.json()["detail"][0]["loc"][:len(loc)] == loc, r.json()
+    assert (len(planner.cache), cache.integrity()) == before  # nothing cached is lost
+    cache.close()
+
+
+async def test_drug_schedule_hold_at_once_then_a_job(clients) -> None:
+    _, raw = clients
+    body = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "doses": [0.3, 0.3],
+            "rests": [0.5], "dry_radius_um": 50.0, "interfacial_length": 0.01,
+            "drug": {"load_ug": 1.0}}
+    r = await raw.post("/v1/schedule", json=body)
+    assert r.status_code == 200 and len(r.json()["hold"]) == 2, r.text
+    r = await raw.post("/v1/schedule", json={**body, "check_protocol": True,
+                                              "drug": {"diffusivity_cm2_s": 1e-7,
+                                                       "mesh_size_nm": 23.0}})
+    assert r.status_code == 202, r.text
+    url = r.json()["validation_url"]
+    deadline = time.monotonic() + 120
+    while (v := (await raw.get(url)).json())["status"] not in ("done", "failed"):
+        assert time.monotonic() < deadline
+        await asyncio.sleep(0.2)
+    assert v["status"] == "done", v
+    check = v["result"]["protocol_check"]
+    assert len(check["rest_leak_fractions"]) == 1 and check["mass_balance_error"] < 1e-10
+    bad = await raw.post("/v1/schedule", json={**body, "doses": [0.6, 0.5]})
+    assert bad.status_code == 422 and bad.json()["detail"][0]["loc"][:2] == ["body", "doses"]
