@@ -6,7 +6,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from api.schemas import RequestModel
+from api.schemas import GelSpec, RequestModel
 
 SIZE_FIELDS = ("radius", "diameter", "volume_ratio")
 MAX_POINTS = 2000
@@ -95,9 +95,7 @@ class KineticsFitRequest(_In):
     )
 
     time_s: list[float] = Field(max_length=MAX_POINTS, description="times after the jump, s")
-    gel: str | dict[str, Any] = Field(
-        "ANB", description="preset, stored fitted gel, or parameters omega, a0, b0, a1, b1"
-    )
+    gel: GelSpec = "ANB"
     t_start: float = Field(description="start temperature, K")
     t_end: float = Field(description="jump temperature, K")
     branch: Literal["swollen", "shrunken"] | None = Field(

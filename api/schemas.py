@@ -16,6 +16,7 @@ from pydantic import (
     ConfigDict,
     Discriminator,
     Field,
+    StringConstraints,
     Tag,
     field_validator,
     model_validator,
@@ -30,7 +31,8 @@ T_MAX = 373.15
 ELL_DEFAULT = 0.005
 ELL_RANGE = (0.0025, 0.01)
 
-PresetName = Literal["ANB", "HHT"]
+# a preset ('ANB', 'HHT') or a stored fitted gel (dosing.gel_store; an unknown name is a 422)
+GelName = Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")]
 Branch = Literal["swollen", "shrunken"]
 
 
@@ -93,7 +95,8 @@ class _Out(BaseModel):
 class GelParameters(RequestModel):
     """A custom gel: a preset with any of its parameters replaced (eq. FloryParam)."""
 
-    base: PresetName = Field("ANB", description="preset whose parameters fill any left unset")
+    base: GelName = Field("ANB", description="preset ('ANB', 'HHT') or stored fitted gel whose "
+                                             "parameters fill any left unset")
     omega: float | None = Field(None, gt=0.0, le=1.0e4, examples=[100.0],
                                 description="Omega = Omega_p / Omega_f, dimensionless, 0 < Omega "
                                             "<= 1e4 (default: the preset's)")
@@ -127,9 +130,10 @@ def _gel_kind(value: Any) -> str:
 
 
 GelSpec = Annotated[
-    Annotated[PresetName, Tag("preset")] | Annotated[GelParameters, Tag("custom")],
+    Annotated[GelName, Tag("preset")] | Annotated[GelParameters, Tag("custom")],
     Discriminator(_gel_kind),
-    Field(description="a preset name ('ANB' or 'HHT') or custom parameters", examples=["ANB"]),
+    Field(description="a preset name ('ANB' or 'HHT'), a stored fitted gel's name (thermogel "
+                      "fit ... --save NAME) or custom parameters", examples=["ANB"]),
 ]
 
 

@@ -29,9 +29,10 @@ from dosing import (
     UnknownValidationError,
 )
 from dosing.jobs import DEFAULT_LEASE_SECONDS
+from dosing.request import resolve_gel
 from solver.equilibrium import equilibria, folds
 from solver.errors import NotApplicableError, ParameterError, SolverError
-from solver.gel import PRESETS, Gel, Permeability, preset
+from solver.gel import PRESETS, Gel
 from solver.phase import classify_jump
 
 from . import drug_service
@@ -42,29 +43,17 @@ log = logging.getLogger("thermogel.service")
 
 SCHEDULE_QUEUE = 8  # schedule jobs queued or running before 429
 SCHEDULE_PREFIX = "schedule-"
-_GEL_FIELDS = ("omega", "a0", "b0", "a1", "b1")
 
 
 # ----------------------------------------------------------------------------- physics
 
 def to_gel(spec: str | s.GelParameters) -> Gel:
-    """The solver gel a request names: a preset, or a preset with parameters replaced."""
+    """The solver gel a request names: a preset or stored gel, or one with parameters
+    replaced (``dosing.request.resolve_gel``: one rule for HTTP, CLI and Python)."""
     if isinstance(spec, str):
-        return preset(spec)
-    base = preset(spec.base)
-    custom = {n: getattr(spec, n) for n in _GEL_FIELDS if getattr(spec, n) is not None}
-    params = {n: custom.get(n, getattr(base, n)) for n in _GEL_FIELDS}
-    if spec.permeability == "power":
-        perm = Permeability("power", spec.beta)
-    elif spec.permeability == "constant":
-        perm = Permeability("constant")
-    else:
-        perm = base.permeability
-    same = not custom and perm == base.permeability
-    try:
-        return Gel(**params, permeability=perm, name=base.name if same else "custom")
-    except ParameterError as exc:
-        raise ParameterError(f"gel.{exc.field}", exc.value, exc.valid) from None
+        return resolve_gel(spec)
+    return resolve_gel(spec.model_dump(include=set(s.GelParameters.model_fields),
+                                       exclude_none=True))
 
 
 def _folds(gel: Gel) -> list[dict[str, Any]]:

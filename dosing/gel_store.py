@@ -124,7 +124,8 @@ def lookup(name: str, store: GelStore | None = None) -> Gel:
         return st.load(name)
     raise ParameterError("gel", name, "one of " + ", ".join(sorted(PRESETS))
                          + " or a stored fitted gel ("
-                         + (", ".join(st.names()) or f"none yet in {st.dir}") + ")")
+                         + (", ".join(st.names()) or "none stored yet: thermogel fit ... "
+                            "--save NAME") + ")")
 
 
 def record_for(gel: Gel, store: GelStore | None = None) -> dict[str, Any] | None:

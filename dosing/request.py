@@ -15,7 +15,7 @@ from typing import Any
 
 from solver.equilibrium import equilibrium, nearest_stable
 from solver.errors import ParameterError, require_finite_positive
-from solver.gel import Gel, check_temperature
+from solver.gel import Gel, Permeability, check_temperature
 
 from .scenario import TRUTH, SolverSettings
 from .units import PhysicalConstants, stored_volume, ul_to_volume, volume_to_ul
@@ -23,16 +23,56 @@ from .units import PhysicalConstants, stored_volume, ul_to_volume, volume_to_ul
 BRANCHES = ("swollen", "shrunken")
 
 
+GEL_FIELDS = ("omega", "a0", "b0", "a1", "b1")
+
+
+def gel_with(base: str, overrides: dict[str, Any] | None = None,
+             permeability: str | None = None, beta: float | None = None) -> Gel:
+    """A preset or stored gel (``base``, by name) with any of its parameters (eq.
+    FloryParam) or its permeability law (eq. Permeability) replaced.
+
+    The one rule of the HTTP service, the command line and Python: the gel keeps its base's
+    name when nothing changes and is called 'custom' otherwise; a bad parameter is a
+    ParameterError naming ``gel.<parameter>``.
+    """
+    from .gel_store import lookup
+
+    gel = lookup(base)
+    custom = {k: float(v) for k, v in (overrides or {}).items() if v is not None}
+    unknown = sorted(set(custom) - set(GEL_FIELDS))
+    if unknown:
+        raise ParameterError(f"gel.{unknown[0]}", custom[unknown[0]],
+                             "one of " + ", ".join(GEL_FIELDS))
+    try:
+        if permeability is None and beta is None:
+            perm = gel.permeability
+        else:
+            perm = Permeability(permeability or "power", 0.0 if beta is None else beta)
+        if not custom and perm == gel.permeability:
+            return gel
+        params = {n: custom.get(n, getattr(gel, n)) for n in GEL_FIELDS}
+        return Gel(**params, permeability=perm, name="custom")
+    except ParameterError as exc:
+        field = exc.field.removeprefix("permeability.").replace("law", "permeability")
+        raise ParameterError(f"gel.{field}", exc.value, exc.valid) from None
+
+
 def resolve_gel(value: Gel | str | dict[str, Any]) -> Gel:
-    """A Gel from a Gel, a preset name, a stored fitted gel's name (``dosing.gel_store``)
-    or a parameter dict (field ``gel``)."""
+    """A Gel from a Gel, a preset name, a stored fitted gel's name (``dosing.gel_store``),
+    a full parameter dict (``Gel.to_dict``) or a partial one on a named base
+    (``{"base": "ANB", "omega": 300}``, see :func:`gel_with`); field ``gel``."""
     if isinstance(value, Gel):
         return value
     if isinstance(value, str):
-        from .gel_store import lookup
-
-        return lookup(value)
+        return gel_with(value)
     if isinstance(value, dict):
+        if "base" in value:
+            d = dict(value)
+            base = d.pop("base", "ANB")
+            perm, beta = d.pop("permeability", None), d.pop("beta", None)
+            if isinstance(perm, dict):  # Gel.to_dict's form
+                perm, beta = perm.get("law"), perm.get("beta", beta)
+            return gel_with(base, d, perm, beta)
         try:
             return Gel.from_dict(value)
         except TypeError as exc:

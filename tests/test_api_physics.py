@@ -93,7 +93,7 @@ async def test_classify_matches_solver(clients) -> None:
     ("/v1/equilibrium", {"temperature": 400.0}, ["body", "temperature"]),
     ("/v1/equilibrium", {"temperature": 273.0}, ["body", "temperature"]),
     ("/v1/equilibrium", {"temperature": "warm"}, ["body", "temperature"]),
-    ("/v1/equilibrium", {"temperature": 300.0, "gel": "XYZ"}, ["body", "gel", "preset"]),
+    ("/v1/equilibrium", {"temperature": 300.0, "gel": "XYZ"}, ["body", "gel"]),
     ("/v1/equilibrium", {"temperature": 300.0, "temp": 1}, ["body", "temp"]),
     ("/v1/equilibrium", {"temperature": 300.0, "gel": {"omega": -1.0}},
      ["body", "gel", "custom", "omega"]),

@@ -9,7 +9,7 @@ import sys
 from typing import Any
 
 from solver.errors import ParameterError
-from solver.gel import Gel, Permeability
+from solver.gel import Gel
 
 
 def add_gel_options(p: argparse.ArgumentParser) -> None:
@@ -26,23 +26,17 @@ def add_gel_options(p: argparse.ArgumentParser) -> None:
 
 def gel_from_args(args: argparse.Namespace) -> Gel:
     """The gel the options describe: a preset or stored gel, with any custom parameter
-    replacing its own (bounded as the HTTP service bounds them)."""
-    from dosing.gel_store import lookup
+    replacing its own (bounded as the HTTP service bounds them; one rule for HTTP, CLI and
+    Python: ``dosing.request.gel_with``)."""
+    from dosing.request import gel_with
 
     spec = gel_bounds(args)
     if spec:
         from api.schemas import GelParameters
 
         check_bounds(GelParameters, spec)
-    base = lookup(args.gel)
-    fields = {n: getattr(args, n) for n in ("omega", "a0", "b0", "a1", "b1")}
-    custom = {k: v for k, v in fields.items() if v is not None}
-    perm = Permeability("power", args.beta) if args.beta is not None else base.permeability
-    if not custom and args.beta is None:
-        return base
-    d = {n: getattr(base, n) for n in ("omega", "a0", "b0", "a1", "b1")}
-    d.update(custom)
-    return Gel(**d, permeability=perm, name="custom" if custom else base.name)
+    custom = {n: getattr(args, n) for n in ("omega", "a0", "b0", "a1", "b1")}
+    return gel_with(args.gel, custom, "power" if args.beta is not None else None, args.beta)
 
 
 def _clean(obj: Any) -> Any:

@@ -14,10 +14,12 @@ from typing import Any
 
 import fastapi
 from fastapi import Request
-from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import JSONResponse
 
 from api.fit_schemas import FitJobResponse, KineticsFitRequest, SwellingFitRequest
+
+from ..service import to_gel
+from .compute import compute
 
 router = fastapi.APIRouter(tags=["fit"])
 FIT_QUEUE = 8
@@ -66,7 +68,7 @@ def _kinetics(body: KineticsFitRequest, data: Any, planner: Any) -> dict[str, An
 
     settings = SolverSettings() if body.interfacial_length is None else SolverSettings(
         interfacial_length=body.interfacial_length)
-    res = fit_shrinking(data, body.gel, body.t_start, body.t_end, branch=body.branch,
+    res = fit_shrinking(data, to_gel(body.gel), body.t_start, body.t_end, branch=body.branch,
                         dry_radius_um=body.dry_radius_um,
                         swollen_radius_um=body.swollen_radius_um,
                         constants=PhysicalConstants(body.viscosity_pa_s,
@@ -116,12 +118,10 @@ async def fit_kinetics_route(body: KineticsFitRequest, request: Request) -> Any:
     """Fit tau (hence k0) to a shrinking curve after a jump: a job, poll status_url."""
     from dosing.fit import kinetics_data
     from dosing.gel_store import check_name
-    from dosing.request import resolve_gel
-
     if body.save:
         check_name(body.save)
     data = kinetics_data(body.time_s, body.size, body.size_kind, body.weight)
-    await run_in_threadpool(resolve_gel, body.gel)  # an unknown gel is a 422 now
+    await compute(to_gel, body.gel)  # an unknown gel is a 422 now
     planner = getattr(getattr(request.app.state, "service", None), "planner", None)
     key = _key("kinetics", body)
     _jobs(request).submit(key, _kinetics, body, data, planner)
