@@ -9,7 +9,6 @@ a restart and run once across servers), and the state the routes share.  No phys
 
 from __future__ import annotations
 
-import hashlib
 import logging
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
@@ -35,14 +34,13 @@ from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.gel import PRESETS, Gel
 from solver.phase import classify_jump
 
-from . import drug_service
+from . import drug_service, stored_jobs
 from . import schemas as s
 from .warmup import WarmupReport, warm_up
 
 log = logging.getLogger("thermogel.service")
 
-SCHEDULE_QUEUE = 8  # schedule jobs queued or running before 429
-SCHEDULE_PREFIX = "schedule-"
+JOB_QUEUE = 8  # stored jobs (schedules, fits) queued or running before 429
 
 
 # ----------------------------------------------------------------------------- physics
@@ -122,21 +120,21 @@ class ServiceState:
     owns_planner: bool = False
     warmup: WarmupReport | None = None
     options: dict[str, Any] = field(default_factory=dict)
-    _schedules: JobRunner | None = None
-    _schedule_pool: ThreadPoolExecutor | None = None
+    _jobs: JobRunner | None = None
+    _job_pool: ThreadPoolExecutor | None = None
 
     @property
-    def schedules(self) -> JobRunner:
-        """Schedule jobs: one thread (their full-solver runs go to the planner's executor),
-        leased on the planner's cache so that one server runs each job."""
-        if self._schedules is None:
-            self._schedule_pool = ThreadPoolExecutor(1, thread_name_prefix="schedule")
+    def jobs(self) -> JobRunner:
+        """Stored jobs (schedules, fits; :mod:`api.stored_jobs`): one thread (their
+        full-solver runs go to the planner's executor), leased on the planner's cache so
+        that one server runs each job."""
+        if self._jobs is None:
+            self._job_pool = ThreadPoolExecutor(1, thread_name_prefix="job")
             cache = getattr(self.planner, "cache", None)
             lease = float(self.options.get("lease_seconds") or DEFAULT_LEASE_SECONDS)
-            self._schedules = JobRunner(self._schedule_pool, max_pending=SCHEDULE_QUEUE,
-                                        leases=cache, lease_seconds=lease,
-                                        what="schedule jobs")
-        return self._schedules
+            self._jobs = JobRunner(self._job_pool, max_pending=JOB_QUEUE, leases=cache,
+                                   lease_seconds=lease, what="schedule and fit jobs")
+        return self._jobs
 
     def start(self, warm: bool) -> None:
         """Create the planner if none was given, then warm the kernels (blocking)."""
@@ -153,16 +151,16 @@ class ServiceState:
             return {}
         return {"cache": str(p.cache.path), "cached_trajectories": len(p.cache),
                 "validations_unfinished": p.jobs.pending(), "max_pending": p.jobs.max_pending,
-                "schedule_jobs_unfinished": self.schedules.pending()}
+                "jobs_unfinished": self.jobs.pending()}
 
     def stop(self, wait: bool = False) -> None:
-        """Drop queued schedule jobs (``wait``: join the running one); close the planner if
-        this service created it."""
-        if self._schedules is not None:
-            self._schedules.shutdown(wait=False)
-            if self._schedule_pool is not None:
-                self._schedule_pool.shutdown(wait=wait, cancel_futures=True)
-            self._schedules = self._schedule_pool = None
+        """Drop queued stored jobs (``wait``: join the running one; they stay in the cache
+        and run again when polled); close the planner if this service created it."""
+        if self._jobs is not None:
+            self._jobs.shutdown(wait=False)
+            if self._job_pool is not None:
+                self._job_pool.shutdown(wait=wait, cancel_futures=True)
+            self._jobs = self._job_pool = None
         if self.owns_planner and self.planner is not None:
             self.planner.close()
             self.planner = None
@@ -244,70 +242,20 @@ def _schedule_is_quick(planner: Any, body: s.ScheduleRequest) -> bool:
         answerable_now(planner, req.dose_request(c)) for c in accumulate(req.doses))
 
 
-def _schedule_job(state: ServiceState, job_id: str, body: dict[str, Any]) -> dict[str, Any]:
-    """Run a stored schedule job and store its outcome (in the job thread)."""
-    planner = state.planner
-    try:
-        result = _schedule_result(planner, s.ScheduleRequest.model_validate(body))
-    except Exception as exc:
-        planner.cache.finish_job(job_id, "failed", error=f"{type(exc).__name__}: {exc}")
-        raise
-    planner.cache.finish_job(job_id, "done", result=result)
-    return result
-
-
-def _finished_job(state: ServiceState, job_id: str) -> dict[str, Any] | None:
-    """The stored job if another process finished it, else None (a lease waiter's fetch)."""
-    row = state.planner.cache.get_job(job_id)
-    return row if row is not None and row["status"] != "pending" else None
-
-
-def _start_schedule(state: ServiceState, job_id: str, body: dict[str, Any]) -> None:
-    """Queue a stored schedule job here, unless it is queued or running already."""
-    if state.schedules.state(job_id) in ("pending", "running"):
-        return
-    state.schedules.submit(job_id, _schedule_job, state, job_id, body,
-                           fetch=lambda: _finished_job(state, job_id))
-
-
 def schedule(state: ServiceState, body: s.ScheduleRequest) -> dict[str, Any] | Pending:
     """The hold schedule (200) when nothing needs a new full-solver run, else a stored job
     (:class:`Pending`)."""
     planner = state.planner
     if _schedule_is_quick(planner, body):
         return {"status": "answered", **_schedule_result(planner, body)}
-    key = hashlib.sha256(body.model_dump_json().encode()).hexdigest()[:24]
-    job_id = SCHEDULE_PREFIX + key
-    stored = body.model_dump(mode="json", by_alias=True)
-    row = planner.cache.get_job(job_id)
-    if row is None or row["status"] == "failed":  # new, or asked again after a failure
-        _start_schedule(state, job_id, stored)  # admitted (or QueueFullError) first
-        if row is None:
-            planner.cache.put_job(job_id, "schedule", stored)
-        else:
-            planner.cache.finish_job(job_id, "pending")
-    elif row["status"] == "pending":
-        _start_schedule(state, job_id, row["request"])
-    return Pending(job_id, SCHEDULE_PENDING_NOTE)
+    return Pending(stored_jobs.submit(state, "schedule", body), SCHEDULE_PENDING_NOTE)
+
+
+stored_jobs.register(stored_jobs.JobKind("schedule", s.ScheduleRequest, _schedule_result))
 
 
 def validation(state: ServiceState, vid: str) -> dict[str, Any]:
-    """A dose validation from the planner, or a schedule job (both persistent); an
-    unfinished schedule job nobody here runs (a restart) is queued again."""
-    if not vid.startswith(SCHEDULE_PREFIX):
-        return {"kind": "dose", **state.planner.validation(vid).to_dict()}
-    row = state.planner.cache.get_job(vid)
-    if row is None:
-        raise UnknownValidationError(vid)
-    out: dict[str, Any] = {"id": vid, "kind": "schedule", "status": row["status"]}
-    if row["status"] == "pending":
-        _start_schedule(state, vid, row["request"])
-        out["status"] = state.schedules.state(vid) or "pending"
-        if out["status"] in ("done", "failed"):  # finished just now
-            row = state.planner.cache.get_job(vid) or row
-            out["status"] = row["status"]
-    if out["status"] == "done":
-        out["result"] = row["result"]
-    elif out["status"] == "failed":
-        out["error"] = row["error"] or "failed"
-    return out
+    """A dose validation from the planner, or a stored job (both persistent)."""
+    if stored_jobs.is_job(vid):
+        return stored_jobs.status(state, vid)
+    return {"kind": "dose", **state.planner.validation(vid).to_dict()}

@@ -119,3 +119,11 @@ async def test_http_fit_is_a_job(env) -> None:
             assert r.status_code == 202
             r = await c.post("/v1/fit/kinetics", json={**kin, "gel": "nosuch"})
             assert r.status_code == 422 and "webgel" in r.text
+    # the finished job is in the cache: a new server (a restart) answers it without refitting
+    app2 = create_app(warm=False, cache_path=str(env / "v.sqlite"))
+    async with app2.router.lifespan_context(app2):
+        transport = httpx.ASGITransport(app=app2)
+        async with httpx.AsyncClient(base_url="http://t", transport=transport) as c:
+            again = (await c.get(url)).json()
+            assert again["status"] == "done" and again["kind"] == "swelling"
+            assert again["result"]["parameters"] == j["result"]["parameters"]

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from typing import Any
 
 from solver.errors import ParameterError
 from solver.gel import Gel
+from solver.json_safe import json_safe
 
 
 def add_gel_options(p: argparse.ArgumentParser) -> None:
@@ -39,22 +39,9 @@ def gel_from_args(args: argparse.Namespace) -> Gel:
     return gel_with(args.gel, custom, "power" if args.beta is not None else None, args.beta)
 
 
-def _clean(obj: Any) -> Any:
-    """Replace non-finite floats by None so the output is strict JSON."""
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    if hasattr(obj, "tolist"):
-        return _clean(obj.tolist())
-    return obj
-
-
 def print_json(obj: Any) -> None:
     """Print one strict JSON object on stdout."""
-    json.dump(_clean(obj), sys.stdout, indent=None)
+    json.dump(json_safe(obj), sys.stdout, indent=None)
     sys.stdout.write("\n")
 
 

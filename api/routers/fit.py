@@ -1,58 +1,50 @@
-"""``POST /v1/fit/swelling`` and ``/v1/fit/kinetics``: fits run as jobs (202 + poll).
+"""``POST /v1/fit/swelling`` and ``/v1/fit/kinetics``: gel fits as stored jobs (202 + poll).
 
 The data are checked at once (a bad column, NaN, a negative size or too few points is a 422
-naming it); the fit runs on a one-thread job runner of this app and is polled at
-``GET /v1/fit/jobs/{id}``; a fit that fails on the data (e.g. all points on one side of the
-transition) ends ``failed`` with the message.
+naming it); the fit runs as a stored job (:mod:`api.stored_jobs`: kept in the cache, so it
+survives a restart) and is polled at ``GET /v1/fit/jobs/{id}``; a fit that fails on the data
+(e.g. all points on one side of the transition) ends ``failed`` with the message.
 """
 
 from __future__ import annotations
 
-import hashlib
-from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-import fastapi
-from fastapi import Request
+from fastapi import APIRouter
 from fastapi.responses import JSONResponse
 
-from api.fit_schemas import FitJobResponse, KineticsFitRequest, SwellingFitRequest
+from dosing import PhysicalConstants, SolverSettings
+from dosing.fit import data_dict, fit_shrinking, fit_swelling, kinetics_data, swelling_data
+from dosing.gel_store import GelStore, check_name
+from solver.errors import ParameterError
+from solver.fit import fit_gel
+from solver.gel import Gel
+from solver.json_safe import json_safe
 
+from .. import stored_jobs
+from ..deps import StateDep
+from ..fit_schemas import FitJobResponse, KineticsFitRequest, SwellingFitRequest
 from ..service import to_gel
 from .compute import compute
 
-router = fastapi.APIRouter(tags=["fit"])
-FIT_QUEUE = 8
+router = APIRouter(tags=["fit"])
+KINDS = {"swelling": "fit-swelling", "kinetics": "fit-kinetics"}
 
 
-def _jobs(request: Request) -> Any:
-    """This app's fit job runner (created on first use)."""
-    from dosing.jobs import JobRunner
-
-    st = request.app.state
-    if getattr(st, "fit_jobs", None) is None:
-        st.fit_jobs = JobRunner(ThreadPoolExecutor(1, thread_name_prefix="fit"), FIT_QUEUE)
-    return st.fit_jobs
+def _swelling_data(body: SwellingFitRequest) -> Any:
+    data = swelling_data(body.temperature_K, body.size, body.size_kind, body.weight)
+    if len(data) <= 6 - len(body.fixed or {}):
+        raise ParameterError("temperature_K", f"{len(data)} points", "more points than "
+                             "fitted parameters")
+    return data
 
 
-def _key(kind: str, body: Any) -> str:
-    return kind + "-" + hashlib.sha256(body.model_dump_json().encode()).hexdigest()[:24]
-
-
-def _accepted(kind: str, key: str) -> JSONResponse:
-    url = f"/v1/fit/jobs/{key}"
-    return JSONResponse({"id": key, "kind": kind, "status": "pending", "status_url": url},
-                        status_code=202, headers={"Location": url})
-
-
-def _swelling(body: SwellingFitRequest, data: Any) -> dict[str, Any]:
-    from dosing.fit import data_dict, fit_swelling
-    from dosing.gel_store import GelStore
-    from solver.fit import fit_gel
-
+def _swelling(_: Any, body: SwellingFitRequest) -> dict[str, Any]:
+    """The swelling fit's report (a stored job's run; eq. EqlEqn)."""
+    data = _swelling_data(body)
     res = fit_swelling(data, sigma_t=body.sigma_t, size_rel_sigma=body.size_rel_sigma,
                        fixed=body.fixed, n_starts=body.n_starts)
-    report = res.to_dict()
+    report = json_safe(res.to_dict())
     if body.save:
         GelStore().save(body.save, fit_gel(res, body.save),
                         swelling={"data": data_dict(data), "fit": report})
@@ -60,12 +52,9 @@ def _swelling(body: SwellingFitRequest, data: Any) -> dict[str, Any]:
     return report
 
 
-def _kinetics(body: KineticsFitRequest, data: Any, planner: Any) -> dict[str, Any]:
-    from dosing import PhysicalConstants, SolverSettings
-    from dosing.fit import data_dict, fit_shrinking
-    from dosing.gel_store import GelStore
-    from solver.gel import Gel
-
+def _kinetics(planner: Any, body: KineticsFitRequest) -> dict[str, Any]:
+    """The kinetics fit's report (a stored job's run; eq. timescale)."""
+    data = kinetics_data(body.time_s, body.size, body.size_kind, body.weight)
     settings = SolverSettings() if body.interfacial_length is None else SolverSettings(
         interfacial_length=body.interfacial_length)
     res = fit_shrinking(data, to_gel(body.gel), body.t_start, body.t_end, branch=body.branch,
@@ -76,7 +65,7 @@ def _kinetics(body: KineticsFitRequest, data: Any, planner: Any) -> dict[str, An
                         fit_beta=body.fit_beta, beta=body.beta, model=body.model,
                         settings=settings, size_rel_sigma=body.size_rel_sigma,
                         planner=planner)
-    report = res.to_dict()
+    report = json_safe(res.to_dict())
     if body.save:
         store = GelStore()
         g = Gel.from_dict({**report["gel"], "name": body.save})
@@ -90,62 +79,60 @@ def _kinetics(body: KineticsFitRequest, data: Any, planner: Any) -> dict[str, An
     return report
 
 
-@router.post("/v1/fit/swelling", status_code=202, response_model=FitJobResponse,
-             responses={202: {"model": FitJobResponse}, 429: {"description": "too many fit "
-                                                                "jobs queued; retry later"}})
-async def fit_swelling_route(body: SwellingFitRequest, request: Request) -> Any:
-    """Fit a gel to an equilibrium swelling curve (eq. EqlEqn): a job, poll status_url."""
-    from dosing.fit import swelling_data
-    from dosing.gel_store import check_name
+stored_jobs.register(stored_jobs.JobKind(KINDS["swelling"], SwellingFitRequest, _swelling))
+stored_jobs.register(stored_jobs.JobKind(KINDS["kinetics"], KineticsFitRequest, _kinetics))
 
+
+def _check(body: SwellingFitRequest | KineticsFitRequest) -> None:
+    """What can be refused before the job: the name, the data, the gel (422 naming it)."""
     if body.save:
         check_name(body.save)
-    data = swelling_data(body.temperature_K, body.size, body.size_kind, body.weight)
-    if len(data) <= 6 - len(body.fixed or {}):
-        from solver.errors import ParameterError
+    if isinstance(body, SwellingFitRequest):
+        _swelling_data(body)
+    else:
+        kinetics_data(body.time_s, body.size, body.size_kind, body.weight)
+        to_gel(body.gel)
 
-        raise ParameterError("temperature_K", f"{len(data)} points", "more points than "
-                             "fitted parameters")
-    key = _key("swelling", body)
-    _jobs(request).submit(key, _swelling, body, data)
-    return _accepted("swelling", key)
+
+def _submit(state: Any, kind: str, body: Any) -> JSONResponse:
+    _check(body)
+    jid = stored_jobs.submit(state, KINDS[kind], body)
+    url = f"/v1/fit/jobs/{jid}"
+    return JSONResponse({"id": jid, "kind": kind, "status": "pending", "status_url": url},
+                        status_code=202, headers={"Location": url})
+
+
+_ACCEPTED = {202: {"model": FitJobResponse},
+             429: {"description": "too many jobs queued; retry later"}}
+
+
+@router.post("/v1/fit/swelling", status_code=202, response_model=FitJobResponse,
+             responses=_ACCEPTED)
+async def fit_swelling_route(body: SwellingFitRequest, state: StateDep) -> Any:
+    """Fit a gel to an equilibrium swelling curve (eq. EqlEqn): a job, poll status_url."""
+    return await compute(_submit, state, "swelling", body)
 
 
 @router.post("/v1/fit/kinetics", status_code=202, response_model=FitJobResponse,
-             responses={202: {"model": FitJobResponse}, 429: {"description": "too many fit "
-                                                                "jobs queued; retry later"}})
-async def fit_kinetics_route(body: KineticsFitRequest, request: Request) -> Any:
+             responses=_ACCEPTED)
+async def fit_kinetics_route(body: KineticsFitRequest, state: StateDep) -> Any:
     """Fit tau (hence k0) to a shrinking curve after a jump: a job, poll status_url."""
-    from dosing.fit import kinetics_data
-    from dosing.gel_store import check_name
-    if body.save:
-        check_name(body.save)
-    data = kinetics_data(body.time_s, body.size, body.size_kind, body.weight)
-    await compute(to_gel, body.gel)  # an unknown gel is a 422 now
-    planner = getattr(getattr(request.app.state, "service", None), "planner", None)
-    key = _key("kinetics", body)
-    _jobs(request).submit(key, _kinetics, body, data, planner)
-    return _accepted("kinetics", key)
+    return await compute(_submit, state, "kinetics", body)
+
+
+def _status(state: Any, job_id: str) -> dict[str, Any]:
+    if not job_id.startswith(tuple(k + "-" for k in KINDS.values())):
+        from dosing import UnknownValidationError
+
+        raise UnknownValidationError(job_id)
+    out = stored_jobs.status(state, job_id)
+    kind = out["kind"].removeprefix("fit-")
+    return {**out, "kind": kind, "status_url": f"/v1/fit/jobs/{job_id}"}
 
 
 @router.get("/v1/fit/jobs/{job_id}", response_model=FitJobResponse,
             responses={404: {"description": "no such fit job"}})
-async def fit_job(job_id: str, request: Request) -> Any:
-    """A fit job's state, with the report when done or the error when failed."""
-    runner = _jobs(request)
-    state = runner.state(job_id)
-    if state is None:
-        return JSONResponse({"detail": [{"loc": ["path", "job_id"], "type": "not_found",
-                                         "msg": f"no fit job {job_id!r} (jobs are kept in "
-                                                "memory and end with a restart)"}]},
-                            status_code=404)
-    out: dict[str, Any] = {"id": job_id, "kind": job_id.split("-")[0], "status": state,
-                           "status_url": f"/v1/fit/jobs/{job_id}"}
-    fut = runner.get(job_id)
-    if state == "done":
-        from api.commands.common import _clean
-
-        out["result"] = _clean(fut.result())
-    elif state == "failed":
-        out["error"] = str(fut.exception())
-    return out
+async def fit_job(job_id: str, state: StateDep) -> Any:
+    """A fit job's state, with the report when done or the error when failed (kept in the
+    cache across restarts)."""
+    return await compute(_status, state, job_id)
