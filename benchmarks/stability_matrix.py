@@ -21,7 +21,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from work_precision import (
+
+from benchmarks.work_precision import (
     FULL,
     SMOKE,
     Log,
@@ -33,7 +34,6 @@ from work_precision import (
     warm_up,
     write_csv,
 )
-
 from solver.equilibrium import folds
 from solver.gel import ANB, HHT, Gel
 from solver.phase import classify_jump

@@ -23,7 +23,8 @@ relative error of the time to expel 80% of the stored fluid (swelling cases: to 
 of the volume change).
 
 The library functions here are reused by benchmarks/stability_matrix.py and by the
-``thermogel bench`` command (api/commands/bench.py), which puts this directory on sys.path.
+``thermogel bench`` command (api/commands/bench.py), which imports this module as
+``benchmarks.work_precision``.
 """
 
 from __future__ import annotations
@@ -43,9 +44,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from front_model import median_time
-from full_solver import dense_radius, max_error
 
+from benchmarks.front_model import median_time
+from benchmarks.full_solver import dense_radius, max_error
 from solver.errors import BudgetExceeded, NotApplicableError, ParameterError, SolverError
 from solver.front import fraction_radius, front_applicability, front_trajectory
 from solver.full import FullResult, simulate

@@ -1,8 +1,8 @@
 """``thermogel bench``: the work-precision report and the stability matrix (issue 7).
 
-The report's library lives in the source tree's benchmarks/ (work_precision.py,
-stability_matrix.py, which reuse benchmarks/full_solver.py and front_model.py); this command
-puts that directory on sys.path, so it needs a source checkout.
+The report's library is the source tree's ``benchmarks`` package (work_precision.py,
+stability_matrix.py, which reuse full_solver.py and front_model.py), installed with the
+project from a source checkout (``pip install -e .``).
 """
 
 from __future__ import annotations
@@ -14,18 +14,19 @@ from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
 
-BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
-
 
 def load_benchmarks() -> tuple[ModuleType, ModuleType]:
-    """The work_precision and stability_matrix modules of benchmarks/."""
-    if not (BENCHMARKS / "work_precision.py").is_file():
-        raise SystemExit(f"thermogel bench: error: {BENCHMARKS} not found (the benchmarks "
-                         "ship with the source tree, not the installed package)")
-    if str(BENCHMARKS) not in sys.path:
-        sys.path.insert(0, str(BENCHMARKS))
-    return (importlib.import_module("work_precision"),
-            importlib.import_module("stability_matrix"))
+    """The ``benchmarks.work_precision`` and ``benchmarks.stability_matrix`` modules."""
+    try:
+        return (importlib.import_module("benchmarks.work_precision"),
+                importlib.import_module("benchmarks.stability_matrix"))
+    except ModuleNotFoundError as exc:
+        if exc.name not in ("benchmarks", "benchmarks.work_precision",
+                            "benchmarks.stability_matrix"):
+            raise
+        raise SystemExit("thermogel bench: error: the benchmarks package is not installed "
+                         "(it ships with the source tree: pip install -e . in a checkout)"
+                         ) from None
 
 
 def register(sub: argparse._SubParsersAction) -> None:
