@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
+from typing import Protocol
 
 import numpy as np
 from numba import njit
@@ -26,6 +27,14 @@ from .system import (
     porosity,
     rhs,
 )
+
+class Rezoner(Protocol):
+    """Mesh adaptation hook of the moving grid (``moving.Rezoner``)."""
+
+    every: int
+
+    def __call__(self, y: np.ndarray, geo: np.ndarray) -> bool: ...
+
 
 OutputFn = Callable[[float, np.ndarray], None]
 ProgressFn = Callable[[float], None]
@@ -146,12 +155,17 @@ def _emit(out_times: np.ndarray, k_out: int, t: float, fn: Callable[[float], np.
 def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_times: np.ndarray,
                  on_output: OutputFn, rtol: float, atol: float, max_steps: int,
                  progress: ProgressFn | None, stats: Stats, ticks: int = 200,
-                 jac_mode: int = JAC_ANALYTIC, method: ros.Method = ros.RODASP) -> np.ndarray:
+                 jac_mode: int = JAC_ANALYTIC, method: ros.Method = ros.RODASP,
+                 rezoner: Rezoner | None = None) -> np.ndarray:
     """Integrate with adaptive RODASP through every segment; returns the final state.
 
     The stepping loop runs in numba (rosenbrock.rodas_run) between stops: output times,
-    ``ticks`` progress points, record-buffer flushes.  Outputs are cubic Hermite
-    interpolants of the last step.
+    ``ticks`` progress points, record-buffer flushes and, on the moving grid, every
+    ``rezoner.every`` accepted steps a mesh check.  Outputs are cubic Hermite
+    interpolants of the last step.  A rezoner changes y and ``ws.geo`` in place after the
+    outputs up to the current time are out; the integrator restarts there with a fresh
+    Jacobian and without the step controller's history (a one-step method needs nothing
+    else).
     """
     counters = np.zeros(6, dtype=np.int64)
     rec = np.zeros((4, 4096))
@@ -181,13 +195,19 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
                 t_stop = min(t_stop, (np.floor(tt[0] / total * ticks + 1e-9) + 1.0) * total / ticks)
             if k_out < out_times.size:
                 t_stop = min(t_stop, out_times[k_out])
+            budget = max_steps
+            if rezoner is not None and rezoner.every > 0:
+                budget = min(max_steps, int(counters[ros.C_STEPS]) + rezoner.every)
             status = ros.rodas_run(
                 ws.grid, y, f, yold, fold, tt, t_stop, seg.t1, seg.par, ws.geo, ws.work,
                 ws.lower, ws.upper, ws.jband, ws.jc, ws.jd, ws.je, ws.lu, ws.ipiv, ws.cm,
                 ws.dm, ws.xm, ws.em, ws.spiv, ws.zbuf, ws.u, ws.ytmp, ws.ftmp, ws.ynew,
                 ws.fnew, ws.errv, ws.scale, rtol, atol, method.tableau, method.a, method.c,
-                method.m, method.e, counters, ctrl, rec, max_steps, jac_mode)
+                method.m, method.e, counters, ctrl, rec, budget, jac_mode)
             _flush(stats, rec, counters)
+            check = status == ros.RUN_BUDGET and budget < max_steps
+            if check:
+                status = ros.RUN_REACHED
             if status in reasons:
                 phi = np.zeros(ws.n)
                 porosity(ws.grid, y, ws.geo, phi)
@@ -202,6 +222,8 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
             t0, t1 = float(tt[1]), float(tt[0])
             k_out = _emit(out_times, k_out, t1,
                           partial(_dense_state, ws, t0, t1, yold, y, fold, f), on_output)
+            if check and rezoner is not None and rezoner(y, ws.geo):
+                ctrl[1], ctrl[3] = 0.0, 0.0  # restart: new Jacobian, no controller history
             if progress is not None:
                 progress(min(1.0, t1 / total))
     return y
