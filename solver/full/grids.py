@@ -14,8 +14,8 @@ from dataclasses import dataclass
 from types import ModuleType
 
 from ..errors import ParameterError
-from . import eulerian, lagrangian
-from .system import EULERIAN, LAGRANGIAN
+from . import ale, eulerian, lagrangian
+from .system import EULERIAN, LAGRANGIAN, MOVING
 
 
 @dataclass(frozen=True)
@@ -34,7 +34,7 @@ GRIDS: dict[str, GridSpec] = {
                          "the paper's grid: uniform cells in R = r/a (appendix Numerical scheme)"),
     "lagrangian": GridSpec("lagrangian", LAGRANGIAN, lagrangian, False,
                            "uniform cells in the dry coordinate rho"),
-    "moving": GridSpec("moving", LAGRANGIAN, lagrangian, True,
+    "moving": GridSpec("moving", MOVING, ale, True,
                        "non-uniform cells in the dry coordinate, adapted to the interface by "
                        "rezoning (solver/full/moving.py)"),
 }

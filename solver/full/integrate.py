@@ -80,7 +80,8 @@ class Workspace:
         mod = MODULES[grid]
         self.grid = grid
         self.geo = geo
-        self.n = geo.shape[1] - 1
+        self.n = geo.shape[1] - 1 + getattr(mod, "EXTRA", 0)  # state size (moving grid: + t)
+        self.ia = self.n - 1 - getattr(mod, "EXTRA", 0)  # index of the radius a
         self.lower, self.upper, p = mod.structure(interfacial)
         m = self.n - p
         kv = self.lower + self.upper
@@ -117,7 +118,7 @@ def _dense_state(ws: Workspace, t0: float, t1: float, y0: np.ndarray, y1: np.nda
     if t >= t1 or t1 <= t0:
         return y1.copy()
     out = np.zeros(ws.n)
-    dense_output(ws.grid, ws.geo, t0, t1, y0, y1, f0, f1, t, out, np.zeros(ws.n))
+    dense_output(ws.grid, ws.geo, t0, t1, y0, y1, f0, f1, t, out, np.zeros(ws.geo.shape[1] - 1))
     return out
 
 
@@ -175,7 +176,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
     ctrl = np.array([h0, 0.0, 0.0, 0.0])
     y = y.copy()
     yold, fold = np.zeros_like(y), np.zeros_like(y)
-    ia = ws.n - 1
+    ia = ws.ia
     k_out = 0
     reasons = {ros.RUN_BUDGET: f"step budget exhausted ({max_steps} steps)",
                ros.RUN_UNDERFLOW: "step size underflow",
@@ -209,7 +210,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
             if check:
                 status = ros.RUN_REACHED
             if status in reasons:
-                phi = np.zeros(ws.n)
+                phi = np.zeros(ws.geo.shape[1] - 1)
                 porosity(ws.grid, y, ws.geo, phi)
                 hint = ""
                 if phi.max() > 1.0 - 1e-3:

@@ -30,9 +30,9 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
 
 from ..errors import ParameterError
+from . import ale, rezone
 
 
 @dataclass(frozen=True)
@@ -53,7 +53,7 @@ class MeshOptions:
     """
 
     resolution: float = 0.1
-    bulk: float = 2.0
+    bulk: float = 4.0
     edge_cells: float = 4.0
     grading: float = 0.1
     check_every: int = 4
@@ -87,21 +87,14 @@ class MeshOptions:
         return out
 
 
-def geometry_from_nodes(nodes: np.ndarray) -> np.ndarray:
-    """Lagrangian geometry rows for arbitrary nodes: nodes rho_k, cell volume midpoints,
-    dry shell volumes (the same arithmetic as ``lagrangian.geometry`` for k/n)."""
-    nodes = np.asarray(nodes, dtype=float)
-    n = nodes.size - 1
-    geo = np.zeros((4, n + 1))
-    geo[0] = nodes
-    geo[1, :n] = np.cbrt(0.5 * (nodes[:-1] ** 3 + nodes[1:] ** 3))
-    geo[2, :n] = np.diff(nodes**3)
-    return geo
+def geometry(nodes: np.ndarray) -> np.ndarray:
+    """The moving grid's geometry rows (``ale.py``) for a mesh at rest at ``nodes``."""
+    return ale.geometry_rows(np.asarray(nodes, dtype=float))
 
 
-def set_nodes(geo: np.ndarray, nodes: np.ndarray) -> None:
-    """Overwrite the geometry rows in place (the integrator's arrays keep their identity)."""
-    geo[:, :] = geometry_from_nodes(nodes)
+def state(radii: np.ndarray, t: float = 0.0) -> np.ndarray:
+    """The moving grid's state: the node radii and the time."""
+    return np.append(radii, t)
 
 
 def state_from_profile(radius: float, phi: np.ndarray, nodes: np.ndarray) -> np.ndarray:
@@ -114,54 +107,18 @@ def remap(y: np.ndarray, old: np.ndarray, new: np.ndarray) -> np.ndarray:
     """Node radii on the ``new`` nodes from state ``y`` on ``old``: the cumulative fluid
     volume W(s) = r^3 - s, s = rho^3, interpolated by PCHIP (monotone, so J > 1 in every new
     cell); W(1), the radius and the solid are exact."""
-    s_old = old**3
-    w_old = np.concatenate([[0.0], y**3]) - s_old
-    w_old[0] = 0.0
-    s_new = new**3
-    w_new = PchipInterpolator(s_old, w_old)(s_new[1:])
-    w_new[-1] = w_old[-1]
-    out = np.cbrt(w_new + s_new[1:])
-    out[-1] = y[-1]
+    out = np.empty_like(y)
+    rezone.remap(y, old, new, out)
     return out
-
-
-def log_jac(y: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-    """ln J of every cell."""
-    r3 = np.concatenate([[0.0], y**3])
-    return np.log(np.diff(r3) / np.diff(nodes**3))
 
 
 def target_nodes(y: np.ndarray, nodes: np.ndarray, opts: MeshOptions, ell: float) -> np.ndarray:
     """Nodes that equidistribute the monitor of the state y (module doc)."""
     n = nodes.size - 1
-    centre = 0.5 * (nodes[:-1] + nodes[1:])
-    lj = log_jac(y, nodes)
-    # |d ln J / d rho| at the interior nodes, then at the cell centres (max of the two faces)
-    grad = np.abs(np.diff(lj) / np.diff(centre))
-    g_cell = np.zeros(n)
-    g_cell[:-1] = grad
-    g_cell[1:] = np.maximum(g_cell[1:], grad)
-    h_bulk = opts.bulk / n
-    h = np.minimum(h_bulk, opts.resolution / np.maximum(g_cell, 1e-300))
-    if ell > 0.0:
-        h_edge = ell / opts.edge_cells
-        h = np.minimum(h, h_edge + opts.grading * (1.0 - centre))
-    _lipschitz(centre, h, opts.grading)
-    # density 1/h between the samples (piecewise linear in 1/h), equidistributed over n cells
-    xs = np.concatenate([[0.0], centre, [1.0]])
-    dens = 1.0 / np.concatenate([[h[0]], h, [h[-1]]])
-    cum = np.concatenate([[0.0], np.cumsum(0.5 * (dens[1:] + dens[:-1]) * np.diff(xs))])
-    out = np.interp(np.linspace(0.0, cum[-1], n + 1), cum, xs)
-    out[0], out[-1] = 0.0, 1.0
+    out = np.empty(n + 1)
+    h_edge = ell / opts.edge_cells if ell > 0.0 else 0.0
+    rezone.target_nodes(y, nodes, opts.resolution, opts.bulk / n, h_edge, opts.grading, out)
     return out
-
-
-def _lipschitz(x: np.ndarray, h: np.ndarray, slope: float) -> None:
-    """In place: the largest h' <= h with |h'(x_i) - h'(x_j)| <= slope |x_i - x_j|."""
-    for i in range(1, h.size):
-        h[i] = min(h[i], h[i - 1] + slope * (x[i] - x[i - 1]))
-    for i in range(h.size - 2, -1, -1):
-        h[i] = min(h[i], h[i + 1] + slope * (x[i + 1] - x[i]))
 
 
 def initial_nodes(radius: float, phi_of: Any, n: int, opts: MeshOptions,
@@ -181,24 +138,43 @@ def initial_nodes(radius: float, phi_of: Any, n: int, opts: MeshOptions,
 
 
 class Rezoner:
-    """Checks the mesh every ``check_every`` accepted steps and remaps when it is off."""
+    """Every ``check_every`` accepted steps: the target mesh of the current state, the
+    node velocity that follows it (the change of the target since the last check), and a
+    remap onto it when the nodes are more than ``tolerance`` of a cell off."""
+
+    HORIZON = 4.0  # check intervals over which no cell may shrink below half its width
+    ITERATIONS = 2  # fixed-point iterations of the target mesh
 
     def __init__(self, opts: MeshOptions, ell: float) -> None:
         self.opts, self.ell = opts, ell
         self.every = opts.check_every if opts.rezone else 0
         self.checks = 0
         self.remaps = 0
+        self._last: tuple[float, np.ndarray] | None = None
 
     def __call__(self, y: np.ndarray, geo: np.ndarray) -> bool:
-        """Remap y (in place) and the geometry rows when the mesh is off its target."""
+        """Update the mesh motion (and remap y in place when the mesh is off); True when
+        the right-hand side changed (the integrator restarts)."""
         self.checks += 1
+        n = geo.shape[1] - 1
+        t = float(y[n])
+        ale.refresh(geo, t)
         nodes = geo[0].copy()
-        new = target_nodes(y, nodes, self.opts, self.ell)
-        width = np.diff(nodes)
-        cell = np.minimum(np.concatenate([[width[0]], width]), np.concatenate([width, [width[-1]]]))
-        if np.max(np.abs(new - nodes) / cell) <= self.opts.tolerance:
-            return False
-        y[:] = remap(y, nodes, new)
-        set_nodes(geo, new)
-        self.remaps += 1
+        new = target_nodes(y[:n], nodes, self.opts, self.ell)
+        for _ in range(self.ITERATIONS):  # towards the fixed point, independent of the mesh
+            new = target_nodes(remap(y[:n], nodes, new), new, self.opts, self.ell)
+        velocity = np.zeros(n + 1)
+        if self._last is not None and t > self._last[0]:
+            dt = t - self._last[0]
+            velocity = (new - self._last[1]) / dt
+            rate = np.diff(velocity) / np.diff(new)
+            worst = -rate.min() * self.HORIZON * dt
+            if worst > 0.5:
+                velocity *= 0.5 / worst
+        self._last = (t, new)
+        if rezone.offset(nodes, new) > self.opts.tolerance:
+            y[:n] = remap(y[:n], nodes, new)
+            nodes = new
+            self.remaps += 1
+        ale.set_mesh(geo, nodes, velocity, t)
         return True

@@ -107,8 +107,9 @@ def _initial_state(spec: GridSpec, gel: Gel, t_start: float, first_t: float,
         if spec.moving:
             nodes = moving.initial_nodes(eq.stretch, lambda x: np.full(x.size - 1, eq.porosity),
                                          n, mesh, ell)
-            return (moving.state_from_profile(eq.stretch, np.full(n, eq.porosity), nodes),
-                    moving.geometry_from_nodes(nodes), branch)
+            return (moving.state(moving.state_from_profile(eq.stretch, np.full(n, eq.porosity),
+                                                           nodes)),
+                    moving.geometry(nodes), branch)
         return mod.state_from_profile(eq.stretch, np.full(n, eq.porosity)), mod.geometry(n), branch
     if isinstance(initial, FullResult):
         r, s = _source_dry(initial)
@@ -118,15 +119,16 @@ def _initial_state(spec: GridSpec, gel: Gel, t_start: float, first_t: float,
                 return 1.0 - np.diff(x**3) / np.diff(np.concatenate([[0.0], y**3]))
 
             nodes = moving.initial_nodes(float(r[-1]), phi_of, n, mesh, ell)
-            return (np.cbrt(np.interp(nodes[1:] ** 3, s, r**3)),
-                    moving.geometry_from_nodes(nodes), "given")
+            return (moving.state(np.cbrt(np.interp(nodes[1:] ** 3, s, r**3))),
+                    moving.geometry(nodes), "given")
         return mod.state_from_dry(r, s, n), mod.geometry(n), "given"
     radius, phi = _given_profile(initial, n)
     if spec.moving:  # a profile on the mesh's given nodes, else on uniform cells (the
         # first mesh check adapts them)
         nodes = np.asarray(mesh.nodes) if mesh.nodes is not None else np.arange(n + 1) / n
-        y, geo = moving.state_from_profile(radius, phi, nodes), moving.geometry_from_nodes(nodes)
-        a = float(y[-1])
+        y = moving.state(moving.state_from_profile(radius, phi, nodes))
+        geo = moving.geometry(nodes)
+        a = float(y[-2])
     else:
         y, geo = mod.state_from_profile(radius, phi), mod.geometry(n)
         a = mod.radius(y)
