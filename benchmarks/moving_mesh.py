@@ -63,17 +63,17 @@ def _fmt(v: np.ndarray) -> str:
 
 def steep_cells(res: object) -> int:
     """Fewest cells across the steepest part of the interface (where |dphi/drho| is at least
-    half its peak) over the outputs with a front."""
+    half its peak) over the outputs with a front inside the bead (R_f < 0.95 a)."""
     fewest = 10**9
     nodes = res.nodes if res.nodes.size else None  # type: ignore[attr-defined]
     for i in range(res.t.size):  # type: ignore[attr-defined]
-        if not np.isfinite(res.front[i]):  # type: ignore[attr-defined]
+        if not res.front[i] < 0.95 * res.radius[i]:  # type: ignore[attr-defined]
             continue
         x = nodes[i] if nodes is not None else np.linspace(0, 1, res.phi.shape[1] + 1)  # type: ignore[attr-defined]
         c = 0.5 * (x[1:] + x[:-1])
         g = np.abs(np.gradient(res.phi[i], c))  # type: ignore[attr-defined]
         fewest = min(fewest, int(np.count_nonzero(g >= 0.5 * g.max())))
-    return fewest
+    return fewest if fewest < 10**9 else 0
 
 
 def section_reproduce(gels: list[str]) -> None:

@@ -28,6 +28,7 @@ from .system import (
     rhs,
 )
 
+
 class Rezoner(Protocol):
     """Mesh adaptation hook of the moving grid (``moving.Rezoner``)."""
 

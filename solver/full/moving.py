@@ -7,7 +7,7 @@ grid's, which take every width from the geometry rows, so equal widths reproduce
 uniform grid bit for bit.  The Korteweg pressure is the same finite-volume Laplacian
 (docs/interfacial.md, sec. 4) with non-uniform faces.
 
-Adaptation (docs/interfacial.md, sec. 11).  Every few accepted steps the rezoner builds the
+Adaptation (docs/moving_mesh.md).  Every few accepted steps the rezoner builds the
 target mesh that equidistributes the monitor M = 1/h*, with the target spacing
 
     h*(rho) = min(h_bulk, delta / |d ln J / d rho|),   h*(1) <= ell / edge_cells,

@@ -154,11 +154,13 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     ``protocol`` [(duration, temperature), ...] from t = 0; without a protocol it is
     [(until, t_end)].  ``grid``: 'eulerian' (the paper's, appendix Numerical scheme),
     'lagrangian' (uniform in the dry coordinate) or 'moving' (non-uniform Lagrangian cells
-    adapted to the interface by rezoning, options ``mesh``: solver.full.moving.MeshOptions;
-    phi snapshots are then on each output's cells, ``FullResult.nodes``); ``integrator``: 'implicit' (adaptive RODASP, rtol/atol on porosity and
-    radius) or 'explicit' (the paper's forward Euler; ``dt``, the largest step, defaults to
-    0.8 of the stability limit; output times are hit exactly).  ``every`` is the output
-    interval (default: 200 outputs); ``progress(fraction)`` is called as the run advances.
+    that follow the interface, rezoned every few steps; options ``mesh``, a
+    solver.full.moving.MeshOptions; phi snapshots are then on each output's own cells,
+    ``FullResult.nodes``); ``integrator``: 'implicit' (adaptive RODASP, rtol/atol on
+    porosity and radius) or 'explicit' (the paper's forward Euler; ``dt``, the largest
+    step, defaults to 0.8 of the stability limit; output times are hit exactly).
+    ``every`` is the output interval (default: 200 outputs); ``progress(fraction)`` is
+    called as the run advances.
     ``interfacial_length`` ell (dry radii) adds the interfacial energy (ell^2/2)|grad_X J|^2
     (docs/interfacial.md); 0 is the paper's model, unchanged. The interface is about 10 ell
     wide: resolve it with n >= 2/ell cells (Lagrangian grid; the Eulerian grid needs several
