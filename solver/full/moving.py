@@ -11,6 +11,7 @@ Adaptation (docs/moving_mesh.md).  Every few accepted steps the rezoner builds t
 target mesh that equidistributes the monitor M = 1/h*, with the target spacing
 
     h*(rho) = min(h_bulk, delta / |d ln J / d rho|),   h*(1) <= ell / edge_cells,
+    h* >= ell / finest,
 
 limited to grow by at most ``grading`` per unit distance (h* Lipschitz, so neighbouring
 cells differ by at most that fraction).  Each interface then gets about Delta ln J / delta
@@ -44,6 +45,8 @@ class MeshOptions:
     bulk: largest cell width relative to a uniform grid of the same size (h_bulk =
         bulk / n); the cells an interface does not need go to the bulk.
     edge_cells: cells per interfacial length at the edge (h*(1) = ell / edge_cells).
+    finest: most cells per interfacial length anywhere (h* >= ell / finest): structures
+        much finer than ell (a stiff gel's spinodal burst at the edge) are not chased.
     grading: largest growth of the target spacing per unit distance (neighbour ratio).
     check_every: accepted steps between mesh checks.
     tolerance: remap when a node is further than this fraction of its cell from its target.
@@ -55,6 +58,7 @@ class MeshOptions:
     resolution: float = 0.1
     bulk: float = 4.0
     edge_cells: float = 4.0
+    finest: float = 50.0
     grading: float = 0.1
     check_every: int = 4
     tolerance: float = 0.3
@@ -63,7 +67,8 @@ class MeshOptions:
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("resolution", 1e-3, 2.0), ("bulk", 1.0, 100.0),
-                             ("edge_cells", 0.1, 100.0), ("grading", 1e-3, 1.0),
+                             ("edge_cells", 0.1, 100.0), ("finest", 1.0, 1e4),
+                             ("grading", 1e-3, 1.0),
                              ("tolerance", 1e-3, 10.0)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (
@@ -117,7 +122,9 @@ def target_nodes(y: np.ndarray, nodes: np.ndarray, opts: MeshOptions, ell: float
     n = nodes.size - 1
     out = np.empty(n + 1)
     h_edge = ell / opts.edge_cells if ell > 0.0 else 0.0
-    rezone.target_nodes(y, nodes, opts.resolution, opts.bulk / n, h_edge, opts.grading, out)
+    h_min = ell / opts.finest if ell > 0.0 else 0.0
+    rezone.target_nodes(y, nodes, opts.resolution, opts.bulk / n, h_edge, h_min, opts.grading,
+                        out)
     return out
 
 
@@ -144,6 +151,7 @@ class Rezoner:
 
     HORIZON = 4.0  # check intervals over which no cell may shrink below half its width
     ITERATIONS = 2  # fixed-point iterations of the target mesh
+    AGREEMENT = 0.5  # largest relative change of the target's velocity between checks
 
     def __init__(self, opts: MeshOptions, ell: float) -> None:
         self.opts, self.ell = opts, ell
@@ -151,6 +159,7 @@ class Rezoner:
         self.checks = 0
         self.remaps = 0
         self._last: tuple[float, np.ndarray] | None = None
+        self._raw: np.ndarray | None = None
 
     def __call__(self, y: np.ndarray, geo: np.ndarray) -> bool:
         """Update the mesh motion (and remap y in place when the mesh is off); True when
@@ -166,11 +175,18 @@ class Rezoner:
         velocity = np.zeros(n + 1)
         if self._last is not None and t > self._last[0]:
             dt = t - self._last[0]
-            velocity = (new - self._last[1]) / dt
-            rate = np.diff(velocity) / np.diff(new)
-            worst = -rate.min() * self.HORIZON * dt
-            if worst > 0.5:
-                velocity *= 0.5 / worst
+            raw = (new - self._last[1]) / dt
+            # follow the target only while it translates steadily: two successive estimates
+            # agree (a nucleating front makes the target jump, not move)
+            prev = self._raw
+            self._raw = raw
+            big = max(np.abs(raw).max(), 1e-300)
+            if prev is not None and np.abs(raw - prev).max() <= self.AGREEMENT * big:
+                velocity = raw
+                rate = np.diff(velocity) / np.diff(new)
+                worst = -rate.min() * self.HORIZON * dt
+                if worst > 0.5:
+                    velocity = velocity * (0.5 / worst)
         self._last = (t, new)
         if rezone.offset(nodes, new) > self.opts.tolerance:
             y[:n] = remap(y[:n], nodes, new)

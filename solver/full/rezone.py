@@ -77,9 +77,9 @@ def remap(y, old, new, out):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def target_nodes(y, nodes, resolution, h_bulk, h_edge, grading, out):  # noqa: ANN001, ANN201
+def target_nodes(y, nodes, resolution, h_bulk, h_edge, h_min, grading, out):  # noqa: ANN001, ANN201
     """Nodes equidistributing 1/h* (moving.py module doc) into ``out``; h_edge <= 0: no
-    edge refinement."""
+    edge refinement; h* >= h_min."""
     n = nodes.size - 1
     centre = np.empty(n)
     lj = np.empty(n)
@@ -101,7 +101,7 @@ def target_nodes(y, nodes, resolution, h_bulk, h_edge, grading, out):  # noqa: A
             hc = resolution / g
         if h_edge > 0.0:
             hc = min(hc, h_edge + grading * (1.0 - centre[c]))
-        h[c] = hc
+        h[c] = max(hc, h_min)
     for c in range(1, n):
         h[c] = min(h[c], h[c - 1] + grading * (centre[c] - centre[c - 1]))
     for c in range(n - 2, -1, -1):
