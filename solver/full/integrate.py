@@ -36,6 +36,8 @@ class Rezoner(Protocol):
 
     def __call__(self, y: np.ndarray, geo: np.ndarray) -> bool: ...
 
+    def reset(self, y: np.ndarray, geo: np.ndarray) -> None: ...
+
 
 OutputFn = Callable[[float, np.ndarray], None]
 ProgressFn = Callable[[float], None]
@@ -190,6 +192,8 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
         if not stats.t or stats.t[-1] != seg.t0:
             stats.record(seg.t0, y[ia], f[ia], edge_porosity(ws.grid, y, ws.geo))
         ctrl[0], ctrl[1], ctrl[3] = min(ctrl[0], h0), 0.0, 0.0
+        if rezoner is not None:
+            rezoner.reset(y, ws.geo)  # a new temperature: the mesh stops until it is re-aimed
         k_out = _emit(out_times, k_out, seg.t0, lambda _t: y.copy(), on_output)
         while tt[0] < seg.t1:
             t_stop = seg.t1

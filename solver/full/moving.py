@@ -1,4 +1,4 @@
-"""The moving Lagrangian grid: non-uniform dry-coordinate cells, adapted by rezoning.
+"""The moving Lagrangian grid: non-uniform dry-coordinate cells that follow the interface.
 
 The cells are those of the Lagrangian grid (``lagrangian.py``: nodes rho_k carry the
 solid, cell c holds the dry volume rho_{c+1}^3 - rho_c^3, J_c = (r_{c+1}^3 - r_c^3) / w_c)
@@ -14,14 +14,18 @@ target mesh that equidistributes the monitor M = 1/h*, with the target spacing
     h* >= ell / finest,
 
 limited to grow by at most ``grading`` per unit distance (h* Lipschitz, so neighbouring
-cells differ by at most that fraction).  Each interface then gets about Delta ln J / delta
+cells differ by at most that fraction), iterated twice towards its fixed point so it does
+not depend on the current mesh.  Between checks the nodes move at the target's velocity
+(``ale.py``: the ALE term keeps the unknowns the radii of the moving nodes), used only while
+two successive estimates agree.  Each interface then gets about Delta ln J / delta
 cells whatever its width (the steep side shrinks like Omega^-1/2 at large Omega), the edge,
 where the front nucleates, stays resolved at the ell scale, and the rest of the cells go
 to the bulk.  When a node is more than ``tolerance`` of its cell off its target, the state
 is remapped: in the dry coordinate the solid is exact under any remap, and the cumulative
 fluid volume W(s) = r^3 - s (s = rho^3) is interpolated monotonically (PCHIP, strictly
 increasing since J > 1), so every new cell has 0 < phi < 1 and the total volume, a = r_n,
-is unchanged.  The one-step Rosenbrock integrator then restarts with a fresh Jacobian.
+is unchanged.  After every check the one-step Rosenbrock integrator restarts with a
+fresh Jacobian.
 """
 
 from __future__ import annotations
@@ -160,6 +164,16 @@ class Rezoner:
         self.remaps = 0
         self._last: tuple[float, np.ndarray] | None = None
         self._raw: np.ndarray | None = None
+
+    def reset(self, y: np.ndarray, geo: np.ndarray) -> None:
+        """Stop the nodes where they are and forget the target's history (at a protocol
+        step, where the interface's motion changes abruptly)."""
+        n = geo.shape[1] - 1
+        t = float(y[n])
+        ale.refresh(geo, t)
+        ale.set_mesh(geo, geo[0].copy(), np.zeros(n + 1), t)
+        self._last = None
+        self._raw = None
 
     def __call__(self, y: np.ndarray, geo: np.ndarray) -> bool:
         """Update the mesh motion (and remap y in place when the mesh is off); True when
