@@ -201,3 +201,20 @@ def test_protocol_steps_restart_the_mesh_motion() -> None:
     adapted = simulate("ANB", 302.0, grid="moving", n=200, **kw)  # type: ignore[arg-type]
     assert np.max(np.abs(adapted.radius / uniform.radius - 1.0)) < 3e-4
     assert np.max(adapted.solid_error) < 1e-12
+
+
+def test_direct_dose_times_with_their_numerical_bound() -> None:
+    """ANB ell = 0.005, 50% and 80%: the uniform grid's converged values (N = 800; docs/
+    interfacial.md sec. 6, converged to 1e-5) lie within 0.1% and within the stated bound
+    (the 400- vs 200-cell gap, a threefold safety for a second-order scheme)."""
+    from solver.full.direct import direct_dose_times
+
+    a0 = equilibrium(ANB, 302.0).stretch
+    radii = fraction_radius(a0, np.array([0.5, 0.8]))
+    d = direct_dose_times("ANB", 302.0, 308.0, list(radii), 0.005, n=400)
+    for t, ref, bound in zip(d.times, (0.024513, 0.081977), d.numerical, strict=True):
+        assert abs(t / ref - 1.0) < 1e-3
+        assert abs(t / ref - 1.0) <= bound + 2e-5  # + the reference's own rounding
+    assert d.nucleation_time is not None and 0.0 < d.nucleation_time < d.times[0]
+    with pytest.raises(ParameterError):
+        direct_dose_times("ANB", 302.0, 308.0, list(radii), 0.0)
