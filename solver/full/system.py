@@ -13,7 +13,7 @@ from numba import njit
 from . import ale, eulerian, lagrangian
 
 EULERIAN, LAGRANGIAN, MOVING = 0, 1, 2
-GRID_CODES = {"eulerian": EULERIAN, "lagrangian": LAGRANGIAN}  # the fixed grids (grids.py)
+GRID_CODES = {"eulerian": EULERIAN, "lagrangian": LAGRANGIAN, "moving": MOVING}  # see grids.py
 MODULES = {EULERIAN: eulerian, LAGRANGIAN: lagrangian, MOVING: ale}
 
 
