@@ -202,10 +202,15 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
             if k_out < out_times.size:
                 t_stop = min(t_stop, out_times[k_out])
             budget = max_steps
+            t_land = seg.t1
             if rezoner is not None and rezoner.every > 0:
                 budget = min(max_steps, int(counters[ros.C_STEPS]) + rezoner.every)
+                # land on output times: the moving nodes' radii are smooth in time, but their
+                # differences across a thin cell are not well interpolated over a long step
+                if k_out < out_times.size and out_times[k_out] > tt[0]:
+                    t_land = min(t_land, float(out_times[k_out]))
             status = ros.rodas_run(
-                ws.grid, y, f, yold, fold, tt, t_stop, seg.t1, seg.par, ws.geo, ws.work,
+                ws.grid, y, f, yold, fold, tt, t_stop, t_land, seg.par, ws.geo, ws.work,
                 ws.lower, ws.upper, ws.jband, ws.jc, ws.jd, ws.je, ws.lu, ws.ipiv, ws.cm,
                 ws.dm, ws.xm, ws.em, ws.spiv, ws.zbuf, ws.u, ws.ytmp, ws.ftmp, ws.ynew,
                 ws.fnew, ws.errv, ws.scale, rtol, atol, method.tableau, method.a, method.c,
