@@ -1,7 +1,8 @@
 """The full poro-elastic PDE solver (eqs. PDE_Dimless to Boundary_Dimless).
 
-Two discretizations (the paper's Eulerian grid in R = r/a and a Lagrangian grid in the dry
-coordinate), an explicit forward Euler reference and an adaptive implicit Rosenbrock
+Three grids (the paper's Eulerian grid in R = r/a, a uniform Lagrangian grid in the dry
+coordinate, and a moving Lagrangian grid whose cells follow the interface; registry in
+grids.py), an explicit forward Euler reference and an adaptive implicit Rosenbrock
 integrator (RODASP), front tracking and a plain-data result object.
 """
 

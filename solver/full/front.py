@@ -67,6 +67,18 @@ def diffuse_window(interfacial_length: float, n: int) -> int:
     return max(WINDOW, WINDOW + int(np.ceil(8.0 * interfacial_length * n)))
 
 
+def moving_window(nodes: np.ndarray, phi: np.ndarray, interfacial_length: float) -> int:
+    """:func:`diffuse_window` on a non-uniform dry grid: the cells within 8 ell of the
+    steepest porosity step, at least WINDOW."""
+    if phi.size < 2 or interfacial_length <= 0.0:
+        return WINDOW
+    centre = 0.5 * (nodes[:-1] + nodes[1:])
+    k = int(np.argmax(np.abs(np.diff(phi))))
+    x = 0.5 * (centre[k] + centre[k + 1])
+    inside = int(np.count_nonzero(np.abs(centre - x) <= 8.0 * interfacial_length))
+    return max(WINDOW, WINDOW + (inside + 1) // 2)
+
+
 @njit(cache=True)
 def interfaces(phi):  # noqa: ANN001, ANN201
     """Number of separate sharp interfaces: runs of grid-scale porosity steps

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
+from typing import Protocol
 
 import numpy as np
 from numba import njit
@@ -26,6 +27,17 @@ from .system import (
     porosity,
     rhs,
 )
+
+
+class Rezoner(Protocol):
+    """Mesh adaptation hook of the moving grid (``moving.Rezoner``)."""
+
+    every: int
+
+    def __call__(self, y: np.ndarray, geo: np.ndarray) -> bool: ...
+
+    def reset(self, y: np.ndarray, geo: np.ndarray) -> None: ...
+
 
 OutputFn = Callable[[float, np.ndarray], None]
 ProgressFn = Callable[[float], None]
@@ -71,7 +83,8 @@ class Workspace:
         mod = MODULES[grid]
         self.grid = grid
         self.geo = geo
-        self.n = geo.shape[1] - 1
+        self.n = geo.shape[1] - 1 + getattr(mod, "EXTRA", 0)  # state size (moving grid: + t)
+        self.ia = self.n - 1 - getattr(mod, "EXTRA", 0)  # index of the radius a
         self.lower, self.upper, p = mod.structure(interfacial)
         m = self.n - p
         kv = self.lower + self.upper
@@ -108,7 +121,7 @@ def _dense_state(ws: Workspace, t0: float, t1: float, y0: np.ndarray, y1: np.nda
     if t >= t1 or t1 <= t0:
         return y1.copy()
     out = np.zeros(ws.n)
-    dense_output(ws.grid, ws.geo, t0, t1, y0, y1, f0, f1, t, out, np.zeros(ws.n))
+    dense_output(ws.grid, ws.geo, t0, t1, y0, y1, f0, f1, t, out, np.zeros(ws.geo.shape[1] - 1))
     return out
 
 
@@ -146,12 +159,17 @@ def _emit(out_times: np.ndarray, k_out: int, t: float, fn: Callable[[float], np.
 def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_times: np.ndarray,
                  on_output: OutputFn, rtol: float, atol: float, max_steps: int,
                  progress: ProgressFn | None, stats: Stats, ticks: int = 200,
-                 jac_mode: int = JAC_ANALYTIC, method: ros.Method = ros.RODASP) -> np.ndarray:
+                 jac_mode: int = JAC_ANALYTIC, method: ros.Method = ros.RODASP,
+                 rezoner: Rezoner | None = None) -> np.ndarray:
     """Integrate with adaptive RODASP through every segment; returns the final state.
 
     The stepping loop runs in numba (rosenbrock.rodas_run) between stops: output times,
-    ``ticks`` progress points, record-buffer flushes.  Outputs are cubic Hermite
-    interpolants of the last step.
+    ``ticks`` progress points, record-buffer flushes and, on the moving grid, every
+    ``rezoner.every`` accepted steps a mesh check.  Outputs are cubic Hermite
+    interpolants of the last step.  A rezoner changes y and ``ws.geo`` in place after the
+    outputs up to the current time are out; the integrator restarts there with a fresh
+    Jacobian and without the step controller's history (a one-step method needs nothing
+    else).
     """
     counters = np.zeros(6, dtype=np.int64)
     rec = np.zeros((4, 4096))
@@ -161,7 +179,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
     ctrl = np.array([h0, 0.0, 0.0, 0.0])
     y = y.copy()
     yold, fold = np.zeros_like(y), np.zeros_like(y)
-    ia = ws.n - 1
+    ia = ws.ia
     k_out = 0
     reasons = {ros.RUN_BUDGET: f"step budget exhausted ({max_steps} steps)",
                ros.RUN_UNDERFLOW: "step size underflow",
@@ -174,6 +192,8 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
         if not stats.t or stats.t[-1] != seg.t0:
             stats.record(seg.t0, y[ia], f[ia], edge_porosity(ws.grid, y, ws.geo))
         ctrl[0], ctrl[1], ctrl[3] = min(ctrl[0], h0), 0.0, 0.0
+        if rezoner is not None:
+            rezoner.reset(y, ws.geo)  # a new temperature: the mesh stops until it is re-aimed
         k_out = _emit(out_times, k_out, seg.t0, lambda _t: y.copy(), on_output)
         while tt[0] < seg.t1:
             t_stop = seg.t1
@@ -181,15 +201,26 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
                 t_stop = min(t_stop, (np.floor(tt[0] / total * ticks + 1e-9) + 1.0) * total / ticks)
             if k_out < out_times.size:
                 t_stop = min(t_stop, out_times[k_out])
+            budget = max_steps
+            t_land = seg.t1
+            if rezoner is not None and rezoner.every > 0:
+                budget = min(max_steps, int(counters[ros.C_STEPS]) + rezoner.every)
+                # land on output times: the moving nodes' radii are smooth in time, but their
+                # differences across a thin cell are not well interpolated over a long step
+                if k_out < out_times.size and out_times[k_out] > tt[0]:
+                    t_land = min(t_land, float(out_times[k_out]))
             status = ros.rodas_run(
-                ws.grid, y, f, yold, fold, tt, t_stop, seg.t1, seg.par, ws.geo, ws.work,
+                ws.grid, y, f, yold, fold, tt, t_stop, t_land, seg.par, ws.geo, ws.work,
                 ws.lower, ws.upper, ws.jband, ws.jc, ws.jd, ws.je, ws.lu, ws.ipiv, ws.cm,
                 ws.dm, ws.xm, ws.em, ws.spiv, ws.zbuf, ws.u, ws.ytmp, ws.ftmp, ws.ynew,
                 ws.fnew, ws.errv, ws.scale, rtol, atol, method.tableau, method.a, method.c,
-                method.m, method.e, counters, ctrl, rec, max_steps, jac_mode)
+                method.m, method.e, counters, ctrl, rec, budget, jac_mode)
             _flush(stats, rec, counters)
+            check = status == ros.RUN_BUDGET and budget < max_steps
+            if check:
+                status = ros.RUN_REACHED
             if status in reasons:
-                phi = np.zeros(ws.n)
+                phi = np.zeros(ws.geo.shape[1] - 1)
                 porosity(ws.grid, y, ws.geo, phi)
                 hint = ""
                 if phi.max() > 1.0 - 1e-3:
@@ -202,6 +233,8 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
             t0, t1 = float(tt[1]), float(tt[0])
             k_out = _emit(out_times, k_out, t1,
                           partial(_dense_state, ws, t0, t1, yold, y, fold, f), on_output)
+            if check and rezoner is not None and rezoner(y, ws.geo):
+                ctrl[1], ctrl[3] = 0.0, 0.0  # restart: new Jacobian, no controller history
             if progress is not None:
                 progress(min(1.0, t1 / total))
     return y

@@ -13,7 +13,7 @@ import numpy as np
 from ..crossing import first_fall, hermite_root
 
 _ARRAYS = ("t", "radius", "front", "jump", "phi", "coords", "temperature", "expelled_volume",
-           "solid_error", "step_t", "step_radius", "step_rate", "step_edge")
+           "solid_error", "step_t", "step_radius", "step_rate", "step_edge", "nodes")
 
 
 def _clean(obj: Any) -> Any:
@@ -44,7 +44,9 @@ class FullResult:
     the dry coordinate rho on the Lagrangian grid), temperature, expelled fluid volume
     (eq. FluidVolExpelled) and the relative solid-volume error.  ``step_*`` hold a,
     da/dt and the edge cell's porosity at every accepted step (dense a(t) for crossing
-    times; the time a front nucleates at the edge).
+    times; the time a front nucleates at the edge).  On the moving grid ``nodes`` holds
+    every output's dry node radii (len(t), n + 1), the cells ``phi`` refers to, and
+    ``coords`` the last output's cell midpoints; on fixed grids it is empty.
     """
 
     t: np.ndarray
@@ -62,10 +64,11 @@ class FullResult:
     step_radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
     step_rate: np.ndarray = field(default_factory=lambda: np.zeros(0))
     step_edge: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    nodes: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     @property
     def grid(self) -> str:
-        """'eulerian' or 'lagrangian'."""
+        """'eulerian', 'lagrangian' or 'moving'."""
         return str(self.diagnostics.get("grid", "eulerian"))
 
     def nucleation_time(self, level: float) -> float:
@@ -115,8 +118,12 @@ class FullResult:
         if self.grid == "eulerian":
             return self.radius[:, None] * self.coords[None, :]
         n = self.coords.size
-        w = np.diff((np.arange(n + 1) / n) ** 3)
-        r3 = np.cumsum(w[None, :] / (1.0 - self.phi), axis=1)
+        if self.nodes.size:
+            w = np.diff(self.nodes**3, axis=1)
+            r3 = np.cumsum(w / (1.0 - self.phi), axis=1)
+        else:
+            w = np.diff((np.arange(n + 1) / n) ** 3)
+            r3 = np.cumsum(w[None, :] / (1.0 - self.phi), axis=1)
         lo = np.concatenate([np.zeros((r3.shape[0], 1)), r3[:, :-1]], axis=1)
         return np.cbrt(0.5 * (lo + r3))
 
@@ -124,7 +131,9 @@ class FullResult:
         """JSON-ready dict (NaN -> None); ``profiles=False`` drops the phi snapshots."""
         out: dict[str, Any] = {}
         for name in _ARRAYS:
-            if name == "phi" and not profiles:
+            if name in ("phi", "nodes") and not profiles:
+                continue
+            if name == "nodes" and not self.nodes.size:
                 continue
             out[name] = getattr(self, name)
         out["spinodal"] = bool(self.spinodal)

@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from .banded import bordered_factor, bordered_solve
-from .system import edge_porosity, error_norm, event, linearize, rhs
+from .system import edge_porosity, error_norm, event, linearize, radius_index, rhs, underflow
 
 GAMMA = 0.25
 _ALPHA = np.zeros((6, 6))
@@ -156,7 +156,8 @@ def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, 
     count in counters[5].  Returns a RUN_* status.
     """
     n = y.size
-    ia = n - 1
+    ia = radius_index(grid, n)
+    floor = underflow(grid)
     gamma, expo = tableau[0], tableau[1]
     while tt[0] < t_stop:
         if counters[C_STEPS] >= max_steps:
@@ -177,7 +178,7 @@ def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, 
         if t + h >= t_seg - 1e-12 * max(1.0, abs(t_seg)):
             h = t_seg - t
             last = True
-        if h < 1e-14 * max(1.0, abs(t)):
+        if h < floor * max(1.0, abs(t)):
             return RUN_UNDERFLOW
         status, err = rodas_try(grid, y, f, h, par, geo, work, lower, upper, jband, jc, jd,
                                 je, lu, ipiv, cm, dm, xm, em, spiv, zbuf, u, ytmp, ftmp, ynew,

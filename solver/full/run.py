@@ -17,9 +17,12 @@ from ..equilibrium import equilibrium
 from ..errors import BudgetExceeded, ParameterError, SolverError
 from ..gel import Gel, check_temperature, preset
 from . import front as fronts
+from . import moving
+from .grids import GridSpec, grid_spec
 from .integrate import Segment, Stats, Workspace, run_explicit, run_implicit
+from .moving import MeshOptions, Rezoner
 from .result import FullResult
-from .system import GRID_CODES, JAC_ANALYTIC, JAC_FD, MODULES, porosity, solid_error
+from .system import JAC_ANALYTIC, JAC_FD, porosity, solid_error
 
 N_RANGE = (10, 20000)
 ELL_MAX = 0.2  # the interfacial length must be small against the dry radius
@@ -64,22 +67,21 @@ def _choice(field: str, value: Any, options: Sequence[str]) -> str:
     return str(value)
 
 
-def _initial_state(mod: Any, gel: Gel, t_start: float, first_t: float, branch: str | None,
-                   initial: Initial, n: int) -> tuple[np.ndarray, str]:
-    """State vector on the grid: uniform equilibrium, a FullResult's last state, or (a, phi)."""
-    if initial is None:
-        if branch is None:
-            branch = "swollen" if first_t >= t_start else "shrunken"
-        _choice("branch", branch, ("swollen", "shrunken"))
-        eq = equilibrium(gel, t_start, branch)  # type: ignore[arg-type]
-        return mod.state_from_profile(eq.stretch, np.full(n, eq.porosity)), branch
-    if isinstance(initial, FullResult):
-        src = MODULES[GRID_CODES[initial.grid]]
-        phi = initial.phi[-1]
-        y_src = src.state_from_profile(float(initial.radius[-1]), phi)
-        geo_src = src.geometry(phi.size)
-        r, s = src.dry_profile(y_src, geo_src)
-        return mod.state_from_dry(r, s, n), "given"
+def _source_dry(initial: FullResult) -> tuple[np.ndarray, np.ndarray]:
+    """(r, s) at the nodes of a result's last state: radius r enclosing the dry volume s."""
+    phi = initial.phi[-1]
+    spec = grid_spec(initial.grid)
+    if spec.moving:
+        nodes = initial.nodes[-1]
+        y = moving.state_from_profile(float(initial.radius[-1]), phi, nodes)
+        return np.concatenate([[0.0], y]), nodes**3
+    src = spec.module
+    y_src = src.state_from_profile(float(initial.radius[-1]), phi)
+    return src.dry_profile(y_src, src.geometry(phi.size))
+
+
+def _given_profile(initial: Any, n: int) -> tuple[float, np.ndarray]:
+    """A validated (radius, phi) pair of ``initial``."""
     try:
         radius, phi = initial
         phi = np.asarray(phi, dtype=float)
@@ -88,12 +90,52 @@ def _initial_state(mod: Any, gel: Gel, t_start: float, first_t: float, branch: s
         raise ParameterError("initial", initial, "a FullResult or (radius, phi profile)") from None
     if phi.shape != (n,) or not np.all((phi > 0.0) & (phi < 1.0)):
         raise ParameterError("initial", "phi", f"{n} cell porosities in (0, 1) on the grid")
-    y = mod.state_from_profile(radius, phi)
-    a = mod.radius(y)
+    return radius, phi
+
+
+def _initial_state(spec: GridSpec, gel: Gel, t_start: float, first_t: float,
+                   branch: str | None, initial: Initial, n: int, mesh: MeshOptions,
+                   ell: float) -> tuple[np.ndarray, np.ndarray, str]:
+    """(state, geometry, branch) on the grid: uniform equilibrium, a FullResult's last state
+    (remapped conservatively), or (a, phi); the moving grid's first mesh is adapted to it."""
+    mod = spec.module
+    if initial is None:
+        if branch is None:
+            branch = "swollen" if first_t >= t_start else "shrunken"
+        _choice("branch", branch, ("swollen", "shrunken"))
+        eq = equilibrium(gel, t_start, branch)  # type: ignore[arg-type]
+        if spec.moving:
+            nodes = moving.initial_nodes(eq.stretch, lambda x: np.full(x.size - 1, eq.porosity),
+                                         n, mesh, ell)
+            return (moving.state(moving.state_from_profile(eq.stretch, np.full(n, eq.porosity),
+                                                           nodes)),
+                    moving.geometry(nodes), branch)
+        return mod.state_from_profile(eq.stretch, np.full(n, eq.porosity)), mod.geometry(n), branch
+    if isinstance(initial, FullResult):
+        r, s = _source_dry(initial)
+        if spec.moving:
+            def phi_of(x: np.ndarray) -> np.ndarray:
+                y = np.cbrt(np.interp(x[1:] ** 3, s, r**3))
+                return 1.0 - np.diff(x**3) / np.diff(np.concatenate([[0.0], y**3]))
+
+            nodes = moving.initial_nodes(float(r[-1]), phi_of, n, mesh, ell)
+            return (moving.state(np.cbrt(np.interp(nodes[1:] ** 3, s, r**3))),
+                    moving.geometry(nodes), "given")
+        return mod.state_from_dry(r, s, n), mod.geometry(n), "given"
+    radius, phi = _given_profile(initial, n)
+    if spec.moving:  # a profile on the mesh's given nodes, else on uniform cells (the
+        # first mesh check adapts them)
+        nodes = np.asarray(mesh.nodes) if mesh.nodes is not None else np.arange(n + 1) / n
+        y = moving.state(moving.state_from_profile(radius, phi, nodes))
+        geo = moving.geometry(nodes)
+        a = float(y[-2])
+    else:
+        y, geo = mod.state_from_profile(radius, phi), mod.geometry(n)
+        a = mod.radius(y)
     if not (math.isfinite(radius) and abs(a - radius) <= 1e-3 * a):
         raise ParameterError("initial.radius", radius,
                              f"the radius implied by the profile, {a:.6g} (solid volume 1)")
-    return y, "given"
+    return y, geo, "given"
 
 
 def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
@@ -103,18 +145,22 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
              branch: str | None = None, initial: Initial = None, dt: float | None = None,
              max_steps: int | None = None, progress: Callable[[float], None] | None = None,
              jacobian: str = "analytic", interfacial_length: float = 0.0,
-             max_seconds: float | None = None) -> FullResult:
+             max_seconds: float | None = None, mesh: MeshOptions | None = None) -> FullResult:
     """Run the full poro-elastic model (eqs. PDE_Dimless to Boundary_Dimless).
 
     The gel starts from a uniform equilibrium at ``t_start`` (``branch``: default swollen
     when the first step heats, shrunken when it cools) or from ``initial`` (a FullResult's
     final state, remapped conservatively, or (radius, phi) on this grid), then follows
     ``protocol`` [(duration, temperature), ...] from t = 0; without a protocol it is
-    [(until, t_end)].  ``grid``: 'eulerian' (the paper's, appendix Numerical scheme) or
-    'lagrangian'; ``integrator``: 'implicit' (adaptive RODASP, rtol/atol on porosity and
-    radius) or 'explicit' (the paper's forward Euler; ``dt``, the largest step, defaults to
-    0.8 of the stability limit; output times are hit exactly).  ``every`` is the output
-    interval (default: 200 outputs); ``progress(fraction)`` is called as the run advances.
+    [(until, t_end)].  ``grid``: 'eulerian' (the paper's, appendix Numerical scheme),
+    'lagrangian' (uniform in the dry coordinate) or 'moving' (non-uniform Lagrangian cells
+    that follow the interface, rezoned every few steps; options ``mesh``, a
+    solver.full.moving.MeshOptions; phi snapshots are then on each output's own cells,
+    ``FullResult.nodes``); ``integrator``: 'implicit' (adaptive RODASP, rtol/atol on
+    porosity and radius) or 'explicit' (the paper's forward Euler; ``dt``, the largest
+    step, defaults to 0.8 of the stability limit; output times are hit exactly).
+    ``every`` is the output interval (default: 200 outputs); ``progress(fraction)`` is
+    called as the run advances.
     ``interfacial_length`` ell (dry radii) adds the interfacial energy (ell^2/2)|grad_X J|^2
     (docs/interfacial.md); 0 is the paper's model, unchanged. The interface is about 10 ell
     wide: resolve it with n >= 2/ell cells (Lagrangian grid; the Eulerian grid needs several
@@ -130,7 +176,12 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
         raise ParameterError("gel", gel, "a Gel or a preset name")
     t_start = check_temperature(t_start, "t_start")
     steps = _protocol(t_end, until, protocol)
-    grid = _choice("grid", grid, tuple(GRID_CODES))
+    spec = grid_spec(grid)
+    grid = spec.name
+    if mesh is None:
+        mesh = MeshOptions()
+    elif not isinstance(mesh, MeshOptions):
+        raise ParameterError("mesh", mesh, "None or a solver.full.moving.MeshOptions")
     integrator = _choice("integrator", integrator, ("implicit", "explicit"))
     jac_mode = {"analytic": JAC_ANALYTIC, "fd": JAC_FD}[_choice("jacobian", jacobian,
                                                               ("analytic", "fd"))]
@@ -168,10 +219,14 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
         raise ParameterError("every", every, f">= {total / MAX_OUTPUTS:.3g} "
                              f"(at most {MAX_OUTPUTS} outputs)")
 
-    code = GRID_CODES[grid]
-    mod = MODULES[code]
-    geo = mod.geometry(n)
-    y0, branch_used = _initial_state(mod, gel, t_start, steps[0][1], branch, initial, n)
+    if spec.moving and integrator != "implicit":
+        raise ParameterError("integrator", integrator, "'implicit' on the moving grid")
+    if spec.moving and mesh.nodes is not None and len(mesh.nodes) != n + 1:
+        raise ParameterError("mesh.nodes", len(mesh.nodes) - 1, f"n = {n} cells")
+    code = spec.code
+    mod = spec.module
+    y0, geo, branch_used = _initial_state(spec, gel, t_start, steps[0][1], branch, initial, n,
+                                          mesh, ell)
     segments, t0 = [], 0.0
     perm = gel.permeability
     for duration, temp in steps:
@@ -186,20 +241,24 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
 
     ws = Workspace(code, geo, interfacial=ell > 0.0)
     collector = _Collector(mod, code, geo, segments, out_times.size, n,
-                           fronts.diffuse_window(ell, n) if ell > 0.0 else fronts.WINDOW)
+                           fronts.diffuse_window(ell, n) if ell > 0.0 else fronts.WINDOW,
+                           moving=spec.moving, ell=ell)
+    rezoner = Rezoner(mesh, ell) if spec.moving else None
     stats = Stats()
     diag: dict[str, Any] = {
         "grid": grid, "n": n, "integrator": integrator, "rtol": rtol, "atol": atol,
         "jacobian": "fd" if jac_mode == JAC_FD else "analytic", "interfacial_length": ell,
         "gel": gel.to_dict(), "t_start": t_start, "branch": branch_used,
         "protocol": [list(s) for s in steps]}
+    if spec.moving:
+        diag["mesh"] = mesh.to_dict()
     if max_seconds is not None:
         progress = _budgeted(progress, started, float(max_seconds), total, stats,
                              f"{grid} grid, N = {n}, interfacial length {ell:g}")
     try:
         if integrator == "implicit":
             run_implicit(ws, y0, segments, out_times, collector, float(rtol), float(atol),
-                         int(max_steps), progress, stats, jac_mode=jac_mode)
+                         int(max_steps), progress, stats, jac_mode=jac_mode, rezoner=rezoner)
         else:
             diag["dt"] = dt
             run_explicit(ws, y0, segments, out_times, collector, dt, int(max_steps),
@@ -217,6 +276,8 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     diag.update(steps=stats.steps, rejected=stats.rejected, jacobians=stats.jacobians,
                 rhs_calls=stats.rhs_calls, merges=stats.merges,
                 wall_time=time.perf_counter() - started)
+    if rezoner is not None:
+        diag.update(mesh_checks=rezoner.checks, remaps=rezoner.remaps)
     result = collector.result(diag, stats)
     return result
 
@@ -254,9 +315,12 @@ class _Collector:
     """Receives the state at every output time and builds the result arrays."""
 
     def __init__(self, mod: Any, code: int, geo: np.ndarray, segments: list[Segment],
-                 size: int, n: int, window: int = fronts.WINDOW) -> None:
+                 size: int, n: int, window: int = fronts.WINDOW, moving: bool = False,
+                 ell: float = 0.0) -> None:
         self.mod, self.code, self.geo, self.segments = mod, code, geo, segments
         self.window = window
+        self.ell = ell
+        self.nodes = np.zeros((size, n + 1)) if moving else np.zeros((0, 0))
         self.t = np.zeros(size)
         self.radius = np.zeros(size)
         self.phi = np.zeros((size, n))
@@ -268,6 +332,8 @@ class _Collector:
         k = self.k
         a = porosity(self.code, y, self.geo, self.phi[k])
         self.t[k], self.radius[k] = t, a
+        if self.nodes.size:
+            self.nodes[k] = self.geo[0]
         self.solid[k] = solid_error(self.code, y, self.geo, self.phi[k])
         if self.spinodal_time is None and fronts.spinodal_collapse(self.phi[k]):
             self.spinodal_time = t
@@ -284,6 +350,7 @@ class _Collector:
         k = self.k
         t, radius, phi = self.t[:k], self.radius[:k], self.phi[:k]
         coords = self.geo[1, : phi.shape[1]].copy()
+        nodes = self.nodes[:k].copy() if self.nodes.size else np.zeros((0, 0))
         front = np.full(k, np.nan)
         jump = np.full(k, np.nan)
         res = FullResult(t=t, radius=radius, front=front, jump=jump, phi=phi, coords=coords,
@@ -292,10 +359,13 @@ class _Collector:
                          solid_error=self.solid[:k], spinodal=self.spinodal_time is not None,
                          diagnostics=diag, step_t=np.array(stats.t),
                          step_radius=np.array(stats.a), step_rate=np.array(stats.da),
-                         step_edge=np.array(stats.edge))
+                         step_edge=np.array(stats.edge), nodes=nodes)
         radii = res.cell_radii()
         for i in range(k):
-            front[i], jump[i] = fronts.locate_front(radii[i], phi[i], self.window)
+            window = self.window
+            if nodes.size:
+                window = fronts.moving_window(nodes[i], phi[i], self.ell)
+            front[i], jump[i] = fronts.locate_front(radii[i], phi[i], window)
         ell = float(diag.get("interfacial_length") or 0.0)
         if res.spinodal and ell > 0.0:
             diag["spinodal_time"] = self.spinodal_time

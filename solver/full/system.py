@@ -10,11 +10,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from . import eulerian, lagrangian
+from . import ale, eulerian, lagrangian
 
-EULERIAN, LAGRANGIAN = 0, 1
-GRID_CODES = {"eulerian": EULERIAN, "lagrangian": LAGRANGIAN}
-MODULES = {EULERIAN: eulerian, LAGRANGIAN: lagrangian}
+EULERIAN, LAGRANGIAN, MOVING = 0, 1, 2
+GRID_CODES = {"eulerian": EULERIAN, "lagrangian": LAGRANGIAN, "moving": MOVING}  # see grids.py
+MODULES = {EULERIAN: eulerian, LAGRANGIAN: lagrangian, MOVING: ale}
 
 
 @njit(cache=True)
@@ -22,6 +22,8 @@ def rhs(grid, y, par, geo, out, work):  # noqa: ANN001, ANN201
     """dy/dt on the chosen grid; False for an unphysical state."""
     if grid == EULERIAN:
         return eulerian.rhs(y, par, geo, out, work)
+    if grid == MOVING:
+        return ale.rhs(y, par, geo, out, work)
     return lagrangian.rhs(y, par, geo, out, work)
 
 
@@ -30,6 +32,8 @@ def fd_scale(grid, y, geo, out):  # noqa: ANN001, ANN201
     """Finite-difference increments for the Jacobian."""
     if grid == EULERIAN:
         eulerian.fd_scale(y, geo, out)
+    elif grid == MOVING:
+        ale.fd_scale(y, geo, out)
     else:
         lagrangian.fd_scale(y, geo, out)
 
@@ -39,6 +43,8 @@ def error_norm(grid, y, ynew, err, geo, rtol, atol, work):  # noqa: ANN001, ANN2
     """Weighted norm of a local error estimate (porosity and radius errors)."""
     if grid == EULERIAN:
         return eulerian.error_norm(y, ynew, err, geo, rtol, atol, work)
+    if grid == MOVING:
+        return ale.error_norm(y, ynew, err, geo, rtol, atol, work)
     return lagrangian.error_norm(y, ynew, err, geo, rtol, atol, work)
 
 
@@ -47,6 +53,8 @@ def porosity(grid, y, geo, out):  # noqa: ANN001, ANN201
     """Cell porosities; returns the radius a."""
     if grid == EULERIAN:
         return eulerian.porosity(y, geo, out)
+    if grid == MOVING:
+        return ale.porosity(y, geo, out)
     return lagrangian.porosity(y, geo, out)
 
 
@@ -57,6 +65,8 @@ def edge_porosity(grid, y, geo):  # noqa: ANN001, ANN201
     if grid == EULERIAN:
         a = y[n - 1]
         return 1.0 - (1.0 - y[n - 2]) / (a * a * a * geo[2, n - 1])
+    if grid == MOVING:
+        ale.refresh(geo, y[n])
     return 1.0 - geo[2, n - 1] / (y[n - 1] ** 3 - y[n - 2] ** 3)
 
 
@@ -96,6 +106,8 @@ def solid_error(grid, y, geo, phi):  # noqa: ANN001, ANN201
         for i in range(n):
             acc += (1.0 - phi[i]) * geo[2, i]
         return abs(a * a * a * acc - 1.0)
+    if grid == MOVING:
+        ale.refresh(geo, y[n])
     prev3 = 0.0
     for c in range(n):
         r3 = y[c] * y[c] * y[c]
@@ -119,6 +131,9 @@ def linearize(grid, y, f, par, geo, work, lower, upper, jband, jc, jd, je,  # no
         return calls + 1 if calls >= 0 else -1
     if grid == EULERIAN:
         ok = eulerian.jacobian(y, par, geo, work, upper, jband, jc, jd, je, f)
+    elif grid == MOVING:
+        ok = ale.jacobian(y, par, geo, work, upper, jband, jc, jd, je, f, ytmp, ftmp)
+        return 3 if ok and np.isfinite(f[f.size - 2]) else -1
     else:
         ok = lagrangian.jacobian(y, par, geo, work, upper, jband, jc, jd, je, f)
     return 2 if ok and np.isfinite(f[f.size - 1]) else -1
@@ -168,6 +183,24 @@ def fd_jacobian(grid, y, f0, par, geo, work, lower, upper, jband, jc, jd, je,  #
             je[r, k] = (ftmp[m + r] - f0[m + r]) / d
         ytmp[m + k] = y[m + k]
     return calls
+
+
+@njit(cache=True)
+def radius_index(grid, size):  # noqa: ANN001, ANN201
+    """Index of the radius a in a state of ``size`` entries (the moving grid appends t)."""
+    if grid == MOVING:
+        return size - 2
+    return size - 1
+
+
+@njit(cache=True)
+def underflow(grid):  # noqa: ANN001, ANN201
+    """Smallest relative step before the integrator gives up: 1e-14 on the fixed grids; on
+    the moving grid 1e-22, since its cells resolve a stiff gel's spinodal burst at the edge
+    (Omega = 1e4: the edge cell's porosity falls 0.96 -> 0.4 within ~1e-10, docs/moving_mesh.md)."""
+    if grid == MOVING:
+        return 1e-22
+    return 1e-14
 
 
 @njit(cache=True)

@@ -1,0 +1,178 @@
+"""The moving Lagrangian grid (solver/full/moving.py, ale.py) against the uniform grid, direct
+runs at small interfacial lengths, a stiff gel, the delayed-transition bound and speed.
+
+    .venv/bin/python benchmarks/moving_mesh.py                      # everything (~15 min)
+    .venv/bin/python benchmarks/moving_mesh.py --section reproduce  # one section
+
+Sections (issue 12's acceptance):
+  reproduce  dose times 10%..90% of ANB 302->308 K and HHT 304->308 K at ell = 0.005,
+             0.0025, 0.00125: uniform Lagrangian grid (4/ell cells, the planner's rungs)
+             against the moving grid with a quarter of the cells; largest relative gap,
+             largest solid error, wall times.
+  direct     HHT at ell = 3.125e-4 and 1e-4, ANB at 1e-4 on the moving grid (400 cells),
+             against the ell -> 0 limits of docs/interfacial.md (ANB 0.0777, HHT 0.0746).
+  stiff      Omega = 1e4 (ANB otherwise), 302->308 K, ell = 1e-3: the 50% dose at 400 and
+             800 cells, and the cells across the steepest part of the interface.
+  delayed    the ell = 0 Lagrangian lattice (uniform grid): ANB and HHT 80% at N = 200,
+             400, 800 (the delayed-transition bound, 0.116 and 0.221).
+  speed      ell = 2e-4 on the moving grid to the 90% dose: wall time, steps.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from solver.equilibrium import equilibrium
+from solver.front.result import fraction_radius
+from solver.full import simulate
+from solver.gel import preset
+
+CASES = {"ANB": (302.0, 308.0), "HHT": (304.0, 308.0)}
+FRACTIONS = np.arange(1, 10) / 10.0
+RTOL = 1e-5
+UNTIL = {"ANB": 0.15, "HHT": 0.22}  # past the 90% dose at every ell below 0.005
+LIMITS = {"ANB": 0.0777, "HHT": 0.0746}  # t80 as ell -> 0 (docs/interfacial.md, sec. 7)
+
+
+def run(gel: object, t_start: float, until: float, grid: str, n: int, ell: float,
+        fractions: np.ndarray = FRACTIONS) -> tuple[np.ndarray, float, object]:
+    """(dose times, wall s, result) of one run."""
+    g = preset(gel) if isinstance(gel, str) else gel
+    a0 = equilibrium(g, t_start).stretch
+    started = time.perf_counter()
+    res = simulate(g, t_start, 308.0, until=until, grid=grid, n=n, interfacial_length=ell,
+                   rtol=RTOL, every=until / 400)
+    wall = time.perf_counter() - started
+    times = []
+    for a in fraction_radius(a0, fractions):
+        try:
+            times.append(res.time_to_radius(a))
+        except ValueError:
+            times.append(math.nan)
+    return np.array(times), wall, res
+
+
+def _fmt(v: np.ndarray) -> str:
+    return " ".join(f"{x:.6f}" for x in v)
+
+
+def steep_cells(res: object) -> str:
+    """Cells across the steepest part of the interface (where |dphi/drho| between adjacent
+    cells is at least half its peak), min / median over the outputs whose front is inside
+    the bead (R_f < 0.95 a)."""
+    counts = []
+    n = res.phi.shape[1]  # type: ignore[attr-defined]
+    for i in range(res.t.size):  # type: ignore[attr-defined]
+        if not res.front[i] < 0.95 * res.radius[i]:  # type: ignore[attr-defined]
+            continue
+        x = res.nodes[i] if res.nodes.size else np.arange(n + 1) / n  # type: ignore[attr-defined]
+        c = 0.5 * (x[1:] + x[:-1])
+        g = np.abs(np.diff(res.phi[i]) / np.diff(c))  # type: ignore[attr-defined]
+        counts.append(int(np.count_nonzero(g >= 0.5 * g.max())))
+    return f"{min(counts)} / {int(np.median(counts))}" if counts else "-"
+
+
+def section_reproduce(gels: list[str]) -> None:
+    print("== moving grid (1/ell cells) against the uniform grid (4/ell cells): dose times "
+          "10%..90% ==")
+    for gel in gels:
+        t_start, _ = CASES[gel]
+        for ell in (0.005, 0.0025, 0.00125):
+            until = UNTIL[gel] if ell < 0.004 else {"ANB": 0.15, "HHT": 0.25}[gel]
+            n = int(round(4 / ell))
+            tu, wu, _ = run(gel, t_start, until, "lagrangian", n, ell)
+            tm, wm, rm = run(gel, t_start, until, "moving", n // 4, ell)
+            gap = np.nanmax(np.abs(tm - tu) / tu)
+            print(f"{gel} ell={ell:<8} uniform N={n:5d} {_fmt(tu)} ({wu:.1f} s)")
+            print(f"{gel} ell={ell:<8} moving  N={n // 4:5d} {_fmt(tm)} ({wm:.1f} s, "
+                  f"{rm.diagnostics['steps']} steps, {rm.diagnostics['remaps']} remaps)")
+            print(f"   largest gap {100 * gap:.3f}%, solid error {rm.solid_error.max():.1e}, "
+                  f"cells across the steepest part (min / median) {steep_cells(rm)}", flush=True)
+
+
+def section_direct(gels: list[str]) -> None:
+    print("== direct runs on the moving grid (400 cells) against the ell -> 0 limit ==")
+    for gel, ell in (("HHT", 3.125e-4), ("HHT", 1e-4), ("ANB", 1e-4)):
+        if gel not in gels:
+            continue
+        t_start, _ = CASES[gel]
+        t, wall, res = run(gel, t_start, 0.1, "moving", 400, ell, np.array([0.5, 0.8]))
+        print(f"{gel} ell={ell:<9} t50 {t[0]:.6f}  t80 {t[1]:.6f}  limit {LIMITS[gel]}  "
+              f"off {100 * (t[1] / LIMITS[gel] - 1):+.2f}%  ({wall:.1f} s, "
+              f"{res.diagnostics['steps']} steps, cells across the steepest part "
+              f"{steep_cells(res)})",
+              flush=True)
+
+
+def section_stiff() -> None:
+    print("== Omega = 1e4 (ANB otherwise), 302 -> 308 K, ell = 1e-3: the 50% dose ==")
+    gel = replace(preset("ANB"), omega=1e4, name="ANB-stiff")
+    values = []
+    for n in (400, 800):
+        t, wall, res = run(gel, 302.0, 0.2, "moving", n, 1e-3, np.array([0.5]))
+        values.append(t[0])
+        print(f"N={n}: t50 {t[0]:.6f} ({wall:.1f} s, {res.diagnostics['steps']} steps, cells "
+              f"across the steepest part {steep_cells(res)})", flush=True)
+    print(f"   change on doubling: {100 * abs(values[1] - values[0]) / values[1]:.3f}%")
+
+
+def section_delayed(gels: list[str]) -> None:
+    print("== ell = 0 Lagrangian lattice (uniform): the delayed-transition bound, t80 ==")
+    for gel in gels:
+        t_start, _ = CASES[gel]
+        row = []
+        for n in (200, 400, 800):
+            t, wall, _ = run(gel, t_start, 0.35, "lagrangian", n, 0.0, np.array([0.8]))
+            row.append(t[0])
+            print(f"{gel} N={n}: t80 {t[0]:.5f} ({wall:.1f} s)", flush=True)
+        print(f"   {gel} spread {100 * (max(row) - min(row)) / min(row):.2f}%")
+
+
+def section_speed(gels: list[str]) -> None:
+    print("== speed: ell = 2e-4 on the moving grid (400 cells) to the 90% dose ==")
+    for gel in gels:
+        t_start, _ = CASES[gel]
+        g = preset(gel)
+        a90 = fraction_radius(equilibrium(g, t_start).stretch, 0.9)
+        until = {"ANB": 0.128, "HHT": 0.127}[gel]
+        started = time.perf_counter()
+        res = simulate(g, t_start, 308.0, until=until, grid="moving", n=400,
+                       interfacial_length=2e-4, rtol=RTOL, every=until / 50)
+        wall = time.perf_counter() - started
+        try:
+            t90 = f"{res.time_to_radius(a90):.6f}"
+        except ValueError:
+            t90 = f"not reached by t = {until}"
+        print(f"{gel}: t90 {t90}, {wall:.1f} s, {res.diagnostics['steps']} steps "
+              f"({res.diagnostics['rejected']} rejected), {res.diagnostics['remaps']} remaps",
+              flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--section", choices=("reproduce", "direct", "stiff", "delayed",
+                                              "speed"), action="append")
+    parser.add_argument("--gel", choices=tuple(CASES), action="append")
+    args = parser.parse_args()
+    sections = args.section or ["reproduce", "direct", "stiff", "delayed", "speed"]
+    gels = args.gel or list(CASES)
+    for s in sections:
+        if s == "reproduce":
+            section_reproduce(gels)
+        elif s == "direct":
+            section_direct(gels)
+        elif s == "stiff":
+            section_stiff()
+        elif s == "delayed":
+            section_delayed(gels)
+        else:
+            section_speed(gels)
+
+
+if __name__ == "__main__":
+    main()
