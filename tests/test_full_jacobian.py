@@ -13,7 +13,7 @@ from jacobian_support import dense_jacobian
 
 from solver.equilibrium import equilibrium
 from solver.full import eulerian, lagrangian
-from solver.full.integrate import Segment, Stats, Workspace, run_implicit
+from solver.full.integrate import Segment, Stats, StepControl, Workspace, run_implicit
 from solver.full.system import JAC_ANALYTIC, JAC_FD, linearize
 from solver.gel import ANB
 
@@ -30,7 +30,7 @@ def test_analytic_jacobian_matches_finite_differences(mod: object, code: int) ->
     ws = Workspace(grid, geo)
     y0 = mod.state_from_profile(eq.stretch, np.full(N, eq.porosity))
     y = run_implicit(ws, y0, [Segment(0.0, 0.01, 308.0, par)], np.array([0.01]),
-                     lambda t, y: None, 1e-7, 1e-10, 100000, None, Stats())
+                     lambda t, y: None, StepControl(1e-7, 1e-10, 100000), None, Stats())
     mats = {}
     for mode in (JAC_ANALYTIC, JAC_FD):
         f = np.zeros(N)

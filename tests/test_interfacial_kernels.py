@@ -15,7 +15,7 @@ from jacobian_support import dense_jacobian
 from solver.equilibrium import equilibrium
 from solver.errors import ParameterError
 from solver.full import eulerian, lagrangian, simulate
-from solver.full.integrate import Segment, Stats, Workspace, run_implicit
+from solver.full.integrate import Segment, Stats, StepControl, Workspace, run_implicit
 from solver.full.kernels import korteweg
 from solver.full.system import JAC_ANALYTIC, JAC_FD, linearize
 from solver.gel import ANB
@@ -31,7 +31,8 @@ def _front_state(mod: object, grid: int, code: int) -> tuple:
     ws = Workspace(grid, geo, interfacial=True)
     y0 = mod.state_from_profile(eq.stretch, np.full(N, eq.porosity))  # type: ignore[attr-defined]
     y = run_implicit(ws, y0, [Segment(0.0, 0.03, 308.0, par)], np.array([0.03]),
-                     lambda t, y: None, 1e-7, 1e-10, 100000, None, Stats(), jac_mode=JAC_FD)
+                     lambda t, y: None, StepControl(1e-7, 1e-10, 100000, JAC_FD), None,
+                     Stats())
     return ws, geo, par, y
 
 

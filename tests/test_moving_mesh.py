@@ -19,7 +19,7 @@ from solver.equilibrium import equilibrium
 from solver.errors import ParameterError
 from solver.front.result import fraction_radius
 from solver.full import FullResult, moving, rezone, simulate
-from solver.full.integrate import Segment, Stats, Workspace, run_implicit
+from solver.full.integrate import Segment, Stats, StepControl, Workspace, run_implicit
 from solver.full.system import JAC_ANALYTIC, MOVING, linearize
 from solver.gel import ANB
 
@@ -119,7 +119,8 @@ def test_moving_jacobian_matches_central_differences() -> None:
     y0 = moving.state(moving.state_from_profile(eq.stretch, np.full(n, eq.porosity), nodes))
     rz = moving.Rezoner(opts, ell)
     y = run_implicit(ws, y0, [Segment(0.0, 0.03, 308.0, par)], np.array([0.03]),
-                     lambda t, y: None, 1e-7, 1e-10, 100000, None, Stats(), rezoner=rz)
+                     lambda t, y: None, StepControl(1e-7, 1e-10, 100000), None, Stats(),
+                     rezoner=rz)
     rz(y, ws.geo)
     assert np.any(ws.geo[moving.ale.R_VEL] != 0.0)  # the nodes move
     central = np.zeros((n + 1, n + 1))

@@ -156,10 +156,20 @@ def _emit(out_times: np.ndarray, k_out: int, t: float, fn: Callable[[float], np.
     return k_out
 
 
+@dataclass(frozen=True)
+class StepControl:
+    """What bounds the implicit steps: tolerances on porosity and radius, the step budget,
+    and the Jacobian (``system.JAC_ANALYTIC`` or ``JAC_FD``)."""
+
+    rtol: float = 1e-6
+    atol: float = 1e-9
+    max_steps: int = 500_000
+    jac_mode: int = JAC_ANALYTIC
+
+
 def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_times: np.ndarray,
-                 on_output: OutputFn, rtol: float, atol: float, max_steps: int,
-                 progress: ProgressFn | None, stats: Stats, ticks: int = 200,
-                 jac_mode: int = JAC_ANALYTIC, method: ros.Method = ros.RODASP,
+                 on_output: OutputFn, control: StepControl, progress: ProgressFn | None,
+                 stats: Stats, ticks: int = 200, method: ros.Method = ros.RODASP,
                  rezoner: Rezoner | None = None) -> np.ndarray:
     """Integrate with adaptive RODASP through every segment; returns the final state.
 
@@ -171,6 +181,8 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
     Jacobian and without the step controller's history (a one-step method needs nothing
     else).
     """
+    rtol, atol, max_steps, jac_mode = (control.rtol, control.atol, control.max_steps,
+                                       control.jac_mode)
     counters = np.zeros(6, dtype=np.int64)
     rec = np.zeros((4, 4096))
     tt = np.zeros(2)

@@ -19,16 +19,14 @@ from ..gel import Gel, check_temperature, preset
 from . import front as fronts
 from . import moving
 from .grids import GridSpec, grid_spec
-from .integrate import Segment, Stats, Workspace, run_explicit, run_implicit
+from .integrate import Segment, Stats, StepControl, Workspace, run_explicit, run_implicit
 from .moving import MeshOptions, Rezoner
+from .options import SolverOptions
 from .result import FullResult
 from .system import JAC_ANALYTIC, JAC_FD, porosity, solid_error
 
-N_RANGE = (10, 20000)
-ELL_MAX = 0.2  # the interfacial length must be small against the dry radius
 MAX_OUTPUTS = 100_000
 DEFAULT_OUTPUTS = 200
-DEFAULT_MAX_STEPS = {"implicit": 500_000, "explicit": 20_000_000}
 
 Initial = FullResult | tuple[float, Sequence[float]] | None
 
@@ -140,34 +138,34 @@ def _initial_state(spec: GridSpec, gel: Gel, t_start: float, first_t: float,
 
 def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
              until: float | None = None, protocol: Sequence[tuple[float, float]] | None = None,
-             grid: str = "eulerian", n: int = 400, integrator: str = "implicit",
-             rtol: float = 1e-6, atol: float = 1e-9, every: float | None = None,
-             branch: str | None = None, initial: Initial = None, dt: float | None = None,
-             max_steps: int | None = None, progress: Callable[[float], None] | None = None,
-             jacobian: str = "analytic", interfacial_length: float = 0.0,
-             max_seconds: float | None = None, mesh: MeshOptions | None = None) -> FullResult:
+             every: float | None = None, branch: str | None = None, initial: Initial = None,
+             progress: Callable[[float], None] | None = None,
+             options: SolverOptions | None = None, **option_fields: Any) -> FullResult:
     """Run the full poro-elastic model (eqs. PDE_Dimless to Boundary_Dimless).
 
     The gel starts from a uniform equilibrium at ``t_start`` (``branch``: default swollen
     when the first step heats, shrunken when it cools) or from ``initial`` (a FullResult's
     final state, remapped conservatively, or (radius, phi) on this grid), then follows
     ``protocol`` [(duration, temperature), ...] from t = 0; without a protocol it is
-    [(until, t_end)].  ``grid``: 'eulerian' (the paper's, appendix Numerical scheme),
-    'lagrangian' (uniform in the dry coordinate) or 'moving' (non-uniform Lagrangian cells
-    that follow the interface, rezoned every few steps; options ``mesh``, a
-    solver.full.moving.MeshOptions; phi snapshots are then on each output's own cells,
-    ``FullResult.nodes``); ``integrator``: 'implicit' (adaptive RODASP, rtol/atol on
-    porosity and radius) or 'explicit' (the paper's forward Euler; ``dt``, the largest
-    step, defaults to 0.8 of the stability limit; output times are hit exactly).
+    [(until, t_end)].  How it is discretised and integrated is a
+    :class:`~solver.full.options.SolverOptions`, given whole as ``options`` and/or field by
+    field as keywords (scipy's ``solve_ivp(..., **options)``): ``grid`` 'eulerian' (the
+    paper's, appendix Numerical scheme, the default), 'lagrangian' (uniform in the dry
+    coordinate) or 'moving' (non-uniform Lagrangian cells that follow the interface,
+    rezoned every few steps; ``mesh``, a solver.full.moving.MeshOptions; phi snapshots are
+    then on each output's own cells, ``FullResult.nodes``); ``n`` cells; ``integrator``
+    'implicit' (adaptive RODASP, ``rtol``/``atol`` on porosity and radius, ``jacobian``) or
+    'explicit' (the paper's forward Euler; ``dt``, the largest step, defaults to 0.8 of the
+    stability limit; output times are hit exactly); ``interfacial_length`` ell (dry radii)
+    adds the interfacial energy (ell^2/2)|grad_X J|^2 (docs/interfacial.md; 0, the default,
+    is the paper's model): the interface is about 10 ell wide, resolve it with n >= 2/ell
+    cells on the Lagrangian grid (the Eulerian grid needs several times more and uses the
+    finite-difference Jacobian with the term) or use the moving grid; ``max_steps`` and
+    ``max_seconds`` (a wall-clock budget, checked at least every 4096 steps: past it the
+    run stops with BudgetExceeded, a SolverError).
     ``every`` is the output interval (default: 200 outputs); ``progress(fraction)`` is
-    called as the run advances.
-    ``interfacial_length`` ell (dry radii) adds the interfacial energy (ell^2/2)|grad_X J|^2
-    (docs/interfacial.md); 0 is the paper's model, unchanged. The interface is about 10 ell
-    wide: resolve it with n >= 2/ell cells (Lagrangian grid; the Eulerian grid needs several
-    times more, and uses the finite-difference Jacobian with the term). ``max_seconds`` is a
-    wall-clock budget behind the step budget (checked at least every 4096 steps): past it the
-    run stops with BudgetExceeded, a SolverError. Raises ParameterError for bad input and
-    SolverError (with diagnostics) for numerical failure.
+    called as the run advances.  Raises ParameterError for bad input and SolverError (with
+    diagnostics) for numerical failure.
     """
     started = time.perf_counter()
     if isinstance(gel, str):
@@ -176,40 +174,15 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
         raise ParameterError("gel", gel, "a Gel or a preset name")
     t_start = check_temperature(t_start, "t_start")
     steps = _protocol(t_end, until, protocol)
-    spec = grid_spec(grid)
-    grid = spec.name
-    if mesh is None:
-        mesh = MeshOptions()
-    elif not isinstance(mesh, MeshOptions):
-        raise ParameterError("mesh", mesh, "None or a solver.full.moving.MeshOptions")
-    integrator = _choice("integrator", integrator, ("implicit", "explicit"))
-    jac_mode = {"analytic": JAC_ANALYTIC, "fd": JAC_FD}[_choice("jacobian", jacobian,
-                                                              ("analytic", "fd"))]
-    ell = _interfacial_length(interfacial_length)
-    if ell > 0.0 and grid == "eulerian":
-        jac_mode = JAC_FD
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not (
-            N_RANGE[0] <= n <= N_RANGE[1]):
-        raise ParameterError("n", n, f"an integer {N_RANGE[0]}-{N_RANGE[1]}")
-    n = int(n)
-    if not (isinstance(rtol, (int, float)) and 1e-13 <= rtol <= 0.1):
-        raise ParameterError("rtol", rtol, "1e-13 <= rtol <= 0.1")
-    if not (isinstance(atol, (int, float)) and 0.0 < atol <= 1.0):
-        raise ParameterError("atol", atol, "0 < atol <= 1")
-    if dt is not None:
-        if integrator != "explicit":
-            raise ParameterError("dt", dt, "None for the implicit integrator (explicit only)")
-        if not (isinstance(dt, (int, float)) and math.isfinite(dt) and 0.0 < dt < 1.0):
-            raise ParameterError("dt", dt, "0 < dt < 1")
-    if max_steps is None:
-        max_steps = DEFAULT_MAX_STEPS[integrator]
-    if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
-        raise ParameterError("max_steps", max_steps, "a positive integer")
+    opts = SolverOptions.build(options, **option_fields)
+    spec = grid_spec(opts.grid)
+    grid, n, integrator, mesh = spec.name, opts.n, opts.integrator, opts.mesh
+    ell, rtol, atol, dt = opts.interfacial_length, opts.rtol, opts.atol, opts.dt
+    max_steps, max_seconds = opts.step_budget, opts.max_seconds
+    jac_mode = JAC_FD if opts.jacobian == "fd" or (ell > 0.0 and grid == "eulerian") \
+        else JAC_ANALYTIC
     if progress is not None and not callable(progress):
         raise ParameterError("progress", progress, "a callable taking the fraction done")
-    if max_seconds is not None and not (isinstance(max_seconds, (int, float))
-                                        and math.isfinite(max_seconds) and max_seconds >= 0.0):
-        raise ParameterError("max_seconds", max_seconds, "None or a finite number >= 0 (s)")
     total = float(sum(d for d, _ in steps))
     if every is None:
         every = total / DEFAULT_OUTPUTS
@@ -219,10 +192,6 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
         raise ParameterError("every", every, f">= {total / MAX_OUTPUTS:.3g} "
                              f"(at most {MAX_OUTPUTS} outputs)")
 
-    if spec.moving and integrator != "implicit":
-        raise ParameterError("integrator", integrator, "'implicit' on the moving grid")
-    if spec.moving and mesh.nodes is not None and len(mesh.nodes) != n + 1:
-        raise ParameterError("mesh.nodes", len(mesh.nodes) - 1, f"n = {n} cells")
     code = spec.code
     mod = spec.module
     y0, geo, branch_used = _initial_state(spec, gel, t_start, steps[0][1], branch, initial, n,
@@ -257,12 +226,13 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
                              f"{grid} grid, N = {n}, interfacial length {ell:g}")
     try:
         if integrator == "implicit":
-            run_implicit(ws, y0, segments, out_times, collector, float(rtol), float(atol),
-                         int(max_steps), progress, stats, jac_mode=jac_mode, rezoner=rezoner)
+            run_implicit(ws, y0, segments, out_times, collector,
+                         StepControl(rtol, atol, max_steps, jac_mode), progress, stats,
+                         rezoner=rezoner)
         else:
             diag["dt"] = dt
-            run_explicit(ws, y0, segments, out_times, collector, dt, int(max_steps),
-                         progress, stats)
+            run_explicit(ws, y0, segments, out_times, collector, dt, max_steps, progress,
+                         stats)
     except SolverError as exc:
         exc.diagnostics.update(diag)
         exc.diagnostics["wall_time"] = time.perf_counter() - started
@@ -298,17 +268,6 @@ def _budgeted(progress: Callable[[float], None] | None, started: float, seconds:
             progress(fraction)
 
     return tick
-
-
-def _interfacial_length(value: Any) -> float:
-    """Validated interfacial length ell in dry radii: 0 (the paper's model) to ELL_MAX."""
-    try:
-        ell = float(value)
-    except (TypeError, ValueError):
-        ell = math.nan
-    if isinstance(value, bool) or not (math.isfinite(ell) and 0.0 <= ell <= ELL_MAX):
-        raise ParameterError("interfacial_length", value, f"0 <= ell <= {ELL_MAX} (dry radii)")
-    return ell
 
 
 class _Collector:
