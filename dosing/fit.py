@@ -19,6 +19,7 @@ import io
 import math
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -195,22 +196,42 @@ def choose_kinetics_model(gel: Gel, t_start: float, t_end: float, branch: str,
     return (front_model_name(settings) if choice == "front" else "full"), why
 
 
+@dataclass(frozen=True)
+class KineticsOptions:
+    """How a shrinking curve is fitted: the curve's ``model`` ('front-sharp' / 'front', the
+    step-function front models, milliseconds per curve; 'full', one full-solver run per
+    beta, cached, with ``settings``; 'auto', the planner's choice), whether to fit the
+    permeability exponent (``fit_beta``; ``beta`` fixed, or its start) and the relative
+    size noise ``size_rel_sigma``."""
+
+    model: str = "auto"
+    fit_beta: bool = False
+    beta: float | None = None
+    settings: SolverSettings | None = None
+    size_rel_sigma: float = 0.01
+
+
 def fit_shrinking(data: KineticsData, gel: Gel | str | dict[str, Any], t_start: float,
                   t_end: float, *, branch: str | None = None, dry_radius_um: float | None = None,
                   swollen_radius_um: float | None = None,
-                  constants: PhysicalConstants | None = None, fit_beta: bool = False,
-                  beta: float | None = None, model: str = "auto",
-                  settings: SolverSettings | None = None, size_rel_sigma: float = 0.01,
-                  planner: Any = None) -> FitResult:
+                  constants: PhysicalConstants | None = None, planner: Any = None,
+                  options: KineticsOptions | None = None,
+                  **option_fields: Any) -> FitResult:
     """Fit tau (s) and, with a bead size, k0 (m^2) of eq. timescale to a shrinking curve.
 
-    ``model``: 'front-sharp' / 'front' (the step-function front models, milliseconds per
-    curve), 'full' (one full-solver run per beta, cached), or 'auto' (the planner's choice).
-    With a front model only k0 k(phi_+) enters the curve, so beta cannot be fitted there
+    ``options`` (or its fields as keywords): a :class:`KineticsOptions`.  With a front
+    model only k0 k(phi_+) enters the curve, so beta cannot be fitted there
     (ParameterError); with 'full' each beta costs a solver run.
     """
     from .request import resolve_dry_radius
 
+    try:
+        opts = replace(options or KineticsOptions(), **option_fields)
+    except TypeError as exc:
+        raise ParameterError("options", sorted(option_fields), "fields of KineticsOptions: "
+                             "model, fit_beta, beta, settings, size_rel_sigma") from exc
+    model, fit_beta, beta = opts.model, opts.fit_beta, opts.beta
+    settings, size_rel_sigma = opts.settings, opts.size_rel_sigma
     g = resolve_gel(gel)
     jump = resolve_jump(g, t_start, t_end, branch)
     settings = settings or SolverSettings()

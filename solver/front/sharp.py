@@ -31,7 +31,7 @@ from .evolve import (
     radius_of_front,
 )
 from .flux import flux_numerator, front_value
-from .levels import FrontLevels, front_levels
+from .levels import FrontLevels, front_applicability, front_levels
 from .maxwell import maxwell_porosities
 from .result import FrontResult
 from .start import resolve_start
@@ -92,6 +92,6 @@ def sharp_front_trajectory(gel: Gel, t_start: float, t_end: float, *,
     value = sharp_front_value(gel, float(t_start), float(t_end), branch)
     st = resolve_start(levels, start, True)
     curve = sharp_curve(levels, value, st.t0, st.front, st.solid)
-    return sample_curve(gel, t_start, t_end, branch, levels, st, curve, until, target_radius,
-                        every, n, "front-sharp",
-                        {"front_value": value, "paper_front_value": front_value(levels)})
+    return sample_curve(levels, st, curve, until, target_radius, every, n, "front-sharp",
+                        {"applicability": front_applicability(gel, t_start, t_end, branch)[1],
+                         "front_value": value, "paper_front_value": front_value(levels)})

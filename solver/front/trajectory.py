@@ -75,19 +75,19 @@ def front_trajectory(gel: Gel, t_start: float, t_end: float, *, branch: Branch |
     levels = front_levels(gel, t_start, t_end, branch)
     st = resolve_start(levels, start, conservative)
     curve = leading_curve(levels, st.t0, st.front, st.solid)
-    return sample_curve(gel, t_start, t_end, branch, levels, st, curve, until, target_radius,
-                        every, n, "front-leading",
-                        {"radius_centre": float(curve.radius(0.0)),
+    return sample_curve(levels, st, curve, until, target_radius, every, n, "front-leading",
+                        {"applicability": front_applicability(gel, t_start, t_end, branch)[1],
+                         "radius_centre": float(curve.radius(0.0)),
                          "t_end_temperature": levels.t_end,
                          "chebyshev_degree": curve.rate.degree(),
                          "conservative": conservative})
 
 
-def sample_curve(gel: Gel, t_start: float, t_end: float, branch: Branch | None,
-                 levels: FrontLevels, st: StartState, curve: FrontCurve, until: float | None,
+def sample_curve(levels: FrontLevels, st: StartState, curve: FrontCurve, until: float | None,
                  target_radius: float | None, every: float | None, n: int, model: str,
                  extra: dict) -> FrontResult:
-    """Sample a front curve from its start to its stop into a :class:`FrontResult`."""
+    """Sample a front curve from its start to its stop into a :class:`FrontResult`
+    (``extra``: the model's own diagnostics, with its ``applicability`` in words)."""
     t_stop, x_stop, reason = _stop(curve, until, target_radius)
     t = _sample_times(st.t0, t_stop, every, n)
     x = curve.front_at(t)
@@ -98,8 +98,7 @@ def sample_curve(gel: Gel, t_start: float, t_end: float, branch: Branch | None,
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(a))):
         raise SolverError(f"{model} model produced a non-finite state",
                           {"t_stop": t_stop, "front_stop": x_stop})
-    _, why = front_applicability(gel, t_start, t_end, branch)
-    diag = {"behaviour": levels.behaviour, "applicability": why, "stop": reason,
+    diag = {"behaviour": levels.behaviour, "stop": reason,
             "t_centre": curve.t_centre, "solid": st.solid, "a0": levels.a0, **extra,
             **st.diagnostics}
     return FrontResult(t=t, radius=a, front=x, flux=amp, phi_minus=levels.phi_minus,

@@ -179,11 +179,11 @@ def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
 
 def simulate_release(gel: Any, t_start: float, solute: Solute, *, t_end: float | None = None,
                      until: float | None = None,
-                     protocol: Sequence[tuple[float, float]] | None = None, n: int = 200,
-                     interfacial_length: float = 0.0, samples: int = 2000,
-                     rtol: float = 1e-6, solute_rtol: float = DEFAULT_RTOL,
-                     profiles: int = 51, **kw: Any) -> tuple[FullResult, ReleaseResult]:
-    """The mechanical run (Lagrangian grid, ``samples`` outputs) and the solute on it."""
+                     protocol: Sequence[tuple[float, float]] | None = None,
+                     samples: int = 2000, solute_rtol: float = DEFAULT_RTOL,
+                     profiles: int = 51, **options: Any) -> tuple[FullResult, ReleaseResult]:
+    """The mechanical run (Lagrangian grid, ``samples`` outputs; ``options`` are
+    ``simulate``'s, default n = 200 cells, rtol 1e-6, ell = 0) and the solute on it."""
     from ..full import simulate
 
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not (
@@ -196,6 +196,6 @@ def simulate_release(gel: Any, t_start: float, solute: Solute, *, t_end: float |
     else:
         total = math.nan
     every = total / samples if math.isfinite(total) and total > 0 else None
-    res = simulate(gel, t_start, t_end, until=until, protocol=protocol, grid="lagrangian",
-                   n=n, rtol=rtol, interfacial_length=interfacial_length, every=every, **kw)
+    options = {"grid": "lagrangian", "n": 200, "rtol": 1e-6, **options}
+    res = simulate(gel, t_start, t_end, until=until, protocol=protocol, every=every, **options)
     return res, release(res, solute, rtol=solute_rtol, profiles=profiles)
