@@ -54,7 +54,7 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
     state = ServiceState(planner=planner, options=options)
 
     @asynccontextmanager
-    async def lifespan(_: FastAPI):  # noqa: ANN202
+    async def lifespan(_: FastAPI):
         await run_in_threadpool(state.start, warm)
         try:
             yield

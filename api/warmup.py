@@ -58,7 +58,7 @@ def _modules(packages: tuple[str, ...]) -> Iterator[Any]:
         for info in pkgutil.walk_packages(getattr(pkg, "__path__", []), prefix=f"{name}."):
             try:
                 yield importlib.import_module(info.name)
-            except Exception as exc:  # noqa: BLE001 - a broken module must not stop the service
+            except Exception as exc:
                 log.warning("warm-up: cannot import %s: %s", info.name, exc)
 
 
@@ -80,7 +80,7 @@ def cached_signatures(kernel: Any) -> list[tuple]:
         return []
     try:
         return [key[0] for key in cache_file._load_index()]
-    except Exception:  # noqa: BLE001 - a stale or foreign index is just a cold cache
+    except Exception:
         return []
 
 
@@ -91,7 +91,7 @@ def load_cached(kernel: Any) -> int:
         try:
             kernel.compile(sig)
             n += 1
-        except Exception:  # noqa: BLE001 - an entry that no longer types is skipped
+        except Exception:
             continue
     return n
 
@@ -156,7 +156,7 @@ def warm_up(planner: Any = None, packages: tuple[str, ...] = PACKAGES) -> Warmup
     for call in representative_workload(planner):
         try:
             call()
-        except Exception as exc:  # noqa: BLE001 - report, keep serving
+        except Exception as exc:
             report.errors.append(f"{type(exc).__name__}: {exc}")
             log.warning("warm-up call failed: %s", exc)
     for name, kernel in sorted(found.items()):

@@ -76,7 +76,7 @@ def kinetics(full: bool) -> None:
                 print(f"kinetics: synthetic curve from the full solver (ell = 0.0025) in "
                       f"{time.perf_counter() - t0:.1f} s")
 
-                def curve(t):  # noqa: ANN001, ANN202
+                def curve(t):
                     return np.interp(t, traj.step_t, traj.step_radius)
             else:
                 curve = front_radius_model(ANB, 302.0, 308.0, "swollen")(None)

@@ -51,7 +51,7 @@ def speed(repeats: int) -> None:
     """Warm timings of a whole trajectory and of a single dose query."""
     print("speed (warm, median):")
     for name, (gel, t0, t1, _, a80, _) in CASES.items():
-        def whole(gel=gel, t0=t0, t1=t1) -> object:  # noqa: ANN001
+        def whole(gel=gel, t0=t0, t1=t1) -> object:
             return front_trajectory(gel, t0, t1)
 
         res = whole()
@@ -60,7 +60,7 @@ def speed(repeats: int) -> None:
         print(f"  {name}: whole trajectory {tr * 1e3:6.3f} ms, dose query {q * 1e6:6.1f} us")
 
 
-def full_run(name: str, grid: str, n: int):  # noqa: ANN201
+def full_run(name: str, grid: str, n: int):
     """The full solver (Eulerian as the paper, or Lagrangian) to past the 90% dose."""
     from solver.full import simulate
 
@@ -71,7 +71,7 @@ def full_run(name: str, grid: str, n: int):  # noqa: ANN201
     return run
 
 
-def flux_check(full) -> dict:  # noqa: ANN001
+def flux_check(full) -> dict:
     """A vs a^2 da/dt of the full solution, ANB at t = 0.2 (acceptance: within 2%)."""
     gel, t0, t1 = CASES["ANB"][:3]
     lev = front_levels(gel, t0, t1)
@@ -86,7 +86,7 @@ def flux_check(full) -> dict:  # noqa: ANN001
     return out
 
 
-def starts(name: str, full) -> dict:  # noqa: ANN001
+def starts(name: str, full) -> dict:
     """The three starts: (start, conservative) by label."""
     ts = CASES[name][3]
     a, rf, _ = full.state_at(ts)
@@ -94,7 +94,7 @@ def starts(name: str, full) -> dict:  # noqa: ANN001
             f"full@{ts:g} paper": ((ts, a, rf), False)}
 
 
-def dose_errors(name: str, full) -> dict:  # noqa: ANN001
+def dose_errors(name: str, full) -> dict:
     """Relative dose-time errors (10..90%) and 80% times per start, printed."""
     gel, t0, t1, _, a80, paper80 = CASES[name]
     radii = fraction_radius(float(full.radius[0]), FRACTIONS)

@@ -39,7 +39,7 @@ def _difference(rows: list[dict]) -> float:
     return worst
 
 
-def _report(name: str, run) -> None:  # noqa: ANN001
+def _report(name: str, run) -> None:
     t = time.perf_counter()
     res = run()
     wall = time.perf_counter() - t

@@ -267,7 +267,7 @@ class Runner:
             wall = time.perf_counter() - started
             self.log(f"  {label}: failed after {wall:.2f} s: {exc}")
             return Outcome(None, wall, 1, "failed", str(exc), dict(exc.diagnostics))
-        except Exception as exc:  # noqa: BLE001 - a crash is a finding, reported not raised
+        except Exception as exc:
             wall = time.perf_counter() - started
             self.log(f"  {label}: CRASH {type(exc).__name__}: {exc}")
             return Outcome(None, wall, 1, "bug", f"{type(exc).__name__}: {exc}")

@@ -47,7 +47,7 @@ def _code_version() -> str:
         from importlib.metadata import version
 
         pkg = version("thermogel")
-    except Exception:  # noqa: BLE001 - not installed as a distribution
+    except Exception:
         pkg = "unknown"
     from .scenario import code_version
 

@@ -218,7 +218,7 @@ class JobRunner:
         for entry in started:
             try:
                 self._start(entry)
-            except Exception as exc:  # noqa: BLE001 - e.g. the lease store is unreachable
+            except Exception as exc:
                 self._release(entry)
                 self._settle(entry.outer, error=exc)
         return futures
@@ -267,7 +267,7 @@ class JobRunner:
                 self._settle(entry.outer, result=found)
                 return True
             return self._claim(entry)
-        except Exception as exc:  # noqa: BLE001 - reported through the future
+        except Exception as exc:
             self._settle(entry.outer, error=exc)
             return True
 
@@ -288,7 +288,7 @@ class JobRunner:
     def _run(self, entry: _Entry) -> None:
         try:
             inner = self.executor.submit(entry.job.fn, *entry.job.args)
-        except Exception as exc:  # noqa: BLE001 - e.g. the executor was shut down
+        except Exception as exc:
             self._release(entry)
             self._settle(entry.outer, error=exc)
             return
@@ -304,7 +304,7 @@ class JobRunner:
         if exc is None and entry.job.on_done is not None:
             try:
                 entry.job.on_done(inner)
-            except Exception as err:  # noqa: BLE001 - reported through the future
+            except Exception as err:
                 exc = err
         self._release(entry)  # after on_done: the result is stored before others look
         if exc is not None:
@@ -327,7 +327,7 @@ class JobRunner:
             entry.held = False
             try:
                 self.leases.release(entry.job.key, self.owner)
-            except Exception:  # noqa: BLE001 - an unreleased lease just expires
+            except Exception:
                 pass
 
     def _ensure_heartbeat(self) -> None:
@@ -345,7 +345,7 @@ class JobRunner:
             if keys and self.leases is not None:
                 try:
                     self.leases.renew(keys, self.owner, self.lease_seconds)
-                except Exception:  # noqa: BLE001 - retried on the next beat
+                except Exception:
                     pass
 
     # ------------------------------------------------------------------ shutdown

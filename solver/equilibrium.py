@@ -96,7 +96,7 @@ def energy_slope(gel: Gel, temperature: float, stretch: np.ndarray | float) -> n
     return 3.0 * lam * lam * residual(gel, temperature, lam)
 
 
-def _sign_change_roots(f, grid: np.ndarray, values: np.ndarray) -> list[float]:  # noqa: ANN001
+def _sign_change_roots(f, grid: np.ndarray, values: np.ndarray) -> list[float]:
     """Every root of f bracketed by a sign change of ``values`` on ``grid`` (brentq)."""
     roots: list[float] = []
     s = np.sign(values)

@@ -26,7 +26,7 @@ Behaviour = Literal["smooth", "front", "delayed_front", "spinodal"]
 Direction = Literal["swell", "shrink", "none"]
 
 
-def _affine(f, gel: Gel, *args):  # noqa: ANN001, ANN202
+def _affine(f, gel: Gel, *args):
     """Split a quantity that is affine in T into (value at T=0, slope in T)."""
     v0 = f(gel, 0.0, *args)
     return v0, f(gel, 1.0, *args) - v0

@@ -15,21 +15,21 @@ from .gel import Gel
 
 
 @njit(cache=True)
-def osmotic_p(phi, chi0, chi1):  # noqa: ANN001, ANN201 - numba kernel
+def osmotic_p(phi, chi0, chi1):
     """P(phi), with Pi = Omega P(phi) (eq. Osmotic_Dimless, sec. FrontSoln)."""
     x = 1.0 - phi
     return -np.log1p(-x) - x - (chi0 - chi1) * x * x - 2.0 * chi1 * x * x * x
 
 
 @njit(cache=True)
-def osmotic_dp(phi, chi0, chi1):  # noqa: ANN001, ANN201
+def osmotic_dp(phi, chi0, chi1):
     """P'(phi) = dP/dphi (sec. FrontSoln)."""
     x = 1.0 - phi
     return -1.0 / phi + 1.0 + 2.0 * (chi0 - chi1) * x + 6.0 * chi1 * x * x
 
 
 @njit(cache=True)
-def mixing_energy(jac, chi0, chi1):  # noqa: ANN001, ANN201
+def mixing_energy(jac, chi0, chi1):
     """W_mix / Omega per dry volume: J[phi log phi + chi phi (1-phi)] (eq. MixingEnergy)."""
     x = 1.0 / jac
     return (jac - 1.0) * np.log1p(-x) + (chi0 + chi1 * x) * (1.0 - x)

@@ -16,9 +16,9 @@ import uvicorn
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from api_support import fake_full_solver, fake_planner  # noqa: E402
+from api_support import fake_full_solver, fake_planner
 
-from api.http import create_app  # noqa: E402
+from api.http import create_app
 
 if __name__ == "__main__":
     p = argparse.ArgumentParser()

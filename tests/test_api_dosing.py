@@ -169,7 +169,7 @@ async def test_full_queue_is_429_with_retry_after(tmp_path) -> None:
 
 async def test_blocking_work_never_blocks_the_event_loop(tmp_path, fake) -> None:
     class SlowPlanner(Planner):
-        def dose(self, req, validate=False):  # noqa: ANN001, ANN202
+        def dose(self, req, validate=False):
             time.sleep(1.5)
             return super().dose(req, validate)
 

@@ -69,7 +69,7 @@ def _fake_planner(tmp_path_factory):
 @schema.parametrize()
 @settings(max_examples=MAX_EXAMPLES, deadline=None, derandomize=True,
           suppress_health_check=list(HealthCheck))
-def test_no_server_error(case) -> None:  # noqa: ANN001
+def test_no_server_error(case) -> None:
     if _over_budget("strict"):
         return
     case.call_and_validate(checks=[not_a_server_error, status_code_conformance,
@@ -100,7 +100,7 @@ def _strict(text: str) -> Any:
 @schema.parametrize()
 @settings(max_examples=MAX_EXAMPLES, deadline=None, derandomize=True,
           suppress_health_check=list(HealthCheck))
-def test_non_strict_json_is_a_422_naming_the_field(case) -> None:  # noqa: ANN001
+def test_non_strict_json_is_a_422_naming_the_field(case) -> None:
     """The generated body with one number made non-finite (chosen by the body's hash)."""
     if _over_budget("non-strict") or case.method.upper() != "POST":
         return

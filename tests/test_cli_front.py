@@ -7,7 +7,7 @@ import pytest
 from api.cli import main
 
 
-def test_front_json(capsys) -> None:  # noqa: ANN001
+def test_front_json(capsys) -> None:
     assert main(["front", "--gel", "HHT", "--t-start", "304", "--t-end", "308",
                  "--every", "0.05", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
@@ -16,7 +16,7 @@ def test_front_json(capsys) -> None:  # noqa: ANN001
     assert out["front"][-1] == 0.0 and out["t"][1] == 0.05
 
 
-def test_front_sharp_is_earlier_than_the_papers(capsys) -> None:  # noqa: ANN001
+def test_front_sharp_is_earlier_than_the_papers(capsys) -> None:
     """Sharp-interface front condition: ANB 80 % (a = 1.4750) at 0.0762 against the paper's
     model's 0.0950 (docs/interfacial.md sec. 8)."""
     times = {}
@@ -32,7 +32,7 @@ def test_front_sharp_is_earlier_than_the_papers(capsys) -> None:  # noqa: ANN001
     assert "paper_start" in capsys.readouterr().err
 
 
-def test_front_text_and_not_applicable(capsys) -> None:  # noqa: ANN001
+def test_front_text_and_not_applicable(capsys) -> None:
     assert main(["front", "--t-start", "302", "--t-end", "308", "--target-radius", "1.47"]) == 0
     assert "front-leading" in capsys.readouterr().out
     assert main(["front", "--t-start", "308", "--t-end", "302"]) == 2
@@ -40,7 +40,7 @@ def test_front_text_and_not_applicable(capsys) -> None:  # noqa: ANN001
 
 
 @pytest.mark.slow
-def test_front_started_from_the_full_solver(capsys) -> None:  # noqa: ANN001
+def test_front_started_from_the_full_solver(capsys) -> None:
     assert main(["front", "--gel", "HHT", "--t-start", "304", "--t-end", "308",
                  "--start-from-full", "0.01", "--paper-start", "--target-radius", "1.67",
                  "--json"]) == 0

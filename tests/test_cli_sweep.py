@@ -21,12 +21,12 @@ def test_axes_from_lists_and_ranges() -> None:
 
 
 @pytest.mark.parametrize("text", ["308:a:3", "308:310", "1:10:3:lin", "0:10:3:log", "1:2:0"])
-def test_a_bad_axis_is_exit_2_naming_the_option(text: str, capsys) -> None:  # noqa: ANN001
+def test_a_bad_axis_is_exit_2_naming_the_option(text: str, capsys) -> None:
     rc = main(["sweep", "--t-end", text, "--dry-radius-um", "50", "--dose", "0.5"])
     assert rc == 2 and "--t-end=" in capsys.readouterr().err
 
 
-def test_sweep_writes_the_tables_and_the_plot(tmp_path: Path, capsys) -> None:  # noqa: ANN001
+def test_sweep_writes_the_tables_and_the_plot(tmp_path: Path, capsys) -> None:
     out = {k: tmp_path / f"s.{k}" for k in ("csv", "json", "png")}
     rc = main(["sweep", "--t-end", "305,308,400", "--dry-radius-um", "20:50:2", "--dose",
                "0.3,1.2", "--csv", str(out["csv"]), "--json", str(out["json"]), "--plot",

@@ -141,7 +141,7 @@ def test_concurrent_processes_and_threads(tmp_path: Path) -> None:
             for i in range(15):
                 cache.put_trajectory(f"t{me}-{i}", _traj(i))
                 assert cache.get(f"t{me}-{i}") is not None
-        except BaseException as exc:  # noqa: BLE001
+        except BaseException as exc:
             errors.append(exc)
 
     threads = [threading.Thread(target=thread_work, args=(me,)) for me in range(4)]

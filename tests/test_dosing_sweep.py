@@ -162,7 +162,7 @@ def test_a_failing_executor_chunk_is_reported_not_raised() -> None:
     from concurrent.futures import Future
 
     class Flaky(ThreadPoolExecutor):
-        def submit(self, fn, part, *a):  # noqa: ANN001, ANN202
+        def submit(self, fn, part, *a):
             if part[0]["t_end"] == 309.0:
                 fut: Future = Future()
                 fut.set_exception(OSError("worker lost"))

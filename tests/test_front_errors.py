@@ -21,7 +21,7 @@ from solver.front import levels as levels_module
         (ANB, 302, 302, "does not shrink"),   # no jump
     ],
 )
-def test_not_applicable_cases(gel, t0: float, t1: float, word: str) -> None:  # noqa: ANN001
+def test_not_applicable_cases(gel, t0: float, t1: float, word: str) -> None:
     ok, reason = front_applicability(gel, t0, t1)
     assert not ok and word in reason
     with pytest.raises(NotApplicableError, match=word):

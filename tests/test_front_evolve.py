@@ -12,7 +12,7 @@ from solver.front.start import thin_shell, thin_shell_rate
 JUMPS = {"ANB": (ANB, 302.0, 308.0), "HHT": (HHT, 304.0, 308.0)}
 
 
-def solid(lev, a, rf):  # noqa: ANN001, ANN201
+def solid(lev, a, rf):
     return lev.s_plus * a**3 - lev.jump * rf**3
 
 

@@ -14,15 +14,15 @@ JUMPS = {"ANB": (ANB, 302.0, 308.0), "HHT": (HHT, 304.0, 308.0)}
 STATES = [(1.8, 1.2), (2.2, 2.1), (1.3, 0.3), (1.6, 1.4)]
 
 
-def bvp_reference(levels, a: float, rf: float):  # noqa: ANN001, ANN201
+def bvp_reference(levels, a: float, rf: float):
     """solve_bvp on eq. BVP_Front with its two conditions and A as the unknown parameter."""
     sp, jump, dp = levels.s_plus, levels.jump, levels.dp_plus
 
-    def ode(r, y, p):  # noqa: ANN001, ANN202
+    def ode(r, y, p):
         f = shell_f(levels, rf, r)
         return ((-2 * jump**2 * rf**6 / (sp * f**2 * r**7) - p[0] / r**2) / dp)[None, :]
 
-    def bc(ya, yb, p):  # noqa: ANN001, ANN202
+    def bc(ya, yb, p):
         return np.array([ya[0] * dp - front_value(levels), yb[0] * dp - edge_value(levels, a)])
 
     r = np.geomspace(rf, a, 200)

@@ -9,7 +9,7 @@ from solver.front.evolve import radius_of_front
 
 
 @pytest.mark.parametrize(("gel", "t0", "t1"), [(ANB, 302, 308), (HHT, 304, 308)])
-def test_profiles_are_consistent(gel, t0: float, t1: float) -> None:  # noqa: ANN001
+def test_profiles_are_consistent(gel, t0: float, t1: float) -> None:
     lev = front_levels(gel, t0, t1)
     rf = 1.2
     a = float(radius_of_front(lev, 1.0, rf))

@@ -37,7 +37,7 @@ def runs() -> dict:
             for name in CASES for grid in ("eulerian", "lagrangian")}
 
 
-def paper_start(full, t0: float) -> tuple[float, float, float]:  # noqa: ANN001
+def paper_start(full, t0: float) -> tuple[float, float, float]:
     a, rf, _ = full.state_at(t0)
     return t0, a, rf
 

@@ -74,7 +74,7 @@ def _serve_gracefully(cache: Path) -> Iterator[str]:
                 pass  # _server kills it
 
 
-def _fill(page, **fields: str) -> None:  # noqa: ANN001
+def _fill(page, **fields: str) -> None:
     for name, value in fields.items():
         page.fill(f"#{name}", value)
 

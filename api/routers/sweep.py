@@ -244,7 +244,7 @@ async def sweep(body: SweepRequest, request: Request) -> JSONResponse:
                        404: {"model": ErrorResponse, "description": "unknown id"}})
 async def sweep_status(
         sweep_id: str, request: Request,
-        format: Annotated[Literal["json", "csv"],  # noqa: A002 - the query parameter's name
+        format: Annotated[Literal["json", "csv"],
                           Query(description="'csv': the finished table as CSV")] = "json",
 ) -> Any:
     """A sweep's progress; when done, its table (JSON with units, or CSV)."""

@@ -259,7 +259,7 @@ def global_starts(data: SwellingData, t_ref: float, sigma_t: float, sigma_y: np.
 
 # ---------------------------------------------------------------- the fit
 def _residual_fn(data: SwellingData, t_ref: float, free: np.ndarray, q_fixed: np.ndarray,
-                 sigma_t: float, sigma_y: np.ndarray, root_w: np.ndarray):  # noqa: ANN202
+                 sigma_t: float, sigma_y: np.ndarray, root_w: np.ndarray):
     grid = stretch_grid()
 
     def fun(p: np.ndarray) -> np.ndarray:
@@ -457,7 +457,7 @@ def _transition_intervals(q: np.ndarray, cov_q: np.ndarray, t_ref: float,
     return warns
 
 
-def _report(data: SwellingData, q: np.ndarray, res,  # noqa: ANN001
+def _report(data: SwellingData, q: np.ndarray, res,
             free: np.ndarray, t_ref: float, fixed: dict, nfev: int, n_starts: int,
             absolute_sigma: bool, sigma_t: float, size_rel_sigma: float) -> FitResult:
     n, p = len(data), free.size

@@ -168,7 +168,7 @@ def fit_kinetics(data: KineticsData, model: RadiusModel, *, fit_beta: bool = Fal
                    model)
 
 
-def _report(data: KineticsData, names: list[str], res, unpack, scale: float | None,  # noqa: ANN001
+def _report(data: KineticsData, names: list[str], res, unpack, scale: float | None,
             beta: float | None, fit_beta: bool, nfev: int, absolute_sigma: bool, rel: float,
             model: RadiusModel) -> FitResult:
     n, p = len(data), len(names)

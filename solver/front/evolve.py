@@ -43,7 +43,7 @@ def front_of_radius(levels: FrontLevels, solid: float, radius: Array | float) ->
 
 
 @njit(cache=True)
-def _clenshaw(coef, lo, hi, x):  # noqa: ANN001, ANN202 - numba kernel
+def _clenshaw(coef, lo, hi, x):
     """Chebyshev series with domain [lo, hi] at scalar x (Clenshaw recurrence)."""
     y = (2.0 * x - lo - hi) / (hi - lo)
     b1 = 0.0
@@ -54,7 +54,7 @@ def _clenshaw(coef, lo, hi, x):  # noqa: ANN001, ANN202 - numba kernel
 
 
 @njit(cache=True)
-def _invert_decreasing(cf, cd, lo, hi, targets, tol, steps):  # noqa: ANN001, ANN202
+def _invert_decreasing(cf, cd, lo, hi, targets, tol, steps):
     """Solve F(x) = y on [lo, hi] for each target, F decreasing with F' = -D (Chebyshev
     series cf, cd on [lo, hi]): bracketed Newton, bisection when a step leaves the bracket."""
     out = np.empty(targets.size)

@@ -62,7 +62,7 @@ def set_mesh(geo: np.ndarray, nodes: np.ndarray, velocity: np.ndarray, t0: float
 
 
 @njit(cache=True)
-def refresh(geo, t):  # noqa: ANN001, ANN201
+def refresh(geo, t):
     """Rows 0-2 at time t; False if a cell has collapsed (nodes out of order)."""
     n = geo.shape[1] - 1
     if geo[R_T0, 1] == 0.0:
@@ -86,7 +86,7 @@ def refresh(geo, t):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def _ale_terms(y, geo, work, out):  # noqa: ANN001, ANN202
+def _ale_terms(y, geo, work, out):
     """Add V_k J(rho_k) rho_k^2 / r_k^2 to dr_k/dt (needs work[W_JAC] of the cells)."""
     n = geo.shape[1] - 1
     for k in range(1, n):
@@ -102,7 +102,7 @@ def _ale_terms(y, geo, work, out):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def rhs(y, par, geo, out, work):  # noqa: ANN001, ANN201
+def rhs(y, par, geo, out, work):
     """d(r_1..r_n, t)/dt at the state's time; False for an unphysical state."""
     n = geo.shape[1] - 1
     if not refresh(geo, y[n]):
@@ -115,7 +115,7 @@ def rhs(y, par, geo, out, work):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out, ytmp, ftmp):  # noqa: ANN001, ANN201
+def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out, ytmp, ftmp):
     """The Lagrangian grid's analytic band plus the ALE term's (tridiagonal), and the time
     column by one forward difference; rhs into ``out``; False if unphysical."""
     n = geo.shape[1] - 1
@@ -168,7 +168,7 @@ def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out, ytmp, ftmp):  # n
 
 
 @njit(cache=True)
-def fd_scale(y, geo, out):  # noqa: ANN001, ANN201
+def fd_scale(y, geo, out):
     """Finite-difference increments: the Lagrangian grid's, and for the time 1e-7 of the
     time a node needs to cross its smallest neighbouring cell."""
     n = geo.shape[1] - 1
@@ -183,7 +183,7 @@ def fd_scale(y, geo, out):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def error_norm(y, ynew, err, geo, rtol, atol, work):  # noqa: ANN001, ANN201
+def error_norm(y, ynew, err, geo, rtol, atol, work):
     """The Lagrangian grid's norm at the new state's geometry (the time has no error)."""
     n = geo.shape[1] - 1
     refresh(geo, ynew[n])
@@ -191,7 +191,7 @@ def error_norm(y, ynew, err, geo, rtol, atol, work):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def porosity(y, geo, out):  # noqa: ANN001, ANN201
+def porosity(y, geo, out):
     """Cell porosities at the state's time (geometry rows set to it); returns a."""
     n = geo.shape[1] - 1
     refresh(geo, y[n])

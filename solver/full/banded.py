@@ -14,7 +14,7 @@ from numba import njit
 
 
 @njit(cache=True)
-def _tri_lu(ab, ipiv):  # noqa: ANN001, ANN202
+def _tri_lu(ab, ipiv):
     """:func:`band_lu` specialised to lower = upper = 1 (LAPACK dgttrf); the diagonal of U
     is stored inverted (so solves multiply)."""
     m = ab.shape[1]
@@ -51,7 +51,7 @@ def _tri_lu(ab, ipiv):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def _tri_solve(ab, ipiv, b):  # noqa: ANN001, ANN202
+def _tri_solve(ab, ipiv, b):
     """:func:`band_solve` specialised to lower = upper = 1 (LAPACK dgttrs)."""
     m = ab.shape[1]
     for j in range(m - 1):
@@ -68,7 +68,7 @@ def _tri_solve(ab, ipiv, b):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def band_lu(ab, lower, upper, ipiv):  # noqa: ANN001, ANN201
+def band_lu(ab, lower, upper, ipiv):
     """In-place LU with partial pivoting of a band matrix (LAPACK dgbtf2); False if singular.
 
     The first ``lower`` rows of ``ab`` (fill-in space) must be zero on entry.
@@ -108,7 +108,7 @@ def band_lu(ab, lower, upper, ipiv):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def band_solve(ab, lower, upper, ipiv, b):  # noqa: ANN001, ANN201
+def band_solve(ab, lower, upper, ipiv, b):
     """Solve A x = b in place with the factors of :func:`band_lu` (LAPACK dgbtrs)."""
     if lower == 1 and upper == 1:
         _tri_solve(ab, ipiv, b)
@@ -132,7 +132,7 @@ def band_solve(ab, lower, upper, ipiv, b):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def dense_lu(a, ipiv):  # noqa: ANN001, ANN201
+def dense_lu(a, ipiv):
     """In-place LU with partial pivoting of a small dense matrix; False if singular."""
     p = a.shape[0]
     for j in range(p):
@@ -158,7 +158,7 @@ def dense_lu(a, ipiv):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def dense_solve(a, ipiv, b):  # noqa: ANN001, ANN201
+def dense_solve(a, ipiv, b):
     """Solve with the factors of :func:`dense_lu` in place."""
     p = a.shape[0]
     for j in range(p):
@@ -176,7 +176,7 @@ def dense_solve(a, ipiv, b):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def bordered_factor(ab, lower, upper, ipiv, cmat, dmat, emat, xmat, spiv):  # noqa: ANN001, ANN201
+def bordered_factor(ab, lower, upper, ipiv, cmat, dmat, emat, xmat, spiv):
     """Factor [[A, C], [D, E]]: band LU of A, X = A^-1 C, Schur complement E - D X in emat."""
     if not band_lu(ab, lower, upper, ipiv):
         return False
@@ -198,7 +198,7 @@ def bordered_factor(ab, lower, upper, ipiv, cmat, dmat, emat, xmat, spiv):  # no
 
 
 @njit(cache=True)
-def bordered_solve(ab, lower, upper, ipiv, dmat, xmat, emat, spiv, b, zbuf):  # noqa: ANN001, ANN201
+def bordered_solve(ab, lower, upper, ipiv, dmat, xmat, emat, spiv, b, zbuf):
     """Solve M x = b in place (b = [band part, border part]) with :func:`bordered_factor`."""
     m = ab.shape[1]
     p = emat.shape[0]

@@ -54,7 +54,7 @@ def structure(interfacial: bool) -> tuple[int, int, int]:
 
 
 @njit(cache=True)
-def dry_radii(y, geo, work):  # noqa: ANN001, ANN201
+def dry_radii(y, geo, work):
     """Dry radii rho = s^(1/3) of the inner faces and the cell midpoints, and the cells'
     dry volumes (units of the dry sphere: rho^3 differences), for the Korteweg term."""
     n = geo.shape[1] - 1
@@ -82,7 +82,7 @@ def geometry(n: int) -> np.ndarray:
 
 
 @njit(cache=True)
-def cell_state(y, geo, work):  # noqa: ANN001, ANN201
+def cell_state(y, geo, work):
     """Porosity, J and hoop stretch at the cell centres from (s, a); False if unphysical."""
     n = geo.shape[1] - 1
     a = y[n - 1]
@@ -105,7 +105,7 @@ def cell_state(y, geo, work):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def mu_gradient(a, phi_b, geo, omega, chi0, chi1, ell2, work):  # noqa: ANN001, ANN201
+def mu_gradient(a, phi_b, geo, omega, chi0, chi1, ell2, work):
     """dmu/dr at the interior faces (work[W_MU, 1..n-1]) and at r = a (returned).
 
     eq. ChemPotential_Dimless: dmu/dr = d sigma'_r/dr + 2 (sigma'_r - sigma'_theta)/r - dPi/dr,
@@ -133,7 +133,7 @@ def mu_gradient(a, phi_b, geo, omega, chi0, chi1, ell2, work):  # noqa: ANN001, 
 
 
 @njit(cache=True)
-def rhs(y, par, geo, out, work):  # noqa: ANN001, ANN201
+def rhs(y, par, geo, out, work):
     """d(s_1..s_{n-1}, a)/dt; returns False for an unphysical state."""
     n = geo.shape[1] - 1
     omega, chi0, chi1, code, beta = par[0], par[1], par[2], int(par[3]), par[4]
@@ -158,7 +158,7 @@ def rhs(y, par, geo, out, work):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True, inline="always")
-def _add(row, col, val, jband, jc, jd, je, upper):  # noqa: ANN001, ANN202
+def _add(row, col, val, jband, jc, jd, je, upper):
     """Accumulate J[row, col] into the bordered band storage (m = band size)."""
     m = jband.shape[1]
     if col < 0:
@@ -175,7 +175,7 @@ def _add(row, col, val, jband, jc, jd, je, upper):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):  # noqa: ANN001, ANN201
+def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):
     """Analytic Jacobian of :func:`rhs` in the bordered band layout, and rhs into ``out``;
     False if unphysical.
 
@@ -281,7 +281,7 @@ def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):  # noqa: ANN001,
 
 
 @njit(cache=True)
-def fd_scale(y, geo, out):  # noqa: ANN001, ANN201
+def fd_scale(y, geo, out):
     """Finite-difference increments: 1e-8 of the smaller adjacent cell solid content."""
     n = geo.shape[1] - 1
     prev = 0.0
@@ -293,7 +293,7 @@ def fd_scale(y, geo, out):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def error_norm(y, ynew, err, geo, rtol, atol, work):  # noqa: ANN001, ANN201
+def error_norm(y, ynew, err, geo, rtol, atol, work):
     """Error measure of a step: volume-weighted RMS of the porosity error (the fluid volume
     error), max with the radius error.
 
@@ -323,7 +323,7 @@ def error_norm(y, ynew, err, geo, rtol, atol, work):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def porosity(y, geo, out):  # noqa: ANN001, ANN201
+def porosity(y, geo, out):
     """Cell porosities from (s, a) (no validity check); returns a."""
     n = geo.shape[1] - 1
     a = y[n - 1]
@@ -385,7 +385,7 @@ MERGE_JUMP = 0.2  # porosity drop across the front that marks a swollen core
 
 
 @njit(cache=True)
-def merge_core(y, geo):  # noqa: ANN001, ANN201
+def merge_core(y, geo):
     """Merge a vanishing swollen core into the first shell cell, conserving solid.
 
     When a shrinking front reaches the centre, the last swollen cells of this grid are

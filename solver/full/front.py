@@ -80,7 +80,7 @@ def moving_window(nodes: np.ndarray, phi: np.ndarray, interfacial_length: float)
 
 
 @njit(cache=True)
-def interfaces(phi):  # noqa: ANN001, ANN201
+def interfaces(phi):
     """Number of separate sharp interfaces: runs of grid-scale porosity steps
     (single-cell steps >= COLLAPSE_STEP), runs closer than WINDOW cells counting as one."""
     count = 0

@@ -253,7 +253,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
 
 
 @njit(cache=True)
-def _euler_steps(grid, y, par, geo, work, f, dt, nsteps):  # noqa: ANN001, ANN201
+def _euler_steps(grid, y, par, geo, work, f, dt, nsteps):
     """nsteps forward Euler steps in place; returns the number done before a bad state."""
     for k in range(nsteps):
         if not rhs(grid, y, par, geo, f, work):
@@ -264,7 +264,7 @@ def _euler_steps(grid, y, par, geo, work, f, dt, nsteps):  # noqa: ANN001, ANN20
 
 
 @njit(cache=True)
-def _stability_step(grid, y, f0, par, geo, work, lower, upper, jband, jc, jd, je,  # noqa: ANN001, ANN201
+def _stability_step(grid, y, f0, par, geo, work, lower, upper, jband, jc, jd, je,
                     ytmp, ftmp, scale):
     """Largest stable forward Euler step 2 / rho(J), rho bounded by Gershgorin row sums."""
     if fd_jacobian(grid, y, f0, par, geo, work, lower, upper, jband, jc, jd, je,

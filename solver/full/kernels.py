@@ -20,7 +20,7 @@ EDGE_MAX_STEP = 0.05  # largest march step in log J while bracketing the edge ro
 
 
 @njit(cache=True)
-def permeability(phi, code, beta):  # noqa: ANN001, ANN201
+def permeability(phi, code, beta):
     """k(phi): 1 (code 0) or phi / (1 - phi)^beta (code 1, eq. Permeability)."""
     if code == 0:
         return 1.0
@@ -28,7 +28,7 @@ def permeability(phi, code, beta):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def _edge_g(z, a4, omega, chi0, chi1):  # noqa: ANN001, ANN202
+def _edge_g(z, a4, omega, chi0, chi1):
     """g at J = e^z and its z-derivative (eq. Boundary_Dimless)."""
     jac = np.exp(z)
     phi = -np.expm1(-z)
@@ -38,7 +38,7 @@ def _edge_g(z, a4, omega, chi0, chi1):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def edge_porosity(a, phi_adj, omega, chi0, chi1):  # noqa: ANN001, ANN201
+def edge_porosity(a, phi_adj, omega, chi0, chi1):
     """Edge porosity phi_b solving eq. Boundary_Dimless for edge radius ``a``.
 
     Marches in z = log J from the adjacent cell's porosity downhill in energy until g
@@ -90,7 +90,7 @@ def edge_porosity(a, phi_adj, omega, chi0, chi1):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def permeability_slope(phi, code, beta):  # noqa: ANN001, ANN201
+def permeability_slope(phi, code, beta):
     """dk/dphi of :func:`permeability`."""
     if code == 0:
         return 0.0
@@ -98,7 +98,7 @@ def permeability_slope(phi, code, beta):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def cell_stress(lam, jac, phi, omega, chi0, chi1):  # noqa: ANN001, ANN201
+def cell_stress(lam, jac, phi, omega, chi0, chi1):
     """(X, D) = (sigma'_r - Pi, sigma'_r - sigma'_theta) of a cell (eqs. Stress_Dimless,
     Osmotic_Dimless) with hoop stretch lam, lambda_r = J / lam^2 and phi = 1 - 1/J."""
     l4 = lam * lam * lam * lam
@@ -107,7 +107,7 @@ def cell_stress(lam, jac, phi, omega, chi0, chi1):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def cell_stress_partials(lam, jac, phi, omega, chi0, chi1):  # noqa: ANN001, ANN201
+def cell_stress_partials(lam, jac, phi, omega, chi0, chi1):
     """(dX/dJ, dX/dlam, dD/dJ, dD/dlam) of :func:`cell_stress` (phi follows J)."""
     l4 = lam * lam * lam * lam
     j2 = jac * jac
@@ -119,7 +119,7 @@ def cell_stress_partials(lam, jac, phi, omega, chi0, chi1):  # noqa: ANN001, ANN
 
 
 @njit(cache=True)
-def edge_terms(a, phi_b, omega, chi0, chi1):  # noqa: ANN001, ANN201
+def edge_terms(a, phi_b, omega, chi0, chi1):
     """Edge values for dmu/dr at r = a: B = sigma'_r - sigma'_theta, dB/da and dphi_b/da.
 
     X_b = sigma'_r - Pi vanishes on the edge root (eq. Boundary_Dimless), so only the hoop
@@ -136,7 +136,7 @@ def edge_terms(a, phi_b, omega, chi0, chi1):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def edge_phi(a, phi_adj, omega, chi0, chi1, ell2):  # noqa: ANN001, ANN201
+def edge_phi(a, phi_adj, omega, chi0, chi1, ell2):
     """Edge porosity: the root of eq. Boundary_Dimless (ell = 0), or, with the interfacial
     term, the adjacent cell's value (dJ/drho = 0 at rho = 1 makes J(1) - J_{n-1} = O(h^2);
     the stress condition sigma'_r - Pi - q = 0 then fixes q at the edge, docs/interfacial.md)."""
@@ -146,7 +146,7 @@ def edge_phi(a, phi_adj, omega, chi0, chi1, ell2):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def korteweg(jac, rho_face, rho_mid, dry, ell2, n, q):  # noqa: ANN001, ANN201
+def korteweg(jac, rho_face, rho_mid, dry, ell2, n, q):
     """Korteweg pressure q = ell^2 rho^-2 d/drho (rho^2 dJ/drho) of every cell (finite volume
     on the dry coordinate, docs/interfacial.md).
 
@@ -165,6 +165,6 @@ def korteweg(jac, rho_face, rho_mid, dry, ell2, n, q):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def interfacial_ell2(par):  # noqa: ANN001, ANN201
+def interfacial_ell2(par):
     """ell^2 from the kernel parameters (0 when par has no sixth entry: the paper's model)."""
     return par[5] if par.size > 5 else 0.0

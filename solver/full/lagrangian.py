@@ -52,7 +52,7 @@ def geometry(n: int) -> np.ndarray:
 
 
 @njit(cache=True)
-def cell_state(y, geo, work):  # noqa: ANN001, ANN201
+def cell_state(y, geo, work):
     """Porosity, J, hoop stretch and midpoint radius of every cell; False if unphysical."""
     n = geo.shape[1] - 1
     prev3 = 0.0
@@ -73,7 +73,7 @@ def cell_state(y, geo, work):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def mu_gradient(y, phi_b, geo, omega, chi0, chi1, ell2, work):  # noqa: ANN001, ANN201
+def mu_gradient(y, phi_b, geo, omega, chi0, chi1, ell2, work):
     """dmu/dr at the interior nodes (work[W_MU, 1..n-1]) and at the edge (returned).
 
     eq. ChemPotential_Dimless with differences between cell midpoints, node averages of
@@ -100,7 +100,7 @@ def mu_gradient(y, phi_b, geo, omega, chi0, chi1, ell2, work):  # noqa: ANN001, 
 
 
 @njit(cache=True)
-def rhs(y, par, geo, out, work):  # noqa: ANN001, ANN201
+def rhs(y, par, geo, out, work):
     """dr_k/dt = k(phi) dmu/dr at every node k = 1..n; False for an unphysical state."""
     n = geo.shape[1] - 1
     omega, chi0, chi1, code, beta = par[0], par[1], par[2], int(par[3]), par[4]
@@ -119,7 +119,7 @@ def rhs(y, par, geo, out, work):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):  # noqa: ANN001, ANN201
+def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):
     """Analytic Jacobian of :func:`rhs` (band layout: tridiagonal, pentadiagonal with the
     interfacial term), and rhs into ``out``; False if unphysical."""
     n = geo.shape[1] - 1
@@ -197,7 +197,7 @@ def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):  # noqa: ANN001,
 
 
 @njit(cache=True)
-def _korteweg_partials(y, geo, ell2, work):  # noqa: ANN001, ANN202
+def _korteweg_partials(y, geo, ell2, work):
     """dq_c/dr at the nodes c-1, c, c+1, c+2 (y indices c-2..c+1) into work[W_DQ + i, c].
 
     On this grid q_c = (G_{c+1} (J_{c+1} - J_c) - G_c (J_c - J_{c-1})) / w_c with constant
@@ -227,7 +227,7 @@ def _korteweg_partials(y, geo, ell2, work):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def _korteweg_jacobian(y, geo, ell2, code, beta, work, upper, jband):  # noqa: ANN001, ANN202
+def _korteweg_jacobian(y, geo, ell2, code, beta, work, upper, jband):
     """Add the Korteweg terms k_f (q_{k-1} - q_k) / gap_k of the interior rows' dmu/dr (the
     gap and local-stress partials are already in, through X which includes -q)."""
     n = geo.shape[1] - 1
@@ -247,7 +247,7 @@ def _korteweg_jacobian(y, geo, ell2, code, beta, work, upper, jband):  # noqa: A
 
 
 @njit(cache=True)
-def _edge_jacobian_interfacial(y, geo, omega, chi0, chi1, code, beta, work, upper,  # noqa: ANN001, ANN202
+def _edge_jacobian_interfacial(y, geo, omega, chi0, chi1, code, beta, work, upper,
                                jband, out, mu_edge):
     """Edge row with the interfacial term: mu_e = -X_{n-1} / (a - rc_{n-1}) + 2 B / a with
     X including -q_{n-1}, and B = J/a^4 - a^2/J at the edge porosity phi_b = phi_{n-1}."""
@@ -284,7 +284,7 @@ def _edge_jacobian_interfacial(y, geo, omega, chi0, chi1, code, beta, work, uppe
 
 
 @njit(cache=True)
-def fd_scale(y, geo, out):  # noqa: ANN001, ANN201
+def fd_scale(y, geo, out):
     """Finite-difference increments: 1e-8 of the smaller adjacent cell width."""
     n = geo.shape[1] - 1
     prev = 0.0
@@ -297,7 +297,7 @@ def fd_scale(y, geo, out):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def error_norm(y, ynew, err, geo, rtol, atol, work):  # noqa: ANN001, ANN201
+def error_norm(y, ynew, err, geo, rtol, atol, work):
     """Volume-weighted RMS of the porosity error (the fluid volume error), max with the
     radius error.
 
@@ -323,7 +323,7 @@ def error_norm(y, ynew, err, geo, rtol, atol, work):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def porosity(y, geo, out):  # noqa: ANN001, ANN201
+def porosity(y, geo, out):
     """Cell porosities from the node radii (no validity check); returns a."""
     n = geo.shape[1] - 1
     prev3 = 0.0

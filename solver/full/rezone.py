@@ -12,7 +12,7 @@ from numba import njit
 
 
 @njit(cache=True)
-def _end_slope(h0, h1, m0, m1):  # noqa: ANN001, ANN202
+def _end_slope(h0, h1, m0, m1):
     """scipy's one-sided three-point end slope with the shape-preserving limits."""
     d = ((2.0 * h0 + h1) * m0 - h0 * m1) / (h0 + h1)
     if np.sign(d) != np.sign(m0):
@@ -23,7 +23,7 @@ def _end_slope(h0, h1, m0, m1):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def pchip(x, y, xi, out):  # noqa: ANN001, ANN201
+def pchip(x, y, xi, out):
     """Monotone piecewise cubic Hermite interpolant of (x, y) at the sorted points xi."""
     n = x.size
     h = np.empty(n - 1)
@@ -55,7 +55,7 @@ def pchip(x, y, xi, out):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def remap(y, old, new, out):  # noqa: ANN001, ANN201
+def remap(y, old, new, out):
     """Node radii on ``new`` from y on ``old`` (see moving.remap): PCHIP of the cumulative
     fluid volume W(s) = r^3 - s over s = rho^3; W(1) and the radius exact."""
     n = y.size
@@ -77,7 +77,7 @@ def remap(y, old, new, out):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def target_nodes(y, nodes, resolution, h_bulk, h_edge, h_min, grading, out):  # noqa: ANN001, ANN201
+def target_nodes(y, nodes, resolution, h_bulk, h_edge, h_min, grading, out):
     """Nodes equidistributing 1/h* (moving.py module doc) into ``out``; h_edge <= 0: no
     edge refinement; h* >= h_min."""
     n = nodes.size - 1
@@ -134,7 +134,7 @@ def target_nodes(y, nodes, resolution, h_bulk, h_edge, h_min, grading, out):  # 
 
 
 @njit(cache=True)
-def offset(nodes, new):  # noqa: ANN001, ANN201
+def offset(nodes, new):
     """Largest |new - nodes| in units of the smaller adjacent cell."""
     n = nodes.size - 1
     worst = 0.0

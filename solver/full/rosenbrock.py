@@ -68,7 +68,7 @@ RODASP = Method(np.array([GAMMA, 0.25]), A_COEF, C_COEF, M_COEF, E_COEF)
 
 
 @njit(cache=True)
-def _combine(base, coef, row, scale, u, out):  # noqa: ANN001, ANN202
+def _combine(base, coef, row, scale, u, out):
     """out = base + scale * sum_{j < row} coef[row, j] U_j."""
     n = base.size
     for i in range(n):
@@ -82,7 +82,7 @@ def _combine(base, coef, row, scale, u, out):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def rodas_try(grid, y, f0, h, par, geo, work, lower, upper, jband, jc, jd, je, lu, ipiv,  # noqa: ANN001, ANN201
+def rodas_try(grid, y, f0, h, par, geo, work, lower, upper, jband, jc, jd, je, lu, ipiv,
               cm, dm, xm, em, spiv, zbuf, u, ytmp, ftmp, ynew, errv, rtol, atol,
               gamma, acoef, ccoef, mcoef, ecoef):
     """One RODASP step of size h from (y, f0 = f(y)) with Jacobian J.
@@ -142,7 +142,7 @@ SAFETY, FAC_MIN, FAC_MAX = 0.9, 0.2, 6.0
 
 
 @njit(cache=True)
-def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, upper,  # noqa: ANN001, ANN201
+def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, upper,
               jband, jc, jd, je, lu, ipiv, cm, dm, xm, em, spiv, zbuf, u, ytmp, ftmp, ynew,
               fnew, errv, scale, rtol, atol, tableau, acoef, ccoef, mcoef, ecoef, counters,
               ctrl, rec, max_steps, jac_mode):

@@ -18,7 +18,7 @@ MODULES = {EULERIAN: eulerian, LAGRANGIAN: lagrangian, MOVING: ale}
 
 
 @njit(cache=True)
-def rhs(grid, y, par, geo, out, work):  # noqa: ANN001, ANN201
+def rhs(grid, y, par, geo, out, work):
     """dy/dt on the chosen grid; False for an unphysical state."""
     if grid == EULERIAN:
         return eulerian.rhs(y, par, geo, out, work)
@@ -28,7 +28,7 @@ def rhs(grid, y, par, geo, out, work):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def fd_scale(grid, y, geo, out):  # noqa: ANN001, ANN201
+def fd_scale(grid, y, geo, out):
     """Finite-difference increments for the Jacobian."""
     if grid == EULERIAN:
         eulerian.fd_scale(y, geo, out)
@@ -39,7 +39,7 @@ def fd_scale(grid, y, geo, out):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def error_norm(grid, y, ynew, err, geo, rtol, atol, work):  # noqa: ANN001, ANN201
+def error_norm(grid, y, ynew, err, geo, rtol, atol, work):
     """Weighted norm of a local error estimate (porosity and radius errors)."""
     if grid == EULERIAN:
         return eulerian.error_norm(y, ynew, err, geo, rtol, atol, work)
@@ -49,7 +49,7 @@ def error_norm(grid, y, ynew, err, geo, rtol, atol, work):  # noqa: ANN001, ANN2
 
 
 @njit(cache=True)
-def porosity(grid, y, geo, out):  # noqa: ANN001, ANN201
+def porosity(grid, y, geo, out):
     """Cell porosities; returns the radius a."""
     if grid == EULERIAN:
         return eulerian.porosity(y, geo, out)
@@ -59,7 +59,7 @@ def porosity(grid, y, geo, out):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def edge_porosity(grid, y, geo):  # noqa: ANN001, ANN201
+def edge_porosity(grid, y, geo):
     """Porosity of the outermost cell (where a front nucleates), from state y."""
     n = geo.shape[1] - 1
     if grid == EULERIAN:
@@ -74,7 +74,7 @@ JAC_ANALYTIC, JAC_FD = 0, 1
 
 
 @njit(cache=True)
-def dense_output(grid, geo, t0, t1, y0, y1, f0, f1, t, out, phi):  # noqa: ANN001, ANN201
+def dense_output(grid, geo, t0, t1, y0, y1, f0, f1, t, out, phi):
     """State at t in [t0, t1] into ``out`` (cubic Hermite; linear where the cubic leaves
     the physical range in a fast transient), its porosities into ``phi``; returns
     |solid volume - 1| of the porosity representation (the conservation check)."""
@@ -97,7 +97,7 @@ def dense_output(grid, geo, t0, t1, y0, y1, f0, f1, t, out, phi):  # noqa: ANN00
 
 
 @njit(cache=True)
-def solid_error(grid, y, geo, phi):  # noqa: ANN001, ANN201
+def solid_error(grid, y, geo, phi):
     """|dry volume - 1| from the radius and the cell porosities ``phi`` of state y."""
     n = phi.size
     acc = 0.0
@@ -117,7 +117,7 @@ def solid_error(grid, y, geo, phi):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def linearize(grid, y, f, par, geo, work, lower, upper, jband, jc, jd, je,  # noqa: ANN001, ANN201
+def linearize(grid, y, f, par, geo, work, lower, upper, jband, jc, jd, je,
               ytmp, ftmp, scale, mode):
     """f(y) into ``f`` and the Jacobian at y in bordered band storage: analytic (mode
     JAC_ANALYTIC) or colored finite differences.  Returns the cost in rhs-call
@@ -140,7 +140,7 @@ def linearize(grid, y, f, par, geo, work, lower, upper, jband, jc, jd, je,  # no
 
 
 @njit(cache=True)
-def fd_jacobian(grid, y, f0, par, geo, work, lower, upper, jband, jc, jd, je,  # noqa: ANN001, ANN201
+def fd_jacobian(grid, y, f0, par, geo, work, lower, upper, jband, jc, jd, je,
                 ytmp, ftmp, scale):
     """Colored forward-difference Jacobian of the bordered band structure.
 
@@ -186,7 +186,7 @@ def fd_jacobian(grid, y, f0, par, geo, work, lower, upper, jband, jc, jd, je,  #
 
 
 @njit(cache=True)
-def radius_index(grid, size):  # noqa: ANN001, ANN201
+def radius_index(grid, size):
     """Index of the radius a in a state of ``size`` entries (the moving grid appends t)."""
     if grid == MOVING:
         return size - 2
@@ -194,7 +194,7 @@ def radius_index(grid, size):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def underflow(grid):  # noqa: ANN001, ANN201
+def underflow(grid):
     """Smallest relative step before the integrator gives up: 1e-14 on the fixed grids; on
     the moving grid 1e-22, since its cells resolve a stiff gel's spinodal burst at the edge
     (Omega = 1e4: the edge cell's porosity falls 0.96 -> 0.4 within ~1e-10, docs/moving_mesh.md)."""
@@ -204,7 +204,7 @@ def underflow(grid):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def event(grid, y, geo):  # noqa: ANN001, ANN201
+def event(grid, y, geo):
     """Apply a discrete event to y in place (the Eulerian core merge); returns cells merged."""
     if grid == EULERIAN:
         return eulerian.merge_core(y, geo)

@@ -32,7 +32,7 @@ Y_MAX = 100.0
 
 
 @njit(cache=True)
-def hindrance_factor(phi, code, sieve, y):  # noqa: ANN001, ANN201
+def hindrance_factor(phi, code, sieve, y):
     """f(phi) of law ``code`` (see the module docstring); 0 <= f <= 1."""
     if code == 0:
         return 1.0

@@ -39,7 +39,7 @@ OK, BUDGET, BAD = 0, 1, 2
 
 
 @njit(cache=True)
-def conductances(r3, dw, d0, code, sieve, yfree, g):  # noqa: ANN001, ANN201
+def conductances(r3, dw, d0, code, sieve, yfree, g):
     """Diffusive conductances at node volumes ``r3``: g[k] through node k+1 (k < n-1, between
     cells k and k+1; the two half cells in series) and g[n-1] at the edge (the last half
     cell).  Units of volume (4 pi R^3 / 3) per time and per unit concentration."""
@@ -64,7 +64,7 @@ def conductances(r3, dw, d0, code, sieve, yfree, g):  # noqa: ANN001, ANN201
 
 
 @njit(cache=True)
-def operator(r3, dw, qrate, g, kpart, vmed, lo, di, up, fw, fl):  # noqa: ANN001, ANN201
+def operator(r3, dw, qrate, g, kpart, vmed, lo, di, up, fw, fl):
     """The tridiagonal operator L (dm/dt = L m) at node volumes ``r3`` (n + 1 values from the
     centre, r3[0] = 0), node flux rates ``qrate`` (Q at node k+1 in qrate[k]) and
     conductances ``g`` (:func:`conductances`).
@@ -112,7 +112,7 @@ def operator(r3, dw, qrate, g, kpart, vmed, lo, di, up, fw, fl):  # noqa: ANN001
 
 
 @njit(cache=True)
-def _apply(lo, di, up, x, out):  # noqa: ANN001, ANN202
+def _apply(lo, di, up, x, out):
     """out = L x."""
     m = di.size
     for i in range(m):
@@ -125,7 +125,7 @@ def _apply(lo, di, up, x, out):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def _solve(lo, di, up, dh, rhs, out, cp):  # noqa: ANN001, ANN202
+def _solve(lo, di, up, dh, rhs, out, cp):
     """Solve (I - dh L) out = rhs (Thomas algorithm; the matrix is an M-matrix, diagonally
     dominant by columns, so no pivoting is needed)."""
     m = di.size
@@ -143,13 +143,13 @@ def _solve(lo, di, up, dh, rhs, out, cp):  # noqa: ANN001, ANN202
 
 
 @njit(cache=True)
-def _geometry(s3a, s3b, theta, r3):  # noqa: ANN001, ANN202
+def _geometry(s3a, s3b, theta, r3):
     for k in range(r3.size):
         r3[k] = (1.0 - theta) * s3a[k] + theta * s3b[k]
 
 
 @njit(cache=True)
-def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, prof_idx,  # noqa: ANN001, ANN201
+def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, prof_idx,
                 rtol, max_steps, counters):
     """March the solute through the mechanics samples ``ts`` with node volumes ``s3``
     (len(ts), n + 1).  ``m`` (n + 1) is the initial state, updated in place.
