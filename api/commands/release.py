@@ -12,7 +12,7 @@ from solver.errors import ParameterError
 from .common import add_gel_options, gel_from_args, print_json
 from .dose import _viscosity
 from .drug_options import add_drug_options, drug_from_args
-from .simulate import _protocol
+from .simulate import add_protocol_options
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -20,14 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("release", help="drug released by a temperature protocol: full solver "
                                        "with the drug carried by the pore fluid")
     add_gel_options(p)
-    p.add_argument("--t-start", type=float, required=True, help="start (loading) temperature, K")
-    p.add_argument("--t-end", type=float, default=None, help="end temperature in K (one jump)")
-    p.add_argument("--until", type=float, default=None,
-                   help="dimensionless duration of the jump (with --t-end)")
-    p.add_argument("--protocol", type=_protocol, default=None, metavar="D:T,...",
-                   help="temperature steps instead of --t-end/--until, e.g. 0.05:308,0.5:302")
-    p.add_argument("--branch", choices=["swollen", "shrunken"], default=None,
-                   help="start branch (default: swollen when heating, shrunken when cooling)")
+    add_protocol_options(p, "start (loading) temperature, K")
     p.add_argument("--dry-radius-um", type=float, default=None,
                    help="dry bead radius in um (for seconds and a release volume)")
     c = p.add_argument_group("timescale constants (eq. timescale; tau at the hottest step)")

@@ -25,11 +25,10 @@ def _protocol(text: str) -> list[tuple[float, float]]:
         ) from None
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    """Add the sub-command."""
-    p = sub.add_parser("simulate", help="full PDE solver: porosity, radius and front in time")
-    add_gel_options(p)
-    p.add_argument("--t-start", type=float, required=True, help="start temperature in K")
+def add_protocol_options(p: argparse.ArgumentParser, t_start_help: str) -> None:
+    """--t-start, and a jump (--t-end, --until) or --protocol steps, and --branch: the
+    temperature history of ``simulate`` and ``release``."""
+    p.add_argument("--t-start", type=float, required=True, help=t_start_help)
     p.add_argument("--t-end", type=float, default=None, help="end temperature in K (one jump)")
     p.add_argument("--until", type=float, default=None,
                    help="dimensionless duration of the jump (with --t-end)")
@@ -37,6 +36,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="temperature steps instead of --t-end/--until, e.g. 0.05:308,0.5:302")
     p.add_argument("--branch", choices=["swollen", "shrunken"], default=None,
                    help="start branch (default: swollen when heating, shrunken when cooling)")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the sub-command."""
+    p = sub.add_parser("simulate", help="full PDE solver: porosity, radius and front in time")
+    add_gel_options(p)
+    add_protocol_options(p, "start temperature in K")
     p.add_argument("--grid", choices=["eulerian", "lagrangian"], default="eulerian",
                    help="discretization (default eulerian, the paper's)")
     p.add_argument("--n", type=int, default=400, help="grid cells (default 400)")

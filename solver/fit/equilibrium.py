@@ -34,6 +34,7 @@ from ..equilibrium import _parts, folds
 from ..errors import ParameterError
 from ..gel import T_MAX, T_MIN, Gel
 from ..thermo import osmotic_p
+from .data import SIZE_POWER, checked_series
 from .result import (
     CONFIDENCE,
     RELATIVE_WARN,
@@ -47,10 +48,8 @@ from .result import (
 
 PARAMS = ("omega", "a0", "b0", "a1", "b1", "scale")
 INTERNAL = ("log_omega", "chi0_ref", "b0", "chi1_ref", "b1", "log_scale")
-SIZE_POWER = {"radius": 1, "diameter": 1, "volume_ratio": 3}
 OMEGA_RANGE = (1.0, 1.0e5)
 LAMBDA_CAP = 30.0  # largest stretch a fitted scale may imply
-MAX_POINTS = 5000  # the nearest-point search holds points x stretch-grid arrays
 BAD = 1.0e4  # residual (in sigmas) of a point where the model has no finite temperature
 
 
@@ -75,35 +74,15 @@ class SwellingData:
     weight: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        if self.kind not in SIZE_POWER:
-            raise ParameterError("size_kind", self.kind, "radius, diameter or volume_ratio")
-        t = np.asarray(self.temperature, dtype=float).ravel()
-        y = np.asarray(self.size, dtype=float).ravel()
-        if t.size > MAX_POINTS:
-            raise ParameterError("data", f"{t.size} points", f"at most {MAX_POINTS} points")
-        if t.size != y.size:
-            raise ParameterError("size", f"{y.size} values", f"{t.size} values (one per "
-                                 "temperature)")
-        for name, v in (("temperature_K", t), (self.kind, y)):
-            bad = np.nonzero(~np.isfinite(v))[0]
-            if bad.size:
-                raise ParameterError(name, "NaN or infinite", "finite numbers",
-                                     f"row(s) {', '.join(str(i + 1) for i in bad[:5])}")
-        neg = np.nonzero(y <= 0.0)[0]
-        if neg.size:
-            raise ParameterError(self.kind, float(y[neg[0]]), "sizes > 0",
-                                 f"row(s) {', '.join(str(i + 1) for i in neg[:5])} are <= 0")
+        t, y, w = checked_series(self.temperature, self.size, self.kind, self.weight,
+                                 "temperature_K", "temperature")
         out = np.nonzero((t < T_MIN) | (t > T_MAX))[0]
         if out.size:
             raise ParameterError("temperature_K", float(t[out[0]]), f"{T_MIN}-{T_MAX} K",
                                  f"row(s) {', '.join(str(i + 1) for i in out[:5])}")
         object.__setattr__(self, "temperature", t)
         object.__setattr__(self, "size", y)
-        if self.weight is not None:
-            w = np.asarray(self.weight, dtype=float).ravel()
-            if w.size != t.size or not np.all(np.isfinite(w) & (w > 0.0)):
-                raise ParameterError("weight", "invalid", "one finite weight > 0 per point")
-            object.__setattr__(self, "weight", w)
+        object.__setattr__(self, "weight", w)
 
     @property
     def power(self) -> int:

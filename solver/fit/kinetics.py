@@ -19,7 +19,7 @@ from scipy.optimize import least_squares
 
 from ..errors import ParameterError
 from ..gel import BETA_RANGE
-from .equilibrium import MAX_POINTS, SIZE_POWER
+from .data import SIZE_POWER, checked_series
 from .result import (
     CONFIDENCE,
     RELATIVE_WARN,
@@ -46,32 +46,13 @@ class KineticsData:
     weight: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        if self.kind not in SIZE_POWER:
-            raise ParameterError("size_kind", self.kind, "radius, diameter or volume_ratio")
-        t = np.asarray(self.time, dtype=float).ravel()
-        y = np.asarray(self.size, dtype=float).ravel()
-        if t.size > MAX_POINTS:
-            raise ParameterError("data", f"{t.size} points", f"at most {MAX_POINTS} points")
-        if t.size != y.size:
-            raise ParameterError("size", f"{y.size} values", f"{t.size} values (one per time)")
-        for name, v in (("time_s", t), (self.kind, y)):
-            bad = np.nonzero(~np.isfinite(v))[0]
-            if bad.size:
-                raise ParameterError(name, "NaN or infinite", "finite numbers",
-                                     f"row(s) {', '.join(str(i + 1) for i in bad[:5])}")
-        neg = np.nonzero(y <= 0.0)[0]
-        if neg.size:
-            raise ParameterError(self.kind, float(y[neg[0]]), "sizes > 0",
-                                 f"row(s) {', '.join(str(i + 1) for i in neg[:5])} are <= 0")
+        t, y, w = checked_series(self.time, self.size, self.kind, self.weight, "time_s",
+                                 "time")
         if np.any(t < 0.0):
             raise ParameterError("time_s", float(t.min()), "times >= 0 (from the jump)")
         object.__setattr__(self, "time", t)
         object.__setattr__(self, "size", y)
-        if self.weight is not None:
-            w = np.asarray(self.weight, dtype=float).ravel()
-            if w.size != t.size or not np.all(np.isfinite(w) & (w > 0.0)):
-                raise ParameterError("weight", "invalid", "one finite weight > 0 per point")
-            object.__setattr__(self, "weight", w)
+        object.__setattr__(self, "weight", w)
 
     @property
     def power(self) -> int:
