@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.gel import Gel
+from solver.json_safe import json_safe
 
 from .jobs import QueueFullError
 from .request import DoseRequest, resolve_gel
@@ -278,7 +279,7 @@ class SweepResult:
         """:meth:`to_dict` as strict JSON (non-finite numbers as null)."""
         import json
 
-        return json.dumps(_finite(self.to_dict()))
+        return json.dumps(json_safe(self.to_dict()))
 
     def to_csv(self) -> str:
         """The rows as CSV; each header is ``name [unit]`` (units of '1' are fractions)."""
@@ -290,15 +291,6 @@ class SweepResult:
                                                  else r[n]) for n in COLUMNS])
         return buf.getvalue()
 
-
-def _finite(obj: Any) -> Any:
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    return obj
 
 
 def _chunk_failed(chunk: list[dict[str, Any]], exc: BaseException) -> list[dict[str, Any]]:

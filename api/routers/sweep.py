@@ -11,7 +11,6 @@ planner's own (poll /v1/validations/{id}); each poll of the sweep fills those do
 from __future__ import annotations
 
 import hashlib
-import math
 import threading
 from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
@@ -24,6 +23,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from dosing import JobRunner, UnknownValidationError
 from dosing.sweep import COLUMNS, SweepGrid, SweepResult, fill_validations, run_sweep
+from solver.json_safe import json_safe
 
 from ..schemas import (
     Branch,
@@ -253,7 +253,7 @@ async def sweep_status(
         res = SweepResult(out["result"]["grid"], out["result"]["rows"],
                           out["result"]["seconds"])
         return Response(res.to_csv(), media_type="text/csv")
-    return _finite(out)
+    return json_safe(out)
 
 
 @router.get("/v1/sweeps/{sweep_id}/plot.svg", response_class=Response,
@@ -286,15 +286,6 @@ def _svg(table: dict[str, Any], gel: int) -> bytes:
     draw_sweep(table, buf, gel_index=gel)
     return buf.getvalue()
 
-
-def _finite(obj: Any) -> Any:
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, list):
-        return [_finite(v) for v in obj]
-    return obj
 
 
 __all__ = ["COLUMNS", "router"]
