@@ -42,3 +42,19 @@ def checked_series(x: Any, size: Any, kind: str, weight: Any, x_name: str,
         if w.size != xs.size or not np.all(np.isfinite(w) & (w > 0.0)):
             raise ParameterError("weight", "invalid", "one finite weight > 0 per point")
     return xs, ys, w
+
+
+class SizeSeries:
+    """What the measured series share: the size column's power m (size = scale x
+    stretch^m) and the number of points."""
+
+    size: np.ndarray
+    kind: str
+
+    @property
+    def power(self) -> int:
+        """m in size = scale stretch^m."""
+        return SIZE_POWER[self.kind]
+
+    def __len__(self) -> int:
+        return int(np.size(self.size))

@@ -34,7 +34,7 @@ from ..equilibrium import _parts, folds
 from ..errors import ParameterError
 from ..gel import T_MAX, T_MIN, Gel
 from ..thermo import osmotic_p
-from .data import SIZE_POWER, checked_series
+from .data import SIZE_POWER, SizeSeries, checked_series
 from .result import (
     CONFIDENCE,
     RELATIVE_WARN,
@@ -64,7 +64,7 @@ class _Coeffs(NamedTuple):
 
 
 @dataclass(frozen=True)
-class SwellingData:
+class SwellingData(SizeSeries):
     """Equilibrium points: temperature (K), size (``kind``: radius, diameter, volume_ratio)
     and optional relative weights."""
 
@@ -83,14 +83,6 @@ class SwellingData:
         object.__setattr__(self, "temperature", t)
         object.__setattr__(self, "size", y)
         object.__setattr__(self, "weight", w)
-
-    @property
-    def power(self) -> int:
-        """m in size = scale lambda^m."""
-        return SIZE_POWER[self.kind]
-
-    def __len__(self) -> int:
-        return int(self.temperature.size)
 
 
 # ---------------------------------------------------------------- the model

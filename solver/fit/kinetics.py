@@ -19,7 +19,7 @@ from scipy.optimize import least_squares
 
 from ..errors import ParameterError
 from ..gel import BETA_RANGE
-from .data import SIZE_POWER, checked_series
+from .data import SizeSeries, checked_series
 from .result import (
     CONFIDENCE,
     RELATIVE_WARN,
@@ -36,7 +36,7 @@ RadiusModel = Callable[[float | None], RadiusCurve]
 
 
 @dataclass(frozen=True)
-class KineticsData:
+class KineticsData(SizeSeries):
     """Sizes after a jump at time 0: ``time`` (s, or any unit: tau comes out in it), ``size``
     (``kind``: radius, diameter, volume_ratio) and optional relative weights."""
 
@@ -53,14 +53,6 @@ class KineticsData:
         object.__setattr__(self, "time", t)
         object.__setattr__(self, "size", y)
         object.__setattr__(self, "weight", w)
-
-    @property
-    def power(self) -> int:
-        """m in size = scale a^m."""
-        return SIZE_POWER[self.kind]
-
-    def __len__(self) -> int:
-        return int(self.time.size)
 
 
 def _half_time(t: np.ndarray, y: np.ndarray) -> float | None:
