@@ -127,12 +127,17 @@ def run_swelling(args: argparse.Namespace) -> int:
     for tr in res.extra.get("transitions", []):
         print(f"  transition ({tr['kind']}) {tr['temperature']:.3f} K  95% "
               f"{_interval(tr.get('interval'))}")
+    _print_notes(res, report)
+    return 0
+
+
+def _print_notes(res: Any, report: dict[str, Any]) -> None:
+    """The fit's warnings on stdout; where it was saved and plotted on stderr."""
     for w in res.warnings:
         print(f"  warning: {w}")
     for key in ("saved", "plots"):
         if key in report:
             print(f"  {key}: {report[key]}", file=sys.stderr)
-    return 0
 
 
 def run_kinetics(args: argparse.Namespace) -> int:
@@ -193,9 +198,5 @@ def run_kinetics(args: argparse.Namespace) -> int:
     if "k0_m2" in res.extra:
         print(f"  k0     {res.extra['k0_m2']:12.6g} m^2  95% "
               f"{_interval(res.extra['k0_interval_m2'])}")
-    for w in res.warnings:
-        print(f"  warning: {w}")
-    for key in ("saved", "plots"):
-        if key in report:
-            print(f"  {key}: {report[key]}", file=sys.stderr)
+    _print_notes(res, report)
     return 0
