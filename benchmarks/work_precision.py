@@ -32,7 +32,6 @@ from __future__ import annotations
 import argparse
 import csv
 import functools
-import inspect
 import math
 import os
 import platform
@@ -153,21 +152,11 @@ def case_by_name(name: str) -> Case:
     raise ParameterError("case", name, " or ".join(c.name for c in CASES))
 
 
-def interfacial_supported() -> bool:
-    """Whether the full solver takes ``interfacial_length`` (issue 8)."""
-    return "interfacial_length" in inspect.signature(simulate).parameters
-
-
 def report_ell(requested: float | None) -> float | None:
-    """The interfacial length the front cases run with: None (the paper's model) when the
-    solver lacks the term or ``requested`` is 0, else ``requested`` or DEFAULT_ELL."""
+    """The interfacial length the front cases run with: None (the paper's model) when
+    ``requested`` is 0, else ``requested`` or DEFAULT_ELL."""
     if requested is not None and not (math.isfinite(requested) and requested >= 0.0):
         raise ParameterError("interfacial_length", requested, "a finite number >= 0")
-    if not interfacial_supported():
-        if requested:
-            raise ParameterError("interfacial_length", requested,
-                                 "0 (this full solver has no interfacial energy yet)")
-        return None
     if requested == 0.0:
         return None
     return DEFAULT_ELL if requested is None else float(requested)
@@ -715,9 +704,7 @@ def machine_line(info: dict[str, Any]) -> str:
 
 def report_markdown(report: Report) -> str:
     """The work-precision report as Markdown: machine, headline, references, full table."""
-    ell = ("the paper's model (no interfacial energy: the solver does not offer it)"
-           if report.ell is None and not interfacial_supported()
-           else "the paper's model" if report.ell is None
+    ell = ("the paper's model" if report.ell is None
            else f"interfacial length ell = {report.ell:g} in the front cases")
     parts = [f"# Work-precision report ({report.plan.label})", "",
              f"Machine: {machine_line(report.machine)}. Wall time of the report "
