@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
@@ -11,27 +10,12 @@ from typing import Any
 import numpy as np
 
 from ..crossing import first_fall, hermite_root
+from ..json_safe import json_safe
 
 _ARRAYS = ("t", "radius", "front", "jump", "phi", "coords", "temperature", "expelled_volume",
            "solid_error", "step_t", "step_radius", "step_rate", "step_edge", "nodes")
 
 
-def _clean(obj: Any) -> Any:
-    """JSON-ready copy: arrays to lists, non-finite floats to None."""
-    if isinstance(obj, np.ndarray):
-        return _clean(obj.tolist())
-    if isinstance(obj, (float, np.floating)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (np.bool_,)):
-        return bool(obj)
-    if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    return obj
 
 
 @dataclass
@@ -138,14 +122,14 @@ class FullResult:
             out[name] = getattr(self, name)
         out["spinodal"] = bool(self.spinodal)
         out["diagnostics"] = self.diagnostics
-        return _clean(out)
+        return json_safe(out)
 
     def save(self, path: str | Path) -> Path:
         """Write to an .npz file (arrays plus the diagnostics as JSON)."""
         p = Path(path)
         arrays = {name: np.asarray(getattr(self, name)) for name in _ARRAYS}
         np.savez_compressed(p, spinodal=np.array(bool(self.spinodal)),
-                            diagnostics=np.array(json.dumps(_clean(self.diagnostics))),
+                            diagnostics=np.array(json.dumps(json_safe(self.diagnostics))),
                             **arrays)
         return p if p.suffix == ".npz" else p.with_name(p.name + ".npz")
 

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ..full.result import _clean
+from ..json_safe import json_safe
 
 _ARRAYS = ("t", "radius", "released_fraction", "advected_fraction", "expelled_fraction",
            "in_gel_fraction", "medium_concentration", "temperature", "profile_t", "profiles",
@@ -84,7 +84,7 @@ class ReleaseResult:
         out["mass_balance_error"] = self.mass_balance_error
         out["effective_diffusivity"] = self.effective_diffusivity
         out["diagnostics"] = self.diagnostics
-        return _clean(out)
+        return json_safe(out)
 
     def save(self, path: str | Path) -> Path:
         """Write to an .npz file (arrays plus scalars and diagnostics as JSON)."""
@@ -93,7 +93,7 @@ class ReleaseResult:
         extra = {"mass_balance_error": self.mass_balance_error,
                  "effective_diffusivity": self.effective_diffusivity,
                  "diagnostics": self.diagnostics}
-        np.savez_compressed(p, extra=np.array(json.dumps(_clean(extra))), **arrays)
+        np.savez_compressed(p, extra=np.array(json.dumps(json_safe(extra))), **arrays)
         return p if p.suffix == ".npz" else p.with_name(p.name + ".npz")
 
     @classmethod
