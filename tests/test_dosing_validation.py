@@ -19,7 +19,7 @@ import pytest
 
 from api.cli import main
 from dosing import DoseRequest, Planner
-from dosing.scenario import PAPER
+from dosing.scenario import LADDER, PAPER
 from dosing.validation import front_prior
 
 ANB80 = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.8}
@@ -54,7 +54,7 @@ def test_front_model_80_percent_within_5_percent(planner, kw: dict, paper: float
 @pytest.mark.parametrize("kw,limit,tol", [(ANB80, 0.0777, 0.03), (HHT80, 0.0723, 0.03)])
 def test_default_answer_is_the_sharp_front_model(planner, kw: dict, limit: float,
                                                  tol: float) -> None:
-    ans = planner.dose(DoseRequest(**kw))
+    ans = planner.dose(DoseRequest(**kw, settings=LADDER))
     assert ans.model == "front-sharp" and ans.interfacial_length == 0.005
     assert ans.time == pytest.approx(limit, rel=tol)
     assert ans.error_estimate == front_prior(0.8, "front-sharp") and ans.validation is None
@@ -116,7 +116,7 @@ def test_validation_reports_both_grids_and_their_spread(planner, kw: dict, radiu
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("settings,model", [(PAPER, "front"), (None, "front-sharp")])
+@pytest.mark.parametrize("settings,model", [(PAPER, "front"), (LADDER, "front-sharp")])
 def test_prior_covers_the_measured_front_errors(planner, settings, model: str) -> None:
     """The unvalidated estimate (validation.PRIOR_GAPS) bounds what calibrate measures."""
     for kw in (ANB80, HHT80):
