@@ -18,6 +18,7 @@ from pydantic import (
     Field,
     StringConstraints,
     Tag,
+    ValidationInfo,
     field_validator,
     model_validator,
 )
@@ -59,13 +60,15 @@ def method_field() -> Any:
         "from three uniform Lagrangian runs at ell, ell/2, ell/4"))
 
 
-def check_interfacial_length(value: float | None) -> float | None:
-    """None, 0 or within DIRECT_ELL_RANGE (a ValueError names the range; the ladder's
-    narrower range is checked by the planner's SolverSettings)."""
-    if value is not None and value != 0.0 and not (
-            DIRECT_ELL_RANGE[0] <= value <= DIRECT_ELL_RANGE[1]):
+def check_interfacial_length(value: float | None, info: ValidationInfo) -> float | None:
+    """None, 0 or within DIRECT_ELL_RANGE, or ELL_RANGE with validation_method 'ladder'
+    (declared before interfacial_length; a ValueError names the range)."""
+    ladder = (info.data or {}).get("validation_method") == "ladder"
+    lo, hi = ELL_RANGE if ladder else DIRECT_ELL_RANGE
+    if value is not None and value != 0.0 and not lo <= value <= hi:
         raise ValueError(f"interfacial_length must be null (the bead's own), 0 (the paper's "
-                         f"model) or {DIRECT_ELL_RANGE[0]}-{DIRECT_ELL_RANGE[1]} dry radii")
+                         f"model) or {lo}-{hi} dry radii"
+                         + (" (the ladder goes down to ell / 4)" if ladder else ""))
     return value
 
 
@@ -327,8 +330,8 @@ class DoseTimeRequest(RequestModel):
         None, description="start branch at T_start (default: swollen)")
     constants: ConstantsIn | None = Field(
         None, description="timescale constants (default: the paper's values)")
-    interfacial_length: float | None = interfacial_length_field()
     validation_method: Method = method_field()
+    interfacial_length: float | None = interfacial_length_field()
     drug: DrugIn | None = Field(None, description="a drug in the pore fluid: doses are drug")
     validate_full: bool = Field(
         False, alias="validate",
@@ -562,8 +565,8 @@ class ScheduleRequest(RequestModel):
         False, description="shoot on the full solver for times meeting every dose (a job)")
     tolerance: float = Field(0.01, gt=0.0, le=0.2,
                              description="relative tolerance of the corrected doses, 0-0.2")
-    interfacial_length: float | None = interfacial_length_field()
     validation_method: Method = method_field()
+    interfacial_length: float | None = interfacial_length_field()
     drug: DrugIn | None = Field(None, description="a drug in the pore fluid: doses are drug")
 
     _ell = field_validator("interfacial_length")(check_interfacial_length)

@@ -195,8 +195,13 @@ def truth_text(req: Any) -> str:
                 "limit ell -> 0")
     xi = req.constants.mesh_length_nm
     lo, hi = req.interfacial_range or (s.interfacial_length, s.interfacial_length)
-    return (f"the regularized model (interfacial energy) at the bead's own interfacial length "
-            f"ell = xi_dry / a_d = {s.interfacial_length:.3g} (dry mesh length {xi:g} nm, dry "
-            f"radius {dry:.4g} um; the range {lo:.3g}-{hi:.3g} for xi_dry "
-            f"{req.constants.mesh_length_range_nm[0]:g}-"
-            f"{req.constants.mesh_length_range_nm[1]:g} nm), {run}")
+    own = req.constants.interfacial_lengths(dry)[0]
+    xr = req.constants.mesh_length_range_nm
+    if math.isclose(own, s.interfacial_length, rel_tol=1e-9):
+        return (f"the regularized model (interfacial energy) at the bead's own interfacial "
+                f"length ell = xi_dry / a_d = {s.interfacial_length:.3g} (dry mesh length "
+                f"{xi:g} nm, dry radius {dry:.4g} um; the range {lo:.3g}-{hi:.3g} for xi_dry "
+                f"{xr[0]:g}-{xr[1]:g} nm), {run}")
+    return (f"the regularized model (interfacial energy) at the given interfacial length "
+            f"ell = {s.interfacial_length:.3g} (the bead's own, xi_dry / a_d for {xi:g} nm and "
+            f"a dry radius of {dry:.4g} um, would be {own:.3g}; range {lo:.3g}-{hi:.3g}), {run}")

@@ -45,7 +45,7 @@ def test_dose_text_and_errors(capsys, tmp_path: Path) -> None:
                  "--fraction", "0.5", "--cache", str(tmp_path / "c.sqlite")]) == 2
     assert "gel" in capsys.readouterr().err
     assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction",
-                 "0.5", "--interfacial-length", "0.001",
+                 "0.5", "--interfacial-length", "0.001", "--validation-method", "ladder",
                  "--cache", str(tmp_path / "c.sqlite")]) == 2
     assert "settings.interfacial_length" in capsys.readouterr().err
 
