@@ -13,7 +13,7 @@ three parts, each in words and numbers:
   for small doses, whose time is mostly the nucleation delay at the edge;
 * model form: the delayed-transition front law, the ell = 0 Lagrangian lattice at
   N = 200 / 400 / 800 (N-independent: its N-spread is reported), against the local-equilibrium
-  (Maxwell) front of the regularized model (docs/interfacial.md, sec. 11).  Bead-size
+  (Maxwell) front of the regularized model (docs/interfacial.md, sec. 10).  Bead-size
   independent, so its runs are cached per gel and jump.
 
 The runs are ordinary scenarios (``Scenario``), so the planner caches, deduplicates and
@@ -168,7 +168,7 @@ def uncertainty(truth: SolverSettings, runs: list[dict[str, Any]], time: float,
             f"{t_d:.5g} (the ell = 0 Lagrangian lattice, N = "
             f"{'/'.join(str(k) for k, _ in mf)}: {', '.join(f'{t:.5g}' for t in ts)}, "
             f"N-spread {_pct(spread)}). Which law holds is for experiment to decide "
-            "(docs/interfacial.md, sec. 11); it is not part of the error estimate"))
+            "(docs/interfacial.md, sec. 10); it is not part of the error estimate"))
     else:
         model = Part(None, "model form: the delayed-transition runs (ell = 0 lattice) failed "
                            "or are not available")
