@@ -260,7 +260,8 @@ def _paper(model: str, time: float, rep: dict[str, Any]) -> tuple[float, str]:
 
 
 VALIDATION_COST = ("two moving-grid runs of the regularized model at the bead's ell (400 "
-                   "and 200 cells, a few seconds each), two at the ends of the mesh length's "
+                   "and 200 cells: seconds for ANB and HHT, about a minute for a stiffer gel "
+                   "such as Omega = 300), two at the ends of the mesh length's "
                    "range and, once per gel and jump, the ell = 0 lattice at N = 200/400/800 "
                    "for the model-form part")
 

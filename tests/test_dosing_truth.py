@@ -199,3 +199,30 @@ def test_cli_dose_json_has_the_new_fields(capsys, tmp_path: Path) -> None:
     out = json.loads(capsys.readouterr().out)
     assert out["method"] == "direct" and out["uncertainty"] is None
     assert out["interfacial_length"] == pytest.approx(4e-5) and out["bead_dry_radius_um"] == 50
+
+
+# ---------------------------------------------------------------------- real runs (slow)
+
+@pytest.fixture
+def real_planner(tmp_path: Path):
+    p = Planner(cache_path=tmp_path / "real.sqlite", executor=ThreadPoolExecutor(2))
+    yield p
+    p.close()
+
+
+@pytest.mark.slow
+def test_hht_small_doses_have_a_numerical_bound_below_10_percent(real_planner) -> None:
+    """Issue 12: HHT 10/20/30 % of a 50 um bead, validated: numerical bound <= 10 % each
+    (measured 0.08-0.10 %, benchmarks/planner_truth.py --section small), the ell-range and
+    model-form parts stated separately.  The runs are shared: ~1 min in all."""
+    for f in (0.3, 0.2, 0.1):
+        ans = real_planner.dose(DoseRequest("HHT", 304.0, 308.0, dose_fraction=f,
+                                            dry_radius_um=50.0), validate=True)
+        u = ans.uncertainty
+        assert ans.interfacial_length == pytest.approx(8e-5)
+        assert u.numerical.relative <= 0.10, (f, u.numerical.text)
+        # the ell range matters for small doses: the time grows with ell (nucleation delay)
+        lo, hi = u.interfacial_length_times
+        assert lo < ans.validation["time"] < hi and u.interfacial_length_range.relative > 0
+        # the delayed transition is N-independent (its three lattices within 5 %) and later
+        assert u.delayed_transition_spread < 0.05 and u.delayed_transition_ratio > 1.0
