@@ -51,6 +51,9 @@ def schedule(planner: Planner, dry: float | None) -> None:
         print(f"{gel} {t0:g}->{t1:g}  {single.time:12.6f}{_pct(single.error_estimate):>11}"
               f"{first:15.6f}{_pct(gap):>9}{str(abs(gap) <= single.error_estimate):>8}"
               f"{time.perf_counter() - w:8.1f}", flush=True)
+        print(f"    single dose's truth {single.validation['time']:.6f} (ell = "
+              f"{single.interfacial_length:.3g}); corrected first - truth "
+              f"{_pct((first - single.validation['time']) / single.validation['time'])}")
         print(f"    corrected times {[round(t, 6) for t in ans.corrected['actuation_times']]}, "
               f"delivered {[round(f, 4) for f in ans.corrected['delivered_fractions']]}, "
               f"hold {[round(r['actuation_time'], 6) for r in ans.hold]}")
