@@ -98,6 +98,9 @@ class SolverSettings:
         if self.integrator not in INTEGRATORS:
             raise ParameterError("settings.integrator", self.integrator,
                                  " or ".join(map(repr, INTEGRATORS)))
+        if self.grid == "moving" and self.integrator != "implicit":
+            raise ParameterError("settings.integrator", self.integrator,
+                                 "'implicit' on the moving grid")
         if self.n is None:
             object.__setattr__(self, "n", 400 if ell == 0.0 or direct else
                                math.ceil(CELLS_PER_LENGTH / ell - 1e-9))
