@@ -220,11 +220,19 @@ def _direct(model: str, time: float, rep: dict[str, Any]) -> tuple[float, str]:
         est = (abs(time - truth) + num * truth) / time
         text = (f"The front model (a fast reduced model, the sharp-interface limit "
                 f"ell -> 0) gives {time:.5g}; {run}The front model is {_pct(gap)} off it. ")
-    parts = " ".join(f"{unc[k]['text']}." for k in
-                     ("numerical", "interfacial_length_range", "model_form"))
+    rng = unc["interfacial_length_range"]["relative"]
+    ratio = unc.get("delayed_transition_ratio")
+    summary = (f"numerical {_pct(num)}; interfacial length "
+               + ("not applicable (no bead size)" if rng is None else
+                  f"{_pct(rng)} over the mesh length's range")
+               + "; model form: the delayed-transition law gives "
+               + ("no time (its runs failed)" if ratio is None else
+                  f"{unc['delayed_transition_time']:.5g}, {ratio:.3g}x this truth"))
     return est, text + (f"The estimate ({_pct(est)}) is the numerical bound"
                         + ("" if model == "full" else " plus that gap")
-                        + f". The three parts of the truth's uncertainty: {parts}")
+                        + f". The truth's uncertainty in three parts (each explained in "
+                          f"`uncertainty`): {summary}; only the numerical part is in the "
+                          "estimate.")
 
 
 def _paper(model: str, time: float, rep: dict[str, Any]) -> tuple[float, str]:

@@ -136,7 +136,7 @@ def test_validated_direct_answer_states_three_parts(planner, fake) -> None:
                        (u.model_form, "model form")):
         assert part.text.startswith(word) and part.relative is not None
     assert "bead's own interfacial length" in ans.truth and "50 um" in ans.truth
-    assert "Helmers" in ans.error_explanation
+    assert "Helmers" in u.model_form.text and "delayed-transition" in ans.error_explanation
     json.dumps(ans.to_dict())  # plain data all the way down
     from api.schemas import DoseTimeResponse
 
