@@ -55,7 +55,8 @@ def test_thermogel_serve_on_loopback(tmp_path: Path) -> None:
 
 
 def _smooth(t_start: float) -> dict:
-    return {"gel": "ANB", "t_start": t_start, "t_end": 303.0, "dose_fraction": 0.1}
+    return {"gel": "ANB", "t_start": t_start, "t_end": 303.0, "dose_fraction": 0.1,
+            "validation_method": "ladder"}  # three runs per validation, as the timing assumes
 
 
 def _states(c: Client, ids: list[str]) -> dict[str, tuple[str, dict | None]]:
