@@ -158,6 +158,14 @@ class SolverSettings:
         """Plain-data form (the resolved values: every field that changes the run)."""
         return asdict(self)
 
+    def request_dict(self) -> dict[str, Any]:
+        """Plain-data form as asked for: ``interfacial_length`` None when it was not given
+        (the bead's own, set per request), so the settings can be sent on unresolved."""
+        d = asdict(self)
+        if self.auto_length:
+            d["interfacial_length"] = None
+        return d
+
 
 def _interfacial_length(value: Any, bounds: tuple[float, float] = ELL_RANGE) -> float:
     """A validated settings.interfacial_length: 0 or within ``bounds`` (dry radii)."""

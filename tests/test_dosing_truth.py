@@ -228,3 +228,13 @@ def test_hht_small_doses_have_a_numerical_bound_below_10_percent(real_planner) -
         # (N-independent at large doses: 1.5 % at 80 %, docs/moving_mesh.md; up to ~9 % here)
         assert u.delayed_transition_ratio > 1.0 and u.delayed_transition_spread is not None
         assert u.delayed_transition_ns == [200, 400, 800]
+
+
+def test_sweep_keeps_the_bead_ell_unresolved() -> None:
+    from dosing.sweep import SweepGrid
+
+    grid = SweepGrid(t_ends=[308.0], dry_radii_um=[50.0], doses=[0.3], gels=["ANB"],
+                     t_start=302.0, settings=SolverSettings())
+    assert grid.settings["interfacial_length"] is None
+    req = DoseRequest(**FRONT, dose_fraction=0.3, dry_radius_um=50.0, settings=grid.settings)
+    assert req.settings.interfacial_length == pytest.approx(8e-5)
