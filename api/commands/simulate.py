@@ -10,7 +10,6 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from dosing.scenario import GRIDS
 from solver.errors import ParameterError
 
 from .common import add_gel_options, gel_from_args, print_json
@@ -38,9 +37,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="temperature steps instead of --t-end/--until, e.g. 0.05:308,0.5:302")
     p.add_argument("--branch", choices=["swollen", "shrunken"], default=None,
                    help="start branch (default: swollen when heating, shrunken when cooling)")
-    p.add_argument("--grid", choices=list(GRIDS), default="eulerian",
-                   help="discretization (default eulerian, the paper's; moving: Lagrangian "
-                        "cells that follow the interface, with --interfacial-length)")
+    p.add_argument("--grid", choices=["eulerian", "lagrangian"], default="eulerian",
+                   help="discretization (default eulerian, the paper's)")
     p.add_argument("--n", type=int, default=400, help="grid cells (default 400)")
     p.add_argument("--integrator", choices=["implicit", "explicit"], default="implicit",
                    help="adaptive implicit (default) or the paper's forward Euler")
