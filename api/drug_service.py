@@ -40,7 +40,8 @@ def to_drug_dose_request(body: s.DoseTimeRequest, to_gel: Any) -> DrugDoseReques
         dose_fraction=body.dose_fraction, drug_mass_ug=body.drug_mass_ug, wait=body.drug.wait,
         wait_seconds=body.drug.wait_seconds, dry_radius_um=body.dry_radius_um,
         swollen_radius_um=body.swollen_radius_um, constants=_constants(body.constants),
-        branch=body.branch, settings=SolverSettings(interfacial_length=body.interfacial_length))
+        branch=body.branch, settings=SolverSettings(interfacial_length=body.interfacial_length,
+                                method=body.validation_method))
 
 
 def to_drug_schedule_request(body: s.ScheduleRequest, to_gel: Any) -> DrugScheduleRequest:
@@ -54,7 +55,8 @@ def to_drug_schedule_request(body: s.ScheduleRequest, to_gel: Any) -> DrugSchedu
         swollen_radius_um=body.swollen_radius_um, constants=_constants(body.constants),
         branch=body.branch, check_protocol=body.check_protocol, correct=body.correct,
         tolerance=body.tolerance,
-        settings=SolverSettings(interfacial_length=body.interfacial_length))
+        settings=SolverSettings(interfacial_length=body.interfacial_length,
+                                method=body.validation_method))
 
 
 def dose_answer(planner: Any, body: s.DoseTimeRequest, to_gel: Any) -> dict[str, Any]:

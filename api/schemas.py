@@ -18,6 +18,7 @@ from pydantic import (
     Field,
     StringConstraints,
     Tag,
+    ValidationInfo,
     field_validator,
     model_validator,
 )
@@ -26,10 +27,12 @@ from .drug_schemas import DrugIn  # the optional drug of the dose and schedule r
 
 T_MIN = 273.15  # K, same bounds as solver.gel.check_temperature
 T_MAX = 373.15
-# interfacial length of the validation truth (dosing.scenario: DEFAULT_INTERFACIAL_LENGTH,
-# and the coarsest ladder rung's range)
+# interfacial length of the ladder truth (dosing.scenario: DEFAULT_INTERFACIAL_LENGTH,
+# and the coarsest ladder rung's range) and of a direct run (DIRECT_ELL_RANGE)
 ELL_DEFAULT = 0.005
 ELL_RANGE = (0.0025, 0.01)
+DIRECT_ELL_RANGE = (2e-5, 0.02)
+Method = Literal["direct", "ladder"]
 
 # a preset ('ANB', 'HHT') or a stored fitted gel (dosing.gel_store; an unknown name is a 422)
 GelName = Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")]
@@ -37,19 +40,35 @@ Branch = Literal["swollen", "shrunken"]
 
 
 def interfacial_length_field() -> Any:
-    """The validation truth's interfacial length: 0 (the paper's model) or the ladder's."""
-    return Field(ELL_DEFAULT, ge=0.0, le=ELL_RANGE[1], examples=[ELL_DEFAULT], description=(
-        f"interfacial length ell of the validation truth in dry radii: 0 for the paper's "
-        f"model (no interfacial energy; checked on two grids), or {ELL_RANGE[0]}-"
-        f"{ELL_RANGE[1]}: the regularized model's limit ell -> 0, extrapolated from runs at "
-        f"ell, ell/2, ell/4 (default {ELL_DEFAULT})"))
+    """The validation truth's interfacial length: None (the bead's own), 0 (the paper's
+    model) or a given ell."""
+    return Field(None, ge=0.0, le=DIRECT_ELL_RANGE[1], examples=[None, 0.0], description=(
+        "interfacial length ell of the validation truth in dry radii: null (default) for "
+        "the bead's own, ell = xi_dry / a_d from constants.mesh_length_nm and the bead size "
+        "(1e-4, standing for the limit ell -> 0, without a bead size; with validation_method "
+        f"'ladder': {ELL_DEFAULT}); 0 for the paper's model (no interfacial energy; checked "
+        f"on two grids); or a given ell, {DIRECT_ELL_RANGE[0]}-{DIRECT_ELL_RANGE[1]} (direct) "
+        f"or {ELL_RANGE[0]}-{ELL_RANGE[1]} (ladder: the limit ell -> 0 extrapolated from runs "
+        "at ell, ell/2, ell/4)"))
 
 
-def check_interfacial_length(value: float) -> float:
-    """0 or within ELL_RANGE (a ValueError names the range)."""
-    if value != 0.0 and not ELL_RANGE[0] <= value <= ELL_RANGE[1]:
-        raise ValueError(f"interfacial_length must be 0 (the paper's model) or "
-                         f"{ELL_RANGE[0]}-{ELL_RANGE[1]} dry radii")
+def method_field() -> Any:
+    """How the regularized truth is computed: 'direct' (default) or 'ladder'."""
+    return Field("direct", description=(
+        "'direct' (default): the regularized model at the interfacial length itself on the "
+        "moving grid (400 cells, checked at 200); 'ladder': the limit ell -> 0 extrapolated "
+        "from three uniform Lagrangian runs at ell, ell/2, ell/4"))
+
+
+def check_interfacial_length(value: float | None, info: ValidationInfo) -> float | None:
+    """None, 0 or within DIRECT_ELL_RANGE, or ELL_RANGE with validation_method 'ladder'
+    (declared before interfacial_length; a ValueError names the range)."""
+    ladder = (info.data or {}).get("validation_method") == "ladder"
+    lo, hi = ELL_RANGE if ladder else DIRECT_ELL_RANGE
+    if value is not None and value != 0.0 and not lo <= value <= hi:
+        raise ValueError(f"interfacial_length must be null (the bead's own), 0 (the paper's "
+                         f"model) or {lo}-{hi} dry radii"
+                         + (" (the ladder goes down to ell / 4)" if ladder else ""))
     return value
 
 
@@ -257,6 +276,15 @@ class ConstantsIn(RequestModel):
         None, gt=0.0, le=1.0e-10, examples=[8.0e-20],
         description="permeability scale k0 in m^2, 0 < k0 <= 1e-10 (default 8e-20 m^2; the "
                     "paper prints m^3)")
+    mesh_length_nm: float | None = Field(
+        None, gt=0.0, le=1.0e3, examples=[4.0],
+        description="the gel's dry mesh (interfacial) length xi_dry in nm, 0 < xi <= 1000: "
+                    "the truth's interfacial length is xi_dry / a_d (default 4 nm, "
+                    "docs/interfacial.md sec. 1)")
+    mesh_length_range_nm: tuple[float, float] | None = Field(
+        None, examples=[[2.0, 8.0]],
+        description="plausible range [lo, hi] of mesh_length_nm in nm, over which the "
+                    "answer's interfacial-length uncertainty is measured (default [2, 8])")
 
     @field_validator("viscosity_pa_s")
     @classmethod
@@ -302,7 +330,8 @@ class DoseTimeRequest(RequestModel):
         None, description="start branch at T_start (default: swollen)")
     constants: ConstantsIn | None = Field(
         None, description="timescale constants (default: the paper's values)")
-    interfacial_length: float = interfacial_length_field()
+    validation_method: Method = method_field()
+    interfacial_length: float | None = interfacial_length_field()
     drug: DrugIn | None = Field(None, description="a drug in the pore fluid: doses are drug")
     validate_full: bool = Field(
         False, alias="validate",
@@ -319,9 +348,16 @@ class DoseTimeRequest(RequestModel):
 class RunCheck(_Out):
     """The full solver's answer in one validation run."""
 
-    grid: str | None = Field(None, description="'eulerian' or 'lagrangian'")
+    grid: str | None = Field(None, description="'eulerian', 'lagrangian' or 'moving'")
     n: int | None = Field(None, description="grid cells N")
     interfacial_length: float | None = Field(None, description="ell of this run, dry radii")
+    role: Literal["truth", "check", "ell_range", "model_form"] | None = Field(
+        None, description="direct truth only: 'truth' (the answer's run), 'check' (n / 2 "
+                          "cells), 'ell_range' (an end of the mesh length's range) or "
+                          "'model_form' (the ell = 0 lattice's delayed transition)")
+    nucleation_time: float | None = Field(
+        None, description="when the front nucleated at the edge (regularized runs; null: "
+                          "none)")
     scenario_key: str | None = Field(None, description="cache key of this run")
     time: float | None = Field(None, description="full solver's actuation time, dimensionless")
     wall_seconds: float | None = Field(None, description="wall time of the run, s")
@@ -341,6 +377,41 @@ class LimitOut(_Out):
     method: str = Field(description="how the limit was taken, in words")
 
 
+class UncertaintyPart(_Out):
+    """One part of the truth's uncertainty, in numbers and in words."""
+
+    relative: float | None = Field(None, description="its size relative to the truth's time "
+                                                     "(null: not measured or not applicable)")
+    text: str = Field(description="what it is and how it was measured, in words")
+
+
+class UncertaintyOut(_Out):
+    """The direct truth's uncertainty in three parts (dosing.truth.Uncertainty)."""
+
+    numerical: UncertaintyPart = Field(
+        description="grid and time step: the relative gap of the run at n and n / 2 cells")
+    interfacial_length_range: UncertaintyPart = Field(
+        description="the largest relative change of the time over ell = xi_dry / a_d with "
+                    "xi_dry over its plausible range (needs a bead size)")
+    model_form: UncertaintyPart = Field(
+        description="the delayed-transition front law (the ell = 0 lattice) against this "
+                    "local-equilibrium (Maxwell) answer: |ratio - 1|; not in the estimate")
+    interfacial_lengths: list[float] | None = Field(
+        None, description="the ends of the ell range that were run, dry radii")
+    interfacial_length_times: list[float] | None = Field(
+        None, description="the truth's time at those ells, dimensionless")
+    delayed_transition_time: float | None = Field(
+        None, description="the delayed-transition time (finest lattice), dimensionless")
+    delayed_transition_ratio: float | None = Field(
+        None, description="delayed-transition time / the truth's time")
+    delayed_transition_ns: list[int] | None = Field(
+        None, description="the lattice sizes N of the delayed-transition runs")
+    delayed_transition_times: list[float] | None = Field(
+        None, description="the delayed-transition time at each N")
+    delayed_transition_spread: float | None = Field(
+        None, description="(max - min) / finest of those times: its N-independence")
+
+
 class ValidationReport(_Out):
     """The truth's time for the same dose, every run behind it, and the front model's
     errors in time and in volume."""
@@ -348,17 +419,25 @@ class ValidationReport(_Out):
     model: Literal["regularized", "paper"] | None = Field(
         None, description="'regularized' (limit ell -> 0 of the model with interfacial energy) "
                           "or 'paper' (no interfacial energy)")
+    method: Literal["direct", "ladder", "paper"] | None = Field(
+        None, description="'direct' (the regularized model at ell itself, moving grid), "
+                          "'ladder' (its limit ell -> 0 from three runs) or 'paper'")
     interfacial_length: float | None = Field(
-        None, description="coarsest ell of the ladder, dry radii (0: the paper's model)")
+        None, description="ell of the direct truth, or the coarsest ell of the ladder, dry "
+                          "radii (0: the paper's model)")
+    uncertainty: UncertaintyOut | None = Field(
+        None, description="direct truth only: its uncertainty in three parts")
     time: float | None = Field(None, description="the truth's actuation time, dimensionless "
                                                  "(units of tau)")
     error: float | None = Field(
-        None, description="the truth's own relative uncertainty: the limit's error bound, or "
-                          "the paper's model's grid spread")
+        None, description="the truth's own relative uncertainty: the direct run's numerical "
+                          "bound, the limit's error bound, or the paper's model's grid "
+                          "spread")
     settings: dict[str, Any] | None = Field(None, description="full-solver settings (grid, N, "
                                                               "integrator, rtol, ell)")
     runs: list[RunCheck] = Field(default_factory=list, description=(
-        "the runs: ell, ell/2, ell/4 (regularized) or the two grids (paper)"))
+        "the runs: direct (the truth, its check at n / 2, the ell range's ends, the ell = 0 "
+        "lattice at N = 200/400/800), ell, ell/2, ell/4 (ladder) or the two grids (paper)"))
     limit: LimitOut | None = Field(None, description="the extrapolation (regularized only)")
     grid_spread: float | None = Field(
         None, description="(max - min) / truth of the grids' times (paper's model only): its "
@@ -392,6 +471,15 @@ class DoseTimeResponse(_Out):
                     "interfacial_length 0) or 'full' (PDE solver)")
     interfacial_length: float = Field(
         description="interfacial length of the truth, dry radii (0: the paper's model)")
+    method: Literal["direct", "ladder", "paper"] = Field(
+        "direct", description="how the truth is computed: 'direct' (the regularized model "
+                              "at this ell on the moving grid), 'ladder' or 'paper'")
+    bead_dry_radius_um: float | None = Field(
+        None, description="the dry bead radius the truth's ell = xi_dry / a_d assumes, um "
+                          "(null: no bead size, ell stands for the limit ell -> 0)")
+    uncertainty: UncertaintyOut | None = Field(
+        None, description="validated direct answers: the truth's uncertainty in three parts "
+                          "(numerical, interfacial length range, model form)")
     truth: str = Field(description="what the answer is checked against, in words")
     behaviour: str = Field(
         description="the jump's class: 'front', 'delayed_front', 'smooth', 'spinodal'")
@@ -477,7 +565,8 @@ class ScheduleRequest(RequestModel):
         False, description="shoot on the full solver for times meeting every dose (a job)")
     tolerance: float = Field(0.01, gt=0.0, le=0.2,
                              description="relative tolerance of the corrected doses, 0-0.2")
-    interfacial_length: float = interfacial_length_field()
+    validation_method: Method = method_field()
+    interfacial_length: float | None = interfacial_length_field()
     drug: DrugIn | None = Field(None, description="a drug in the pore fluid: doses are drug")
 
     _ell = field_validator("interfacial_length")(check_interfacial_length)
@@ -510,6 +599,13 @@ class ScheduleResponse(_Out):
     timescale_formula: str = Field(description="how tau was computed")
     scenario_key: str = Field(description="key of the dimensionless scenario")
     note: str = Field(description="caveats, in words")
+    truth: str = Field("", description="the protocol runs' model, interfacial length and "
+                                       "bead size, in words")
+    interfacial_length: float = Field(
+        0.0, description="interfacial length of the protocol runs, dry radii (0: the paper's "
+                         "model)")
+    method: Literal["direct", "ladder", "paper"] = Field(
+        "direct", description="how the truth is computed: 'direct', 'ladder' or 'paper'")
 
 
 # ----------------------------------------------------------------------------- service

@@ -180,7 +180,8 @@ def to_dose_request(body: s.DoseTimeRequest) -> DoseRequest:
         concentration_ug_per_ul=body.concentration_ug_per_ul,
         dry_radius_um=body.dry_radius_um, swollen_radius_um=body.swollen_radius_um,
         constants=_constants(body.constants), branch=body.branch,
-        settings=SolverSettings(interfacial_length=body.interfacial_length))
+        settings=SolverSettings(interfacial_length=body.interfacial_length,
+                                method=body.validation_method))
 
 
 def to_schedule_request(body: s.ScheduleRequest) -> ScheduleRequest:
@@ -193,7 +194,8 @@ def to_schedule_request(body: s.ScheduleRequest) -> ScheduleRequest:
         swollen_radius_um=body.swollen_radius_um, constants=_constants(body.constants),
         branch=body.branch, check_protocol=body.check_protocol, correct=body.correct,
         tolerance=body.tolerance,
-        settings=SolverSettings(interfacial_length=body.interfacial_length))
+        settings=SolverSettings(interfacial_length=body.interfacial_length,
+                                method=body.validation_method))
 
 
 def answerable_now(planner: Any, req: DoseRequest) -> bool:

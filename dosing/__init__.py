@@ -16,8 +16,9 @@ from .cache import ValidationCache
 from .jobs import JobRunner, QueueFullError
 from .planner import DoseAnswer, Planner, UnknownValidationError, ValidationStatus
 from .request import DoseRequest, ScheduleRequest
-from .scenario import TRUTH, Scenario, SolverSettings, Trajectory
+from .scenario import LADDER, PAPER, TRUTH, Scenario, SolverSettings, Trajectory
 from .schedule import ScheduleAnswer
+from .truth import Uncertainty
 from .units import PhysicalConstants, Timescale, timescale, water_viscosity
 
 
@@ -51,8 +52,10 @@ def plan_schedule(req: ScheduleRequest, cache_path: str | None = None,
 
 
 __all__ = [
-    "TRUTH", "DoseAnswer", "DoseRequest", "JobRunner", "PhysicalConstants", "Planner",
+    "LADDER", "PAPER", "TRUTH", "DoseAnswer", "DoseRequest", "JobRunner", "PhysicalConstants",
+    "Planner",
     "QueueFullError", "Scenario", "ScheduleAnswer", "ScheduleRequest", "SolverSettings",
-    "Timescale", "Trajectory", "UnknownValidationError", "ValidationCache", "ValidationStatus",
+    "Timescale", "Trajectory", "Uncertainty", "UnknownValidationError", "ValidationCache",
+    "ValidationStatus",
     "plan_dose", "plan_schedule", "timescale", "water_viscosity",
 ]

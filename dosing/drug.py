@@ -33,7 +33,7 @@ from solver.gel import Gel
 from solver.solute import Hindrance, ReleaseResult, Solute, crank_sphere
 
 from .cache import ValidationCache
-from .scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
+from .scenario import LADDER, RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
 from .units import BOLTZMANN, UM3_PER_UL, PhysicalConstants
 
 # mechanics samples per unit time (at least MIN_SAMPLES per step): benchmarks/drug.py measures
@@ -227,7 +227,11 @@ def leak_time(solute: Solute, start_radius: float, fraction: float = 0.1) -> flo
 
 def drug_settings(settings: SolverSettings) -> SolverSettings:
     """The mechanics of a drug run: the settings' own on the Lagrangian grid (the solute
-    lives on its cells); the paper's model keeps its N there."""
+    lives on its cells); the paper's model keeps its N there.  The direct truth (moving
+    grid, issue 12) is not carried over: a drug run takes the ladder's coarsest rung
+    (``LADDER``, uniform Lagrangian cells at 4 / ell), as before."""
+    if settings.direct:
+        settings = replace(LADDER, rtol=settings.rtol, integrator=settings.integrator)
     return settings if settings.grid == "lagrangian" else replace(settings, grid="lagrangian")
 
 

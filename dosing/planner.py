@@ -32,6 +32,7 @@ from .cache import ValidationCache
 from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner
 from .request import DoseRequest, ScheduleRequest
 from .scenario import Scenario, SolverSettings, Trajectory, run_scenario
+from .truth import Uncertainty, delayed_settings, range_settings, truth_text
 from .units import (
     SYMBOLIC_FORMULA,
     expelled_volume,
@@ -43,6 +44,10 @@ from .units import (
 from .validation import error_estimate, failure, validation_report
 
 DEFAULT_HORIZON = 1.0  # first simulated time of a jump (extended x4 when a dose needs more)
+# the moving grid's first horizon: a direct run at the bead's ell costs most after the front
+# (small steps while the core relaxes), so it stops soon after the dose (the 90 % doses of
+# ANB and HHT are reached by 0.4)
+MOVING_HORIZON = 0.1
 
 
 class UnknownValidationError(KeyError):
@@ -82,10 +87,19 @@ def front_run(gel: Gel, t_start: float, t_end: float, branch: str, sharp: bool) 
 
 @functools.lru_cache(maxsize=256)
 def validation_scenarios(gel: Gel, t_start: float, t_end: float, branch: str,
-                         settings: SolverSettings) -> tuple[Scenario, ...]:
-    """A jump's validation runs (memoised, so each run's cache key is computed once)."""
-    return tuple(Scenario(gel, t_start, t_end, branch=branch, settings=s)
-                 for s in settings.rungs())
+                         settings: SolverSettings,
+                         ell_range: tuple[float, float] | None = None) -> tuple[Scenario, ...]:
+    """A jump's validation runs (memoised, so each run's cache key is computed once): the
+    settings' rungs, then, for the direct truth, the interfacial-length runs at ``ell_range``
+    and the model-form runs (module ``truth``)."""
+    runs = [*settings.rungs(), *range_settings(settings, ell_range), *delayed_settings(settings)]
+    return tuple(Scenario(gel, t_start, t_end, branch=branch, settings=s) for s in runs)
+
+
+def request_scenarios(req: DoseRequest | ScheduleRequest) -> tuple[Scenario, ...]:
+    """The validation runs of a request (:func:`validation_scenarios`)."""
+    return validation_scenarios(req.gel, req.t_start, req.t_end, req.branch, req.settings,
+                                req.interfacial_range)
 
 
 MODEL_NAMES = {"front": "the paper's step-function front model",
@@ -146,6 +160,9 @@ class DoseAnswer:
     behaviour: str
     note: str
     parameter_interval: dict[str, Any] | None = None  # a fitted gel's (dosing.fit_uncertainty)
+    method: str = "direct"  # the truth: 'direct', 'ladder' or 'paper'
+    bead_dry_radius_um: float | None = None  # the bead size the truth's ell assumes
+    uncertainty: Uncertainty | None = None  # the direct truth's three parts (validated)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
@@ -176,10 +193,7 @@ def build_answer(req: DoseRequest, model: str, time: float, radius: float, est: 
     dv, sv = expelled_volume(a0, radius), stored_volume(a0)
     behaviour = jump_class(req.gel, req.t_start, req.t_end, req.branch).behaviour
     s = req.settings
-    truth = (f"the regularized model's sharp-interface limit ell -> 0 (validated at "
-             f"interfacial lengths {', '.join(f'{r.interfacial_length:g}' for r in s.rungs())}"
-             f", {s.grid} grid)" if s.regularized else
-             f"the paper's model, no interfacial energy ({s.grid} grid, N = {s.n})")
+    truth = truth_text(req)
     note = (f"{MODEL_NAMES[model]}: {why}. "
             + ("Started from the initial equilibrium alone. " if model != "full" else "")
             + f"Truth: {truth}. "
@@ -200,7 +214,9 @@ def build_answer(req: DoseRequest, model: str, time: float, radius: float, est: 
         expelled_volume=dv, expelled_volume_ul=None if dry is None else volume_to_ul(dv, dry),
         stored_volume=sv, stored_volume_ul=None if dry is None else volume_to_ul(sv, dry),
         dose_fraction=req.fraction, error_estimate=est, error_explanation=explain,
-        validation=validation, scenario_key=key, behaviour=behaviour, note=note.strip())
+        validation=validation, scenario_key=key, behaviour=behaviour, note=note.strip(),
+        method=s.method if s.regularized else "paper", bead_dry_radius_um=dry,
+        uncertainty=Uncertainty.from_dict((validation or {}).get("uncertainty")))
 
 
 def front_answer(req: DoseRequest) -> DoseAnswer:
@@ -209,9 +225,9 @@ def front_answer(req: DoseRequest) -> DoseAnswer:
     radius, model, why, t_front = model_answer(req)
     if t_front is None:
         raise NotApplicableError(f"needs the full solver: {why}")
-    est, explain = error_estimate(model, t_front, None, req.fraction)
-    key = validation_scenarios(req.gel, req.t_start, req.t_end, req.branch,
-                               req.settings)[0].key()
+    est, explain = error_estimate(model, t_front, None, req.fraction, req.gel,
+                                  req.settings.method)
+    key = request_scenarios(req)[0].key()
     return build_answer(req, model, t_front, radius, est, explain, None, key, why)
 
 
@@ -238,8 +254,7 @@ class Planner:
     def scenarios(self, req: DoseRequest | ScheduleRequest) -> list[Scenario]:
         """The jump's validation runs (``SolverSettings.rungs``): the ladder of interfacial
         lengths, or the paper's model on the truth grid and then the other grid."""
-        return list(validation_scenarios(req.gel, req.t_start, req.t_end, req.branch,
-                                         req.settings))
+        return list(request_scenarios(req))
 
     def cached(self, sc: Scenario, need_radius: float | None = None,
                need_time: float = 0.0) -> Trajectory | None:
@@ -274,9 +289,11 @@ class Planner:
     def _job(self, sc: Scenario, need_radius: float | None, need_time: float) -> Job:
         """The full-solver run for ``sc`` as a job: past the stored horizon (x4)."""
         meta = self.cache.meta(sc.key())
-        horizon = self.horizon if meta is None else 4.0 * float(meta.get("horizon", 0.0))
+        first = self.horizon if sc.settings.grid != "moving" else min(self.horizon,
+                                                                      MOVING_HORIZON)
+        horizon = first if meta is None else 4.0 * float(meta.get("horizon", 0.0))
         return Job(sc.key(), run_scenario,
-                   (sc.to_dict(), max(horizon, self.horizon), need_radius, need_time),
+                   (sc.to_dict(), max(horizon, first), need_radius, need_time),
                    on_done=self._store,
                    fetch=functools.partial(self._fetch, sc, need_radius, need_time))
 
@@ -338,7 +355,8 @@ class Planner:
             raise next((t for t in trajs if isinstance(t, BaseException)),
                        SolverError(f"no full-solver time: {failure(rep)}"))
         time = max(0.0, t_front if t_front is not None else rep["time"])  # tiny doses: -1e-17
-        est, explain = error_estimate(model, time, rep, req.fraction)
+        est, explain = error_estimate(model, time, rep, req.fraction, req.gel,
+                                      req.settings.method)
         ans = self._answer(req, model, time, radius, est, explain, rep, scs[0].key(), why)
         from .fit_uncertainty import attach_parameter_interval
 

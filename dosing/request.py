@@ -17,7 +17,7 @@ from solver.equilibrium import equilibrium, nearest_stable
 from solver.errors import ParameterError, require_finite_positive
 from solver.gel import Gel, Permeability, check_temperature
 
-from .scenario import TRUTH, SolverSettings
+from .scenario import DIRECT_ELL_RANGE, TRUTH, SolverSettings
 from .units import PhysicalConstants, stored_volume, ul_to_volume, volume_to_ul
 
 BRANCHES = ("swollen", "shrunken")
@@ -153,7 +153,34 @@ def _resolve_scenario(req: Any) -> tuple[Jump, float | None]:
     object.__setattr__(req, "branch", jump.branch)
     dry = resolve_dry_radius(req.dry_radius_um, req.swollen_radius_um, jump.start_radius)
     object.__setattr__(req, "bead_dry_radius_um", dry)
+    settings, ell_range = bead_settings(req.settings, req.constants, dry)
+    object.__setattr__(req, "settings", settings)
+    object.__setattr__(req, "interfacial_range", ell_range)
     return jump, dry
+
+
+def _clamp_length(ell: float) -> float:
+    lo, hi = DIRECT_ELL_RANGE
+    return min(max(ell, lo), hi)
+
+
+def bead_settings(settings: SolverSettings, constants: PhysicalConstants,
+                  dry_radius_um: float | None) -> tuple[SolverSettings,
+                                                        tuple[float, float] | None]:
+    """The settings at the bead's own interfacial length ell = xi_dry / a_d (direct truth,
+    ell not given, a bead size known), and (ell_lo, ell_hi) over the mesh length's range
+    (None without a bead size, or when the truth is not direct).  ell is kept within the
+    direct runs' range (DIRECT_ELL_RANGE: 2e-5 is xi_lo = 2 nm on a 100 um dry bead)."""
+    if not settings.direct or dry_radius_um is None:
+        return settings, None
+    ell, lo, hi = (_clamp_length(x) for x in constants.interfacial_lengths(dry_radius_um))
+    if settings.auto_length:
+        settings = settings.with_length(ell)
+    else:  # an ell given by hand: its range scales with it
+        ell0 = ell
+        ell = settings.interfacial_length
+        lo, hi = _clamp_length(ell * lo / ell0), _clamp_length(ell * hi / ell0)
+    return settings, (lo, hi)
 
 def _constants(value: PhysicalConstants | dict[str, Any] | None) -> PhysicalConstants:
     if value is None:
@@ -219,6 +246,8 @@ class DoseRequest:
     settings: SolverSettings | dict[str, Any] | None = None
     jump: Jump = field(init=False, repr=False, compare=False)
     bead_dry_radius_um: float | None = field(init=False, repr=False, compare=False)
+    interfacial_range: tuple[float, float] | None = field(init=False, repr=False,
+                                                          compare=False)
     fraction: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -304,6 +333,8 @@ class ScheduleRequest:
     tolerance: float = 0.01
     jump: Jump = field(init=False, repr=False, compare=False)
     bead_dry_radius_um: float | None = field(init=False, repr=False, compare=False)
+    interfacial_range: tuple[float, float] | None = field(init=False, repr=False,
+                                                          compare=False)
 
     def __post_init__(self) -> None:
         jump, dry = _resolve_scenario(self)

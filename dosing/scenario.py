@@ -27,11 +27,16 @@ from solver.errors import ParameterError, SolverError, require_finite_positive
 from solver.gel import Gel, check_temperature
 
 SCHEMA = 1
-GRIDS = ("eulerian", "lagrangian")
+# the names of solver.full.grids.GRIDS (not imported: importing dosing must not load the
+# numba kernels; tests/test_dosing_truth.py checks the two lists agree)
+GRIDS = ("eulerian", "lagrangian", "moving")
 INTEGRATORS = ("implicit", "explicit")
+METHODS = ("direct", "ladder")
 N_RANGE = (20, 6400)
-# ell of one run; the lower end is a ladder's finest rung at N_RANGE's top
+# ell of one run: a ladder's finest rung at N_RANGE's top (uniform grids), or down to a 10 um
+# dry bead's xi_lo / a_d on the moving grid (direct runs)
 ELL_RANGE = (0.000625, 0.02)
+DIRECT_ELL_RANGE = (2e-5, 0.02)
 # a ladder's coarsest ell: above 0.01 the nucleation delay is a third of an 80 % dose and
 # the three rungs can look asymptotic while they are not (ANB from 0.02: limit 1 % off)
 LADDER_TOP = 0.01
@@ -40,6 +45,11 @@ ARRAYS = ("t", "radius", "front", "expelled_volume", "temperature", "step_t", "s
 
 
 DEFAULT_INTERFACIAL_LENGTH = 0.005  # coarsest rung of the validation ladder (dry radii)
+# ell of the direct truth without a bead size: the ell -> 0 limit, pinned by a direct run at
+# 1e-4 (HHT t80 0.074350, -0.34 % from the limit 0.0746; ANB 0.077842, +0.18 % from 0.0777:
+# docs/moving_mesh.md sec. 4)
+LIMIT_INTERFACIAL_LENGTH = 1e-4
+DIRECT_N = 400  # moving-grid cells of a direct run (its check run has DIRECT_N / 2)
 CELLS_PER_LENGTH = 4  # Lagrangian cells per ell: t80 converged to 1e-4 (docs/interfacial.md)
 RUNGS = 3  # ladder ell, ell/2, ell/4: three values give the observed order and the limit
 
@@ -48,34 +58,52 @@ RUNGS = 3  # ladder ell, ell/2, ell/4: three values give the observed order and 
 class SolverSettings:
     """Full-solver settings that define a validation (all part of the scenario key).
 
-    ``interfacial_length`` ell > 0 (the default, issue 8) makes the truth the regularized
-    model's sharp-interface limit: the validation runs the ladder ell, ell/2, ell/4 (see
-    :meth:`rungs`), each grid-converged at ``CELLS_PER_LENGTH / ell`` cells on the Lagrangian
-    grid, and extrapolates the dose time to ell -> 0 (module ``dosing.ladder``).  ell = 0 is
-    the paper's model, checked on both grids (Eulerian N = 400 is the paper's).  Unset
-    fields take the defaults of the model chosen: grid Lagrangian / Eulerian, n
-    ``CELLS_PER_LENGTH / ell`` / 400, rtol 1e-5 / 1e-6.
+    ``method`` 'direct' (the default, issue 12): the truth is the regularized model at the
+    interfacial length ell itself, run directly on the moving grid (``grid`` 'moving', n 400,
+    rtol 1e-5) and checked by a run with n / 2 cells (:meth:`rungs`; their relative gap is
+    the numerical bound).  ``interfacial_length`` None means the bead's own, ell = xi_dry /
+    a_d (the request sets it from ``PhysicalConstants.mesh_length_nm`` and the bead size;
+    :attr:`auto_length` says it was not given); without a bead size it is
+    ``LIMIT_INTERFACIAL_LENGTH`` = 1e-4, which stands for the limit ell -> 0.
+    ``method`` 'ladder' (issue 8): the truth is the sharp-interface limit extrapolated from
+    the ladder ell, ell/2, ell/4 (default ell 0.005), each grid-converged at
+    ``CELLS_PER_LENGTH / ell`` cells on the Lagrangian grid (module ``dosing.ladder``).
+    ell = 0 is the paper's model (either method), checked on both fixed grids (Eulerian
+    N = 400 is the paper's).  Unset fields take the defaults of the model chosen.
     """
 
     grid: str | None = None
     n: int | None = None
     integrator: str = "implicit"
     rtol: float | None = None
-    interfacial_length: float = DEFAULT_INTERFACIAL_LENGTH
+    interfacial_length: float | None = None
+    method: str = "direct"
 
     def __post_init__(self) -> None:
-        ell = _interfacial_length(self.interfacial_length)
+        if self.method not in METHODS:
+            raise ParameterError("settings.method", self.method, " or ".join(map(repr, METHODS)))
+        direct = self.method == "direct"
+        object.__setattr__(self, "auto_length", self.interfacial_length is None)
+        if self.interfacial_length is None:
+            ell = LIMIT_INTERFACIAL_LENGTH if direct else DEFAULT_INTERFACIAL_LENGTH
+        else:
+            ell = _interfacial_length(self.interfacial_length,
+                                      DIRECT_ELL_RANGE if direct else ELL_RANGE)
         object.__setattr__(self, "interfacial_length", ell)
         if self.grid is None:
-            object.__setattr__(self, "grid", "lagrangian" if ell > 0.0 else "eulerian")
+            object.__setattr__(self, "grid", "eulerian" if ell == 0.0 else
+                               "moving" if direct else "lagrangian")
         if self.grid not in GRIDS:
             raise ParameterError("settings.grid", self.grid, " or ".join(map(repr, GRIDS)))
         if self.integrator not in INTEGRATORS:
             raise ParameterError("settings.integrator", self.integrator,
                                  " or ".join(map(repr, INTEGRATORS)))
+        if self.grid == "moving" and self.integrator != "implicit":
+            raise ParameterError("settings.integrator", self.integrator,
+                                 "'implicit' on the moving grid")
         if self.n is None:
-            object.__setattr__(self, "n", math.ceil(CELLS_PER_LENGTH / ell - 1e-9)
-                               if ell > 0.0 else 400)
+            object.__setattr__(self, "n", 400 if ell == 0.0 or direct else
+                               math.ceil(CELLS_PER_LENGTH / ell - 1e-9))
         if isinstance(self.n, bool) or not isinstance(self.n, (int, np.integer)) or not (
                 N_RANGE[0] <= int(self.n) <= N_RANGE[1]):
             raise ParameterError("settings.n", self.n, f"an integer {N_RANGE[0]}-{N_RANGE[1]}")
@@ -91,12 +119,28 @@ class SolverSettings:
         """True for the regularized model (ell > 0), False for the paper's."""
         return self.interfacial_length > 0.0
 
+    @property
+    def direct(self) -> bool:
+        """True for the direct truth (the regularized model at this ell, no extrapolation)."""
+        return self.method == "direct" and self.regularized
+
+    def with_length(self, ell: float) -> SolverSettings:
+        """These settings at interfacial length ``ell`` (n, grid and rtol kept)."""
+        return replace(self, interfacial_length=ell)
+
     def rungs(self) -> list[SolverSettings]:
-        """The validation runs: the ladder ell / 2^k with n 2^k cells (k < RUNGS), or, for
-        the paper's model, this grid and then the other one."""
+        """The validation runs: direct, this run and its check with n / 2 cells; a ladder,
+        ell / 2^k with n 2^k cells (k < RUNGS); the paper's model, this grid and then the
+        other fixed one."""
         if not self.regularized:
+            fixed = [g for g in GRIDS if g != "moving"]
             return [replace(self, grid=g)
-                    for g in (self.grid, *(g for g in GRIDS if g != self.grid))]
+                    for g in (self.grid, *(g for g in fixed if g != self.grid))]
+        if self.direct:
+            if self.n // 2 < N_RANGE[0]:
+                raise ParameterError("settings.n", self.n, f"an integer {2 * N_RANGE[0]}-"
+                                     f"{N_RANGE[1]} (the check run has n / 2 cells)")
+            return [self, replace(self, n=self.n // 2)]
         scale = 1 << (RUNGS - 1)
         if not ELL_RANGE[0] * scale <= self.interfacial_length <= LADDER_TOP:
             raise ParameterError("settings.interfacial_length", self.interfacial_length,
@@ -107,27 +151,37 @@ class SolverSettings:
                                  f"{N_RANGE[1] // scale} (the ladder's finest rung has {scale} "
                                  f"times more cells)")
         return [SolverSettings(self.grid, self.n << k, self.integrator, self.rtol,
-                               self.interfacial_length / (1 << k)) for k in range(RUNGS)]
+                               self.interfacial_length / (1 << k), self.method)
+                for k in range(RUNGS)]
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain-data form."""
+        """Plain-data form (the resolved values: every field that changes the run)."""
         return asdict(self)
 
+    def request_dict(self) -> dict[str, Any]:
+        """Plain-data form as asked for: ``interfacial_length`` None when it was not given
+        (the bead's own, set per request), so the settings can be sent on unresolved."""
+        d = asdict(self)
+        if self.auto_length:
+            d["interfacial_length"] = None
+        return d
 
-def _interfacial_length(value: Any) -> float:
-    """A validated settings.interfacial_length: 0 or ell_min..ELL_MAX dry radii."""
+
+def _interfacial_length(value: Any, bounds: tuple[float, float] = ELL_RANGE) -> float:
+    """A validated settings.interfacial_length: 0 or within ``bounds`` (dry radii)."""
     try:
         ell = float(value)
     except (TypeError, ValueError):
         ell = math.nan
-    if isinstance(value, bool) or not (ell == 0.0 or ELL_RANGE[0] <= ell <= ELL_RANGE[1]):
+    if isinstance(value, bool) or not (ell == 0.0 or bounds[0] <= ell <= bounds[1]):
         raise ParameterError("settings.interfacial_length", value,
-                             f"0 (the paper's model) or {ELL_RANGE[0]:g}-{ELL_RANGE[1]:g} dry "
+                             f"0 (the paper's model) or {bounds[0]:g}-{bounds[1]:g} dry "
                              "radii")
     return ell
 
 
-TRUTH = SolverSettings()  # the validation truth: the regularized model's limit ell -> 0
+TRUTH = SolverSettings()  # the validation truth: a direct run (the bead's own ell, or 1e-4)
+LADDER = SolverSettings(method="ladder")  # issue 8's truth: the ladder's limit ell -> 0
 PAPER = SolverSettings(interfacial_length=0.0)  # the paper's model: Eulerian grid, N = 400
 
 

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 from . import protocol
 from .request import ScheduleRequest
 from .scenario import Scenario, Step, Trajectory
+from .truth import truth_text
 from .units import SYMBOLIC_FORMULA, stored_volume, timescale, volume_to_ul
 
 if TYPE_CHECKING:
@@ -42,6 +43,9 @@ class ScheduleAnswer:
     timescale_formula: str
     scenario_key: str
     note: str
+    truth: str = ""  # the protocol runs' model, ell and bead size, in words
+    interfacial_length: float = 0.0
+    method: str = "direct"
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
@@ -88,7 +92,7 @@ def plan_schedule_with(planner: Planner, req: ScheduleRequest) -> ScheduleAnswer
     sv = stored_volume(req.start_radius)
     s = req.settings
     solver = (f"full solver, {s.grid} grid, N = {s.n}" + (
-        f", the regularized model at interfacial length {s.interfacial_length:g}"
+        f", the regularized model at interfacial length {s.interfacial_length:.3g}"
         if s.regularized else ", the paper's model"))
     note = ("Hold times assume the gel keeps its state while it rests (the paper's reading: "
             "doses read off one continuous heating). In the real protocol the gel takes up "
@@ -97,7 +101,15 @@ def plan_schedule_with(planner: Planner, req: ScheduleRequest) -> ScheduleAnswer
             f"and the corrected times were found by shooting on the same solver to meet each "
             f"dose within {req.tolerance:.0%}. Volumes are fluid volumes; the model does not "
             "track the drug in re-absorbed fluid.")
-    if "front" in model and s.regularized:
+    if s.direct:
+        note += (f" The protocol check and the shooting run the same truth as each dose's "
+                 f"validation (the regularized model at ell = {s.interfacial_length:.3g}, "
+                 f"moving grid, {s.n} cells"
+                 + ("; the bead's own ell" if req.bead_dry_radius_um is not None else
+                    "; no bead size: ell stands for the limit ell -> 0")
+                 + "), so a corrected first actuation equals the single-dose answer within "
+                 "that answer's validated error.")
+    elif "front" in model and s.regularized:
         note += (" In this front regime the hold times are the sharp-interface limit "
                  "(ell -> 0) while the protocol runs use the ladder's coarsest ell, whose "
                  "front first has to nucleate at the edge: part of the correction is that "
@@ -114,4 +126,6 @@ def plan_schedule_with(planner: Planner, req: ScheduleRequest) -> ScheduleAnswer
         timescale_seconds=None if tau is None else tau.seconds,
         timescale_formula=SYMBOLIC_FORMULA if tau is None else tau.formula,
         scenario_key=Scenario(req.gel, req.t_start, req.t_end, branch=req.branch,
-                              settings=req.settings).key(), note=note)
+                              settings=req.settings).key(), note=note,
+        truth=truth_text(req), interfacial_length=s.interfacial_length,
+        method=s.method if s.regularized else "paper")

@@ -118,8 +118,8 @@ class SweepGrid:
                                  f"has {self.size}): split it into several sweeps")
         if isinstance(self.constants, PhysicalConstants):
             object.__setattr__(self, "constants", self.constants.to_dict())
-        if isinstance(self.settings, SolverSettings):
-            object.__setattr__(self, "settings", self.settings.to_dict())
+        if isinstance(self.settings, SolverSettings):  # unresolved: each point's bead's ell
+            object.__setattr__(self, "settings", self.settings.request_dict())
 
     @property
     def shape(self) -> tuple[int, int, int, int]:

@@ -32,11 +32,21 @@ def water_viscosity(temperature: float) -> float:
 
 @dataclass(frozen=True)
 class PhysicalConstants:
-    """Constants of eq. timescale.  ``viscosity_pa_s="water"`` uses water at T_end."""
+    """Constants of eq. timescale.  ``viscosity_pa_s="water"`` uses water at T_end.
+
+    ``mesh_length_nm`` is the gel's dry mesh (interfacial) length xi_dry, which sets the
+    bead's interfacial length ell = xi_dry / a_d of the truth (docs/interfacial.md, sec. 1:
+    a swollen PNIPAM mesh of ~10 nm at a swelling stretch ~2.3 is ~4 nm in the dry frame);
+    ``mesh_length_range_nm`` its plausible range (default a factor 2 either way, 2-8 nm:
+    swollen mesh sizes of 5-20 nm), over which the answer's interfacial-length
+    part of the error is measured.
+    """
 
     viscosity_pa_s: float | str = 1.0e-3
     polymer_volume_m3: float = 3.0e-25
     permeability_m2: float = 8.0e-20
+    mesh_length_nm: float = 4.0
+    mesh_length_range_nm: tuple[float, float] | None = None  # default (xi / 2, 2 xi)
 
     def __post_init__(self) -> None:
         v = self.viscosity_pa_s
@@ -48,9 +58,26 @@ class PhysicalConstants:
         else:
             object.__setattr__(self, "viscosity_pa_s",
                                require_finite_positive("constants.viscosity_pa_s", v))
-        for name in ("polymer_volume_m3", "permeability_m2"):
+        for name in ("polymer_volume_m3", "permeability_m2", "mesh_length_nm"):
             object.__setattr__(self, name,
                                require_finite_positive(f"constants.{name}", getattr(self, name)))
+        if self.mesh_length_range_nm is None:
+            object.__setattr__(self, "mesh_length_range_nm",
+                               (self.mesh_length_nm / 2.0, 2.0 * self.mesh_length_nm))
+        try:
+            lo, hi = (float(x) for x in self.mesh_length_range_nm)
+        except (TypeError, ValueError):
+            lo = hi = math.nan
+        if not (0.0 < lo <= self.mesh_length_nm <= hi < math.inf):
+            raise ParameterError("constants.mesh_length_range_nm", self.mesh_length_range_nm,
+                                 "two finite numbers 0 < lo <= mesh_length_nm <= hi (nm)")
+        object.__setattr__(self, "mesh_length_range_nm", (lo, hi))
+
+    def interfacial_lengths(self, dry_radius_um: float) -> tuple[float, float, float]:
+        """(ell, ell_lo, ell_hi) = xi_dry / a_d over the mesh length and its range."""
+        a = 1e3 * dry_radius_um  # nm
+        lo, hi = self.mesh_length_range_nm
+        return self.mesh_length_nm / a, lo / a, hi / a
 
     def viscosity(self, t_end: float) -> float:
         """eta in Pa s: the given value, or water's at T_end."""
@@ -65,12 +92,17 @@ class PhysicalConstants:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
-        return asdict(self)
+        d = asdict(self)
+        d["mesh_length_range_nm"] = list(self.mesh_length_range_nm)
+        return d
 
     @classmethod
     def from_dict(cls, data: dict[str, Any] | None) -> PhysicalConstants:
         """Inverse of :meth:`to_dict` (None gives the defaults)."""
-        return cls(**(data or {}))
+        d = dict(data or {})
+        if d.get("mesh_length_range_nm") is not None:
+            d["mesh_length_range_nm"] = tuple(d["mesh_length_range_nm"])
+        return cls(**d)
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,7 @@ from api_support import asgi, fake_full_solver, fake_planner
 from api.client import ApiError
 from api.http import create_app
 from dosing import DoseRequest, Planner
+from dosing.scenario import LADDER
 from dosing.units import radius_after_dose
 
 pytestmark = pytest.mark.anyio
@@ -24,6 +25,8 @@ pytestmark = pytest.mark.anyio
 FRONT = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.8,
          "dry_radius_um": 50.0}
 SMOOTH = {"gel": "ANB", "t_start": 300.0, "t_end": 303.0, "dose_fraction": 0.2}
+LFRONT = {**FRONT, "validation_method": "ladder"}  # issue 8's truth (the ladder's defaults)
+LSMOOTH = {**SMOOTH, "validation_method": "ladder"}
 
 
 @pytest.fixture
@@ -60,14 +63,14 @@ async def _wait_done(api, vid: str, timeout: float = 30.0):
 
 async def test_front_dose_answers_at_once(clients, planner) -> None:
     api, raw = clients
-    r = await raw.post("/v1/dose-time", json=FRONT)
+    r = await raw.post("/v1/dose-time", json=LFRONT)
     assert r.status_code == 200
-    ans = await api.dose_time(FRONT)
-    want = planner.dose(DoseRequest(**FRONT))
+    ans = await api.dose_time(LFRONT)
+    want = planner.dose(DoseRequest(**FRONT, settings=LADDER))
     assert ans.status == "answered" and ans.model == "front-sharp" and ans.behaviour == "front"
     assert ans.time == want.time and ans.seconds == want.seconds
     assert ans.interfacial_length == 0.005 and ans.truth == want.truth
-    paper = await api.dose_time({**FRONT, "interfacial_length": 0.0})
+    paper = await api.dose_time({**LFRONT, "interfacial_length": 0.0})
     assert paper.model == "front" and paper.time > ans.time  # the paper's model: slower
     # issue 5: 80 % of ANB's stored fluid leaves a^3 = 0.2 a0^3 + 0.8: radius 2.29 -> 1.47
     assert ans.start_radius == pytest.approx(2.2924, abs=5e-4)
@@ -79,7 +82,7 @@ async def test_front_dose_answers_at_once(clients, planner) -> None:
 
 async def test_validate_queues_and_reports_front_errors(clients) -> None:
     api, _ = clients
-    ans = await api.dose_time(FRONT, validate=True)
+    ans = await api.dose_time(LFRONT, validate=True)
     assert ans.status == "answered" and ans.validation_id
     assert ans.validation_url == f"/v1/validations/{ans.validation_id}"
     v = await _wait_done(api, ans.validation_id)
@@ -91,14 +94,14 @@ async def test_validate_queues_and_reports_front_errors(clients) -> None:
     assert res["front_time_error"] == pytest.approx(
         (ans.time - res["time"]) / res["time"], rel=1e-9)
     assert res["front_volume_error"] is not None
-    again = await api.dose_time(FRONT)  # the verdict is now served with the answer
+    again = await api.dose_time(LFRONT)  # the verdict is now served with the answer
     assert again.validation is not None and again.validation.time == res["time"]
 
 
 async def test_full_scenario_is_202_then_answered_from_cache(clients, fake) -> None:
     api, raw = clients
-    r1 = await raw.post("/v1/dose-time", json=SMOOTH)
-    r2 = await raw.post("/v1/dose-time", json=SMOOTH)
+    r1 = await raw.post("/v1/dose-time", json=LSMOOTH)
+    r2 = await raw.post("/v1/dose-time", json=LSMOOTH)
     assert (r1.status_code, r2.status_code) == (202, 202)
     vid = r1.json()["validation_id"]
     assert r2.json()["validation_id"] == vid  # deduplicated by scenario
@@ -106,9 +109,9 @@ async def test_full_scenario_is_202_then_answered_from_cache(clients, fake) -> N
     v = await _wait_done(api, vid)
     assert v.status == "done" and v.result["time"] > 0
     assert sorted(c["n"] for c in fake.calls) == [800, 1600, 3200]  # one run per rung
-    ans = await api.dose_time(SMOOTH)
+    ans = await api.dose_time(LSMOOTH)
     assert ans.status == "answered" and ans.model == "full"
-    req = DoseRequest(**SMOOTH)
+    req = DoseRequest(**SMOOTH, settings=LADDER)
     assert ans.final_radius == pytest.approx(radius_after_dose(req.start_radius, 0.2), rel=1e-12)
     assert ans.time == pytest.approx(v.result["time"], rel=1e-12)
 
@@ -125,7 +128,8 @@ async def test_full_scenario_is_202_then_answered_from_cache(clients, fake) -> N
     ({**FRONT, "dry_radius_um": "big"}, "dry_radius_um"),
     ({**FRONT, "constants": {"viscosity_pa_s": "honey"}}, "constants.viscosity_pa_s"),
     ({**FRONT, "swollen_radius_um": 100.0}, "swollen_radius_um"),           # two sizes
-    ({**FRONT, "interfacial_length": 0.001}, "interfacial_length"),         # ladder too fine
+    ({**FRONT, "interfacial_length": 0.001, "validation_method": "ladder"},
+     "interfacial_length"),                                                 # ladder too fine
     ({**FRONT, "interfacial_length": 0.5}, "interfacial_length"),
 ])
 async def test_bad_dose_is_422_naming_the_field(clients, body, field) -> None:

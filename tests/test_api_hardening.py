@@ -26,6 +26,7 @@ from api.http import create_app
 FRONT = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.8,
          "dry_radius_um": 50.0}
 SMOOTH = {"gel": "ANB", "t_start": 300.0, "t_end": 303.0, "dose_fraction": 0.2}
+LSMOOTH = {**SMOOTH, "validation_method": "ladder"}  # three runs: the ladder
 SCHEDULE = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "doses": [0.3, 0.3],
             "rests": [0.5], "dry_radius_um": 50.0}
 VALID = {"/v1/equilibrium": {"gel": "ANB", "temperature": 305.0},
@@ -247,8 +248,8 @@ def test_two_servers_on_one_cache_compute_each_run_once(tmp_path: Path) -> None:
     opts = ("--calls", str(log))
     with fake_server(cache, 0.5, 60.0, *opts) as (a, _), \
             fake_server(cache, 0.5, 60.0, *opts) as (b, _), Client(a) as ca, Client(b) as cb:
-        va = ca.dose_time(SMOOTH)
-        vb = cb.dose_time(SMOOTH)
+        va = ca.dose_time(LSMOOTH)
+        vb = cb.dose_time(LSMOOTH)
         assert va.status == vb.status == "pending" and va.validation_id == vb.validation_id
         done_b = _wait(cb, vb.validation_id, 30)
         done_a = _wait(ca, va.validation_id, 30)
@@ -256,8 +257,8 @@ def test_two_servers_on_one_cache_compute_each_run_once(tmp_path: Path) -> None:
         assert done_a.result == done_b.result
         runs = _runs(log)
         assert len(runs) == 3 and len(set(runs)) == 3, runs
-        assert cb.dose_time(SMOOTH).model == "full"  # both answer from the shared cache
-        assert ca.dose_time(SMOOTH).model == "full"
+        assert cb.dose_time(LSMOOTH).model == "full"  # both answer from the shared cache
+        assert ca.dose_time(LSMOOTH).model == "full"
     assert len(_runs(log)) == 3
 
 
@@ -269,12 +270,12 @@ def test_killing_the_holder_lets_the_other_server_finish(tmp_path: Path) -> None
     opts = ("--calls", str(log), "--lease", "1.0")
     with fake_server(cache, 1.0, 60.0, *opts) as (b, _), Client(b) as cb:
         with fake_server(cache, 1.0, 60.0, *opts) as (a, proc_a), Client(a) as ca:
-            vid = ca.dose_time(SMOOTH).validation_id
+            vid = ca.dose_time(LSMOOTH).validation_id
             deadline = time.monotonic() + 20
             while not _runs(log) and time.monotonic() < deadline:
                 time.sleep(0.05)
             assert _runs(log), "the holder never started"
-            assert cb.dose_time(SMOOTH).validation_id == vid
+            assert cb.dose_time(LSMOOTH).validation_id == vid
             assert cb.validation(vid).status in ("pending", "running")
             proc_a.kill()  # type: ignore[attr-defined]
             proc_a.wait(10)  # type: ignore[attr-defined]

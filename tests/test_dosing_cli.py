@@ -20,7 +20,7 @@ def _json(capsys: pytest.CaptureFixture, argv: list[str]) -> dict:
 def test_dose_json_front_model(capsys, tmp_path: Path) -> None:
     out = _json(capsys, ["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308",
                          "--fraction", "0.8", "--dry-radius-um", "50", "--json",
-                         "--cache", str(tmp_path / "c.sqlite")])
+                         "--validation-method", "ladder", "--cache", str(tmp_path / "c.sqlite")])
     assert out["model"] == "front-sharp" and out["validation"] is None
     assert out["interfacial_length"] == 0.005 and "limit ell -> 0" in out["truth"]
     assert out["final_radius"] == pytest.approx(1.4750, abs=1e-4)
@@ -31,7 +31,7 @@ def test_dose_json_front_model(capsys, tmp_path: Path) -> None:
 def test_dose_text_and_errors(capsys, tmp_path: Path) -> None:
     assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction",
                  "0.5", "--swollen-radius-um", "100", "--viscosity", "water",
-                 "--cache", str(tmp_path / "c.sqlite")]) == 0
+                 "--validation-method", "ladder", "--cache", str(tmp_path / "c.sqlite")]) == 0
     text = capsys.readouterr().out
     assert "front-sharp model: heat for t =" in text and " s\n" in text and "tau =" in text
     assert "truth: the regularized model's sharp-interface limit" in text
@@ -45,7 +45,7 @@ def test_dose_text_and_errors(capsys, tmp_path: Path) -> None:
                  "--fraction", "0.5", "--cache", str(tmp_path / "c.sqlite")]) == 2
     assert "gel" in capsys.readouterr().err
     assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction",
-                 "0.5", "--interfacial-length", "0.001",
+                 "0.5", "--interfacial-length", "0.001", "--validation-method", "ladder",
                  "--cache", str(tmp_path / "c.sqlite")]) == 2
     assert "settings.interfacial_length" in capsys.readouterr().err
 

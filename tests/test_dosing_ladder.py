@@ -71,10 +71,11 @@ def test_http_schema_bounds_match_the_planner() -> None:
         SolverSettings,
     )
 
-    assert schemas.ELL_DEFAULT == DEFAULT_INTERFACIAL_LENGTH == SolverSettings().interfacial_length
+    assert schemas.ELL_DEFAULT == DEFAULT_INTERFACIAL_LENGTH == SolverSettings(
+        method="ladder").interfacial_length
     assert schemas.ELL_RANGE == (ELL_RANGE[0] * (1 << (RUNGS - 1)), LADDER_TOP)
     for ell in schemas.ELL_RANGE:
-        assert len(SolverSettings(interfacial_length=ell).rungs()) == RUNGS
+        assert len(SolverSettings(interfacial_length=ell, method="ladder").rungs()) == RUNGS
 
 
 def test_gap_to_the_plain_limit_bounds_a_pre_asymptotic_ladder() -> None:

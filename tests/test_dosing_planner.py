@@ -14,7 +14,7 @@ import pytest
 from dosing_fakes import FakeSolver, exact_time
 
 from dosing import DoseRequest, Planner, QueueFullError, ScheduleRequest, UnknownValidationError
-from dosing.scenario import PAPER
+from dosing.scenario import LADDER, PAPER
 from dosing.units import expelled_volume, radius_after_dose
 from dosing.validation import front_prior
 from solver import HHT, equilibrium
@@ -46,7 +46,7 @@ def planner(tmp_path: Path, fake: FakeSolver):
 def test_smooth_jump_is_answered_by_the_ladder_limit(planner, fake) -> None:
     """Default truth: the ladder ell = 0.005, 0.0025, 0.00125 (N = 800, 1600, 3200) on the
     Lagrangian grid, extrapolated to ell -> 0; the fake's t(ell) = t0 (1 + 200 ell^1.5)."""
-    req = DoseRequest(**SMOOTH, dose_fraction=0.5)
+    req = DoseRequest(**SMOOTH, dose_fraction=0.5, settings=LADDER)
     ans = planner.dose(req)
     a0 = req.start_radius
     af = nearest_stable(HHT, 307.6, a0).stretch
@@ -90,7 +90,7 @@ def test_smooth_jump_is_answered_by_the_full_solver_on_both_grids(planner, fake)
 
 def test_front_answer_is_the_sharp_model_checked_against_the_ladder_limit(planner,
                                                                          fake) -> None:
-    req = DoseRequest(**FRONT, dose_fraction=0.8)
+    req = DoseRequest(**FRONT, dose_fraction=0.8, settings=LADDER)
     quick = planner.dose(req)
     assert quick.model == "front-sharp" and quick.validation is None and not fake.calls
     assert quick.error_estimate == front_prior(0.8, "front-sharp")
@@ -138,10 +138,10 @@ def test_submit_validation_returns_at_once_dedups_and_survives_restart(tmp_path:
     path = tmp_path / "c.sqlite"
     p = _planner(path, workers=4)
     t0 = time.perf_counter()
-    vid = p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.8))
-    vid2 = p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.5))
+    vid = p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.8, settings=LADDER))
+    vid2 = p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.5, settings=LADDER))
     assert time.perf_counter() - t0 < 1.0 and vid != vid2
-    assert p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.8)) == vid
+    assert p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.8, settings=LADDER)) == vid
     assert p.validation(vid).status in ("pending", "running")
     fake.gate.set()
     st = p.wait_validation(vid, 20.0, 0.02)
@@ -171,10 +171,10 @@ def test_failed_validation_reports_the_error(planner, fake) -> None:
 def test_queue_is_bounded(tmp_path: Path, fake) -> None:
     fake.gate = threading.Event()
     p = _planner(tmp_path / "c.sqlite", max_pending=1)
-    first = DoseRequest(**FRONT, dose_fraction=0.3)
+    first = DoseRequest(**FRONT, dose_fraction=0.3, settings=LADDER)
     p.submit_validation(first)  # one validation: all three rungs admitted
     assert [p.jobs.state(sc.key()) is not None for sc in p.scenarios(first)] == [True] * 3
-    other = DoseRequest(**{**FRONT, "t_start": 301.0}, dose_fraction=0.3)
+    other = DoseRequest(**{**FRONT, "t_start": 301.0}, dose_fraction=0.3, settings=LADDER)
     with pytest.raises(QueueFullError) as err:
         p.submit_validation(other)  # room for one validation: refused whole
     assert err.value.retry_after > 0
@@ -188,7 +188,7 @@ def test_long_doses_extend_the_run_under_one_key(tmp_path: Path, monkeypatch) ->
     slow = FakeSolver(rate_scale=0.05)  # 60 % takes t = 2.7: beyond the first horizon 1
     monkeypatch.setitem(sys.modules, "solver.full", slow.module())
     p = _planner(tmp_path / "c.sqlite")
-    req = DoseRequest(**SMOOTH, dose_fraction=0.6)
+    req = DoseRequest(**SMOOTH, dose_fraction=0.6, settings=LADDER)
     ans = p.dose(req)
     a0 = req.start_radius
     af = nearest_stable(HHT, 307.6, a0).stretch
@@ -222,7 +222,7 @@ def test_schedule_on_the_fake_solver(planner, fake) -> None:
 
 
 def test_regularized_schedule_runs_the_protocol_at_the_coarsest_rung(planner, fake) -> None:
-    req = ScheduleRequest(**FRONT, doses=[0.3, 0.3], rests=[0.2])
+    req = ScheduleRequest(**FRONT, doses=[0.3, 0.3], rests=[0.2], settings=LADDER)
     ans = planner.schedule(req)
     assert ans.model == "front-sharp"
     protocol_runs = [c for c in fake.calls if len(c["protocol"]) > 1]

@@ -19,7 +19,7 @@ import pytest
 
 from api.cli import main
 from dosing import DoseRequest, Planner
-from dosing.scenario import PAPER
+from dosing.scenario import LADDER, PAPER
 from dosing.validation import front_prior
 
 ANB80 = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.8}
@@ -54,7 +54,7 @@ def test_front_model_80_percent_within_5_percent(planner, kw: dict, paper: float
 @pytest.mark.parametrize("kw,limit,tol", [(ANB80, 0.0777, 0.03), (HHT80, 0.0723, 0.03)])
 def test_default_answer_is_the_sharp_front_model(planner, kw: dict, limit: float,
                                                  tol: float) -> None:
-    ans = planner.dose(DoseRequest(**kw))
+    ans = planner.dose(DoseRequest(**kw, settings=LADDER))
     assert ans.model == "front-sharp" and ans.interfacial_length == 0.005
     assert ans.time == pytest.approx(limit, rel=tol)
     assert ans.error_estimate == front_prior(0.8, "front-sharp") and ans.validation is None
@@ -116,7 +116,7 @@ def test_validation_reports_both_grids_and_their_spread(planner, kw: dict, radiu
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("settings,model", [(PAPER, "front"), (None, "front-sharp")])
+@pytest.mark.parametrize("settings,model", [(PAPER, "front"), (LADDER, "front-sharp")])
 def test_prior_covers_the_measured_front_errors(planner, settings, model: str) -> None:
     """The unvalidated estimate (validation.PRIOR_GAPS) bounds what calibrate measures."""
     for kw in (ANB80, HHT80):
@@ -134,7 +134,7 @@ def test_prior_covers_the_measured_front_errors(planner, settings, model: str) -
 @pytest.mark.parametrize("kw,limit,known", [(ANB80, 0.0777, 0.0002), (HHT80, 0.0723, 0.004)])
 def test_ladder_limit_matches_the_convergence_study(planner, kw: dict, limit: float,
                                                     known: float) -> None:
-    v = planner.dose(DoseRequest(**kw), validate=True).validation
+    v = planner.dose(DoseRequest(**kw, settings=LADDER), validate=True).validation
     assert v["model"] == "regularized" and "nucleates" in v["limit"]["method"]
     assert [e["n"] for e in v["runs"]] == [800, 1600, 3200]
     assert abs(v["time"] - limit) <= v["limit"]["error"] + known
@@ -142,9 +142,10 @@ def test_ladder_limit_matches_the_convergence_study(planner, kw: dict, limit: fl
 
 @pytest.mark.slow
 def test_cli_validate_json_has_the_full_solver_time(planner, cache_path, capsys) -> None:
-    want = planner.dose(DoseRequest(**ANB80), validate=True).validation["time"]
+    want = planner.dose(DoseRequest(**ANB80, settings=LADDER), validate=True).validation["time"]
     assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction",
-                 "0.8", "--validate", "--json", "--cache", str(cache_path)]) == 0
+                 "0.8", "--validate", "--json", "--validation-method", "ladder",
+                 "--cache", str(cache_path)]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["model"] == "front-sharp" and out["validation"]["time"] == want
     assert out["interfacial_length"] == 0.005 and "limit ell -> 0" in out["truth"]
@@ -162,7 +163,7 @@ def test_smooth_jump_is_answered_by_the_full_solver(planner) -> None:
     assert "agree" in ans.error_explanation
     # the regularized truth: the term changes a(t) by 9e-4 at ell = 0.005 (order 1.7,
     # docs/interfacial.md sec. 7), so its limit is the paper's model's time to ~1e-4
-    reg = planner.dose(DoseRequest("HHT", 304.0, 307.6, dose_fraction=0.5))
+    reg = planner.dose(DoseRequest("HHT", 304.0, 307.6, dose_fraction=0.5, settings=LADDER))
     assert reg.model == "full" and reg.validation["model"] == "regularized"
     assert reg.time == pytest.approx(ans.time, rel=3e-4)
     assert reg.error_estimate < 1e-3

@@ -42,7 +42,7 @@ def test_full_solver_curve_gives_tau_within_3_percent(tmp_path) -> None:
     """Acceptance: ANB 302 -> 308 K, 50 um bead, 1% noise, data from the full solver at
     ell = 0.0025 (N = 1600, ~15 s); the front model (sharp interface, the default) and the
     full solver at the same settings both give tau within 3% and inside the interval."""
-    st = SolverSettings(interfacial_length=0.0025)
+    st = SolverSettings(interfacial_length=0.0025, method="ladder")
     planner = Planner(cache_path=str(tmp_path / "c.sqlite"), executor=ThreadPoolExecutor(1))
     try:
         traj = planner.trajectory(Scenario(ANB, 302.0, 308.0, settings=st), need_radius=1.12)

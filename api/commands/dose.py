@@ -7,6 +7,7 @@ import sys
 import textwrap
 from typing import Any
 
+from dosing.scenario import GRIDS, METHODS
 from solver.errors import ParameterError
 
 from .common import (
@@ -43,17 +44,24 @@ def add_planning_options(p: argparse.ArgumentParser) -> None:
                    help="Omega_p, volume of a polymer unit in m^3 (default 3e-25)")
     c.add_argument("--k0-m2", type=float, default=8.0e-20,
                    help="permeability scale k0 in m^2 (default 8e-20)")
+    c.add_argument("--mesh-length-nm", type=float, default=4.0, metavar="XI",
+                   help="the gel's dry mesh (interfacial) length xi_dry in nm: the truth's "
+                        "ell = xi_dry / a_d, its range xi/2-2xi (default 4, "
+                        "docs/interfacial.md sec. 1)")
     s = p.add_argument_group("full solver (validation truth)")
+    s.add_argument("--validation-method", choices=list(METHODS), default="direct",
+                   help="'direct' (default): the regularized model at ell itself on the "
+                        "moving grid (N and N/2 cells); 'ladder': its limit ell -> 0 from "
+                        "uniform runs at L, L/2, L/4")
     s.add_argument("--interfacial-length", type=float, default=None, metavar="L",
-                   help="interfacial length ell in dry radii: the truth is the regularized "
-                        "model's limit ell -> 0, from runs at L, L/2, L/4 (default 0.005; "
-                        "0.0025-0.01); 0 = the paper's model, checked on both grids")
-    s.add_argument("--grid", choices=["eulerian", "lagrangian"], default=None,
-                   help="truth grid (default lagrangian; eulerian, the paper's, with "
-                        "--interfacial-length 0)")
+                   help="interfacial length ell in dry radii (default: the bead's own, "
+                        "xi_dry / a_d, or 1e-4 for the limit without a bead size; ladder: "
+                        "0.005, 0.0025-0.01); 0 = the paper's model, checked on both grids")
+    s.add_argument("--grid", choices=list(GRIDS), default=None,
+                   help="truth grid (default moving; ladder: lagrangian; eulerian, the "
+                        "paper's, with --interfacial-length 0)")
     s.add_argument("--n", type=int, default=None,
-                   help="grid cells of the (coarsest) run (default 4/L; 400 with "
-                        "--interfacial-length 0)")
+                   help="grid cells of the (coarsest) run (default 400; ladder: 4/L)")
     p.add_argument("--cache", default=None,
                    help="validation cache file (default $THERMOGEL_CACHE or "
                         "~/.cache/thermogel/validations.sqlite)")
@@ -67,7 +75,8 @@ def planning_values(args: argparse.Namespace) -> dict[str, Any]:
             "swollen_radius_um": args.swollen_radius_um,
             "constants": {"viscosity_pa_s": args.viscosity,
                           "polymer_volume_m3": args.polymer_volume_m3,
-                          "permeability_m2": args.k0_m2}}
+                          "permeability_m2": args.k0_m2,
+                          "mesh_length_nm": args.mesh_length_nm}}
     # --interfacial-length is left to SolverSettings: with --n (which HTTP does not offer)
     # its valid range moves with the grid
 
@@ -79,10 +88,11 @@ def planning_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     return {"gel": gel_from_args(args), "t_start": args.t_start, "t_end": args.t_end,
             "branch": args.branch, "dry_radius_um": args.dry_radius_um,
             "swollen_radius_um": args.swollen_radius_um,
-            "constants": PhysicalConstants(args.viscosity, args.polymer_volume_m3, args.k0_m2),
-            "settings": SolverSettings(grid=args.grid, n=args.n, **(
-                {} if args.interfacial_length is None
-                else {"interfacial_length": args.interfacial_length}))}
+            "constants": PhysicalConstants(args.viscosity, args.polymer_volume_m3, args.k0_m2,
+                                           mesh_length_nm=args.mesh_length_nm),
+            "settings": SolverSettings(grid=args.grid, n=args.n,
+                                       interfacial_length=args.interfacial_length,
+                                       method=args.validation_method)}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -131,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot and not args.validate:
         raise ParameterError("plot", args.plot, "used with --validate")
     if args.validate:
-        runs = ", ".join(f"ell = {s.interfacial_length:g} N = {s.n}" if s.regularized
+        runs = ", ".join(f"ell = {s.interfacial_length:.3g} N = {s.n}" if s.regularized
                          else f"{s.grid} N = {s.n}" for s in req.settings.rungs())
         print(f"validating with the full solver ({runs}): seconds to minutes the first "
               "time, then cached", file=sys.stderr, flush=True)
@@ -155,6 +165,11 @@ def run(args: argparse.Namespace) -> int:
     print(_wrap(ans.timescale_formula))
     print(f"  error estimate {ans.error_estimate:.1%}:")
     print(_wrap(ans.error_explanation))
+    if ans.uncertainty is not None:
+        print("  uncertainty of the truth, in three parts:")
+        for part in (ans.uncertainty.numerical, ans.uncertainty.interfacial_length_range,
+                     ans.uncertainty.model_form):
+            print(_wrap(f"- {part.text}"))
     if ans.validation:
         runs = ", ".join(f"{e['grid']} N={e['n']} ell={e['interfacial_length']:g}: "
                          + (f"{e['time']:.5g}" if "time" in e else "failed")

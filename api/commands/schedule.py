@@ -84,5 +84,7 @@ def run(args: argparse.Namespace) -> int:
         if res.get("actuation_seconds"):
             print(_row("  actuation seconds", res["actuation_seconds"]))
     print(_wrap(ans.timescale_formula))
+    if ans.truth:
+        print(_wrap(f"truth of the protocol runs: {ans.truth}"))
     print(_wrap(ans.note))
     return 0

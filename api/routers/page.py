@@ -47,7 +47,7 @@ class FrontCurveRequest(RequestModel):
     t_start: float = temperature_field("start (loading) temperature", 302.0)
     t_end: float = temperature_field("end (actuation) temperature", 308.0)
     branch: Branch | None = Field(None, description="start branch (default swollen)")
-    interfacial_length: float = interfacial_length_field()
+    interfacial_length: float | None = interfacial_length_field()
     n: int = Field(201, ge=11, le=2001, description="samples, 11-2001")
 
     _ell = field_validator("interfacial_length")(check_interfacial_length)

@@ -72,7 +72,7 @@ class SweepRequest(RequestModel):
         description="1-100 doses, fractions of the stored fluid, 0 < f <= 1 each")
     branch: Branch | None = Field(None, description="start branch (default swollen)")
     constants: ConstantsIn | None = Field(None, description="timescale constants")
-    interfacial_length: float = interfacial_length_field()
+    interfacial_length: float | None = interfacial_length_field()
     validate_points: Literal["all", "needs-full"] | list[Annotated[int, Field(ge=0)]] = Field(
         [], alias="validate", description="points whose full-solver validation to queue: "
         "'needs-full' (those the front model cannot answer), 'all', or a list of indices")
