@@ -10,6 +10,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from dosing.scenario import GRIDS
 from solver.errors import ParameterError
 
 from .common import add_gel_options, gel_from_args, print_json
@@ -43,8 +44,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("simulate", help="full PDE solver: porosity, radius and front in time")
     add_gel_options(p)
     add_protocol_options(p, "start temperature in K")
-    p.add_argument("--grid", choices=["eulerian", "lagrangian"], default="eulerian",
-                   help="discretization (default eulerian, the paper's)")
+    p.add_argument("--grid", choices=list(GRIDS), default="eulerian",
+                   help="discretization: eulerian (the paper's, default), lagrangian (uniform "
+                        "dry cells) or moving (cells that follow the interface)")
     p.add_argument("--n", type=int, default=400, help="grid cells (default 400)")
     p.add_argument("--integrator", choices=["implicit", "explicit"], default="implicit",
                    help="adaptive implicit (default) or the paper's forward Euler")
