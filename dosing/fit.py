@@ -149,7 +149,7 @@ def front_radius_model(gel: Gel, t_start: float, t_end: float, branch: str,
     constant after the front reaches the centre."""
     from .planner import front_run
 
-    def for_beta(beta: float | None):  # noqa: ANN202
+    def for_beta(beta: float | None):
         g = gel if beta is None else gel.with_permeability("power", float(beta))
         fr = front_run(g, t_start, t_end, branch, sharp)
         c = fr.curve
@@ -169,7 +169,7 @@ def full_radius_model(gel: Gel, t_start: float, t_end: float, branch: str,
     need = jump.final_radius + 0.002 * (jump.start_radius - jump.final_radius)
     memo: dict[float | None, Any] = {}
 
-    def for_beta(beta: float | None):  # noqa: ANN202
+    def for_beta(beta: float | None):
         key = None if beta is None else round(float(beta), 8)
         if key not in memo:
             g = gel if beta is None else gel.with_permeability("power", float(beta))
