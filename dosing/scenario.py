@@ -25,6 +25,7 @@ import numpy as np
 from solver.crossing import first_fall, hermite_root
 from solver.errors import ParameterError, SolverError, require_finite_positive
 from solver.gel import Gel, check_temperature
+from solver.json_safe import json_safe
 
 SCHEMA = 1
 # the names of solver.full.grids.GRIDS (not imported: importing dosing must not load the
@@ -357,21 +358,6 @@ def _linear_cube(t0: float, a0: float, t1: float, a1: float, radius: float) -> f
     return t1 if y0 == y1 else t0 + (y0 - y) / (y0 - y1) * (t1 - t0)
 
 
-def _json_safe(obj: Any) -> Any:
-    """Diagnostics as strict JSON (numpy scalars to Python, non-finite floats to None)."""
-    if isinstance(obj, dict):
-        return {str(k): _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_json_safe(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _json_safe(obj.tolist()) if obj.size <= 64 else f"array{obj.shape}"
-    if isinstance(obj, np.generic):
-        obj = obj.item()
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, (str, int, float, bool)) or obj is None:
-        return obj
-    return repr(obj)
 
 
 def _floats(values: Any, like: np.ndarray) -> np.ndarray:
@@ -401,7 +387,7 @@ def _simulate(sc: Scenario, horizon: float,
                       temperature=_floats(res.temperature, t), **steps)
     if t.size < 2 or not (np.all(np.isfinite(t)) and np.all(np.isfinite(traj.radius))):
         raise SolverError("the full solver returned no finite a(t)", {"scenario": sc.key_dict()})
-    diag = _json_safe(getattr(res, "diagnostics", {}) or {})
+    diag = json_safe(getattr(res, "diagnostics", {}) or {}, max_array=64)
     diag["spinodal"] = bool(getattr(res, "spinodal", False))
     return traj, diag
 
