@@ -454,3 +454,25 @@ def runs_for(planner: Any) -> DrugRuns:
         if runs is None:
             runs = _RUNS[planner] = DrugRuns(planner)
         return runs
+
+
+class DrugRequest:
+    """What drug dose and schedule requests share (their dataclasses hold ``jump``,
+    ``drug``, ``t_end``, ``constants`` and ``bead_dry_radius_um``)."""
+
+    jump: Any
+    drug: DrugModel
+    t_end: float
+    constants: Any
+    bead_dry_radius_um: float | None
+
+    @property
+    def start_radius(self) -> float:
+        """a(0): the equilibrium stretch at T_start."""
+        return self.jump.start_radius
+
+    @property
+    def solute(self) -> Any:
+        """The dimensionless solute of this request."""
+        return self.drug.solute(self.start_radius, self.t_end, self.constants,
+                                self.bead_dry_radius_um)

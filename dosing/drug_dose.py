@@ -20,7 +20,7 @@ import numpy as np
 
 from solver.errors import ParameterError, require_finite_positive
 
-from .drug import DrugModel, DrugRuns, DrugScenario, drug_settings, leak_time, runs_for
+from .drug import DrugModel, DrugRequest, DrugRuns, DrugScenario, drug_settings, leak_time, runs_for
 from .request import DoseRequest, Jump, _resolve_scenario
 from .units import PhysicalConstants, timescale, volume_to_ul
 
@@ -52,7 +52,7 @@ def resolve_drug_amount(name_fraction: str, fraction: float | None, name_mass: s
 
 
 @dataclass(frozen=True)
-class DrugDoseRequest:
+class DrugDoseRequest(DrugRequest):
     """One drug dose: ``dose_fraction`` of the loaded drug, or ``drug_mass_ug`` (needs the
     load); ``wait`` (tau) or ``wait_seconds`` at T_start in the medium before heating."""
 
@@ -87,17 +87,6 @@ class DrugDoseRequest:
         object.__setattr__(self, "lead", resolve_wait(self.wait, self.wait_seconds, dry,
                                                       self.t_end, self.constants))
         self.solute  # noqa: B018 - validates the release volume against the bead
-
-    @property
-    def start_radius(self) -> float:
-        """a(0): the equilibrium stretch at T_start."""
-        return self.jump.start_radius
-
-    @property
-    def solute(self) -> Any:
-        """The dimensionless solute of this request."""
-        return self.drug.solute(self.start_radius, self.t_end, self.constants,
-                                self.bead_dry_radius_um)
 
     def fluid_request(self, fraction: float) -> DoseRequest:
         """The fluid dose of the same bead and jump."""

@@ -25,10 +25,10 @@ from typing import Any
 
 from solver.errors import ParameterError, SolverError, require_finite_positive
 
-from .drug import DrugModel, DrugRuns, DrugScenario, drug_settings, leak_time, runs_for
+from .drug import DrugModel, DrugRequest, DrugRuns, DrugScenario, drug_settings, leak_time, runs_for
 from .drug_dose import resolve_wait
 from .protocol import heat_cool_protocol, windows
-from .request import Jump, ScheduleRequest, _resolve_scenario
+from .request import Jump, ScheduleRequest, _resolve_scenario, resolve_rests
 from .scenario import Step
 from .schedule import hold_schedule
 from .units import PhysicalConstants, timescale, volume_to_ul
@@ -39,7 +39,7 @@ LEAK_WARNING = 0.1  # a rest leaking more than this share of the next dose is fl
 
 
 @dataclass(frozen=True)
-class DrugScheduleRequest:
+class DrugScheduleRequest(DrugRequest):
     """Drug doses (``doses`` fractions of the load, or ``doses_ug``) with ``rests`` (tau)
     or ``rests_seconds`` at T_start between them, after ``wait`` at T_start."""
 
@@ -74,7 +74,9 @@ class DrugScheduleRequest:
         load = drug.load(None if dry is None else volume_to_ul(jump.stored_volume, dry))
         object.__setattr__(self, "load_ug", load)
         object.__setattr__(self, "fractions", self._resolve_doses(load))
-        object.__setattr__(self, "rests", _resolve_rests(self, len(self.fractions), dry))
+        object.__setattr__(self, "rests", resolve_rests(self.rests, self.rests_seconds,
+                                                        len(self.fractions), dry, self.t_end,
+                                                        self.constants))
         object.__setattr__(self, "lead", resolve_wait(self.wait, self.wait_seconds, dry,
                                                       self.t_end, self.constants))
         tol = require_finite_positive("tolerance", self.tolerance)
@@ -108,17 +110,6 @@ class DrugScheduleRequest:
                                  "together they ask for more drug than the bead holds")
         return tuple(out)
 
-    @property
-    def start_radius(self) -> float:
-        """a(0): the equilibrium stretch at T_start."""
-        return self.jump.start_radius
-
-    @property
-    def solute(self) -> Any:
-        """The dimensionless solute of this request."""
-        return self.drug.solute(self.start_radius, self.t_end, self.constants,
-                                self.bead_dry_radius_um)
-
     def fluid_schedule(self) -> ScheduleRequest:
         """The same schedule read as fluid fractions (for the hold times with D0 = 0)."""
         return ScheduleRequest(self.gel, self.t_start, self.t_end, doses=self.fractions,
@@ -127,30 +118,6 @@ class DrugScheduleRequest:
                                settings=self.settings, check_protocol=False, correct=False)
 
 
-def _resolve_rests(req: Any, n_doses: int, dry: float | None) -> tuple[float, ...]:
-    if req.rests is not None and req.rests_seconds is not None:
-        raise ParameterError("rests_seconds", req.rests_seconds, "None when rests is given")
-    name = "rests" if req.rests_seconds is None else "rests_seconds"
-    values = list(getattr(req, name) or ())
-    if len(values) != n_doses - 1:
-        raise ParameterError(name, getattr(req, name),
-                             f"{n_doses - 1} values (one rest between consecutive doses)")
-    out = []
-    for i, v in enumerate(values):
-        try:
-            x = float(v)
-        except (TypeError, ValueError):
-            x = math.nan
-        if not math.isfinite(x) or x < 0.0:
-            raise ParameterError(f"{name}[{i}]", v, "a finite number >= 0")
-        out.append(x)
-    if name == "rests_seconds":
-        if dry is None:
-            raise ParameterError("dry_radius_um", None, "a finite number > 0 (um) to turn "
-                                 "rests_seconds into tau units")
-        tau = timescale(dry, req.t_end, req.constants).seconds
-        out = [x / tau for x in out]
-    return tuple(out)
 
 
 @dataclass

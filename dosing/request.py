@@ -307,6 +307,40 @@ class DoseRequest:
                 "constants": self.constants.to_dict(), "settings": self.settings.to_dict()}
 
 
+def resolve_rests(rests: Sequence[float] | None, rests_seconds: Sequence[float] | None,
+                  n_doses: int, dry: float | None, t_end: float,
+                  constants: PhysicalConstants) -> tuple[float, ...]:
+    """The rests between ``n_doses`` doses in tau units: ``rests`` as given, or
+    ``rests_seconds`` over tau (eq. timescale; needs the bead's dry radius ``dry``)."""
+    if rests is not None and rests_seconds is not None:
+        raise ParameterError("rests_seconds", rests_seconds,
+                             "None when rests is given (give one of them)")
+    name = "rests" if rests_seconds is None else "rests_seconds"
+    given = rests if rests_seconds is None else rests_seconds
+    values = tuple(given or ())
+    if len(values) != n_doses - 1:
+        raise ParameterError(name, given,
+                             f"{n_doses - 1} values (one rest between consecutive doses)")
+    out = []
+    for i, v in enumerate(values):
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            x = math.nan
+        if not math.isfinite(x) or x < 0.0:
+            raise ParameterError(f"{name}[{i}]", v, "a finite number >= 0")
+        out.append(x)
+    if name == "rests_seconds":
+        if dry is None:
+            raise ParameterError("dry_radius_um", None, "a finite number > 0 (um; or "
+                                 "swollen_radius_um) to turn rests_seconds into tau units")
+        from .units import timescale
+
+        tau = timescale(dry, t_end, constants).seconds
+        out = [x / tau for x in out]
+    return tuple(out)
+
+
 @dataclass(frozen=True)
 class ScheduleRequest:
     """Several doses (fractions of the stored fluid) with rests at T_start between them.
@@ -354,29 +388,8 @@ class ScheduleRequest:
         object.__setattr__(self, "tolerance", tol)
 
     def _resolve_rests(self, n_doses: int, dry: float | None) -> tuple[float, ...]:
-        if self.rests is not None and self.rests_seconds is not None:
-            raise ParameterError("rests_seconds", self.rests_seconds,
-                                 "None when rests is given (give one of them)")
-        name = "rests" if self.rests_seconds is None else "rests_seconds"
-        values = tuple(getattr(self, name) or ())
-        if len(values) != n_doses - 1:
-            raise ParameterError(name, getattr(self, name),
-                                 f"{n_doses - 1} values (one rest between consecutive doses)")
-        out = []
-        for i, v in enumerate(values):
-            x = float(v)
-            if not math.isfinite(x) or x < 0.0:
-                raise ParameterError(f"{name}[{i}]", v, "a finite number >= 0")
-            out.append(x)
-        if name == "rests_seconds":
-            if dry is None:
-                raise ParameterError("dry_radius_um", None, "a finite number > 0 (um; or "
-                                     "swollen_radius_um) to turn rests_seconds into tau units")
-            from .units import timescale
-
-            tau = timescale(dry, self.t_end, self.constants).seconds
-            out = [x / tau for x in out]
-        return tuple(out)
+        return resolve_rests(self.rests, self.rests_seconds, n_doses, dry, self.t_end,
+                             self.constants)
 
     @property
     def start_radius(self) -> float:
