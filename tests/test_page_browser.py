@@ -124,7 +124,7 @@ def test_page_in_headless_chromium(tmp_path: Path) -> None:
             assert sent == []
 
             # within the page's bounds but refused by the server: shown at the field
-            _fill(page, t_end="308", interfacial_length="0.001")
+            _fill(page, t_end="308", interfacial_length="0.00001")  # below the direct range
             page.click("#plan")
             page.wait_for_selector("body[data-state=server-error]", timeout=60_000)
             assert page.inner_text("#err-interfacial_length").startswith("interfacial_length:")

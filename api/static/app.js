@@ -293,7 +293,8 @@ function readForm() {
   take("t_end", checkValue("t_end", $("t_end").value, b.t_end, 1, "K"));
   if ($("dry_radius_um").value.trim() !== "")
     take("dry_radius_um", checkValue("dry_radius_um", $("dry_radius_um").value, b.dry_radius_um, 1, "µm"));
-  take("interfacial_length", checkValue("interfacial_length", $("interfacial_length").value, b.interfacial_length));
+  if ($("interfacial_length").value.trim() !== "")  // empty: the bead's own (xi_dry / a_d)
+    take("interfacial_length", checkValue("interfacial_length", $("interfacial_length").value, b.interfacial_length));
   const doses = checkList("doses", $("doses").value, { ...b.dose_fraction, maxItems: b.doses.maxItems }, 100, "%");
   if (!doses.error && doses.value.length === 0) doses.error = "dose: give one dose, or several separated by commas";
   take("doses", doses);
