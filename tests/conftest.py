@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+
 import pytest
+
+from dosing import Planner
 
 
 @pytest.fixture(autouse=True, scope="session")
@@ -13,3 +17,13 @@ def _private_gel_store(tmp_path_factory: pytest.TempPathFactory):
     mp.setenv("THERMOGEL_GELS", str(tmp_path_factory.mktemp("gels")))
     yield
     mp.undo()
+
+
+@pytest.fixture
+def planner(tmp_path):
+    """A real planner on a temporary cache with a one-thread executor (closed after the
+    test); a test module may define its own."""
+    p = Planner(cache_path=tmp_path / "cache.sqlite", executor=ThreadPoolExecutor(1))
+    yield p
+    p.close()
+    p.jobs.executor.shutdown(wait=True)

@@ -4,13 +4,11 @@ from __future__ import annotations
 
 import asyncio
 import time
-from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 from api_support import asgi
 
 from api.http import create_app
-from dosing import Planner
 from dosing.drug import DrugCache
 
 pytestmark = pytest.mark.anyio
@@ -24,12 +22,6 @@ def anyio_backend() -> str:
     return "asyncio"
 
 
-@pytest.fixture
-def planner(tmp_path):
-    p = Planner(cache_path=tmp_path / "cache.sqlite", executor=ThreadPoolExecutor(1))
-    yield p
-    p.close()
-    p.jobs.executor.shutdown(wait=True)
 
 
 @pytest.fixture

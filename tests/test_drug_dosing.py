@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import json
 import math
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
 
 from api.cli import main
-from dosing import DoseRequest, PhysicalConstants, Planner, SolverSettings
+from dosing import DoseRequest, PhysicalConstants, SolverSettings
 from dosing.drug import DrugModel, DrugRuns, DrugScenario, drug_settings
 from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
 from dosing.drug_schedule import DrugScheduleRequest, plan_drug_schedule
@@ -27,12 +26,6 @@ BALANCE = 1e-10
 PROTEIN = DrugModel(diffusivity_cm2_s=1e-7, mesh_size_nm=23.0, load_ug=1.0)
 
 
-@pytest.fixture
-def planner(tmp_path):
-    p = Planner(cache_path=tmp_path / "cache.sqlite", executor=ThreadPoolExecutor(1))
-    yield p
-    p.close()
-    p.jobs.executor.shutdown(wait=True)
 
 
 def test_no_diffusion_dose_is_the_fluid_answer(planner) -> None:
