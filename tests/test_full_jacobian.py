@@ -14,6 +14,7 @@ from jacobian_support import dense_jacobian
 from solver.equilibrium import equilibrium
 from solver.full import eulerian, lagrangian
 from solver.full.integrate import Segment, Stats, StepControl, Workspace, run_implicit
+from solver.full.kernels import KernelParams
 from solver.full.system import JAC_ANALYTIC, JAC_FD, linearize
 from solver.gel import ANB
 
@@ -26,7 +27,7 @@ def test_analytic_jacobian_matches_finite_differences(mod: object, code: int) ->
     grid = 0 if mod is eulerian else 1
     eq = equilibrium(ANB, 302, "swollen")
     geo = mod.geometry(N)
-    par = np.array([ANB.omega, ANB.chi0(308), ANB.chi1(308), float(code), 1.5 * code])
+    par = KernelParams(ANB.omega, ANB.chi0(308), ANB.chi1(308), code, 1.5 * code, 0.0)
     ws = Workspace(grid, geo)
     y0 = mod.state_from_profile(eq.stretch, np.full(N, eq.porosity))
     y = run_implicit(ws, y0, [Segment(0.0, 0.01, 308.0, par)], np.array([0.01]),

@@ -20,6 +20,7 @@ from solver.errors import ParameterError
 from solver.front.result import fraction_radius
 from solver.full import FullResult, moving, rezone, simulate
 from solver.full.integrate import Segment, Stats, StepControl, Workspace, run_implicit
+from solver.full.kernels import KernelParams
 from solver.full.system import JAC_ANALYTIC, MOVING, linearize
 from solver.gel import ANB
 
@@ -114,7 +115,7 @@ def test_moving_jacobian_matches_central_differences() -> None:
     nodes = moving.initial_nodes(eq.stretch, lambda x: np.full(x.size - 1, eq.porosity), n,
                                  opts, ell)
     geo = moving.geometry(nodes)
-    par = np.array([ANB.omega, ANB.chi0(308), ANB.chi1(308), 1.0, 1.5, ell**2])
+    par = KernelParams(ANB.omega, ANB.chi0(308), ANB.chi1(308), 1, 1.5, ell**2)
     ws = Workspace(MOVING, geo, interfacial=True)
     y0 = moving.state(moving.state_from_profile(eq.stretch, np.full(n, eq.porosity), nodes))
     rz = moving.Rezoner(opts, ell)

@@ -32,7 +32,6 @@ from .kernels import (
     edge_phi,
     edge_porosity,
     edge_terms,
-    interfacial_ell2,
     korteweg,
     permeability,
     permeability_slope,
@@ -136,8 +135,8 @@ def mu_gradient(a, phi_b, geo, omega, chi0, chi1, ell2, work):
 def rhs(y, par, geo, out, work):
     """d(s_1..s_{n-1}, a)/dt; returns False for an unphysical state."""
     n = geo.shape[1] - 1
-    omega, chi0, chi1, code, beta = par[0], par[1], par[2], int(par[3]), par[4]
-    ell2 = interfacial_ell2(par)
+    omega, chi0, chi1, ell2 = par.omega, par.chi0, par.chi1, par.ell2
+    code, beta = par.perm_code, par.perm_beta
     if not cell_state(y, geo, work):
         return False
     a = y[n - 1]
@@ -184,8 +183,9 @@ def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):
     model only (ell = 0): with the interfacial term this grid uses finite differences.
     """
     n = geo.shape[1] - 1
-    omega, chi0, chi1, code, beta = par[0], par[1], par[2], int(par[3]), par[4]
-    if interfacial_ell2(par) > 0.0:
+    omega, chi0, chi1 = par.omega, par.chi0, par.chi1
+    code, beta = par.perm_code, par.perm_beta
+    if par.ell2 > 0.0:
         return False
     if not cell_state(y, geo, work):
         return False

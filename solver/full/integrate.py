@@ -18,6 +18,7 @@ from numba import njit
 
 from ..errors import SolverError
 from . import rosenbrock as ros
+from .kernels import KernelParams
 from .system import (
     JAC_ANALYTIC,
     MODULES,
@@ -50,7 +51,7 @@ class Segment:
     t0: float
     t1: float
     temperature: float
-    par: np.ndarray
+    par: KernelParams
 
 
 @dataclass
@@ -109,7 +110,7 @@ class Workspace:
         self.errv = np.zeros(self.n)
         self.scale = np.zeros(self.n)
 
-    def rhs(self, y: np.ndarray, par: np.ndarray) -> np.ndarray | None:
+    def rhs(self, y: np.ndarray, par: KernelParams) -> np.ndarray | None:
         """f(y) as a new array, or None for an unphysical state."""
         out = np.zeros(self.n)
         return out if rhs(self.grid, y, par, self.geo, out, self.work) else None
@@ -289,7 +290,7 @@ def _stability_step(grid, y, f0, par, geo, work, lower, upper, jband, jc, jd, je
     return 2.0 / rho if rho > 0.0 else np.inf
 
 
-def stable_step(ws: Workspace, y: np.ndarray, par: np.ndarray) -> float:
+def stable_step(ws: Workspace, y: np.ndarray, par: KernelParams) -> float:
     """Gershgorin estimate of the forward Euler stability limit at state y."""
     f = ws.rhs(y, par)
     if f is None:

@@ -11,10 +11,29 @@ that minimum disappears (the paper's delayed front).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
 from ..thermo import osmotic_dp, osmotic_p
+
+
+class KernelParams(NamedTuple):
+    """The constants of one protocol segment, by name, as every grid's kernels read them.
+
+    ``omega`` and ``chi0``, ``chi1`` at the segment's temperature (eq. FloryParam), the
+    permeability law ``perm_code`` with its exponent ``perm_beta`` (eq. Darcy) and ``ell2``,
+    the square of the interfacial length (0: the paper's model; docs/interfacial.md).  A
+    NamedTuple is a numba tuple type: fields cost no more than a float array's entries.
+    """
+
+    omega: float
+    chi0: float
+    chi1: float
+    perm_code: int
+    perm_beta: float
+    ell2: float
 
 EDGE_MAX_STEP = 0.05  # largest march step in log J while bracketing the edge root
 
@@ -162,9 +181,3 @@ def korteweg(jac, rho_face, rho_mid, dry, ell2, n, q):
             upper = rf * rf * (jac[c + 1] - jac[c]) / (rho_mid[c + 1] - rho_mid[c])
         q[c] = 3.0 * ell2 * (upper - lower) / dry[c]
         lower = upper
-
-
-@njit(cache=True)
-def interfacial_ell2(par):
-    """ell^2 from the kernel parameters (0 when par has no sixth entry: the paper's model)."""
-    return par[5] if par.size > 5 else 0.0

@@ -22,7 +22,6 @@ from .kernels import (
     cell_stress_partials,
     edge_phi,
     edge_terms,
-    interfacial_ell2,
     korteweg,
     permeability,
     permeability_slope,
@@ -103,8 +102,8 @@ def mu_gradient(y, phi_b, geo, omega, chi0, chi1, ell2, work):
 def rhs(y, par, geo, out, work):
     """dr_k/dt = k(phi) dmu/dr at every node k = 1..n; False for an unphysical state."""
     n = geo.shape[1] - 1
-    omega, chi0, chi1, code, beta = par[0], par[1], par[2], int(par[3]), par[4]
-    ell2 = interfacial_ell2(par)
+    omega, chi0, chi1, ell2 = par.omega, par.chi0, par.chi1, par.ell2
+    code, beta = par.perm_code, par.perm_beta
     if not cell_state(y, geo, work):
         return False
     phi_b = edge_phi(y[n - 1], work[W_PHI, n - 1], omega, chi0, chi1, ell2)
@@ -123,8 +122,8 @@ def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):
     """Analytic Jacobian of :func:`rhs` (band layout: tridiagonal, pentadiagonal with the
     interfacial term), and rhs into ``out``; False if unphysical."""
     n = geo.shape[1] - 1
-    omega, chi0, chi1, code, beta = par[0], par[1], par[2], int(par[3]), par[4]
-    ell2 = interfacial_ell2(par)
+    omega, chi0, chi1, ell2 = par.omega, par.chi0, par.chi1, par.ell2
+    code, beta = par.perm_code, par.perm_beta
     if not cell_state(y, geo, work):
         return False
     a = y[n - 1]

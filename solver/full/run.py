@@ -20,6 +20,7 @@ from . import front as fronts
 from . import moving
 from .grids import GridSpec, grid_spec
 from .integrate import Segment, Stats, StepControl, Workspace, run_explicit, run_implicit
+from .kernels import KernelParams
 from .moving import MeshOptions, Rezoner
 from .options import SolverOptions
 from .result import FullResult
@@ -199,8 +200,8 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     segments, t0 = [], 0.0
     perm = gel.permeability
     for duration, temp in steps:
-        par = np.array([gel.omega, gel.chi0(temp), gel.chi1(temp), float(perm.code), perm.beta,
-                        ell * ell])
+        par = KernelParams(float(gel.omega), float(gel.chi0(temp)), float(gel.chi1(temp)),
+                           int(perm.code), float(perm.beta), float(ell * ell))
         segments.append(Segment(t0, t0 + duration, temp, par))
         t0 += duration
     segments[-1].t1 = total

@@ -23,10 +23,24 @@ never cross a mechanics sample (where Q changes).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
 from .hindrance import hindrance_factor
+
+
+class SoluteParams(NamedTuple):
+    """The solute's constants by name, as :func:`release_run` reads them: free
+    diffusivity ``d0``, the hindrance law ``law_code`` with its ``sieve`` and exponent ``y``
+    (module ``hindrance``), and the gel/medium partition coefficient ``partition`` (K)."""
+
+    d0: float
+    law_code: int
+    sieve: float
+    y: float
+    partition: float
 
 GAMMA = 2.0 - np.sqrt(2.0)
 D_COEF = GAMMA / 2.0
@@ -154,7 +168,7 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
     """March the solute through the mechanics samples ``ts`` with node volumes ``s3``
     (len(ts), n + 1).  ``m`` (n + 1) is the initial state, updated in place.
 
-    par = (D0, law code, sieve, Y, K).  ``vmed0`` > 0: the medium volume at t = 0 (it grows
+    ``par`` is a :class:`SoluteParams`.  ``vmed0`` > 0: the medium volume at t = 0 (it grows
     by the expelled fluid), else a perfect sink.  Writes the released mass, and its
     advective part, and the mass in the gel at every sample (``out_rel``, ``out_adv``,
     ``out_gel``) and the concentration
@@ -163,7 +177,7 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
     """
     n = dw.size
     size = n + 1
-    d0, code, sieve, yfree, kpart = par[0], int(par[1]), par[2], par[3], par[4]
+    d0, code, sieve, yfree, kpart = par.d0, par.law_code, par.sieve, par.y, par.partition
     lo = np.zeros(size)
     di = np.zeros(size)
     up = np.zeros(size)

@@ -22,7 +22,7 @@ import numpy as np
 from ..errors import ParameterError, SolverError
 from ..full.result import FullResult
 from .hindrance import Hindrance, hindrance_factor
-from .kernels import BAD, BUDGET, release_run
+from .kernels import BAD, BUDGET, SoluteParams, release_run
 from .result import ReleaseResult
 
 D_MAX = 1e8  # solute diffusivity / gel diffusivity
@@ -144,7 +144,8 @@ def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
     rel = np.zeros(ts.size)
     adv = np.zeros(ts.size)
     h = solute.hindrance
-    par = np.array([solute.diffusivity, float(h.code), h.sieve, h.y, solute.partition])
+    par = SoluteParams(float(solute.diffusivity), int(h.code), float(h.sieve), float(h.y),
+                       float(solute.partition))
     counters = np.zeros(2, dtype=np.int64)
     gel = np.zeros(ts.size)
     status = release_run(ts, s3, dw, -1.0 if vol is None else float(vol), par, m, rel, adv,
