@@ -8,11 +8,14 @@ For each of the paper's cases (ANB 302->308, 308->302, 308->304; HHT 304->308, 3
   * a reference: the finest grid at the tightest tolerance, Richardson-checked on a ladder of
     three grids (observed order and estimated error of a(t) and of the 80% time) and set against
     the other grid at the same N.  In the front cases the paper's model has no interfacial
-    energy and does not converge under grid refinement (issue 3): there the "reference" is the
-    finest Eulerian run and the check reports the grid spread instead.  When the full solver
-    takes ``interfacial_length`` (issue 8), the front cases are run with it and their
-    reference is the grid-converged regularized solution (Lagrangian grid);
-  * the full solver (implicit) over a sweep of N on both grids, and over a sweep of rtol;
+    energy and does not converge under grid refinement (issue 3): with ``--ell 0`` the
+    "reference" is the finest Eulerian run and the check reports the grid spread instead.  By
+    default the front cases' reference is the planner's truth (issue 12): a direct run of the
+    regularized model on the moving grid at ell = 1e-4 (which stands for ell -> 0) with the
+    planner's n = 400 and rtol, Richardson-checked on n = 100, 200, 400;
+  * the full solver (implicit) over a sweep of N on the fixed grids (in the front cases at the
+    report's ell, 0.01 by default: what a uniform grid affords) and, in the front cases, on
+    the moving grid at the truth's ell; and over a sweep of rtol;
   * the paper's explicit forward Euler (N and dt of the paper), timed from a short partial run
     and extrapolated to the whole run (its error is that of its semi-discretization);
   * the front model (and issue 8's sharp-interface one, where present) from the bare
@@ -46,6 +49,7 @@ import numpy as np
 
 from benchmarks.front_model import median_time
 from benchmarks.full_solver import dense_radius, max_error
+from dosing.scenario import TRUTH
 from solver.errors import BudgetExceeded, NotApplicableError, ParameterError, SolverError
 from solver.front import fraction_radius, front_applicability, front_trajectory
 from solver.full import FullResult, simulate
@@ -62,7 +66,9 @@ FRONT_KINDS = ("front", "delayed_front")
 OUTPUTS = 200  # output times per run (every = until / OUTPUTS), the same for every method
 CONSERVATION = 1e-10  # relative solid-volume error a converged run must keep (issue 3)
 CONVERGED = 1e-3  # largest Richardson error estimate (relative) of a converged reference
-DEFAULT_ELL = 0.01  # interfacial length of the report when the solver offers the term
+DEFAULT_ELL = 0.01  # interfacial length of the fixed grids' front runs (4 / ell cells afford it)
+TRUTH_ELL = float(TRUTH.interfacial_length)  # the planner's truth without a bead: 1e-4
+TRUTH_RTOL = float(TRUTH.rtol)
 COLUMNS = ("case", "behaviour", "method", "grid", "n", "rtol", "dt", "ell", "wall_s", "timing",
            "steps", "rejected", "err_a", "err_a_same_n", "err_front", "err_t80", "t80",
            "status", "note")
@@ -134,11 +140,14 @@ class Plan:
     guard_seconds: float
     paper_ns: tuple[int, ...] = ()
     grids: tuple[str, ...] = ("eulerian", "lagrangian")
+    truth_ns: tuple[int, int, int] = (100, 200, TRUTH.n)  # the moving grid's ladder
+    moving_ns: tuple[int, ...] = (100, 200, TRUTH.n)  # its N sweep in the front cases
 
 
 FULL = Plan("full", tuple(c.name for c in CASES), (50, 100, 200, 400, 800, 1600), 1e-6,
             (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8), 400, (400, 800, 1600), 1e-9,
-            (1e-8, 5e-9, 2e-9, 1e-9), 50_000, 5, 6.0, 200, 600.0, (100, 400, 1600))
+            (1e-8, 5e-9, 2e-9, 1e-9), 50_000, 5, 6.0, 200, 600.0, (100, 400, 1600),
+            moving_ns=(50, 100, 200, 400, 800))
 SMOKE = Plan("smoke", ("ANB 308->302", "ANB 302->308"), (50, 100), 1e-6, (1e-4, 1e-6, 1e-8),
              100, (50, 100, 200), 1e-9, (1e-8, 5e-9), 2_000, 3, 0.5, 20, 60.0)
 PLANS = {"full": FULL, "smoke": SMOKE}
@@ -213,6 +222,7 @@ def warm_up() -> None:
     """Load (or compile) every kernel the report calls, so that no timing pays for it."""
     for grid in ("eulerian", "lagrangian"):
         simulate("ANB", 302, 308, until=1e-3, grid=grid, n=20)
+    simulate("ANB", 302, 308, until=1e-3, grid="moving", n=20, interfacial_length=0.01)
     simulate("ANB", 308, 302, until=1e-5, n=20, integrator="explicit", dt=1e-7)
     front_trajectory(preset("ANB"), 302, 308)
 
@@ -349,32 +359,34 @@ REFERENCE_COLUMNS = ("case", "behaviour", "grid", "n", "rtol", "ell", "a80", "t8
                      "error_a", "order_t80", "error_t80", "spread_t80", "converged", "note")
 
 
-def reference_setting(case: Case, plan: Plan, ell: float | None) -> tuple[str, float]:
-    """(grid, rtol) of the reference.  Smooth cases: Eulerian at ``ref_rtol``.  Delayed
-    fronts: Eulerian at the rtol sweep's tightest (shared with it; ``ref_rtol`` on the finest
-    grid costs minutes there).  Fronts: at the sweep's rtol, whose time error (~1e-5) is far
-    below the grid error, so the ladder shares the sweep's runs; on the Lagrangian grid when
-    regularized (it resolves the interface with the fewest cells), else on the paper's
-    Eulerian grid (whose front speed keeps moving with N: no converged reference exists)."""
+def reference_setting(case: Case, plan: Plan,
+                      ell: float | None) -> tuple[str, float, tuple[int, ...], float | None]:
+    """(grid, rtol, ladder, ell) of the reference.  Smooth cases: Eulerian at ``ref_rtol``.
+    Delayed fronts: Eulerian at the rtol sweep's tightest (shared with it; ``ref_rtol`` on
+    the finest grid costs minutes there).  Fronts, regularized: the planner's truth (the
+    moving grid at ``TRUTH_ELL`` and the planner's rtol, ladder ``truth_ns`` ending at its
+    n); fronts with the paper's model (``ell`` None): the paper's Eulerian grid at the
+    sweep's rtol (its front speed keeps moving with N: no converged reference exists)."""
     if case.behaviour == "front":
-        return ("lagrangian" if ell is not None else "eulerian"), plan.rtol
+        if ell is not None:
+            return "moving", TRUTH_RTOL, plan.truth_ns, TRUTH_ELL
+        return "eulerian", plan.rtol, plan.ref_ns, None
     if case.behaviour == "delayed_front":
-        return "eulerian", min(plan.rtols)
-    return "eulerian", plan.ref_rtol
+        return "eulerian", min(plan.rtols), plan.ref_ns, ell
+    return "eulerian", plan.ref_rtol, plan.ref_ns, ell
 
 
 def reference(case: Case, plan: Plan, runner: Runner, ell: float | None) -> Reference:
     """The finest run of the Richardson ladder, checked (SolverError if it fails)."""
-    ell = case_ell(case, ell)
-    grid, rtol = reference_setting(case, plan, ell)
+    grid, rtol, ns, ell = reference_setting(case, plan, case_ell(case, ell))
     ladder = [runner.run(case.gel, case.t_start, case.t_end, case.until, grid=grid, n=n,
-                         rtol=rtol, ell=ell) for n in plan.ref_ns]
-    for n, out in zip(plan.ref_ns, ladder, strict=True):
+                         rtol=rtol, ell=ell) for n in ns]
+    for n, out in zip(ns, ladder, strict=True):
         if out.result is None:
             raise SolverError(f"reference {case.name} {grid} N={n} failed: {out.message}",
                               out.diagnostics)
     fine = ladder[-1].result
-    ratio = plan.ref_ns[2] / plan.ref_ns[1]
+    ratio = ns[2] / ns[1]
     a80 = target_radius(case, float(fine.radius[0]))
     order_a, error_a = observed_order(max_error(ladder[1].result, ladder[0].result, case.until),
                                       max_error(fine, ladder[1].result, case.until), ratio)
@@ -383,13 +395,19 @@ def reference(case: Case, plan: Plan, runner: Runner, ell: float | None) -> Refe
     if None not in t80s:
         order_t, error_t = observed_order(abs(t80s[1] - t80s[0]) / t80s[-1],
                                           abs(t80s[2] - t80s[1]) / t80s[-1], ratio)
-    other = "lagrangian" if grid == "eulerian" else "eulerian"
-    twin = runner.run(case.gel, case.t_start, case.t_end, case.until, grid=other,
-                      n=plan.ref_ns[-1], rtol=rtol, ell=ell)
-    t_twin = crossing(twin.result, a80)
-    spread = abs(t_twin / t80s[-1] - 1.0) if t_twin is not None and t80s[-1] else None
+    spread = None
+    if grid != "moving":  # no fixed grid affords the truth's ell: 4 / ell = 40,000 cells
+        other = "lagrangian" if grid == "eulerian" else "eulerian"
+        twin = runner.run(case.gel, case.t_start, case.t_end, case.until, grid=other,
+                          n=ns[-1], rtol=rtol, ell=ell)
+        t_twin = crossing(twin.result, a80)
+        spread = abs(t_twin / t80s[-1] - 1.0) if t_twin is not None and t80s[-1] else None
     converged = error_a < CONVERGED and (t80s[-1] is None or error_t < CONVERGED)
-    if converged:
+    if grid == "moving":
+        note = (f"the planner's truth: a direct run at ell = {ell:g} (standing for ell -> 0) "
+                f"on the moving grid, Richardson over n = {', '.join(map(str, ns))}: "
+                + ("converged" if converged else "NOT converged by the Richardson check"))
+    elif converged:
         note = "grid-converged (Richardson)"
     elif case.behaviour in FRONT_KINDS and ell is None:
         note = ("NOT converged: the paper's model has no interfacial energy, the front speed "
@@ -397,7 +415,7 @@ def reference(case: Case, plan: Plan, runner: Runner, ell: float | None) -> Refe
                 "show the grid spread")
     else:
         note = "NOT converged by the Richardson check"
-    return Reference(case, fine, grid, plan.ref_ns[-1], rtol, ell, a80, t80s[-1], order_a,
+    return Reference(case, fine, grid, ns[-1], rtol, ell, a80, t80s[-1], order_a,
                      error_a, order_t, error_t, spread, converged, note)
 
 
@@ -445,18 +463,22 @@ def full_row(case: Case, method: str, out: Outcome, ref: Reference, rtol: float,
 
 def sweep_rows(case: Case, plan: Plan, runner: Runner, ref: Reference,
                ell: float | None) -> list[dict[str, Any]]:
-    """The implicit full solver over N (both grids, rtol = plan.rtol) and over rtol
-    (Eulerian, N = plan.tol_n), and, when regularized, the paper's model over
-    ``plan.paper_ns`` (Eulerian); rtol-sweep rows also carry the error against the tightest
-    rtol at the same N (the time-integration error alone, as benchmarks/full_solver.py)."""
+    """The implicit full solver over N (the fixed grids at the report's ell, rtol =
+    plan.rtol; in regularized front cases the moving grid at the truth's ell and rtol over
+    ``plan.moving_ns``) and over rtol (Eulerian, N = plan.tol_n), and, when regularized, the
+    paper's model over ``plan.paper_ns`` (Eulerian); rtol-sweep rows also carry the error
+    against the tightest rtol at the same N (the time-integration error alone, as
+    benchmarks/full_solver.py)."""
     ell = case_ell(case, ell)
     rows = []
-    for grid in plan.grids:
-        for n in plan.ns:
-            out = runner.run(case.gel, case.t_start, case.t_end, case.until, grid=grid, n=n,
-                             rtol=plan.rtol, ell=ell)
-            rows.append(full_row(case, f"full {grid} (N sweep)", out, ref, plan.rtol, n, grid,
-                                 ell))
+    sweeps = [(grid, n, plan.rtol, ell) for grid in plan.grids for n in plan.ns]
+    if ell is not None:
+        sweeps += [("moving", n, TRUTH_RTOL, TRUTH_ELL) for n in plan.moving_ns]
+    for grid, n, rtol, grid_ell in sweeps:
+        out = runner.run(case.gel, case.t_start, case.t_end, case.until, grid=grid, n=n,
+                         rtol=rtol, ell=grid_ell)
+        rows.append(full_row(case, f"full {grid} (N sweep)", out, ref, rtol, n, grid,
+                             grid_ell))
     for n in plan.paper_ns if ell is not None else ():
         out = runner.run(case.gel, case.t_start, case.t_end, case.until, n=n, rtol=plan.rtol)
         rows.append(full_row(case, "full eulerian, paper's model (N sweep)", out, ref,
@@ -623,7 +645,7 @@ def work_precision(plan: Plan, ell: float | None = None, log: Log = quiet,
 
 def headline(report: Report) -> list[dict[str, Any]]:
     """Per case: the reference's 80% time, the paper's explicit scheme (extrapolated), the
-    planner's validation truth (e400: the paper's model, Eulerian, N=400, rtol 1e-6), the
+    paper's model as the paper ran it (e400: Eulerian, N=400, rtol 1e-6), the
     cheapest full-solver run within 1% of the reference on both a(t) and the 80% time, and
     the front models (the paper's, and issue 8's sharp one) from the bare equilibrium."""
     out = []
@@ -705,7 +727,9 @@ def machine_line(info: dict[str, Any]) -> str:
 def report_markdown(report: Report) -> str:
     """The work-precision report as Markdown: machine, headline, references, full table."""
     ell = ("the paper's model" if report.ell is None
-           else f"interfacial length ell = {report.ell:g} in the front cases")
+           else f"interfacial length ell = {report.ell:g} on the fixed grids in the front "
+                f"cases; their reference is the planner's truth (moving grid, ell = "
+                f"{TRUTH_ELL:g})")
     parts = [f"# Work-precision report ({report.plan.label})", "",
              f"Machine: {machine_line(report.machine)}. Wall time of the report "
              f"{report.wall:.0f} s. Full solver: {ell}.", "", "## Headline", "",

@@ -96,3 +96,20 @@ def test_validation_plot_from_the_answer_alone(tmp_path: Path, capsys) -> None:
                  "0.5", "--plot", str(tmp_path / "y.png"),
                  "--cache", str(tmp_path / "c.sqlite")]) == 2
     assert "plot" in capsys.readouterr().err
+
+
+def test_direct_validation_plot_from_the_answer_alone(tmp_path: Path) -> None:
+    """Issue 12: a direct validation (no ladder, no limit) is drawn too."""
+    from api.plots.validation import draw_validation
+
+    unc = {"interfacial_lengths": [4e-5, 1.6e-4], "interfacial_length_times": [0.02046, 0.02047],
+           "delayed_transition_time": 0.0345, "delayed_transition_ratio": 1.69}
+    answer = {"model": "front-sharp", "time": 0.0201, "dose_fraction": 0.5,
+              "error_estimate": 0.018,
+              "validation": {"method": "direct", "interfacial_length": 8e-5, "time": 0.02045,
+                             "error": 4e-4, "limit": None, "uncertainty": unc, "runs": []}}
+    out = draw_validation(answer, tmp_path / "direct.png")
+    assert out.stat().st_size > 10_000 and out.read_bytes()[:4] == b"\x89PNG"
+    paper = {**answer, "validation": {**answer["validation"], "interfacial_length": 0.0}}
+    with pytest.raises(ValueError, match="no regularized validation"):
+        draw_validation(paper, tmp_path / "paper.png")

@@ -110,8 +110,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--validate", action="store_true",
                    help="also run the full solver's validation runs (blocking, cached)")
     p.add_argument("--plot", default=None, metavar="PNG",
-                   help="with --validate: draw the validation (dose time against ell, the "
-                        "limit and the answer) to this file (needs matplotlib)")
+                   help="with --validate: draw the validation (dose time against ell with "
+                        "its bounds, the model-form bound and the answer) to this file "
+                        "(needs matplotlib)")
     add_drug_options(p)
     add_wait_options(p)
     p.set_defaults(func=run)
