@@ -33,7 +33,7 @@ from solver.gel import Gel
 from solver.solute import Hindrance, ReleaseResult, Solute, crank_sphere
 
 from .cache import ValidationCache
-from .scenario import LADDER, RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
+from .scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
 from .units import BOLTZMANN, UM3_PER_UL, PhysicalConstants
 
 # mechanics samples per unit time (at least MIN_SAMPLES per step): benchmarks/drug.py measures
@@ -226,13 +226,14 @@ def leak_time(solute: Solute, start_radius: float, fraction: float = 0.1) -> flo
 # ---------------------------------------------------------------------- drug runs
 
 def drug_settings(settings: SolverSettings) -> SolverSettings:
-    """The mechanics of a drug run: the settings' own on the Lagrangian grid (the solute
-    lives on its cells); the paper's model keeps its N there.  The direct truth (moving
-    grid, issue 12) is not carried over: a drug run takes the ladder's coarsest rung
-    (``LADDER``, uniform Lagrangian cells at 4 / ell), as before."""
-    if settings.direct:
-        settings = replace(LADDER, rtol=settings.rtol, integrator=settings.integrator)
-    return settings if settings.grid == "lagrangian" else replace(settings, grid="lagrangian")
+    """The mechanics of a drug run: the fluid answers' own settings (issue 12: one truth).
+    The direct truth runs on the moving grid at the bead's ell (the solute is resampled onto
+    uniform dry cells, :func:`solver.solute.node_volumes`); a ladder runs its coarsest rung
+    on the Lagrangian grid; the paper's model (ell = 0) moves to the Lagrangian grid with
+    its N (the solute lives on the dry coordinate's cells)."""
+    if settings.grid in ("lagrangian", "moving"):
+        return settings
+    return replace(settings, grid="lagrangian")
 
 
 @dataclass(frozen=True)
@@ -312,8 +313,10 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
         t0 += duration
     if not parts:
         raise ParameterError("protocol", steps, "at least one step of positive duration")
-    cat = {name: np.concatenate([getattr(r, name) for _, r in parts])
-           for name in ("radius", "front", "jump", "phi", "temperature", "solid_error")}
+    names = ["radius", "front", "jump", "phi", "temperature", "solid_error"]
+    if s.grid == "moving":
+        names.append("nodes")  # each output's mesh: the cells its phi refers to
+    cat = {name: np.concatenate([getattr(r, name) for _, r in parts]) for name in names}
     t = np.concatenate([r.t + off for off, r in parts])
     first = parts[0][1]
     a = cat["radius"]
@@ -323,7 +326,8 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
     return FullResult(t=t, radius=a, front=cat["front"], jump=cat["jump"], phi=cat["phi"],
                       coords=first.coords, temperature=cat["temperature"],
                       expelled_volume=4.0 * np.pi / 3.0 * (a[0] ** 3 - a**3),
-                      solid_error=cat["solid_error"], diagnostics=diag)
+                      solid_error=cat["solid_error"], diagnostics=diag,
+                      nodes=cat.get("nodes", np.zeros((0, 0))))
 
 
 def run_drug_scenario(scenario: dict[str, Any], budget: float = RUN_BUDGET_S

@@ -95,16 +95,30 @@ class Solute:
         return cls(**d)
 
 
-def node_volumes(res: FullResult) -> np.ndarray:
-    """r_k^3 at every node (k = 0..n, r_0 = 0) and output, from a Lagrangian run's phi."""
-    if res.grid != "lagrangian":
-        raise ParameterError("grid", res.grid, "'lagrangian' (the solute lives on the dry "
-                             "coordinate's cells)")
-    n = res.coords.size
-    dw = np.diff((np.arange(n + 1) / n) ** 3)
-    s3 = np.zeros((res.t.size, n + 1))
-    s3[:, 1:] = np.cumsum(dw[None, :] / (1.0 - res.phi), axis=1)
-    return s3
+def node_volumes(res: FullResult, cells: int | None = None) -> np.ndarray:
+    """r_k^3 at the material nodes rho_k = k/n (k = 0..n, r_0 = 0) of every output.
+
+    A Lagrangian run's cells are those nodes.  A moving-grid run (issue 12: its nodes move
+    through the material) is resampled onto ``cells`` uniform dry cells (default its own
+    count): within each of its cells the enclosed volume r^3 is linear in the dry volume
+    rho^3 (slope 1 / (1 - phi)), so linear interpolation of r^3 in rho^3 is exact and
+    conserves both volumes.
+    """
+    if res.grid not in ("lagrangian", "moving"):
+        raise ParameterError("grid", res.grid, "'lagrangian' or 'moving' (the solute lives on "
+                             "the dry coordinate's cells)")
+    if res.grid == "lagrangian":
+        n = res.coords.size
+        dw = np.diff((np.arange(n + 1) / n) ** 3)
+        s3 = np.zeros((res.t.size, n + 1))
+        s3[:, 1:] = np.cumsum(dw[None, :] / (1.0 - res.phi), axis=1)
+        return s3
+    n = int(cells or res.phi.shape[1])
+    dry = res.nodes**3
+    own = np.zeros_like(dry)
+    own[:, 1:] = np.cumsum(np.diff(dry, axis=1) / (1.0 - res.phi), axis=1)
+    target = (np.arange(n + 1) / n) ** 3
+    return np.stack([np.interp(target, d, v) for d, v in zip(dry, own, strict=True)])
 
 
 def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
@@ -161,7 +175,7 @@ def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
         conc = np.zeros(ts.size)
     else:
         conc = rel / (vol + (a3[0] - a3))
-    phi0 = float(res.phi[0].mean())
+    phi0 = 1.0 - 1.0 / float(a3[0])  # the loaded bead's mean porosity (solid volume 1)
     radii = np.cbrt(0.5 * (s3[picks, 1:] + s3[picks, :-1]))
     diag = {"steps": int(counters[0]), "rejected": int(counters[1]), "rtol": rtol,
             "samples": int(ts.size), "n": n, "solute": solute.to_dict(),
