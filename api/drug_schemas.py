@@ -118,6 +118,12 @@ class DrugDoseResponse(_Out):
                           "error estimate)")
     scenario_key: str | None = Field(None, description="key of the drug run")
     note: str = Field(description="caveats, in words")
+    interfacial_length: float = Field(
+        description="interfacial length ell (dry radii) of the full-solver runs: the fluid "
+                    "answers' truth, the bead's own xi_dry / a_d by default")
+    bead_dry_radius_um: float | None = Field(None, description="the bead size assumed (um)")
+    truth: str = Field(description="the model the drug runs use, in words (as the fluid "
+                                   "answers' truth)")
 
 
 class DrugScheduleResponse(_Out):
@@ -144,3 +150,9 @@ class DrugScheduleResponse(_Out):
         description="hindered diffusivity in the start state, cm^2/s")
     timescale_seconds: float | None = Field(None, description="tau in s (eq. timescale)")
     note: str = Field(description="caveats, in words")
+    interfacial_length: float = Field(
+        description="interfacial length ell (dry radii) of the full-solver runs: the fluid "
+                    "answers' truth, the bead's own xi_dry / a_d by default")
+    bead_dry_radius_um: float | None = Field(None, description="the bead size assumed (um)")
+    truth: str = Field(description="the model the drug runs use, in words (as the fluid "
+                                   "answers' truth)")

@@ -33,7 +33,9 @@ from solver.gel import Gel
 from solver.solute import Hindrance, ReleaseResult, Solute, crank_sphere
 
 from .cache import ValidationCache
+from .request import DoseRequest
 from .scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
+from .truth import truth_text
 from .units import BOLTZMANN, UM3_PER_UL, PhysicalConstants
 
 # mechanics samples per unit time (at least MIN_SAMPLES per step): benchmarks/drug.py measures
@@ -458,6 +460,15 @@ def runs_for(planner: Any) -> DrugRuns:
         if runs is None:
             runs = _RUNS[planner] = DrugRuns(planner)
         return runs
+
+
+def drug_truth_text(req: Any) -> str:
+    """The model a drug answer's runs use, in words: the fluid answers' truth for the same
+    bead, jump and settings (issue 12: one truth)."""
+    fluid = DoseRequest(req.gel, req.t_start, req.t_end, dose_fraction=0.5,
+                        dry_radius_um=req.bead_dry_radius_um, constants=req.constants,
+                        branch=req.branch, settings=req.settings)
+    return truth_text(fluid)
 
 
 class DrugRequest:

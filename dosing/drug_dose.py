@@ -20,7 +20,16 @@ import numpy as np
 
 from solver.errors import ParameterError, require_finite_positive
 
-from .drug import DrugModel, DrugRequest, DrugRuns, DrugScenario, drug_settings, leak_time, runs_for
+from .drug import (
+    DrugModel,
+    DrugRequest,
+    DrugRuns,
+    DrugScenario,
+    drug_settings,
+    drug_truth_text,
+    leak_time,
+    runs_for,
+)
 from .request import DoseRequest, Jump, _resolve_scenario
 from .units import PhysicalConstants, timescale, volume_to_ul
 
@@ -144,6 +153,9 @@ class DrugDoseAnswer:
     fluid_answer: dict[str, Any] | None
     scenario_key: str | None
     note: str
+    interfacial_length: float = 0.0
+    bead_dry_radius_um: float | None = None
+    truth: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
@@ -181,7 +193,9 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
                   wait=req.lead, leak_time_10pct=t10,
                   leak_time_10pct_seconds=None if tau is None or math.isinf(t10) else t10 * tau,
                   effective_diffusivity_cm2_s=d_eff, drug_diffusivity_cm2_s=d0,
-                  timescale_seconds=tau)
+                  timescale_seconds=tau,
+                  interfacial_length=drug_settings(req.settings).interfacial_length,
+                  bead_dry_radius_um=dry, truth=drug_truth_text(req))
     if solute.diffusivity == 0.0:
         fluid = planner.dose(req.fluid_request(req.fraction))
         return DrugDoseAnswer(

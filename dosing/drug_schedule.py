@@ -25,7 +25,16 @@ from typing import Any
 
 from solver.errors import ParameterError, SolverError, require_finite_positive
 
-from .drug import DrugModel, DrugRequest, DrugRuns, DrugScenario, drug_settings, leak_time, runs_for
+from .drug import (
+    DrugModel,
+    DrugRequest,
+    DrugRuns,
+    DrugScenario,
+    drug_settings,
+    drug_truth_text,
+    leak_time,
+    runs_for,
+)
 from .drug_dose import resolve_wait
 from .protocol import heat_cool_protocol, windows
 from .request import Jump, ScheduleRequest, _resolve_scenario, resolve_rests
@@ -138,6 +147,9 @@ class DrugScheduleAnswer:
     effective_diffusivity_cm2_s: float
     timescale_seconds: float | None
     note: str
+    interfacial_length: float = 0.0
+    bead_dry_radius_um: float | None = None
+    truth: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
@@ -354,7 +366,7 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
             "cells): during each rest the bead leaks drug by diffusion and takes up drug-free "
             "medium, which dilutes the fluid the next heating expels. The corrected times "
             f"meet each drug dose within {req.tolerance:.0%} on the same solver.")
-    if "front" in model and s.regularized:
+    if "front" in model and s.regularized and not s.direct:
         note += (" With D0 = 0 the hold times are the front model's sharp-interface limit "
                  "(ell -> 0) while the protocol runs use the ladder's coarsest ell, whose front "
                  "first has to nucleate at the edge: part of the correction is that delay.")
@@ -365,4 +377,5 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
         corrected=corrected, warnings=warnings, leak_time_10pct=leak_time(solute,
                                                                            req.start_radius),
         effective_diffusivity_cm2_s=d0 * float(solute.hindrance.factor(phi0)),
-        timescale_seconds=tau, note=note)
+        timescale_seconds=tau, note=note, interfacial_length=s.interfacial_length,
+        bead_dry_radius_um=req.bead_dry_radius_um, truth=drug_truth_text(req))

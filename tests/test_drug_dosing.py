@@ -58,6 +58,9 @@ def test_protein_dose_leaks_while_it_waits_as_crank_says(planner) -> None:
     grown_ul = ans.fluid_fraction * (req.start_radius**3 - 1) * 4 * math.pi / 3 * 50**3 / 1e9
     assert ans.medium_concentration_ug_per_ul == pytest.approx(released / (0.1 + grown_ul),
                                                                rel=1e-3)
+    # issue 12: the drug runs state the fluid answers' truth (model, ell, bead size)
+    assert ans.interfacial_length == 0.01 and ans.bead_dry_radius_um == 50
+    assert "given interfacial length ell = 0.01" in ans.truth and "moving grid" in ans.truth
 
 
 @pytest.mark.parametrize("kwargs,field", [
