@@ -1,6 +1,7 @@
 """Drug release: the cost of the drug against the same run without it, and its accuracy.
 
 Run:  .venv/bin/python benchmarks/drug.py [--repeats 3] [--quick]
+      .venv/bin/python benchmarks/drug.py --truth   (one truth: drug vs fluid answers)
 
 For each case (ANB 302->308 K and HHT 304->308 K for t = 0.3, and ANB heat 0.05 / rest 0.5 /
 heat 0.1; Lagrangian N = 400, ell = 0.01, rtol 1e-5) and drug (D0 = 0; the protein of the
@@ -16,6 +17,11 @@ the swollen gel; and the same protein without sieving) it prints
     reference's own mechanics subsampled (the solute's sampling error alone), 'total err'
     on a run sampled so (which adds the mechanics' change: its steps stop at every output);
   * the mass balance max |in gel + released - 1|.
+
+``--truth`` (issue 12): a 50 um bead of ANB, 302 -> 308 K, planned by the planner on its
+default truth (the moving grid at the bead's ell): the validated fluid 50 % dose against the
+50 % drug dose of the README's protein (squeezed out with the fluid, so the two times must
+agree to the fluid answer's numerical bound), with their wall times and ell.
 """
 
 from __future__ import annotations
@@ -67,11 +73,44 @@ def subsample(res: FullResult, every: int) -> FullResult:
                             "expelled_volume", "solid_error")})
 
 
+def one_truth() -> None:
+    """The fluid truth and the drug answer of the same bead and dose (``--truth``)."""
+    import tempfile
+    from concurrent.futures import ThreadPoolExecutor
+
+    from dosing import DoseRequest, Planner
+    from dosing.drug import DrugModel
+    from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
+
+    protein = DrugModel(diffusivity_cm2_s=1e-7, mesh_size_nm=23.0, load_ug=1.0)
+    with tempfile.TemporaryDirectory() as tmp, Planner(
+            cache_path=f"{tmp}/truth.sqlite", executor=ThreadPoolExecutor(1)) as planner:
+        w = time.perf_counter()
+        fluid = planner.dose(DoseRequest("ANB", 302, 308, dose_fraction=0.5, dry_radius_um=50),
+                             validate=True)
+        w_fluid = time.perf_counter() - w
+        w = time.perf_counter()
+        drug = plan_drug_dose(planner, DrugDoseRequest("ANB", 302, 308, protein,
+                                                       dose_fraction=0.5, dry_radius_um=50))
+        w_drug = time.perf_counter() - w
+    truth = fluid.validation.time if hasattr(fluid.validation, "time") else \
+        fluid.validation["time"]
+    print(f"ANB 302 -> 308 K, 50 um, 50 %: fluid truth {truth:.6f} (ell = "
+          f"{fluid.interfacial_length:.3g}, numerical bound "
+          f"{fluid.uncertainty.numerical.relative:.3%}; validation {w_fluid:.1f} s); drug "
+          f"(protein, {drug.mechanism}) {drug.time:.6f} (ell = {drug.interfacial_length:.3g}; "
+          f"{w_drug:.1f} s): gap {abs(drug.time / truth - 1):.3%}")
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--quick", action="store_true", help="the first case only")
+    p.add_argument("--truth", action="store_true", help="drug vs fluid answer of one bead")
     args = p.parse_args()
+    if args.truth:
+        one_truth()
+        return
     print(f"Lagrangian N = {N}, ell = {ELL}, rtol {RTOL}; times in s (warm, median of "
           f"{args.repeats})")
     for name, (gel, t0, protocol) in list(CASES.items())[: 1 if args.quick else None]:
