@@ -130,9 +130,9 @@ class ServiceState:
         that one server runs each job."""
         if self._jobs is None:
             self._job_pool = ThreadPoolExecutor(1, thread_name_prefix="job")
-            cache = getattr(self.planner, "cache", None)
             lease = float(self.options.get("lease_seconds") or DEFAULT_LEASE_SECONDS)
-            self._jobs = JobRunner(self._job_pool, max_pending=JOB_QUEUE, leases=cache,
+            self._jobs = JobRunner(self._job_pool, max_pending=JOB_QUEUE,
+                                   leases=self.planner.cache,
                                    lease_seconds=lease, what="schedule and fit jobs")
         return self._jobs
 

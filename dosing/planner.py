@@ -25,13 +25,14 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from solver.errors import NotApplicableError, SolverError
+from solver.full import simulate
 from solver.gel import Gel
 from solver.phase import JumpClass, classify_jump
 
 from .cache import ValidationCache
 from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner
 from .request import DoseRequest, ScheduleRequest
-from .scenario import Scenario, SolverSettings, Trajectory, run_scenario
+from .scenario import Scenario, Solver, SolverSettings, Trajectory, run_scenario
 from .truth import Uncertainty, delayed_settings, range_settings, truth_text
 from .units import (
     SYMBOLIC_FORMULA,
@@ -238,11 +239,15 @@ class Planner:
     solver runs are deduplicated by scenario key, also across processes sharing the cache
     file (a lease per run, lapsing ``lease_seconds`` after its holder stops renewing it),
     and at most ``max_pending`` validations (each admitted with all its runs) are queued.
+    ``solver`` runs each scenario (default ``solver.full.simulate``; tests pass a fake):
+    it travels to the executor's workers with every run, so on a process pool or Dask it
+    must pickle (a module-level function does, by name).
     """
 
     def __init__(self, cache_path: str | None = None, executor: Executor | None = None,
                  max_pending: int = 64, horizon: float = DEFAULT_HORIZON,
-                 lease_seconds: float = DEFAULT_LEASE_SECONDS) -> None:
+                 lease_seconds: float = DEFAULT_LEASE_SECONDS, solver: Solver = simulate) -> None:
+        self.solver = solver
         self.cache = ValidationCache(cache_path)
         self.jobs = JobRunner(executor, max_pending, leases=self.cache,
                               lease_seconds=lease_seconds)
@@ -292,7 +297,7 @@ class Planner:
         first = self.horizon if sc.settings.grid != "moving" else min(self.horizon,
                                                                       MOVING_HORIZON)
         horizon = first if meta is None else 4.0 * float(meta.get("horizon", 0.0))
-        return Job(sc.key(), run_scenario,
+        return Job(sc.key(), functools.partial(run_scenario, solver=self.solver),
                    (sc.to_dict(), max(horizon, first), need_radius, need_time),
                    on_done=self._store,
                    fetch=functools.partial(self._fetch, sc, need_radius, need_time))

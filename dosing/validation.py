@@ -76,9 +76,9 @@ def _run_entry(sc: Scenario, traj: Trajectory | BaseException | None, start_radi
         entry["time"] = traj.time_to_radius(radius)
         entry["nucleation_time"] = None if level is None else traj.nucleation_time(level)
         entry["wall_seconds"] = traj.meta.get("wall_seconds")
-        diag = traj.meta.get("diagnostics", {})
-        if diag.get("spinodal"):
-            entry["warning"] = diag.get("message") or "spinodal collapse (not converged)"
+        if traj.spinodal:
+            entry["warning"] = (traj.diagnostics.get("message")
+                                or "spinodal collapse (not converged)")
         if t_front is not None:
             target = expelled_volume(start_radius, radius)
             got = expelled_volume(start_radius, traj.radius_at(t_front))

@@ -42,7 +42,7 @@ def fake():
 
 @pytest.fixture
 def planner(tmp_path, fake):
-    with fake_planner(tmp_path / "cache.sqlite", max_pending=8) as p:
+    with fake_planner(tmp_path / "cache.sqlite", fake, max_pending=8) as p:
         yield p
 
 
@@ -152,8 +152,8 @@ async def test_full_queue_is_429_with_retry_after(tmp_path) -> None:
     """max_pending counts validations (issue 15, D4: it counted solver runs, so a
     three-run validation could be admitted in part): one validation, all three of its
     runs, fills a queue of one; the next is refused whole, naming what is full."""
-    with fake_full_solver(delay=1.0), \
-            fake_planner(tmp_path / "c.sqlite", max_pending=1) as planner:
+    with fake_full_solver(delay=1.0) as fake, \
+            fake_planner(tmp_path / "c.sqlite", fake, max_pending=1) as planner:
         async with asgi(create_app(planner=planner, warm=False)) as (_, raw):
             r1 = await raw.post("/v1/dose-time", json=SMOOTH)  # three rungs: the queue is full
             r2 = await raw.post("/v1/dose-time", json={**SMOOTH, "t_start": 300.5})
@@ -177,7 +177,7 @@ async def test_blocking_work_never_blocks_the_event_loop(tmp_path, fake) -> None
             time.sleep(1.5)
             return super().dose(req, validate)
 
-    with fake_planner(tmp_path / "c.sqlite", cls=SlowPlanner) as planner:
+    with fake_planner(tmp_path / "c.sqlite", fake, cls=SlowPlanner) as planner:
         async with asgi(create_app(planner=planner, warm=False)) as (api, _):
             slow = asyncio.create_task(api.dose_time(FRONT))
             await asyncio.sleep(0.1)
