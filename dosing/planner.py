@@ -9,7 +9,9 @@ full solver answers (blocking, cached) otherwise.  The truth is set by the reque
 the sharp-interface front model 'front-sharp', validated by a ladder of interfacial
 lengths), or the paper's model (interfacial_length 0: the paper's front model 'front',
 validated on both grids, whose spread is part of the error estimate).  Module
-``validation`` writes the verdict.
+``validation`` writes the verdict.  :meth:`Planner.answer` is the one call a request
+makes (``Answered | Pending``, module ``answers``); :meth:`Planner.dose` the blocking
+form.  The planner runs scenarios on the solver it is given (``Planner(solver=...)``).
 """
 
 from __future__ import annotations
@@ -185,8 +187,9 @@ def front_answer(req: DoseRequest) -> DoseAnswer:
         raise NotApplicableError(f"needs the full solver: {choice.why}")
     est, explain = error_estimate(choice.model, choice.front_time, None, req.fraction, req.gel,
                                   req.settings.method)
-    key = request_scenarios(req)[0].key()
-    return build_answer(req, choice, choice.front_time, est, explain, None, key)
+    truth = Scenario(req.gel, req.t_start, req.t_end, branch=req.branch,
+                     settings=req.settings.rungs()[0])  # request_scenarios(req)[0], alone
+    return build_answer(req, choice, choice.front_time, est, explain, None, truth.key())
 
 
 class Planner:
