@@ -12,14 +12,7 @@ from __future__ import annotations
 from concurrent.futures import Executor, ThreadPoolExecutor
 from typing import Any
 
-from .answers import (
-    Answered,
-    DoseAnswer,
-    ModelChoice,
-    Pending,
-    ValidationReport,
-    ValidationStatus,
-)
+from .answers import Answered, DoseAnswer, ModelChoice, Pending, ValidationReport, ValidationStatus
 from .cache import ValidationCache
 from .jobs import JobRunner, QueueFullError
 from .planner import Planner, UnknownValidationError

@@ -32,14 +32,7 @@ from solver.full import simulate
 from solver.gel import Gel
 from solver.phase import JumpClass, classify_jump
 
-from .answers import (
-    Answered,
-    DoseAnswer,
-    ModelChoice,
-    Pending,
-    ValidationReport,
-    ValidationStatus,
-)
+from .answers import Answered, DoseAnswer, ModelChoice, Pending, ValidationReport, ValidationStatus
 from .cache import ValidationCache
 from .fit_uncertainty import attach_parameter_interval
 from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner
