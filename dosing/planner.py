@@ -302,24 +302,25 @@ class Planner:
         the answer), else :class:`Pending` with the id of the validation queued for it.
         ``validate``: also queue the validation of an answered dose (its id in the answer).
         The one call the HTTP service makes per dose request."""
-        choice = self.model_answer(req)
-        scs = self.scenarios(req)
-        trajs = [self.cached(sc, choice.radius, choice.front_time or 0.0) for sc in scs]
-        if choice.needs_full and any(t is None for t in trajs):
+        choice, scs, ans = self._now(req)
+        if ans is None:
             return Pending(self._submit_validation(req, choice, scs))
-        ans = self._dose(req, choice, scs, trajs if all(t is not None for t in trajs) else [])
         return Answered(ans, self._submit_validation(req, choice, scs) if validate else None)
 
     def answer_now(self, req: DoseRequest) -> DoseAnswer | None:
         """The dose's answer when it needs no new full-solver run (as :meth:`answer`), else
         None; queues nothing."""
+        return self._now(req)[2]
+
+    def _now(self, req: DoseRequest) -> tuple[ModelChoice, list[Scenario], DoseAnswer | None]:
+        """(model choice, validation runs, the answer from the cache alone or None)."""
         choice = self.model_answer(req)
         scs = self.scenarios(req)
         trajs = [self.cached(sc, choice.radius, choice.front_time or 0.0) for sc in scs]
         complete = all(t is not None for t in trajs)
         if choice.needs_full and not complete:
-            return None
-        return self._dose(req, choice, scs, trajs if complete else [])
+            return choice, scs, None
+        return choice, scs, self._dose(req, choice, scs, trajs if complete else [])
 
     def dose(self, req: DoseRequest, validate: bool = False) -> DoseAnswer:
         """The actuation time for one dose (front model, or the full solver where needed:
