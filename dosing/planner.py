@@ -180,8 +180,9 @@ def front_answer(req: DoseRequest) -> DoseAnswer:
         raise NotApplicableError(f"needs the full solver: {choice.why}")
     est, explain = error_estimate(choice.model, choice.front_time, None, req.fraction, req.gel,
                                   req.settings.method)
-    truth = Scenario(req.gel, req.t_start, req.t_end, branch=req.branch,
-                     settings=req.settings.rungs()[0])  # request_scenarios(req)[0], alone
+    # the truth run's key (request_scenarios(req)[0]: every method's first rung is the
+    # settings themselves), without building the other runs
+    truth = Scenario(req.gel, req.t_start, req.t_end, branch=req.branch, settings=req.settings)
     return build_answer(req, choice, choice.front_time, est, explain, None, truth.key())
 
 

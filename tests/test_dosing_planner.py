@@ -226,3 +226,15 @@ def test_regularized_schedule_runs_the_protocol_at_the_coarsest_rung(planner, fa
                               for c in protocol_runs} == {("lagrangian", 800, 0.005)}
     assert "interfacial length 0.005" in ans.note and "nucleate" in ans.note
     assert ans.corrected["met"]
+
+
+@pytest.mark.parametrize("settings", [None, LADDER, PAPER])
+@pytest.mark.parametrize("dry", [None, 50.0])
+def test_front_answer_keys_the_truth_run_of_the_validation(settings, dry) -> None:
+    """A sweep point's scenario key (built alone, without the other validation runs) is
+    the first validation run's: /v1/validations and the cache find the same row."""
+    from dosing.planner import front_answer, request_scenarios
+
+    kw = {} if settings is None else {"settings": settings}
+    req = DoseRequest(**FRONT, dose_fraction=0.5, dry_radius_um=dry, **kw)
+    assert front_answer(req).scenario_key == request_scenarios(req)[0].key()
