@@ -238,3 +238,26 @@ def test_front_answer_keys_the_truth_run_of_the_validation(settings, dry) -> Non
     kw = {} if settings is None else {"settings": settings}
     req = DoseRequest(**FRONT, dose_fraction=0.5, dry_radius_um=dry, **kw)
     assert front_answer(req).scenario_key == request_scenarios(req)[0].key()
+
+
+def test_typed_answers_keep_their_json(planner, fake) -> None:
+    """The answer's validation is a ValidationReport and its hold rows HoldRows; their
+    JSON is the plain dicts the HTTP answers always had (same keys, same order)."""
+    import json
+
+    from dosing import ValidationReport
+
+    ans = planner.dose(DoseRequest(**SMOOTH, dose_fraction=0.5, settings=LADDER))
+    assert isinstance(ans.validation, ValidationReport)
+    d = ans.to_dict()["validation"]
+    assert type(d) is dict and list(d) == [
+        "model", "method", "interfacial_length", "settings", "runs", "time", "error", "limit",
+        "grid_spread", "front_time", "front_time_error", "front_volume_error", "uncertainty"]
+    assert d == ans.validation.to_dict() and d["time"] == ans.validation.time
+    json.dumps(ans.to_dict(), allow_nan=False)
+    sch = planner.schedule(ScheduleRequest(**FRONT, doses=(0.3, 0.3), rests=(0.0,)))
+    rows = sch.to_dict()["hold"]
+    assert [type(r) for r in rows] == [dict, dict] and list(rows[0]) == [
+        "dose_fraction", "cumulative_fraction", "start", "end", "actuation_time",
+        "actuation_seconds", "error_estimate"]
+    assert rows[1]["end"] == sch.hold[1].end == sch.hold[1]["end"]
