@@ -2,9 +2,10 @@
 
 Blocking, FastAPI-free functions (the routes run them in the threadpool): conversions from
 the API's pydantic models (:mod:`api.schemas`) to ``solver`` and ``dosing`` objects, the
-choice between answering a dose at once and queueing a full-solver validation (an answer
-dict, or :class:`Pending` for a 202), schedule jobs (stored in the cache, so they survive
-a restart and run once across servers), and the state the routes share.  No physics here.
+mapping of the planner's one answer per request to an answer dict (200) or
+:class:`Accepted` (202: the validation or job id to poll), schedule jobs (stored in the
+cache, so they survive a restart and run once across servers), and the state the routes
+share.  No physics here.
 """
 
 from __future__ import annotations
@@ -15,12 +16,12 @@ from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import lru_cache
-from itertools import accumulate
 from typing import Any
 
 from dosing import (
     DoseRequest,
     JobRunner,
+    Pending,
     Planner,
     QueueFullError,
     ScheduleRequest,
@@ -94,8 +95,13 @@ def solver_guard() -> Iterator[None]:
 
 # ----------------------------------------------------------------------------- state
 
+def validation_url(vid: str) -> str:
+    """The path to poll a validation or stored job."""
+    return f"/v1/validations/{vid}"
+
+
 @dataclass
-class Pending:
+class Accepted:
     """A request queued as full-solver work: HTTP 202 with the id to poll."""
 
     validation_id: str
@@ -104,7 +110,7 @@ class Pending:
     @property
     def validation_url(self) -> str:
         """Path to poll."""
-        return f"/v1/validations/{self.validation_id}"
+        return validation_url(self.validation_id)
 
     def to_dict(self) -> dict[str, str]:
         """The 202 body (schemas.PendingResponse)."""
@@ -116,7 +122,7 @@ class Pending:
 class ServiceState:
     """What the routes share: the planner (owned or lent), the warm-up report."""
 
-    planner: Any = None
+    planner: Planner | None = None
     owns_planner: bool = False
     warmup: WarmupReport | None = None
     options: dict[str, Any] = field(default_factory=dict)
@@ -130,9 +136,9 @@ class ServiceState:
         that one server runs each job."""
         if self._jobs is None:
             self._job_pool = ThreadPoolExecutor(1, thread_name_prefix="job")
-            cache = getattr(self.planner, "cache", None)
             lease = float(self.options.get("lease_seconds") or DEFAULT_LEASE_SECONDS)
-            self._jobs = JobRunner(self._job_pool, max_pending=JOB_QUEUE, leases=cache,
+            self._jobs = JobRunner(self._job_pool, max_pending=JOB_QUEUE,
+                                   leases=self.planner.cache,
                                    lease_seconds=lease, what="schedule and fit jobs")
         return self._jobs
 
@@ -198,14 +204,6 @@ def to_schedule_request(body: s.ScheduleRequest) -> ScheduleRequest:
                                 method=body.validation_method))
 
 
-def answerable_now(planner: Any, req: DoseRequest) -> bool:
-    """True when ``planner.dose(req)`` needs no new full-solver run: the front model gives
-    this dose, or every validation run's trajectory covering it is already cached."""
-    radius, model, _, _ = planner.model_answer(req)
-    return model != "full" or all(planner.cached(sc, radius) is not None
-                                  for sc in planner.scenarios(req))
-
-
 DOSE_PENDING_NOTE = (
     "This scenario needs the full solver (no front model applies and no run is cached yet). "
     "Poll validation_url; once it is done, send the same request again: it is then answered "
@@ -213,44 +211,47 @@ DOSE_PENDING_NOTE = (
 SCHEDULE_PENDING_NOTE = "The schedule needs the full solver; poll validation_url for the result."
 
 
-def dose_time(planner: Any, body: s.DoseTimeRequest) -> dict[str, Any] | Pending:
-    """The answer (front model or cache; 200), or :class:`Pending` with a validation id;
-    a dose with a drug is answered by :mod:`api.drug_service`."""
+def dose_time(planner: Planner, body: s.DoseTimeRequest) -> dict[str, Any] | Accepted:
+    """The answer (front model or cache; 200), or :class:`Accepted` with a validation id;
+    one planner call (:meth:`dosing.Planner.answer`).  A dose with a drug is answered by
+    :mod:`api.drug_service`."""
     if body.drug is not None:
         return drug_service.dose_answer(planner, body, to_gel)
-    req = to_dose_request(body)
-    if not answerable_now(planner, req):
-        return Pending(planner.submit_validation(req), DOSE_PENDING_NOTE)
-    out = {"status": "answered", **planner.dose(req).to_dict()}
-    if body.validate_full:
-        queued = Pending(planner.submit_validation(req), "")
-        out.update(validation_id=queued.validation_id, validation_url=queued.validation_url)
-    return out
+    out = planner.answer(to_dose_request(body), validate=body.validate_full)
+    if isinstance(out, Pending):
+        return Accepted(out.validation_id, DOSE_PENDING_NOTE)
+    answer = {"status": "answered", **out.answer.to_dict()}
+    if out.validation_id is not None:
+        answer.update(validation_id=out.validation_id,
+                      validation_url=validation_url(out.validation_id))
+    return answer
 
 
-def _schedule_result(planner: Any, body: s.ScheduleRequest) -> dict[str, Any]:
+def _schedule_result(planner: Planner, body: s.ScheduleRequest) -> dict[str, Any]:
     """The whole schedule (blocking): fluid, or drug with a ``drug``."""
     if body.drug is not None:
         return drug_service.schedule_result(planner, body, to_gel)
     return planner.schedule(to_schedule_request(body)).to_dict()
 
 
-def _schedule_is_quick(planner: Any, body: s.ScheduleRequest) -> bool:
-    """True when nothing in the schedule needs a new full-solver run."""
+def _schedule_now(planner: Planner, body: s.ScheduleRequest) -> dict[str, Any] | None:
+    """The schedule when nothing in it needs a new full-solver run (one planner call for a
+    fluid schedule: :meth:`dosing.Planner.schedule_now`), else None."""
     if body.drug is not None:
-        return drug_service.schedule_is_quick(body, to_gel)
-    req = to_schedule_request(body)
-    return not (req.check_protocol or req.correct) and all(
-        answerable_now(planner, req.dose_request(c)) for c in accumulate(req.doses))
+        if not drug_service.schedule_is_quick(body, to_gel):
+            return None
+        return drug_service.schedule_result(planner, body, to_gel)
+    now = planner.schedule_now(to_schedule_request(body))
+    return None if now is None else now.to_dict()
 
 
-def schedule(state: ServiceState, body: s.ScheduleRequest) -> dict[str, Any] | Pending:
+def schedule(state: ServiceState, body: s.ScheduleRequest) -> dict[str, Any] | Accepted:
     """The hold schedule (200) when nothing needs a new full-solver run, else a stored job
-    (:class:`Pending`)."""
-    planner = state.planner
-    if _schedule_is_quick(planner, body):
-        return {"status": "answered", **_schedule_result(planner, body)}
-    return Pending(stored_jobs.submit(state, "schedule", body), SCHEDULE_PENDING_NOTE)
+    (:class:`Accepted`)."""
+    now = _schedule_now(state.planner, body)
+    if now is not None:
+        return {"status": "answered", **now}
+    return Accepted(stored_jobs.submit(state, "schedule", body), SCHEDULE_PENDING_NOTE)
 
 
 stored_jobs.register(stored_jobs.JobKind("schedule", s.ScheduleRequest, _schedule_result))

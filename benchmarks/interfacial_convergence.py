@@ -48,11 +48,11 @@ UNTIL = {"ANB": 0.1, "HHT": 0.25}  # first try for the run length (doubled if to
 
 
 def dose_times(gel: str, ell: float, grid: str, n: int,
-               fractions: np.ndarray = FRACTIONS) -> tuple[np.ndarray, float, int, float]:
+               fractions: np.ndarray = FRACTIONS) -> tuple[np.ndarray, float, int, float | None]:
     """(times to expel each fraction, wall time, steps, nucleation time) of one regularized
-    run; the front has nucleated at the edge when the outermost cell's porosity falls
-    midway between the start and final porosities (solver.phase.nucleation_level; step
-    resolved)."""
+    run (nucleation None if it never happens); the front has nucleated at the edge when the
+    outermost cell's porosity falls midway between the start and final porosities
+    (solver.phase.nucleation_level; step resolved)."""
     t_start, t_end = CASES[gel]
     a0 = equilibrium(preset(gel), t_start).stretch
     targets = fraction_radius(a0, fractions)
@@ -120,7 +120,8 @@ def section_limit(gels: list[str], quick: bool) -> dict[str, list[Limit]]:
             rows.append(t)
             nucs.append(t_nuc)
             print(f"{gel} ell={ell:<8} N={n:5d} " + " ".join(f"{x:.5f}" for x in t)
-                  + f"  nucleation {t_nuc:.5f}  ({wall:.1f} s)", flush=True)
+                  + "  nucleation " + ("none" if t_nuc is None else f"{t_nuc:.5f}")
+                  + f"  ({wall:.1f} s)", flush=True)
         arr = np.array(rows)
         orders = np.array([observed_order(list(arr[:, j])) for j in range(arr.shape[1])])
         plain = np.array([richardson(list(arr[:, j]), orders[j]) for j in range(arr.shape[1])])
@@ -128,8 +129,7 @@ def section_limit(gels: list[str], quick: bool) -> dict[str, list[Limit]]:
         print(f"{gel} ell -> 0       " + " ".join(f"{x:.5f}" for x in plain)
               + "   (plain Richardson, last three ell)")
         last = list(ells[-3:])
-        lims = [dose_limit(last, list(arr[-3:, j]), [None if math.isnan(x) else x
-                                                     for x in nucs[-3:]])
+        lims = [dose_limit(last, list(arr[-3:, j]), nucs[-3:])
                 for j in range(arr.shape[1])]
         print(f"{gel} after nucl.    " + " ".join(f"{x.time:.5f}" for x in lims)
               + "   (dosing.ladder.dose_limit, last three ell)")

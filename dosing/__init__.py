@@ -12,9 +12,10 @@ from __future__ import annotations
 from concurrent.futures import Executor, ThreadPoolExecutor
 from typing import Any
 
+from .answers import Answered, DoseAnswer, ModelChoice, Pending, ValidationReport, ValidationStatus
 from .cache import ValidationCache
 from .jobs import JobRunner, QueueFullError
-from .planner import DoseAnswer, Planner, UnknownValidationError, ValidationStatus
+from .planner import Planner, UnknownValidationError
 from .request import DoseRequest, ScheduleRequest
 from .scenario import LADDER, PAPER, TRUTH, Scenario, SolverSettings, Trajectory
 from .schedule import ScheduleAnswer
@@ -52,10 +53,10 @@ def plan_schedule(req: ScheduleRequest, cache_path: str | None = None,
 
 
 __all__ = [
-    "LADDER", "PAPER", "TRUTH", "DoseAnswer", "DoseRequest", "JobRunner", "PhysicalConstants",
-    "Planner",
+    "LADDER", "PAPER", "TRUTH", "Answered", "DoseAnswer", "DoseRequest", "JobRunner",
+    "ModelChoice", "Pending", "PhysicalConstants", "Planner",
     "QueueFullError", "Scenario", "ScheduleAnswer", "ScheduleRequest", "SolverSettings",
     "Timescale", "Trajectory", "Uncertainty", "UnknownValidationError", "ValidationCache",
-    "ValidationStatus",
+    "ValidationReport", "ValidationStatus",
     "plan_dose", "plan_schedule", "timescale", "water_viscosity",
 ]

@@ -35,7 +35,7 @@ def table(planner: Planner, settings: SolverSettings) -> list[dict[str, float | 
                                validate=True)
             v = ans.validation
             rows.append({"case": f"{gel} {t0:g}->{t1:g}", "fraction": f, "model": ans.model,
-                         "front": ans.time, "truth": v["time"], "truth_error": v["error"],
+                         "front": ans.time, "truth": v.time, "truth_error": v.error,
                          "estimate": ans.error_estimate})
     return rows
 

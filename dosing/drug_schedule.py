@@ -317,7 +317,8 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
     tau = timescale(dry, req.t_end, req.constants).seconds if dry is not None else None
     warnings: list[str] = []
     if solute.diffusivity == 0.0:
-        model, hold = hold_schedule(planner, req.fluid_schedule())
+        model, rows = hold_schedule(planner, req.fluid_schedule())
+        hold = [row.to_dict() for row in rows]
         model = f"{model} (D0 = 0: drug = fluid on one heating)"
     else:
         model = "full"

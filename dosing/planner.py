@@ -9,7 +9,9 @@ full solver answers (blocking, cached) otherwise.  The truth is set by the reque
 the sharp-interface front model 'front-sharp', validated by a ladder of interfacial
 lengths), or the paper's model (interfacial_length 0: the paper's front model 'front',
 validated on both grids, whose spread is part of the error estimate).  Module
-``validation`` writes the verdict.
+``validation`` writes the verdict.  :meth:`Planner.answer` is the one call a request
+makes (``Answered | Pending``, module ``answers``); :meth:`Planner.dose` the blocking
+form.  The planner runs scenarios on the solver it is given (``Planner(solver=...)``).
 """
 
 from __future__ import annotations
@@ -21,17 +23,22 @@ import threading
 import time
 from collections import OrderedDict
 from concurrent.futures import Executor, Future, ThreadPoolExecutor, wait
-from dataclasses import asdict, dataclass
 from typing import Any
 
 from solver.errors import NotApplicableError, SolverError
+from solver.front import front_applicability, front_trajectory
+from solver.front.sharp import sharp_front_trajectory
+from solver.full import simulate
 from solver.gel import Gel
 from solver.phase import JumpClass, classify_jump
 
+from .answers import Answered, DoseAnswer, ModelChoice, Pending, ValidationReport, ValidationStatus
 from .cache import ValidationCache
+from .fit_uncertainty import attach_parameter_interval
 from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner
 from .request import DoseRequest, ScheduleRequest
-from .scenario import Scenario, SolverSettings, Trajectory, run_scenario
+from .scenario import Scenario, Solver, SolverSettings, Trajectory, run_scenario
+from .schedule import ScheduleAnswer, hold_now, plan_schedule_with
 from .truth import Uncertainty, delayed_settings, range_settings, truth_text
 from .units import (
     SYMBOLIC_FORMULA,
@@ -54,44 +61,39 @@ class UnknownValidationError(KeyError):
     """A validation id this planner's cache has never seen."""
 
 
-@functools.lru_cache(maxsize=256)
 def jump_class(gel: Gel, t_start: float, t_end: float, branch: str) -> JumpClass:
-    """The jump classifier's verdict (memoised)."""
+    """The jump classifier's verdict (memoised in ``solver.phase``)."""
     return classify_jump(gel, t_start, t_end, branch)
 
 
-@functools.lru_cache(maxsize=256)
 def choose_model(gel: Gel, t_start: float, t_end: float, branch: str) -> tuple[str, str]:
     """('front' | 'full', reason): the front model where the classifier says front."""
-    jc = jump_class(gel, t_start, t_end, branch)
+    return _choose(jump_class(gel, t_start, t_end, branch), gel, t_start, t_end, branch)
+
+
+def _choose(jc: JumpClass, gel: Gel, t_start: float, t_end: float,
+            branch: str) -> tuple[str, str]:
     if jc.behaviour != "front":
         return "full", f"this jump is '{jc.behaviour}' ({jc.reason}), not a front"
-    from solver.front import front_applicability
-
     ok, reason = front_applicability(gel, t_start, t_end, branch)
     return ("front" if ok else "full"), reason
 
 
 @functools.lru_cache(maxsize=256)
 def front_run(gel: Gel, t_start: float, t_end: float, branch: str, sharp: bool) -> Any:
-    """The front model's whole trajectory from the initial equilibrium (memoised): the
-    sharp-interface model for the regularized truth, the paper's for the paper's."""
+    """The front model's whole trajectory from the initial equilibrium (memoised: one
+    trajectory serves every dose and bead size of a jump, in sweeps, fits and the page):
+    the sharp-interface model for the regularized truth, the paper's for the paper's."""
     if sharp:
-        from solver.front.sharp import sharp_front_trajectory
-
         return sharp_front_trajectory(gel, t_start, t_end, branch=branch)
-    from solver.front import front_trajectory
-
     return front_trajectory(gel, t_start, t_end, branch=branch)
 
 
-@functools.lru_cache(maxsize=256)
 def validation_scenarios(gel: Gel, t_start: float, t_end: float, branch: str,
                          settings: SolverSettings,
                          ell_range: tuple[float, float] | None = None) -> tuple[Scenario, ...]:
-    """A jump's validation runs (memoised, so each run's cache key is computed once): the
-    settings' rungs, then, for the direct truth, the interfacial-length runs at ``ell_range``
-    and the model-form runs (module ``truth``)."""
+    """A jump's validation runs: the settings' rungs, then, for the direct truth, the
+    interfacial-length runs at ``ell_range`` and the model-form runs (module ``truth``)."""
     runs = [*settings.rungs(), *range_settings(settings, ell_range), *delayed_settings(settings)]
     return tuple(Scenario(gel, t_start, t_end, branch=branch, settings=s) for s in runs)
 
@@ -119,11 +121,12 @@ def front_time(req: DoseRequest, radius: float) -> float:
     return float(fr.time_to_radius(radius))
 
 
-def model_answer(req: DoseRequest) -> tuple[float, str, str, float | None]:
-    """(target radius, model, why, front-model time or None) for a dose request: the
-    front model where the classifier allows and it reaches the dose, else the full one."""
+def model_answer(req: DoseRequest) -> ModelChoice:
+    """The model for a dose request: the front model where the classifier allows and it
+    reaches the dose (its time with it), else the full solver."""
     radius = radius_after_dose(req.start_radius, req.fraction)
-    model, why = choose_model(req.gel, req.t_start, req.t_end, req.branch)
+    jc = jump_class(req.gel, req.t_start, req.t_end, req.branch)
+    model, why = _choose(jc, req.gel, req.t_start, req.t_end, req.branch)
     t_front = None
     if model == "front":
         model = front_model_name(req.settings)
@@ -131,76 +134,25 @@ def model_answer(req: DoseRequest) -> tuple[float, str, str, float | None]:
             t_front = front_time(req, radius)
         except (ValueError, NotApplicableError, SolverError) as exc:
             model, why = "full", f"the front model cannot give this dose ({exc})"
-    return radius, model, why, t_front
+    return ModelChoice(radius, model, why, t_front, jc.behaviour)
 
 
-@dataclass
-class DoseAnswer:
-    """How long to heat: dimensionless and in seconds, with the model and its error."""
-
-    model: str
-    interfacial_length: float
-    truth: str
-    time: float
-    seconds: float | None
-    timescale_seconds: float | None
-    timescale_formula: str
-    start_radius: float
-    final_radius: float
-    final_radius_um: float | None
-    expelled_volume: float
-    expelled_volume_ul: float | None
-    stored_volume: float
-    stored_volume_ul: float | None
-    dose_fraction: float
-    error_estimate: float
-    error_explanation: str
-    validation: dict[str, Any] | None
-    scenario_key: str
-    behaviour: str
-    note: str
-    parameter_interval: dict[str, Any] | None = None  # a fitted gel's (dosing.fit_uncertainty)
-    method: str = "direct"  # the truth: 'direct', 'ladder' or 'paper'
-    bead_dry_radius_um: float | None = None  # the bead size the truth's ell assumes
-    uncertainty: Uncertainty | None = None  # the direct truth's three parts (validated)
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain-data form (JSON-ready)."""
-        return asdict(self)
-
-
-@dataclass
-class ValidationStatus:
-    """A validation's state; ``result`` when done, ``error`` when failed."""
-
-    id: str
-    status: str
-    result: dict[str, Any] | None = None
-    error: str | None = None
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain-data form."""
-        return asdict(self)
-
-
-def build_answer(req: DoseRequest, model: str, time: float, radius: float, est: float,
-                 explain: str, validation: dict[str, Any] | None, key: str,
-                 why: str) -> DoseAnswer:
+def build_answer(req: DoseRequest, choice: ModelChoice, time: float, est: float, explain: str,
+                 validation: ValidationReport | None, key: str) -> DoseAnswer:
     """The answer from the model's time: radii, volumes, seconds, the truth and a note."""
-    a0 = req.start_radius
+    a0, radius, model = req.start_radius, choice.radius, choice.model
     dry = req.bead_dry_radius_um
     tau = timescale(dry, req.t_end, req.constants) if dry is not None else None
     dv, sv = expelled_volume(a0, radius), stored_volume(a0)
-    behaviour = jump_class(req.gel, req.t_start, req.t_end, req.branch).behaviour
     s = req.settings
     truth = truth_text(req)
-    note = (f"{MODEL_NAMES[model]}: {why}. "
+    note = (f"{MODEL_NAMES[model]}: {choice.why}. "
             + ("Started from the initial equilibrium alone. " if model != "full" else "")
             + f"Truth: {truth}. "
             + ("" if validation else "No full-solver validation yet for this scenario.")
             + "".join(f" The full solver ({e['grid']} grid, N = {e['n']}, ell = "
                       f"{e['interfacial_length']:g}) reports: {e['warning']}."
-                      for e in (validation or {}).get("runs", []) if e.get("warning"))
+                      for e in (validation.runs if validation else []) if e.get("warning"))
             + ("" if dry else " Give a bead size (dry_radius_um or swollen_radius_um) "
                "for seconds and microlitres."))
     return DoseAnswer(
@@ -214,21 +166,24 @@ def build_answer(req: DoseRequest, model: str, time: float, radius: float, est: 
         expelled_volume=dv, expelled_volume_ul=None if dry is None else volume_to_ul(dv, dry),
         stored_volume=sv, stored_volume_ul=None if dry is None else volume_to_ul(sv, dry),
         dose_fraction=req.fraction, error_estimate=est, error_explanation=explain,
-        validation=validation, scenario_key=key, behaviour=behaviour, note=note.strip(),
-        method=s.method if s.regularized else "paper", bead_dry_radius_um=dry,
-        uncertainty=Uncertainty.from_dict((validation or {}).get("uncertainty")))
+        validation=validation, scenario_key=key, behaviour=choice.behaviour,
+        note=note.strip(), method=s.method if s.regularized else "paper",
+        bead_dry_radius_um=dry,
+        uncertainty=Uncertainty.from_dict(validation.uncertainty if validation else None))
 
 
 def front_answer(req: DoseRequest) -> DoseAnswer:
     """The front model's answer alone, with its prior error estimate: no cache and no full
     solver (a sweep point).  NotApplicableError where only the full solver answers."""
-    radius, model, why, t_front = model_answer(req)
-    if t_front is None:
-        raise NotApplicableError(f"needs the full solver: {why}")
-    est, explain = error_estimate(model, t_front, None, req.fraction, req.gel,
+    choice = model_answer(req)
+    if choice.front_time is None:
+        raise NotApplicableError(f"needs the full solver: {choice.why}")
+    est, explain = error_estimate(choice.model, choice.front_time, None, req.fraction, req.gel,
                                   req.settings.method)
-    key = request_scenarios(req)[0].key()
-    return build_answer(req, model, t_front, radius, est, explain, None, key, why)
+    # the truth run's key (request_scenarios(req)[0]: every method's first rung is the
+    # settings themselves), without building the other runs
+    truth = Scenario(req.gel, req.t_start, req.t_end, branch=req.branch, settings=req.settings)
+    return build_answer(req, choice, choice.front_time, est, explain, None, truth.key())
 
 
 class Planner:
@@ -238,11 +193,15 @@ class Planner:
     solver runs are deduplicated by scenario key, also across processes sharing the cache
     file (a lease per run, lapsing ``lease_seconds`` after its holder stops renewing it),
     and at most ``max_pending`` validations (each admitted with all its runs) are queued.
+    ``solver`` runs each scenario (default ``solver.full.simulate``; tests pass a fake):
+    it travels to the executor's workers with every run, so on a process pool or Dask it
+    must pickle (a module-level function does, by name).
     """
 
     def __init__(self, cache_path: str | None = None, executor: Executor | None = None,
                  max_pending: int = 64, horizon: float = DEFAULT_HORIZON,
-                 lease_seconds: float = DEFAULT_LEASE_SECONDS) -> None:
+                 lease_seconds: float = DEFAULT_LEASE_SECONDS, solver: Solver = simulate) -> None:
+        self.solver = solver
         self.cache = ValidationCache(cache_path)
         self.jobs = JobRunner(executor, max_pending, leases=self.cache,
                               lease_seconds=lease_seconds)
@@ -292,7 +251,7 @@ class Planner:
         first = self.horizon if sc.settings.grid != "moving" else min(self.horizon,
                                                                       MOVING_HORIZON)
         horizon = first if meta is None else 4.0 * float(meta.get("horizon", 0.0))
-        return Job(sc.key(), run_scenario,
+        return Job(sc.key(), functools.partial(run_scenario, solver=self.solver),
                    (sc.to_dict(), max(horizon, first), need_radius, need_time),
                    on_done=self._store,
                    fetch=functools.partial(self._fetch, sc, need_radius, need_time))
@@ -334,38 +293,65 @@ class Planner:
         """The front model's time to ``radius`` (raises where it does not apply)."""
         return front_time(req, radius)
 
-    def model_answer(self, req: DoseRequest) -> tuple[float, str, str, float | None]:
-        """(target radius, model, why, front-model time or None): :func:`model_answer`."""
+    def model_answer(self, req: DoseRequest) -> ModelChoice:
+        """The model that answers ``req`` (:func:`model_answer`)."""
         return model_answer(req)
 
-    def dose(self, req: DoseRequest, validate: bool = False) -> DoseAnswer:
-        """The actuation time for one dose (front model, or the full solver where needed)."""
-        radius, model, why, t_front = self.model_answer(req)
+    def answer(self, req: DoseRequest, validate: bool = False) -> Answered | Pending:
+        """One dose, without waiting for the full solver: :class:`Answered` when the front
+        model gives it or every validation run covering it is cached (its report then in
+        the answer), else :class:`Pending` with the id of the validation queued for it.
+        ``validate``: also queue the validation of an answered dose (its id in the answer).
+        The one call the HTTP service makes per dose request."""
+        choice, scs, ans = self._now(req)
+        if ans is None:
+            return Pending(self._submit_validation(req, choice, scs))
+        return Answered(ans, self._submit_validation(req, choice, scs) if validate else None)
+
+    def answer_now(self, req: DoseRequest) -> DoseAnswer | None:
+        """The dose's answer when it needs no new full-solver run (as :meth:`answer`), else
+        None; queues nothing."""
+        return self._now(req)[2]
+
+    def _now(self, req: DoseRequest) -> tuple[ModelChoice, list[Scenario], DoseAnswer | None]:
+        """(model choice, validation runs, the answer from the cache alone or None)."""
+        choice = self.model_answer(req)
         scs = self.scenarios(req)
-        need_time = 0.0 if t_front is None else t_front
-        if model == "full" or validate:
-            trajs: list[Any] = self._trajectories(scs, radius, need_time)
+        trajs = [self.cached(sc, choice.radius, choice.front_time or 0.0) for sc in scs]
+        complete = all(t is not None for t in trajs)
+        if choice.needs_full and not complete:
+            return choice, scs, None
+        return choice, scs, self._dose(req, choice, scs, trajs if complete else [])
+
+    def dose(self, req: DoseRequest, validate: bool = False) -> DoseAnswer:
+        """The actuation time for one dose (front model, or the full solver where needed:
+        blocking; ``validate`` runs the validation too and waits for it)."""
+        choice = self.model_answer(req)
+        scs = self.scenarios(req)
+        need_time = choice.front_time or 0.0
+        if choice.needs_full or validate:
+            trajs: list[Any] = self._trajectories(scs, choice.radius, need_time)
         else:
-            trajs = [self.cached(sc, radius, need_time) for sc in scs]
+            trajs = [self.cached(sc, choice.radius, need_time) for sc in scs]
             if any(t is None for t in trajs):
                 trajs = []
-        rep = (validation_report(scs, trajs, req.start_radius, radius, t_front)
+        return self._dose(req, choice, scs, trajs)
+
+    def _dose(self, req: DoseRequest, choice: ModelChoice, scs: list[Scenario],
+              trajs: list[Any]) -> DoseAnswer:
+        """The answer from the model choice and the validation runs' trajectories (or
+        exceptions; none: unvalidated)."""
+        t_front = choice.front_time
+        rep = (validation_report(scs, trajs, req.start_radius, choice.radius, t_front)
                if trajs else None)
-        if model == "full" and rep["time"] is None:
+        if choice.needs_full and (rep is None or rep.time is None):
             raise next((t for t in trajs if isinstance(t, BaseException)),
-                       SolverError(f"no full-solver time: {failure(rep)}"))
-        time = max(0.0, t_front if t_front is not None else rep["time"])  # tiny doses: -1e-17
-        est, explain = error_estimate(model, time, rep, req.fraction, req.gel,
+                       SolverError(f"no full-solver time: {failure(rep) if rep else 'no run'}"))
+        time = max(0.0, t_front if t_front is not None else rep.time)  # tiny doses: -1e-17
+        est, explain = error_estimate(choice.model, time, rep, req.fraction, req.gel,
                                       req.settings.method)
-        ans = self._answer(req, model, time, radius, est, explain, rep, scs[0].key(), why)
-        from .fit_uncertainty import attach_parameter_interval
-
+        ans = build_answer(req, choice, time, est, explain, rep, scs[0].key())
         return attach_parameter_interval(req, ans)
-
-    def _answer(self, req: DoseRequest, model: str, time: float, radius: float, est: float,
-                explain: str, validation: dict[str, Any] | None, key: str,
-                why: str) -> DoseAnswer:
-        return build_answer(req, model, time, radius, est, explain, validation, key, why)
 
     def sweep(self, grid: Any, validate: Any = (), progress: Any = None) -> Any:
         """A design map over ``grid`` (a ``dosing.sweep.SweepGrid``) on this planner's
@@ -379,13 +365,16 @@ class Planner:
     # ------------------------------------------------------------------ validations
     def submit_validation(self, req: DoseRequest) -> str:
         """Queue the full-solver runs that check this dose; returns an id at once."""
-        a0, f = req.start_radius, req.fraction
-        radius, _, _, t_front = self.model_answer(req)
-        scs = self.scenarios(req)
+        return self._submit_validation(req, self.model_answer(req), self.scenarios(req))
+
+    def _submit_validation(self, req: DoseRequest, choice: ModelChoice,
+                           scs: list[Scenario]) -> str:
         keys = [sc.key() for sc in scs]
+        f = req.fraction
         vid = hashlib.sha256(json.dumps([keys, round(f, 12)]).encode()).hexdigest()[:24]
-        record = {"scenarios": [sc.to_dict() for sc in scs], "keys": keys, "start_radius": a0,
-                  "target_radius": radius, "fraction": f, "front_time": t_front}
+        record = {"scenarios": [sc.to_dict() for sc in scs], "keys": keys,
+                  "start_radius": req.start_radius, "target_radius": choice.radius,
+                  "fraction": f, "front_time": choice.front_time}
         self._advance(record, vid)  # admitted whole or not at all (QueueFullError)
         if self.cache.get_validation(vid) is None:
             self.cache.put_validation(vid, record)
@@ -440,11 +429,15 @@ class Planner:
         return st
 
     # ------------------------------------------------------------------ schedules
-    def schedule(self, req: ScheduleRequest) -> Any:
-        """Plan a multi-dose schedule (hold assumption, protocol check, shooting)."""
-        from .schedule import plan_schedule_with
-
+    def schedule(self, req: ScheduleRequest) -> ScheduleAnswer:
+        """Plan a multi-dose schedule (hold assumption, protocol check, shooting:
+        :func:`dosing.schedule.plan_schedule_with`)."""
         return plan_schedule_with(self, req)
+
+    def schedule_now(self, req: ScheduleRequest) -> ScheduleAnswer | None:
+        """The hold schedule when no dose needs a new full-solver run and neither the
+        protocol check nor the correction is asked for, else None (queues nothing)."""
+        return hold_now(self, req)
 
     def close(self) -> None:
         """Shut down an owned executor and close the cache."""

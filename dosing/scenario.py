@@ -5,32 +5,33 @@ dimensionless parameters and permeability law, the start temperature and branch,
 temperature protocol (one jump, or heat/cool steps), the solver settings (grid, N,
 integrator, tolerance, interfacial length) and the code version.  ``run_scenario`` is a
 plain top-level function of plain data so any ``concurrent.futures`` executor (a process
-pool, a Dask client's executor) can run it.
+pool, a Dask client's executor) can run it; it runs the solver it is given (the planner's,
+by default ``solver.full.simulate``) and returns the run record
+(:class:`solver.full.result.FullResult`, stored without profiles) as an ``.npz`` blob.
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
-import io
 import json
 import math
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from solver.crossing import first_fall, hermite_root
 from solver.errors import ParameterError, SolverError, require_finite_positive
+from solver.full import GRIDS as _GRID_REGISTRY
+from solver.full import FullResult, simulate
 from solver.gel import Gel, check_temperature
 from solver.json_safe import json_safe
 
 SCHEMA = 1
-# the names of solver.full.grids.GRIDS (not imported: importing dosing must not load the
-# numba kernels; tests/test_dosing_truth.py checks the two lists agree)
-GRIDS = ("eulerian", "lagrangian", "moving")
+GRIDS = tuple(_GRID_REGISTRY)  # the solver's grid registry (solver.full.grids)
 INTEGRATORS = ("implicit", "explicit")
 METHODS = ("direct", "ladder")
 N_RANGE = (20, 6400)
@@ -41,8 +42,6 @@ DIRECT_ELL_RANGE = (2e-5, 0.02)
 # a ladder's coarsest ell: above 0.01 the nucleation delay is a third of an 80 % dose and
 # the three rungs can look asymptotic while they are not (ANB from 0.02: limit 1 % off)
 LADDER_TOP = 0.01
-ARRAYS = ("t", "radius", "front", "expelled_volume", "temperature", "step_t", "step_radius",
-          "step_rate", "step_edge")
 
 
 DEFAULT_INTERFACIAL_LENGTH = 0.005  # coarsest rung of the validation ladder (dry radii)
@@ -275,139 +274,45 @@ class Scenario:
         return [(float(horizon), self.t_end)]
 
 
-@dataclass
-class Trajectory:
-    """A stored full-solver run: a(t), R_f(t), expelled volume and T(t) at the outputs,
-    plus a(t), da/dt and the edge cell's porosity at every accepted step (``step_*``, empty
-    if the run has none) for accurate crossing and nucleation times; and metadata."""
+Trajectory = FullResult
+"""A stored full-solver run: the one run record, :class:`solver.full.result.FullResult`,
+without profiles (:meth:`FullResult.without_profiles`), with its cache ``meta``."""
 
-    t: np.ndarray
-    radius: np.ndarray
-    front: np.ndarray
-    expelled_volume: np.ndarray
-    temperature: np.ndarray
-    meta: dict[str, Any] = field(default_factory=dict)
-    step_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    step_radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    step_rate: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    step_edge: np.ndarray = field(default_factory=lambda: np.zeros(0))
-
-    @property
-    def horizon(self) -> float:
-        """The last simulated time."""
-        return float(self.t[-1])
-
-    def _dense(self) -> tuple[np.ndarray, np.ndarray]:
-        if self.step_t.size >= 2:
-            return self.step_t, self.step_radius
-        return self.t, self.radius
-
-    def radius_at(self, t: float) -> float:
-        """a(t), interpolated linearly between accepted steps (or outputs)."""
-        tt, aa = self._dense()
-        return float(np.interp(t, tt, aa))
-
-    def time_to_radius(self, radius: float, after: float = 0.0) -> float:
-        """First time >= ``after`` at which a(t) falls to ``radius``.
-
-        Between accepted steps a(t) is the cubic Hermite interpolant of a and da/dt (as
-        the full solver's own crossing times); between outputs, a^3 is linear.
-        """
-        tt, aa = self._dense()
-        i0 = int(np.searchsorted(tt, after, side="left"))
-        hit = np.nonzero(aa[i0:] <= radius)[0]
-        if hit.size == 0:
-            raise ValueError(f"radius {radius:.6g} is not reached by t = {self.horizon:.6g} "
-                             f"(smallest radius {float(aa[i0:].min()):.6g})")
-        j = i0 + int(hit[0])
-        if j == 0 or (j == i0 and tt[j] == after):
-            return float(tt[j])
-        if j == i0:  # crossing between ``after`` and the next sample
-            t0, y0 = after, self.radius_at(after)
-            return _linear_cube(t0, y0, float(tt[j]), float(aa[j]), radius)
-        if self.step_t.size >= 2 and tt[j] > tt[j - 1]:
-            return float(hermite_root(tt[j - 1], tt[j], aa[j - 1], aa[j], self.step_rate[j - 1],
-                                       self.step_rate[j], radius))
-        return _linear_cube(float(tt[j - 1]), float(aa[j - 1]), float(tt[j]), float(aa[j]),
-                            radius)
-
-    def nucleation_time(self, level: float) -> float | None:
-        """First time the edge cell's porosity falls to ``level`` (None if it never does)."""
-        if self.step_edge.size != self.step_t.size or self.step_t.size < 2:
-            return None
-        t = first_fall(self.step_t, self.step_edge, level)
-        return None if math.isnan(t) else t
-
-    def to_npz(self) -> bytes:
-        """The arrays as an .npz blob."""
-        buf = io.BytesIO()
-        np.savez_compressed(buf, **{k: np.asarray(getattr(self, k), dtype=float) for k in ARRAYS})
-        return buf.getvalue()
-
-    @classmethod
-    def from_npz(cls, blob: bytes, meta: dict[str, Any] | None = None) -> Trajectory:
-        """Inverse of :meth:`to_npz`."""
-        with np.load(io.BytesIO(blob)) as z:
-            arrays = {k: np.array(z[k]) for k in ARRAYS if k in z}
-        return cls(**arrays, meta=dict(meta or {}))
+Solver = Callable[..., FullResult]
+"""What the planner runs a scenario with: ``solver.full.simulate`` or a stand-in taking its
+arguments (``gel, t_start, protocol=, grid=, n=, integrator=, rtol=, branch=,
+interfacial_length=, max_seconds=``) and returning a :class:`FullResult`."""
 
 
-def _linear_cube(t0: float, a0: float, t1: float, a1: float, radius: float) -> float:
-    """Crossing time of ``radius`` with a^3 linear in t on [t0, t1]."""
-    y0, y1, y = a0**3, a1**3, radius**3
-    return t1 if y0 == y1 else t0 + (y0 - y) / (y0 - y1) * (t1 - t0)
-
-
-
-
-def _floats(values: Any, like: np.ndarray) -> np.ndarray:
-    """A float array the shape of ``like`` (None entries become NaN; a scalar is broadcast)."""
-    if values is None:
-        return np.full_like(like, np.nan)
-    arr = np.asarray([np.nan if v is None else v for v in np.atleast_1d(values)], dtype=float)
-    return arr * np.ones_like(like) if arr.size == 1 else arr
-
-
-def _simulate(sc: Scenario, horizon: float,
-              budget: float = RUN_BUDGET_S) -> tuple[Trajectory, dict[str, Any]]:
-    """One full-solver run of ``sc`` (a jump runs for ``horizon``) within ``budget`` s."""
-    from solver.full import simulate
-
+def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver) -> FullResult:
+    """One run of ``sc`` (a jump runs for ``horizon``) within ``budget`` s, as stored."""
     s = sc.settings
-    res = simulate(sc.gel, sc.t_start, protocol=sc.steps(horizon), grid=s.grid, n=s.n,
-                   integrator=s.integrator, rtol=s.rtol, branch=sc.branch,
-                   interfacial_length=s.interfacial_length, max_seconds=budget)
-    t = np.asarray(res.t, dtype=float)
-    steps = {k: np.asarray(getattr(res, k, None) if getattr(res, k, None) is not None
-                           else np.zeros(0), dtype=float)
-             for k in ("step_t", "step_radius", "step_rate", "step_edge")}
-    traj = Trajectory(t=t, radius=np.asarray(res.radius, dtype=float),
-                      front=_floats(res.front, t),
-                      expelled_volume=_floats(res.expelled_volume, t),
-                      temperature=_floats(res.temperature, t), **steps)
-    if t.size < 2 or not (np.all(np.isfinite(t)) and np.all(np.isfinite(traj.radius))):
+    res = solver(sc.gel, sc.t_start, protocol=sc.steps(horizon), grid=s.grid, n=s.n,
+                 integrator=s.integrator, rtol=s.rtol, branch=sc.branch,
+                 interfacial_length=s.interfacial_length, max_seconds=budget)
+    rec = res.without_profiles()
+    if rec.t.size < 2 or not (np.all(np.isfinite(rec.t)) and np.all(np.isfinite(rec.radius))):
         raise SolverError("the full solver returned no finite a(t)", {"scenario": sc.key_dict()})
-    diag = json_safe(getattr(res, "diagnostics", {}) or {}, max_array=64)
-    diag["spinodal"] = bool(getattr(res, "spinodal", False))
-    return traj, diag
+    rec.diagnostics = {**json_safe(res.diagnostics, max_array=64), "spinodal": bool(res.spinodal)}
+    return rec
 
 
 def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: float | None = None,
-                 need_time: float = 0.0, max_horizon: float = 64.0,
-                 budget: float = RUN_BUDGET_S) -> tuple[dict, bytes]:
+                 need_time: float = 0.0, max_horizon: float = 64.0, budget: float = RUN_BUDGET_S,
+                 solver: Solver = simulate) -> tuple[dict, bytes]:
     """Run the full solver for a scenario: plain data in, (metadata, npz blob) out.
 
     A jump is simulated for ``horizon``, extended (x4, up to ``max_horizon``) until a(t)
     falls to ``need_radius`` and t reaches ``need_time``; each run gets ``budget`` seconds
-    of wall time.  Top-level and free of shared state, so process pools and Dask workers
-    can run it.
+    of wall time, on ``solver`` (the planner's: a module-level function pickles by name).
+    Top-level and free of shared state, so process pools and Dask workers can run it.
     """
     sc = Scenario.from_dict(scenario)
     wall = time.perf_counter()
     h = float(horizon)
     runs = 0
     while True:
-        traj, diag = _simulate(sc, max(h, need_time), budget)
+        traj = _simulate(sc, max(h, need_time), budget, solver)
         runs += 1
         if sc.protocol is not None or need_radius is None or traj.radius.min() <= need_radius:
             break
@@ -419,6 +324,6 @@ def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: fl
         h = min(4.0 * h, max_horizon)
     meta = {"scenario": sc.key_dict(), "key": sc.key(), "horizon": traj.horizon,
             "wall_seconds": time.perf_counter() - wall, "runs": runs, "created": time.time(),
-            "diagnostics": diag}
+            "diagnostics": traj.diagnostics}
     traj.meta = meta
     return meta, traj.to_npz()

@@ -8,22 +8,39 @@ Three readings of one schedule of doses d_1..d_n with rests r_1..r_{n-1}:
    heating starts from a larger radius than the hold assumption supposes;
 3. the corrected schedule: actuation times found by shooting on the full solver so that
    every dose is met within the tolerance (1 % by default).
+
+A schedule needs of the planner only what :class:`SchedulePlanner` names, so
+``dosing.planner`` imports this module and not the other way round
+(``Planner.schedule`` is :func:`plan_schedule_with`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from itertools import accumulate
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
+
+from solver.full import FullResult
 
 from . import protocol
-from .request import ScheduleRequest
-from .scenario import Scenario, Step, Trajectory
+from .answers import DoseAnswer, HoldRow
+from .request import DoseRequest, ScheduleRequest
+from .scenario import Scenario, Step
 from .truth import truth_text
 from .units import SYMBOLIC_FORMULA, stored_volume, timescale, volume_to_ul
 
-if TYPE_CHECKING:
-    from .planner import Planner
+
+class SchedulePlanner(Protocol):
+    """What a schedule needs of the planner (``dosing.planner.Planner`` is one): single-dose
+    answers, blocking or only when cached, and full-solver runs of a protocol."""
+
+    def dose(self, req: DoseRequest, validate: bool = False) -> DoseAnswer: ...
+
+    def answer_now(self, req: DoseRequest) -> DoseAnswer | None: ...
+
+    def trajectory(self, sc: Scenario, need_radius: float | None = None,
+                   need_time: float = 0.0) -> FullResult: ...
 
 
 @dataclass
@@ -33,7 +50,7 @@ class ScheduleAnswer:
     model: str
     doses: list[float]
     rests: list[float]
-    hold: list[dict[str, Any]]
+    hold: list[HoldRow]
     protocol_check: dict[str, Any] | None
     corrected: dict[str, Any] | None
     start_radius: float
@@ -52,19 +69,38 @@ class ScheduleAnswer:
         return asdict(self)
 
 
-def hold_schedule(planner: Planner, req: ScheduleRequest) -> tuple[str, list[dict[str, Any]]]:
-    """Actuation times under the hold assumption, from the planner's single-dose answers."""
-    rows, prev, models = [], 0.0, set()
-    for d, cum in zip(req.doses, accumulate(req.doses), strict=True):
-        ans = planner.dose(req.dose_request(cum))
-        models.add(ans.model)
-        rows.append({"dose_fraction": d, "cumulative_fraction": cum, "start": prev,
-                     "end": ans.time, "actuation_time": ans.time - prev,
-                     "actuation_seconds": None if ans.seconds is None
-                     else (ans.time - prev) * ans.timescale_seconds,
-                     "error_estimate": ans.error_estimate})
+def hold_rows(req: ScheduleRequest, answers: Sequence[DoseAnswer]) -> tuple[str, list[HoldRow]]:
+    """(models, rows) under the hold assumption from the single-dose answers for the
+    cumulative doses d_1 + ... + d_k (in order)."""
+    rows, prev = [], 0.0
+    for d, cum, ans in zip(req.doses, accumulate(req.doses), answers, strict=True):
+        rows.append(HoldRow(dose_fraction=d, cumulative_fraction=cum, start=prev, end=ans.time,
+                            actuation_time=ans.time - prev,
+                            actuation_seconds=None if ans.seconds is None
+                            else (ans.time - prev) * ans.timescale_seconds,
+                            error_estimate=ans.error_estimate))
         prev = ans.time
-    return "+".join(sorted(models)), rows
+    return "+".join(sorted({ans.model for ans in answers})), rows
+
+
+def hold_schedule(planner: SchedulePlanner, req: ScheduleRequest) -> tuple[str, list[HoldRow]]:
+    """Actuation times under the hold assumption, from the planner's single-dose answers."""
+    return hold_rows(req, [planner.dose(req.dose_request(cum)) for cum in accumulate(req.doses)])
+
+
+def hold_now(planner: SchedulePlanner, req: ScheduleRequest) -> ScheduleAnswer | None:
+    """The schedule's hold reading when every dose is answered without a new full-solver
+    run and neither the protocol check nor the correction is asked for; else None."""
+    if req.check_protocol or req.correct:
+        return None
+    answers = []
+    for cum in accumulate(req.doses):
+        ans = planner.answer_now(req.dose_request(cum))
+        if ans is None:
+            return None
+        answers.append(ans)
+    model, hold = hold_rows(req, answers)
+    return _answer(req, model, hold, None, None)
 
 
 def _seconds(res: dict[str, Any] | None, tau: float | None) -> None:
@@ -73,18 +109,24 @@ def _seconds(res: dict[str, Any] | None, tau: float | None) -> None:
                                     else [d * tau for d in res["actuation_times"]])
 
 
-def plan_schedule_with(planner: Planner, req: ScheduleRequest) -> ScheduleAnswer:
+def plan_schedule_with(planner: SchedulePlanner, req: ScheduleRequest) -> ScheduleAnswer:
     """Plan ``req`` with ``planner``: hold times, then the protocol check and shooting."""
     model, hold = hold_schedule(planner, req)
-    guesses = [row["actuation_time"] for row in hold]
+    guesses = [row.actuation_time for row in hold]
 
-    def run(steps: tuple[Step, ...]) -> Trajectory:
+    def run(steps: tuple[Step, ...]) -> FullResult:
         sc = Scenario(req.gel, req.t_start, protocol=steps, branch=req.branch,
                       settings=req.settings)
         return planner.trajectory(sc)
 
     checked = protocol.check(run, req, guesses) if req.check_protocol else None
     corrected = protocol.shoot(run, req, guesses) if req.correct else None
+    return _answer(req, model, hold, checked, corrected)
+
+
+def _answer(req: ScheduleRequest, model: str, hold: list[HoldRow],
+            checked: dict[str, Any] | None, corrected: dict[str, Any] | None) -> ScheduleAnswer:
+    """The schedule's answer from its readings: seconds, volumes, the truth and a note."""
     dry = req.bead_dry_radius_um
     tau = timescale(dry, req.t_end, req.constants) if dry is not None else None
     _seconds(checked, tau and tau.seconds)

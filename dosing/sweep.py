@@ -332,14 +332,14 @@ def fill_validations(result: SweepResult, planner: Planner) -> int:
         elif st.status == "failed":
             row["message"] = f"validation failed: {st.error}"
         else:
-            rep = st.result or {}
-            row["truth_time"] = rep.get("time")
-            row["front_time_error"] = rep.get("front_time_error")
-            if row["status"] == "needs-full" and rep.get("time") is not None:
+            rep = st.result
+            row["truth_time"] = None if rep is None else rep.time
+            row["front_time_error"] = None if rep is None else rep.front_time_error
+            if row["status"] == "needs-full" and rep is not None and rep.time is not None:
                 tau = row["timescale_seconds"]
-                est, _ = error_estimate("full", rep["time"], rep, row["dose_fraction"])
-                row.update(time=rep["time"], error_estimate=est,
-                           seconds=None if tau is None else rep["time"] * tau)
+                est, _ = error_estimate("full", rep.time, rep, row["dose_fraction"])
+                row.update(time=rep.time, error_estimate=est,
+                           seconds=None if tau is None else rep.time * tau)
     return unfinished
 
 

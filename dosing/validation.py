@@ -19,6 +19,7 @@ import numpy as np
 from solver.gel import Gel, preset
 from solver.phase import nucleation_level
 
+from .answers import ValidationReport
 from .ladder import dose_limit
 from .scenario import Scenario, Trajectory
 from .truth import role, uncertainty
@@ -76,9 +77,9 @@ def _run_entry(sc: Scenario, traj: Trajectory | BaseException | None, start_radi
         entry["time"] = traj.time_to_radius(radius)
         entry["nucleation_time"] = None if level is None else traj.nucleation_time(level)
         entry["wall_seconds"] = traj.meta.get("wall_seconds")
-        diag = traj.meta.get("diagnostics", {})
-        if diag.get("spinodal"):
-            entry["warning"] = diag.get("message") or "spinodal collapse (not converged)"
+        if traj.spinodal:
+            entry["warning"] = (traj.diagnostics.get("message")
+                                or "spinodal collapse (not converged)")
         if t_front is not None:
             target = expelled_volume(start_radius, radius)
             got = expelled_volume(start_radius, traj.radius_at(t_front))
@@ -89,7 +90,7 @@ def _run_entry(sc: Scenario, traj: Trajectory | BaseException | None, start_radi
 
 
 def validation_report(scs: list[Scenario], trajs: list[Any], start_radius: float,
-                      radius: float, t_front: float | None) -> dict[str, Any]:
+                      radius: float, t_front: float | None) -> ValidationReport:
     """The truth's time for the dose, each run's, and the front model's errors.
 
     ``scs`` are the settings' validation runs (``SolverSettings.rungs``) and ``trajs``
@@ -137,24 +138,24 @@ def validation_report(scs: list[Scenario], trajs: list[Any], start_radius: float
     if rep["time"] is not None and t_front is not None:
         rep["front_time_error"] = (t_front - rep["time"]) / rep["time"]
         rep["front_volume_error"] = truth.get("front_volume_error")
-    return rep
+    return ValidationReport(**rep)
 
 
-def failure(rep: dict[str, Any]) -> str | None:
+def failure(rep: ValidationReport) -> str | None:
     """Why the report has no truth time (the failed runs' errors), or None."""
-    if rep["time"] is not None:
+    if rep.time is not None:
         return None
     return "; ".join(f"{e['grid']} N = {e['n']}, ell = {e['interfacial_length']:g}: "
-                     f"{e['error']}" for e in rep["runs"] if "error" in e) or "no run"
+                     f"{e['error']}" for e in rep.runs if "error" in e) or "no run"
 
 
 def _pct(x: float) -> str:
     return f"{100 * x:.2g}%" if x < 0.1 else f"{100 * x:.0f}%"
 
 
-def _runs_text(rep: dict[str, Any]) -> str:
+def _runs_text(rep: ValidationReport) -> str:
     return ", ".join(f"{e['time']:.5g} at ell = {e['interfacial_length']:g} (N = {e['n']})"
-                     for e in rep["runs"] if "time" in e)
+                     for e in rep.runs if "time" in e)
 
 
 def _prior(model: str, fraction: float) -> tuple[float, str]:
@@ -185,8 +186,8 @@ def _prior(model: str, fraction: float) -> tuple[float, str]:
         "different speeds.")
 
 
-def _regularized(model: str, time: float, rep: dict[str, Any]) -> tuple[float, str]:
-    s, lim = rep["settings"], rep["limit"]
+def _regularized(model: str, time: float, rep: ValidationReport) -> tuple[float, str]:
+    s, lim = rep.settings, rep.limit
     truth, abs_err = lim["time"], lim["error"]
     ladder = (f"the regularized full model (interfacial length ell, {s['grid']} grid, each "
               f"run grid-converged) gives {_runs_text(rep)}; its sharp-interface limit "
@@ -203,11 +204,11 @@ def _regularized(model: str, time: float, rep: dict[str, Any]) -> tuple[float, s
                         f"the true time as between {lo:.4g} and {hi:.4g}.")
 
 
-def _direct(model: str, time: float, rep: dict[str, Any]) -> tuple[float, str]:
+def _direct(model: str, time: float, rep: ValidationReport) -> tuple[float, str]:
     """The direct truth's verdict: the error estimate is the numerical part (and, for the
     front model, its gap to the truth); the other two parts are stated beside it."""
-    s, unc = rep["settings"], rep["uncertainty"]
-    truth = rep["time"]
+    s, unc = rep.settings, rep.uncertainty
+    truth = rep.time
     num = unc["numerical"]["relative"]
     num = s["rtol"] if num is None else max(num, s["rtol"])
     run = (f"the regularized full model at ell = {s['interfacial_length']:.3g} directly "
@@ -235,10 +236,10 @@ def _direct(model: str, time: float, rep: dict[str, Any]) -> tuple[float, str]:
                           "estimate.")
 
 
-def _paper(model: str, time: float, rep: dict[str, Any]) -> tuple[float, str]:
-    s = rep["settings"]
-    times = {e["grid"]: e["time"] for e in rep["runs"] if "time" in e}
-    failed = [e["grid"] for e in rep["runs"] if "error" in e]
+def _paper(model: str, time: float, rep: ValidationReport) -> tuple[float, str]:
+    s = rep.settings
+    times = {e["grid"]: e["time"] for e in rep.runs if "time" in e}
+    failed = [e["grid"] for e in rep.runs if "error" in e]
     gaps = [abs(t - time) / time for t in times.values()]
     if model == "full":
         est = max([s["rtol"], *gaps])
@@ -251,7 +252,7 @@ def _paper(model: str, time: float, rep: dict[str, Any]) -> tuple[float, str]:
         listing = ", ".join(f"{t:.4g} on the {g} grid" for g, t in times.items())
         text = (f"The front model (a fast reduced model) gives {time:.4g}; the paper's full "
                 f"model gives {listing} (N = {s['n']}). ")
-    spread = rep["grid_spread"]
+    spread = rep.grid_spread
     if spread is not None and spread > 0.01:
         text += (f"The two grids disagree by {_pct(spread)}: here a sharp front forms and the "
                  "paper's model, which has no interfacial energy, does not fix its speed, so "
@@ -283,7 +284,7 @@ def _no_prior(gel: Gel) -> tuple[float, str]:
         f"validation: {VALIDATION_COST}.")
 
 
-def error_estimate(model: str, time: float, rep: dict[str, Any] | None,
+def error_estimate(model: str, time: float, rep: ValidationReport | None,
                    fraction: float, gel: Gel | None = None,
                    method: str = "direct") -> tuple[float, str]:
     """(relative error of the answer's time, the reason in plain words).  Unvalidated: the
@@ -292,14 +293,14 @@ def error_estimate(model: str, time: float, rep: dict[str, Any] | None,
     prior_model = model if model != "full" else "front-sharp"
     if prior_model == "front-sharp" and method == "direct":
         prior_model = "front-sharp-direct"
-    if rep is None or rep["time"] is None:
+    if rep is None or rep.time is None:
         if not has_prior(gel):
             return _no_prior(gel)  # type: ignore[arg-type]
         return _prior(prior_model, fraction)
-    if rep.get("uncertainty") is not None:
+    if rep.uncertainty is not None:
         est, text = _direct(model, time, rep)
     else:
-        est, text = (_regularized if rep["limit"] is not None else _paper)(model, time, rep)
+        est, text = (_regularized if rep.limit is not None else _paper)(model, time, rep)
     if math.isnan(est):
         est = front_prior(fraction, prior_model)
     return est, text

@@ -1,5 +1,7 @@
-"""Crossing times of sampled curves: first fall below a level, and the root of the cubic
-Hermite interpolant between two accepted steps (shared by full-solver results and stored runs)."""
+"""Crossing times of sampled curves: first fall below a level (NaN when never: a numeric
+primitive; the run record turns it into None), the root of the cubic
+Hermite interpolant between two accepted steps, and the root with a^3 linear between outputs
+(used by the one run record, solver.full.result.FullResult)."""
 
 from __future__ import annotations
 
@@ -40,3 +42,10 @@ def hermite_root(t0: float, t1: float, a0: float, a1: float, d0: float, d1: floa
         else:
             hi = mid
     return t0 + 0.5 * (lo + hi) * h
+
+
+def linear_cube_root(t0: float, a0: float, t1: float, a1: float, target: float) -> float:
+    """Crossing time of ``target`` on [t0, t1] with a^3 linear in t (the expelled volume of
+    eq. FluidVolExpelled linear between two samples)."""
+    y0, y1, y = a0**3, a1**3, target**3
+    return t1 if y0 == y1 else t0 + (y0 - y) / (y0 - y1) * (t1 - t0)

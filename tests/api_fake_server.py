@@ -29,6 +29,7 @@ if __name__ == "__main__":
     p.add_argument("--calls", type=Path, default=None)
     a = p.parse_args()
     kw = {} if a.lease is None else {"lease_seconds": a.lease}
-    with fake_full_solver(a.delay, calls_log=a.calls), fake_planner(a.cache, **kw) as planner:
+    with fake_full_solver(a.delay, calls_log=a.calls) as fake, \
+            fake_planner(a.cache, fake, **kw) as planner:
         uvicorn.run(create_app(planner=planner, warm=False, **kw), host="127.0.0.1",
                     port=a.port, log_level="warning")

@@ -13,7 +13,6 @@ from contextlib import asynccontextmanager, contextmanager
 from pathlib import Path
 
 import httpx
-import pytest
 from dosing_fakes import FakeSolver
 from fastapi import FastAPI
 
@@ -134,21 +133,18 @@ class SlowFakeSolver(FakeSolver):
 @contextmanager
 def fake_full_solver(delay: float = 0.0,
                      calls_log: Path | None = None) -> Iterator[SlowFakeSolver]:
-    """Replace ``solver.full`` by the fake while the block runs.  The planner's
-    ``run_scenario`` imports ``simulate`` when it runs, so a planner on a thread executor
-    (:func:`fake_planner`) runs every full-solver job on the fake, in milliseconds."""
-    fake = SlowFakeSolver(delay, calls_log)
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setitem(sys.modules, "solver.full", fake.module())
-        yield fake
+    """The fake full solver for the block (give it to :func:`fake_planner` or
+    ``Planner(solver=...)``): every full-solver job runs on it, in milliseconds."""
+    yield SlowFakeSolver(delay, calls_log)
 
 
 @contextmanager
-def fake_planner(cache: Path, cls: type[Planner] = Planner, **kw: object) -> Iterator[Planner]:
-    """A planner running its full-solver jobs on one thread of this process (use it inside
-    :func:`fake_full_solver`); on exit, queued jobs are cancelled and the thread joined."""
+def fake_planner(cache: Path, solver: FakeSolver, cls: type[Planner] = Planner,
+                 **kw: object) -> Iterator[Planner]:
+    """A planner running its full-solver jobs on ``solver`` on one thread of this process;
+    on exit, queued jobs are cancelled and the thread joined."""
     pool = ThreadPoolExecutor(1, thread_name_prefix="fake-full")
-    planner = cls(cache_path=cache, executor=pool, **kw)
+    planner = cls(cache_path=cache, executor=pool, solver=solver, **kw)
     try:
         yield planner
     finally:

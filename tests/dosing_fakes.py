@@ -10,30 +10,21 @@ from __future__ import annotations
 
 import math
 import threading
-import types
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from solver.equilibrium import equilibrium, nearest_stable
+from solver.full import FullResult
 
 RATES = {"eulerian": 10.0, "lagrangian": 8.0, "moving": 8.0}
 MOVING_C = 2.0  # the moving grid's times scale as 1 + MOVING_C / n (a direct check's gap)
 ELL_C, ELL_ORDER = 200.0, 1.5  # ell = 0.005: times 7 % later
 
 
-@dataclass
-class FakeResult:
-    t: np.ndarray
-    radius: np.ndarray
-    front: np.ndarray
-    expelled_volume: np.ndarray
-    temperature: np.ndarray
-    diagnostics: dict = field(default_factory=dict)
-
-
 class FakeSolver:
-    """Callable like solver.full.simulate; counts calls; can block or fail on demand."""
+    """Callable like solver.full.simulate (pass it as ``Planner(solver=...)``); returns a
+    real FullResult (outputs only, no per-step record); counts calls; can block or fail on
+    demand."""
 
     def __init__(self, rate_scale: float = 1.0) -> None:
         self.calls: list[dict] = []
@@ -42,13 +33,8 @@ class FakeSolver:
         self.fail: str | None = None
         self.rate_scale = rate_scale
 
-    def module(self) -> types.ModuleType:
-        mod = types.ModuleType("solver.full")
-        mod.simulate = self
-        return mod
-
     def __call__(self, gel, t_start, t_end=None, *, protocol=None, grid="eulerian", n=400,
-                 branch=None, interfacial_length=0.0, **kw) -> FakeResult:
+                 branch=None, interfacial_length=0.0, **kw) -> FullResult:
         with self.lock:
             self.calls.append({"grid": grid, "protocol": protocol, "n": n,
                                "interfacial_length": interfacial_length})
@@ -75,8 +61,9 @@ class FakeSolver:
             t += dur
             a = float(np.cbrt(a3[-1]))
         r = np.array(rs)
-        return FakeResult(np.array(ts), r, np.full(r.size, np.nan),
-                          4 * math.pi / 3 * (a0**3 - r**3), np.array(temps), {"steps": len(ts)})
+        return FullResult(t=np.array(ts), radius=r, front=np.full(r.size, np.nan),
+                          expelled_volume=4 * math.pi / 3 * (a0**3 - r**3),
+                          temperature=np.array(temps), diagnostics={"steps": len(ts)})
 
 
 def exact_time(a0: float, af: float, a: float, grid: str = "eulerian", scale: float = 1.0) -> float:

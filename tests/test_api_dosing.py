@@ -42,7 +42,7 @@ def fake():
 
 @pytest.fixture
 def planner(tmp_path, fake):
-    with fake_planner(tmp_path / "cache.sqlite", max_pending=8) as p:
+    with fake_planner(tmp_path / "cache.sqlite", fake, max_pending=8) as p:
         yield p
 
 
@@ -152,8 +152,8 @@ async def test_full_queue_is_429_with_retry_after(tmp_path) -> None:
     """max_pending counts validations (issue 15, D4: it counted solver runs, so a
     three-run validation could be admitted in part): one validation, all three of its
     runs, fills a queue of one; the next is refused whole, naming what is full."""
-    with fake_full_solver(delay=1.0), \
-            fake_planner(tmp_path / "c.sqlite", max_pending=1) as planner:
+    with fake_full_solver(delay=1.0) as fake, \
+            fake_planner(tmp_path / "c.sqlite", fake, max_pending=1) as planner:
         async with asgi(create_app(planner=planner, warm=False)) as (_, raw):
             r1 = await raw.post("/v1/dose-time", json=SMOOTH)  # three rungs: the queue is full
             r2 = await raw.post("/v1/dose-time", json={**SMOOTH, "t_start": 300.5})
@@ -173,11 +173,11 @@ async def test_full_queue_is_429_with_retry_after(tmp_path) -> None:
 
 async def test_blocking_work_never_blocks_the_event_loop(tmp_path, fake) -> None:
     class SlowPlanner(Planner):
-        def dose(self, req, validate=False):
+        def answer(self, req, validate=False):  # the service's one planner call per dose
             time.sleep(1.5)
-            return super().dose(req, validate)
+            return super().answer(req, validate)
 
-    with fake_planner(tmp_path / "c.sqlite", cls=SlowPlanner) as planner:
+    with fake_planner(tmp_path / "c.sqlite", fake, cls=SlowPlanner) as planner:
         async with asgi(create_app(planner=planner, warm=False)) as (api, _):
             slow = asyncio.create_task(api.dose_time(FRONT))
             await asyncio.sleep(0.1)
@@ -205,3 +205,44 @@ async def test_schedule_hold_then_checked_job(clients) -> None:
     assert got is not None and v.result["protocol_check"] is not None
     bad = await raw.post("/v1/schedule", json={**body, "doses": [0.5, 0.5], "rests": [0.1]})
     assert bad.status_code == 422 and bad.json()["detail"][0]["loc"][:2] == ["body", "doses"]
+
+
+class PlannerSpy:
+    """Wraps the planner and records every public call the service makes on it (the
+    planner's own calls on itself do not go through the spy)."""
+
+    def __init__(self, planner: Planner) -> None:
+        self._planner = planner
+        self.calls: list[str] = []
+
+    def __getattr__(self, name: str) -> object:
+        attr = getattr(self._planner, name)
+        if name.startswith("_") or not callable(attr):
+            return attr
+
+        def call(*args: object, **kwargs: object) -> object:
+            self.calls.append(name)
+            return attr(*args, **kwargs)
+        return call
+
+
+async def test_the_service_calls_the_planner_once_per_request(planner) -> None:
+    """Issue 16: one planner call per POST /v1/dose-time (answered, 202, answered from the
+    cache, answered with a validation queued) and per quick POST /v1/schedule."""
+    spy = PlannerSpy(planner)
+    async with asgi(create_app(planner=spy, warm=False)) as (api, raw):
+        calls = []
+        for body in (FRONT, LSMOOTH, {**FRONT, "validate_full": True}):
+            spy.calls.clear()
+            r = await raw.post("/v1/dose-time", json=body)
+            calls.append((r.status_code, list(spy.calls)))
+        assert calls == [(200, ["answer"]), (202, ["answer"]), (200, ["answer"])]
+        vid = (await raw.post("/v1/dose-time", json=LSMOOTH)).json()["validation_id"]
+        assert (await _wait_done(api, vid)).status == "done"
+        spy.calls.clear()
+        r = await raw.post("/v1/dose-time", json=LSMOOTH)  # now from the cache
+        assert (r.status_code, r.json()["model"], spy.calls) == (200, "full", ["answer"])
+        spy.calls.clear()
+        r = await raw.post("/v1/schedule", json={"gel": "ANB", "t_start": 302.0,
+                                                 "t_end": 308.0, "doses": [0.3, 0.3]})
+        assert (r.status_code, spy.calls) == (200, ["schedule_now"])

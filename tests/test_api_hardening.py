@@ -171,7 +171,8 @@ def anyio_backend() -> str:
 
 @pytest.fixture
 async def raw_client(tmp_path):
-    with fake_full_solver(delay=0.05), fake_planner(tmp_path / "c.sqlite", max_pending=4) as p:
+    with fake_full_solver(delay=0.05) as fake, \
+            fake_planner(tmp_path / "c.sqlite", fake, max_pending=4) as p:
         async with asgi(create_app(planner=p, warm=False)) as (_, raw):
             yield raw
 

@@ -56,10 +56,10 @@ def _over_budget(test: str) -> bool:
 
 @pytest.fixture(scope="module", autouse=True)
 def _fake_planner(tmp_path_factory):
-    """The real planner on a fresh cache, its full-solver jobs on the fake solver (patched
-    in only while this module runs); schedule jobs are drained before the patch goes."""
-    with fake_full_solver(), fake_planner(tmp_path_factory.mktemp("st") / "cache.sqlite",
-                                          max_pending=16) as planner:
+    """The real planner on a fresh cache, its full-solver jobs on the fake solver; schedule
+    jobs are drained before the planner closes."""
+    with fake_full_solver() as fake, fake_planner(tmp_path_factory.mktemp("st") / "cache.sqlite",
+                                                  fake, max_pending=16) as planner:
         _late.target = planner
         yield
         app.state.service.stop(wait=True)

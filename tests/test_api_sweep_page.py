@@ -35,7 +35,7 @@ def anyio_backend() -> str:
 
 @pytest.fixture
 async def raw(tmp_path):
-    with fake_full_solver(delay=0.01), fake_planner(tmp_path / "c.sqlite") as planner:
+    with fake_full_solver(delay=0.01) as fake, fake_planner(tmp_path / "c.sqlite", fake) as planner:
         app = create_app(planner=planner, warm=False)
         async with asgi(app) as (_, client):
             yield client

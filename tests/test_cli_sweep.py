@@ -56,13 +56,20 @@ def test_vary_a_gel_parameter(tmp_path: Path) -> None:
                  "--dose", "0.5"]) == 2
 
 
-def test_validate_waits_and_fills_the_truth(tmp_path: Path) -> None:
+def test_validate_waits_and_fills_the_truth(tmp_path: Path,
+                                            monkeypatch: pytest.MonkeyPatch) -> None:
     """--validate needs-full: the smooth jump's points are validated (here on the fake full
-    solver, in this process) and the table carries the truth's time."""
+    solver, in this process: the command's planner is built with it) and the table carries
+    the truth's time."""
+    import functools
+
     from api_support import fake_full_solver
 
+    import dosing
+
     out = tmp_path / "s.json"
-    with fake_full_solver():
+    with fake_full_solver() as fake:
+        monkeypatch.setattr(dosing, "Planner", functools.partial(dosing.Planner, solver=fake))
         rc = main(["sweep", "--t-end", "305,308", "--dry-radius-um", "50", "--dose", "0.3",
                    "--validate", "needs-full", "--cache", str(tmp_path / "c.sqlite"),
                    "--json", str(out), "--no-progress"])

@@ -156,3 +156,44 @@ def test_concurrent_processes_and_threads(tmp_path: Path) -> None:
     assert cache.integrity() == "ok"
     cache.close()
     assert os.path.getsize(path) > 0
+
+
+def _old_blob(arrays: dict[str, np.ndarray]) -> bytes:
+    """A trajectory blob as the cache wrote it before the one run record (issue 16): the
+    arrays t, radius, front, expelled_volume, temperature, step_* only, no diagnostics."""
+    import io
+
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **{k: np.asarray(v, dtype=float) for k, v in arrays.items()})
+    return buf.getvalue()
+
+
+def test_blobs_of_the_old_format_still_load(tmp_path: Path) -> None:
+    """A row written by an earlier version loads as the one run record: arrays from the
+    blob, diagnostics and the spinodal flag from the row's metadata."""
+    from solver.full import FullResult
+
+    t = np.linspace(0.0, 1.0, 11)
+    step_t = np.linspace(0.0, 1.0, 101)
+    old = {"t": t, "radius": 2.0 - t, "front": np.full(t.size, np.nan),
+           "expelled_volume": 3.0 * t, "temperature": np.full(t.size, 308.0),
+           "step_t": step_t, "step_radius": 2.0 - step_t, "step_rate": -np.ones(step_t.size),
+           "step_edge": 0.9 - 0.5 * step_t}
+    meta = {"key": "k", "horizon": 1.0, "wall_seconds": 0.5,
+            "diagnostics": {"spinodal": True, "message": "spinodal collapse", "steps": 100}}
+    with ValidationCache(tmp_path / "c.sqlite") as cache:
+        cache.put("k", meta, _old_blob(old))
+        got = cache.get("k")
+    assert isinstance(got, FullResult) and got.meta == meta
+    for name, want in old.items():
+        np.testing.assert_array_equal(getattr(got, name), want)
+    assert got.spinodal and got.diagnostics["message"] == "spinodal collapse"
+    assert got.horizon == 1.0 and got.phi.size == 0
+    # a(t) = 2 - t exactly: the Hermite crossing between steps is exact for a line
+    assert got.time_to_radius(1.5) == pytest.approx(0.5, abs=1e-12)
+    assert got.time_to_radius(1.2, after=0.55) == pytest.approx(0.8, abs=1e-12)
+    assert got.nucleation_time(0.65) == pytest.approx(0.5, abs=1e-12)  # edge 0.9 - t/2
+    assert got.nucleation_time(0.1) is None  # never: None, not NaN
+    back = FullResult.from_npz(got.to_npz(), got.meta)  # and the new format round-trips
+    assert back.spinodal and back.diagnostics == got.diagnostics
+    np.testing.assert_array_equal(back.step_edge, got.step_edge)

@@ -4,7 +4,6 @@ error estimates, deduplication, restarts, failures, horizon extension, schedules
 The real solver's numbers are checked in test_dosing_validation.py.
 """
 
-import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -25,19 +24,17 @@ FRONT = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0}
 
 
 @pytest.fixture
-def fake(monkeypatch: pytest.MonkeyPatch) -> FakeSolver:
-    f = FakeSolver()
-    monkeypatch.setitem(sys.modules, "solver.full", f.module())
-    return f
+def fake() -> FakeSolver:
+    return FakeSolver()
 
 
-def _planner(path: Path, workers: int = 2, **kw) -> Planner:
-    return Planner(cache_path=path, executor=ThreadPoolExecutor(workers), **kw)
+def _planner(path: Path, solver: FakeSolver, workers: int = 2, **kw) -> Planner:
+    return Planner(cache_path=path, executor=ThreadPoolExecutor(workers), solver=solver, **kw)
 
 
 @pytest.fixture
 def planner(tmp_path: Path, fake: FakeSolver):
-    p = _planner(tmp_path / "c.sqlite")
+    p = _planner(tmp_path / "c.sqlite", fake)
     yield p
     p.close()
     p.jobs.executor.shutdown()
@@ -136,7 +133,7 @@ def test_submit_validation_returns_at_once_dedups_and_survives_restart(tmp_path:
                                                                       fake) -> None:
     fake.gate = threading.Event()
     path = tmp_path / "c.sqlite"
-    p = _planner(path, workers=4)
+    p = _planner(path, fake, workers=4)
     t0 = time.perf_counter()
     vid = p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.8, settings=LADDER))
     vid2 = p.submit_validation(DoseRequest(**FRONT, dose_fraction=0.5, settings=LADDER))
@@ -153,7 +150,7 @@ def test_submit_validation_returns_at_once_dedups_and_survives_restart(tmp_path:
     assert len(fake.calls) == 3  # one run per rung served both doses
     p.close()
     p.jobs.executor.shutdown()
-    again = _planner(path)  # a restart: same file, new planner
+    again = _planner(path, fake)  # a restart: same file, new planner
     assert again.validation(vid).result == st.result and len(fake.calls) == 3
     with pytest.raises(UnknownValidationError):
         again.validation("nope")
@@ -170,7 +167,7 @@ def test_failed_validation_reports_the_error(planner, fake) -> None:
 
 def test_queue_is_bounded(tmp_path: Path, fake) -> None:
     fake.gate = threading.Event()
-    p = _planner(tmp_path / "c.sqlite", max_pending=1)
+    p = _planner(tmp_path / "c.sqlite", fake, max_pending=1)
     first = DoseRequest(**FRONT, dose_fraction=0.3, settings=LADDER)
     p.submit_validation(first)  # one validation: all three rungs admitted
     assert [p.jobs.state(sc.key()) is not None for sc in p.scenarios(first)] == [True] * 3
@@ -184,10 +181,9 @@ def test_queue_is_bounded(tmp_path: Path, fake) -> None:
     p.jobs.executor.shutdown()
 
 
-def test_long_doses_extend_the_run_under_one_key(tmp_path: Path, monkeypatch) -> None:
+def test_long_doses_extend_the_run_under_one_key(tmp_path: Path) -> None:
     slow = FakeSolver(rate_scale=0.05)  # 60 % takes t = 2.7: beyond the first horizon 1
-    monkeypatch.setitem(sys.modules, "solver.full", slow.module())
-    p = _planner(tmp_path / "c.sqlite")
+    p = _planner(tmp_path / "c.sqlite", slow)
     req = DoseRequest(**SMOOTH, dose_fraction=0.6, settings=LADDER)
     ans = p.dose(req)
     a0 = req.start_radius
@@ -230,3 +226,38 @@ def test_regularized_schedule_runs_the_protocol_at_the_coarsest_rung(planner, fa
                               for c in protocol_runs} == {("lagrangian", 800, 0.005)}
     assert "interfacial length 0.005" in ans.note and "nucleate" in ans.note
     assert ans.corrected["met"]
+
+
+@pytest.mark.parametrize("settings", [None, LADDER, PAPER])
+@pytest.mark.parametrize("dry", [None, 50.0])
+def test_front_answer_keys_the_truth_run_of_the_validation(settings, dry) -> None:
+    """A sweep point's scenario key (built alone, without the other validation runs) is
+    the first validation run's: /v1/validations and the cache find the same row."""
+    from dosing.planner import front_answer, request_scenarios
+
+    kw = {} if settings is None else {"settings": settings}
+    req = DoseRequest(**FRONT, dose_fraction=0.5, dry_radius_um=dry, **kw)
+    assert front_answer(req).scenario_key == request_scenarios(req)[0].key()
+
+
+def test_typed_answers_keep_their_json(planner, fake) -> None:
+    """The answer's validation is a ValidationReport and its hold rows HoldRows; their
+    JSON is the plain dicts the HTTP answers always had (same keys, same order)."""
+    import json
+
+    from dosing import ValidationReport
+
+    ans = planner.dose(DoseRequest(**SMOOTH, dose_fraction=0.5, settings=LADDER))
+    assert isinstance(ans.validation, ValidationReport)
+    d = ans.to_dict()["validation"]
+    assert type(d) is dict and list(d) == [
+        "model", "method", "interfacial_length", "settings", "runs", "time", "error", "limit",
+        "grid_spread", "front_time", "front_time_error", "front_volume_error", "uncertainty"]
+    assert d == ans.validation.to_dict() and d["time"] == ans.validation.time
+    json.dumps(ans.to_dict(), allow_nan=False)
+    sch = planner.schedule(ScheduleRequest(**FRONT, doses=(0.3, 0.3), rests=(0.0,)))
+    rows = sch.to_dict()["hold"]
+    assert [type(r) for r in rows] == [dict, dict] and list(rows[0]) == [
+        "dose_fraction", "cumulative_fraction", "start", "end", "actuation_time",
+        "actuation_seconds", "error_estimate"]
+    assert rows[1]["end"] == sch.hold[1].end == sch.hold[1]["end"]

@@ -128,14 +128,11 @@ def test_dask_local_cluster_returns_the_identical_table(tmp_path: Path) -> None:
     assert on_dask.rows == inline.rows
 
 
-def test_validations_are_queued_for_the_chosen_points(tmp_path: Path,
-                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+def test_validations_are_queued_for_the_chosen_points(tmp_path: Path) -> None:
     """'needs-full' queues a validation per smooth point (on the fake full solver); the ids
     are the planner's, so /v1/validations/{id} polls them."""
-    fake = FakeSolver()
-    monkeypatch.setitem(sys.modules, "solver.full", fake.module())
     pool = ThreadPoolExecutor(1)
-    with Planner(cache_path=tmp_path / "c.sqlite", executor=pool) as p:
+    with Planner(cache_path=tmp_path / "c.sqlite", executor=pool, solver=FakeSolver()) as p:
         res = p.sweep(SweepGrid(t_ends=[305.0, 308.0], dry_radii_um=[50.0], doses=[0.2, 0.4]),
                       validate="needs-full")
         ids = [r["validation_id"] for r in res.rows]

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -29,15 +28,13 @@ CUSTOM = {"gel": {"base": "ANB", "omega": 300.0}, "t_start": 302.0, "t_end": 308
 
 
 @pytest.fixture
-def fake(monkeypatch: pytest.MonkeyPatch) -> FakeSolver:
-    f = FakeSolver()
-    monkeypatch.setitem(sys.modules, "solver.full", f.module())
-    return f
+def fake() -> FakeSolver:
+    return FakeSolver()
 
 
 @pytest.fixture
 def planner(tmp_path: Path, fake: FakeSolver):
-    p = Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(2))
+    p = Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(2), solver=fake)
     yield p
     p.close()
     p.jobs.executor.shutdown()

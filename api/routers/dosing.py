@@ -10,7 +10,7 @@ from fastapi.responses import JSONResponse
 from .. import schemas as s
 from ..deps import PlannerDep, StateDep
 from ..drug_schemas import DrugDoseResponse, DrugScheduleResponse
-from ..service import Pending, dose_time, schedule
+from ..service import Accepted, dose_time, schedule
 from .compute import compute
 
 router = APIRouter(prefix="/v1", tags=["dosing"])
@@ -18,9 +18,9 @@ router = APIRouter(prefix="/v1", tags=["dosing"])
 _FULL = {"model": s.ErrorResponse, "description": "queue full: the message says which"}
 
 
-def answer_or_pending(out: dict[str, Any] | Pending) -> Any:
+def answer_or_pending(out: dict[str, Any] | Accepted) -> Any:
     """An answer (200, the route's model), or 202 with the poll fields and a Location."""
-    if not isinstance(out, Pending):
+    if not isinstance(out, Accepted):
         return out
     return JSONResponse(s.PendingResponse(**out.to_dict()).model_dump(), status_code=202,
                         headers={"Location": out.validation_url})

@@ -104,8 +104,7 @@ def direct_dose_times(gel: Gel | str, t_start: float, t_end: float, radii: Seque
                                                                               strict=True))
     nuc = None
     try:
-        t_nuc = res.nucleation_time(nucleation_level(g, t_start, t_end))
-        nuc = None if math.isnan(t_nuc) else float(t_nuc)
+        nuc = res.nucleation_time(nucleation_level(g, t_start, t_end))
     except (ValueError, ParameterError):
         nuc = None
     return DirectTimes(tuple(float(a) for a in radii), times, check, numerical, nuc,

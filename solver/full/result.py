@@ -1,21 +1,41 @@
-"""FullResult: the plain-data outcome of a full PDE run (arrays plus diagnostics)."""
+"""FullResult: the one record of a full PDE run (arrays plus diagnostics), fresh or stored.
+
+The solver returns it with every output's profiles; the planner's cache keeps it without
+them (:meth:`FullResult.without_profiles`: a(t), R_f(t), the expelled volume, T(t) and the
+per-step record) as an ``.npz`` blob (:meth:`to_npz` / :meth:`from_npz`, the one codec:
+:meth:`save` / :meth:`load` write and read the same bytes as a file).  Missing values: a
+time that does not exist (no nucleation) is None, never NaN; a radius never reached raises
+ValueError; array entries without a value (no front at an output) are NaN, which the JSON
+form turns into null.
+"""
 
 from __future__ import annotations
 
+import io
 import json
-from dataclasses import dataclass, field, fields
+import math
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..crossing import first_fall, hermite_root
+from ..crossing import first_fall, hermite_root, linear_cube_root
 from ..json_safe import json_safe
 
 _ARRAYS = ("t", "radius", "front", "jump", "phi", "coords", "temperature", "expelled_volume",
            "solid_error", "step_t", "step_radius", "step_rate", "step_edge", "nodes")
+# what a stored run keeps (the planner's cache; also the arrays of its older blobs)
+RECORD_ARRAYS = ("t", "radius", "front", "expelled_volume", "temperature", "step_t",
+                 "step_radius", "step_rate", "step_edge")
 
 
+def _empty() -> np.ndarray:
+    return np.zeros(0)
+
+
+def _empty2() -> np.ndarray:
+    return np.zeros((0, 0))
 
 
 @dataclass
@@ -30,62 +50,94 @@ class FullResult:
     da/dt and the edge cell's porosity at every accepted step (dense a(t) for crossing
     times; the time a front nucleates at the edge).  On the moving grid ``nodes`` holds
     every output's dry node radii (len(t), n + 1), the cells ``phi`` refers to, and
-    ``coords`` the last output's cell midpoints; on fixed grids it is empty.
+    ``coords`` the last output's cell midpoints; on fixed grids it is empty.  A stored run
+    (the planner's cache) has no profiles (``phi``, ``coords``, ``jump``, ``solid_error``,
+    ``nodes`` empty) and carries ``meta``: its cache key, scenario, horizon, wall time.
     """
 
     t: np.ndarray
     radius: np.ndarray
     front: np.ndarray
-    jump: np.ndarray
-    phi: np.ndarray
-    coords: np.ndarray
-    temperature: np.ndarray
-    expelled_volume: np.ndarray
-    solid_error: np.ndarray
+    jump: np.ndarray = field(default_factory=_empty)
+    phi: np.ndarray = field(default_factory=_empty2)
+    coords: np.ndarray = field(default_factory=_empty)
+    temperature: np.ndarray = field(default_factory=_empty)
+    expelled_volume: np.ndarray = field(default_factory=_empty)
+    solid_error: np.ndarray = field(default_factory=_empty)
     spinodal: bool = False
     diagnostics: dict[str, Any] = field(default_factory=dict)
-    step_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    step_radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    step_rate: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    step_edge: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    nodes: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    step_t: np.ndarray = field(default_factory=_empty)
+    step_radius: np.ndarray = field(default_factory=_empty)
+    step_rate: np.ndarray = field(default_factory=_empty)
+    step_edge: np.ndarray = field(default_factory=_empty)
+    nodes: np.ndarray = field(default_factory=_empty2)
+    meta: dict[str, Any] = field(default_factory=dict)
 
     @property
     def grid(self) -> str:
         """'eulerian', 'lagrangian' or 'moving'."""
         return str(self.diagnostics.get("grid", "eulerian"))
 
-    def nucleation_time(self, level: float) -> float:
-        """First time the edge cell's porosity falls to ``level`` (NaN if it never does):
-        with a level between the swollen and shrunken porosities, when the front forms."""
-        return first_fall(self.step_t, self.step_edge, level)
+    @property
+    def horizon(self) -> float:
+        """The last simulated time."""
+        return float(self.t[-1])
 
-    def time_to_radius(self, a_target: float) -> float:
-        """First time at which a(t) crosses ``a_target`` (cubic Hermite between steps).
+    def _dense(self) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """(t, a, da/dt) at every accepted step, or (t, a, None) at the outputs."""
+        if self.step_t.size >= 2:
+            return self.step_t, self.step_radius, self.step_rate
+        return self.t, self.radius, None
 
-        Raises ValueError if the radius never reaches it.
+    def radius_at(self, time: float) -> float:
+        """a(t), interpolated linearly between accepted steps (or outputs)."""
+        t, a, _ = self._dense()
+        return float(np.interp(time, t, a))
+
+    def nucleation_time(self, level: float) -> float | None:
+        """First time the edge cell's porosity falls to ``level`` (None if it never does, or
+        the run has no per-step record): with a level between the swollen and shrunken
+        porosities, when the front forms."""
+        if self.step_edge.size != self.step_t.size or self.step_t.size < 2:
+            return None
+        t = first_fall(self.step_t, self.step_edge, level)
+        return None if math.isnan(t) else t
+
+    def time_to_radius(self, a_target: float, after: float = 0.0) -> float:
+        """First time t >= ``after`` at which a(t) reaches ``a_target``, from the side a is on
+        at ``after`` (it falls to a target below, rises to one above).
+
+        Between accepted steps a(t) is the cubic Hermite interpolant of a and da/dt; between
+        outputs (a record without steps, or from ``after`` to the next step) a^3 is linear
+        in t, as the expelled volume (eq. FluidVolExpelled).  Raises ValueError if the
+        radius never reaches it.
         """
         target = float(a_target)
-        if self.step_t.size >= 2:
-            t, a, d = self.step_t, self.step_radius, self.step_rate
-        else:
-            t, a = self.t, self.radius
-            d = np.gradient(a, t) if t.size >= 2 else np.zeros_like(a)
-        if a.size and a[0] == target:
-            return float(t[0])
-        s = np.sign(a - target)
-        idx = np.nonzero(s[:-1] * s[1:] <= 0)[0]
-        if idx.size == 0:
-            raise ValueError(f"the radius never reaches {target:g} "
-                             f"(range {a.min():.6g} to {a.max():.6g} over t <= {t[-1]:.6g})")
-        k = int(idx[0])
-        if t[k + 1] <= t[k]:
-            return float(t[k])
-        return float(hermite_root(t[k], t[k + 1], a[k], a[k + 1], d[k], d[k + 1], target))
+        t, a, rate = self._dense()
+        start = max(float(after), float(t[0]))
+        i0 = int(np.searchsorted(t, start, side="left"))
+        a0 = float(a[i0]) if i0 < t.size and t[i0] == start else self.radius_at(start)
+        if a0 == target:
+            return start
+        hit = np.nonzero((a[i0:] - target) * np.sign(a0 - target) <= 0.0)[0]
+        if hit.size == 0:
+            rest = a[i0:] if i0 < t.size else a[-1:]
+            raise ValueError(f"the radius never reaches {target:.6g} (range {rest.min():.6g} "
+                             f"to {rest.max():.6g} over {start:.6g} <= t <= {t[-1]:.6g})")
+        j = i0 + int(hit[0])
+        if j == i0:  # between ``after`` and the next sample
+            return linear_cube_root(start, a0, float(t[j]), float(a[j]), target)
+        if rate is not None and t[j] > t[j - 1]:
+            return float(hermite_root(t[j - 1], t[j], a[j - 1], a[j], rate[j - 1], rate[j],
+                                      target))
+        return linear_cube_root(float(t[j - 1]), float(a[j - 1]), float(t[j]), float(a[j]),
+                                target)
 
     def state_at(self, time: float) -> tuple[float, float, np.ndarray]:
         """(a, R_f, phi profile) at ``time``, interpolated linearly between outputs."""
         x = float(time)
+        if not self.phi.size:
+            raise ValueError("this record keeps no profiles (a stored run)")
         if not (self.t[0] <= x <= self.t[-1]):
             raise ValueError(f"time {x:g} outside the run [{self.t[0]:g}, {self.t[-1]:g}]")
         k = int(np.searchsorted(self.t, x, side="right") - 1)
@@ -124,23 +176,46 @@ class FullResult:
         out["diagnostics"] = self.diagnostics
         return json_safe(out)
 
-    def save(self, path: str | Path) -> Path:
-        """Write to an .npz file (arrays plus the diagnostics as JSON)."""
-        p = Path(path)
-        arrays = {name: np.asarray(getattr(self, name)) for name in _ARRAYS}
-        np.savez_compressed(p, spinodal=np.array(bool(self.spinodal)),
+    def without_profiles(self) -> FullResult:
+        """This run as the planner stores it: a(t), R_f(t), the expelled volume, T(t) and
+        the per-step record (``RECORD_ARRAYS``), diagnostics and meta; no profiles."""
+        return replace(self, jump=_empty(), phi=_empty2(), coords=_empty(),
+                       solid_error=_empty(), nodes=_empty2(),
+                       **{k: np.asarray(getattr(self, k), dtype=float) for k in RECORD_ARRAYS})
+
+    def to_npz(self) -> bytes:
+        """The run as ``.npz`` bytes: every array, ``spinodal`` and the diagnostics as JSON
+        (``meta`` is not in it: the cache keeps it beside the blob)."""
+        buf = io.BytesIO()
+        np.savez_compressed(buf, spinodal=np.array(bool(self.spinodal)),
                             diagnostics=np.array(json.dumps(json_safe(self.diagnostics))),
-                            **arrays)
-        return p if p.suffix == ".npz" else p.with_name(p.name + ".npz")
+                            **{name: np.asarray(getattr(self, name)) for name in _ARRAYS})
+        return buf.getvalue()
+
+    @classmethod
+    def from_npz(cls, blob: bytes, meta: dict[str, Any] | None = None) -> FullResult:
+        """Inverse of :meth:`to_npz`; also reads the planner's older blobs (the arrays of
+        ``RECORD_ARRAYS`` alone: diagnostics and ``spinodal`` then come from
+        ``meta['diagnostics']``)."""
+        meta = dict(meta or {})
+        with np.load(io.BytesIO(blob), allow_pickle=False) as data:
+            kwargs: dict[str, Any] = {f.name: np.array(data[f.name]) for f in fields(cls)
+                                      if f.name in _ARRAYS and f.name in data}
+            diag = (json.loads(str(data["diagnostics"])) if "diagnostics" in data
+                    else dict(meta.get("diagnostics") or {}))
+            spinodal = (bool(data["spinodal"]) if "spinodal" in data
+                        else bool(diag.get("spinodal", False)))
+        return cls(**kwargs, spinodal=spinodal, diagnostics=diag, meta=meta)
+
+    def save(self, path: str | Path) -> Path:
+        """Write :meth:`to_npz`'s bytes to an .npz file (the suffix is added if missing)."""
+        p = Path(path)
+        if p.suffix != ".npz":
+            p = p.with_name(p.name + ".npz")
+        p.write_bytes(self.to_npz())
+        return p
 
     @classmethod
     def load(cls, path: str | Path) -> FullResult:
         """Read a file written by :meth:`save`."""
-        with np.load(Path(path), allow_pickle=False) as data:
-            kwargs: dict[str, Any] = {}
-            for f in fields(cls):
-                if f.name in _ARRAYS and f.name in data:
-                    kwargs[f.name] = np.array(data[f.name])
-            kwargs["spinodal"] = bool(data["spinodal"])
-            kwargs["diagnostics"] = json.loads(str(data["diagnostics"]))
-        return cls(**kwargs)
+        return cls.from_npz(Path(path).read_bytes())

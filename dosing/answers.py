@@ -1,0 +1,163 @@
+"""The planner's answers as types: the model choice, the validation report, a dose's answer,
+``Answered | Pending`` (one planner call per request), a validation's state, hold rows.
+
+A leaf module (the planner, the validation report, the schedules and the service import it;
+it imports none of them).  Every record's ``to_dict()`` is its JSON form; the reports that
+used to be plain dicts also read like them (``report["time"]``, ``row.get("end")``), so the
+callers that index them keep working.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+from typing import Any
+
+from .truth import Uncertainty
+
+
+class ByKey:
+    """Read access by field name, as the dict such a record replaced (``rec["time"]``)."""
+
+    def __getitem__(self, key: str) -> Any:
+        if key not in {f.name for f in fields(self)}:  # type: ignore[arg-type]
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def get(self, key: str, default: Any = None) -> Any:
+        """The field ``key``, or ``default`` when there is no such field."""
+        try:
+            return self[key]
+        except KeyError:
+            return default
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form (JSON-ready)."""
+        return asdict(self)  # type: ignore[call-overload]
+
+
+@dataclass(frozen=True)
+class ModelChoice:
+    """Which model answers a dose request, decided from the initial equilibrium alone.
+
+    ``radius`` is the target radius after the dose (eq. FluidVolExpelled); ``model``
+    'front' (the paper's front model), 'front-sharp' (the sharp-interface one) or 'full';
+    ``why`` in words; ``front_time`` the front model's dimensionless time (None where the
+    full solver answers); ``behaviour`` the jump classifier's verdict.
+    """
+
+    radius: float
+    model: str
+    why: str
+    front_time: float | None
+    behaviour: str
+
+    @property
+    def needs_full(self) -> bool:
+        """True when only the full solver can answer (no front-model time)."""
+        return self.front_time is None
+
+
+@dataclass(frozen=True)
+class ValidationReport(ByKey):
+    """The full solver's verdict on a dose (:func:`dosing.validation.validation_report`).
+
+    ``runs`` has one entry per validation run (grid, n, interfacial length, key; its time,
+    nucleation time, wall time and warning, or its error; the direct truth's ``role``);
+    ``time`` is the truth's time (None when its runs failed), ``error`` its relative error;
+    ``limit`` the ladder's extrapolation, ``grid_spread`` the paper's two grids' gap,
+    ``uncertainty`` the direct truth's three parts (``Uncertainty.to_dict``); ``front_*``
+    the front model's time and its errors against the truth.
+    """
+
+    model: str
+    method: str
+    interfacial_length: float
+    settings: dict[str, Any]
+    runs: list[dict[str, Any]]
+    time: float | None = None
+    error: float | None = None
+    limit: dict[str, Any] | None = None
+    grid_spread: float | None = None
+    front_time: float | None = None
+    front_time_error: float | None = None
+    front_volume_error: float | None = None
+    uncertainty: dict[str, Any] | None = None
+
+
+@dataclass
+class DoseAnswer:
+    """How long to heat: dimensionless and in seconds, with the model and its error."""
+
+    model: str
+    interfacial_length: float
+    truth: str
+    time: float
+    seconds: float | None
+    timescale_seconds: float | None
+    timescale_formula: str
+    start_radius: float
+    final_radius: float
+    final_radius_um: float | None
+    expelled_volume: float
+    expelled_volume_ul: float | None
+    stored_volume: float
+    stored_volume_ul: float | None
+    dose_fraction: float
+    error_estimate: float
+    error_explanation: str
+    validation: ValidationReport | None
+    scenario_key: str
+    behaviour: str
+    note: str
+    parameter_interval: dict[str, Any] | None = None  # a fitted gel's (dosing.fit_uncertainty)
+    method: str = "direct"  # the truth: 'direct', 'ladder' or 'paper'
+    bead_dry_radius_um: float | None = None  # the bead size the truth's ell assumes
+    uncertainty: Uncertainty | None = None  # the direct truth's three parts (validated)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form (JSON-ready)."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Answered:
+    """A dose answered now (front model, or full-solver runs already cached): HTTP 200.
+    ``validation_id``: the validation queued alongside when one was asked for."""
+
+    answer: DoseAnswer
+    validation_id: str | None = None
+
+
+@dataclass(frozen=True)
+class Pending:
+    """A dose that needs full-solver runs not cached yet: they are queued as the validation
+    ``validation_id`` (HTTP 202); asked again once it is done, the dose is answered."""
+
+    validation_id: str
+
+
+@dataclass
+class ValidationStatus:
+    """A validation's state; ``result`` when done, ``error`` when failed."""
+
+    id: str
+    status: str
+    result: ValidationReport | None = None
+    error: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class HoldRow(ByKey):
+    """One dose of a schedule under the hold assumption (doses read off one heating)."""
+
+    dose_fraction: float
+    cumulative_fraction: float
+    start: float
+    end: float
+    actuation_time: float
+    actuation_seconds: float | None
+    error_estimate: float
