@@ -174,6 +174,6 @@ def run(args: argparse.Namespace) -> int:
     if ans.validation:
         runs = ", ".join(f"{e['grid']} N={e['n']} ell={e['interfacial_length']:g}: "
                          + (f"{e['time']:.5g}" if "time" in e else "failed")
-                         for e in ans.validation["runs"])
+                         for e in ans.validation.runs)
         print(_wrap(f"full solver: {runs}"))
     return 0
