@@ -79,7 +79,18 @@ class _Out(BaseModel):
     model_config = ConfigDict(extra="allow")
 
 
-class DrugDoseResponse(_Out):
+class _StatedTruthOut(_Out):
+    """What every drug answer states: its runs' interfacial length, bead size and model."""
+
+    interfacial_length: float = Field(
+        description="interfacial length ell (dry radii) of the full-solver runs: the fluid "
+                    "answers' truth, the bead's own xi_dry / a_d by default")
+    bead_dry_radius_um: float | None = Field(None, description="the bead size assumed (um)")
+    truth: str = Field(description="the model the drug runs use, in words (as the fluid "
+                                   "answers' truth)")
+
+
+class DrugDoseResponse(_StatedTruthOut):
     """HTTP 200 for a dose with a ``drug``: the actuation time for the drug dose, the leak
     before heating and how the drug came out."""
 
@@ -118,15 +129,9 @@ class DrugDoseResponse(_Out):
                           "error estimate)")
     scenario_key: str | None = Field(None, description="key of the drug run")
     note: str = Field(description="caveats, in words")
-    interfacial_length: float = Field(
-        description="interfacial length ell (dry radii) of the full-solver runs: the fluid "
-                    "answers' truth, the bead's own xi_dry / a_d by default")
-    bead_dry_radius_um: float | None = Field(None, description="the bead size assumed (um)")
-    truth: str = Field(description="the model the drug runs use, in words (as the fluid "
-                                   "answers' truth)")
 
 
-class DrugScheduleResponse(_Out):
+class DrugScheduleResponse(_StatedTruthOut):
     """HTTP 200 for a schedule with a ``drug``: each reading in drug, leakage, warnings."""
 
     status: Literal["answered"] = Field("answered", description="always 'answered'")
@@ -150,9 +155,3 @@ class DrugScheduleResponse(_Out):
         description="hindered diffusivity in the start state, cm^2/s")
     timescale_seconds: float | None = Field(None, description="tau in s (eq. timescale)")
     note: str = Field(description="caveats, in words")
-    interfacial_length: float = Field(
-        description="interfacial length ell (dry radii) of the full-solver runs: the fluid "
-                    "answers' truth, the bead's own xi_dry / a_d by default")
-    bead_dry_radius_um: float | None = Field(None, description="the bead size assumed (um)")
-    truth: str = Field(description="the model the drug runs use, in words (as the fluid "
-                                   "answers' truth)")

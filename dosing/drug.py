@@ -462,6 +462,20 @@ def runs_for(planner: Any) -> DrugRuns:
         return runs
 
 
+@dataclass(kw_only=True)
+class StatedTruth:
+    """What every drug answer states (issue 12): the interfacial length and bead size of its
+    runs and the model in words; and its plain-data form."""
+
+    interfacial_length: float = 0.0
+    bead_dry_radius_um: float | None = None
+    truth: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form (JSON-ready)."""
+        return asdict(self)
+
+
 def drug_truth_text(req: Any) -> str:
     """The model a drug answer's runs use, in words: the fluid answers' truth for the same
     bead, jump and settings (issue 12: one truth)."""

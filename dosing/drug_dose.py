@@ -13,7 +13,7 @@ front model's shell is offered.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -25,6 +25,7 @@ from .drug import (
     DrugRequest,
     DrugRuns,
     DrugScenario,
+    StatedTruth,
     drug_settings,
     drug_truth_text,
     leak_time,
@@ -127,7 +128,7 @@ def resolve_wait(wait: float | None, wait_seconds: float | None, dry: float | No
 
 
 @dataclass
-class DrugDoseAnswer:
+class DrugDoseAnswer(StatedTruth):
     """How long to heat for a drug dose, what leaked before, and how it came out."""
 
     model: str
@@ -153,13 +154,6 @@ class DrugDoseAnswer:
     fluid_answer: dict[str, Any] | None
     scenario_key: str | None
     note: str
-    interfacial_length: float = 0.0
-    bead_dry_radius_um: float | None = None
-    truth: str = ""
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain-data form (JSON-ready)."""
-        return asdict(self)
 
 
 def mechanism(squeezed: float, diffused: float) -> str:

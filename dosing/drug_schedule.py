@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from itertools import accumulate
 from typing import Any
 
@@ -30,6 +30,7 @@ from .drug import (
     DrugRequest,
     DrugRuns,
     DrugScenario,
+    StatedTruth,
     drug_settings,
     drug_truth_text,
     leak_time,
@@ -130,7 +131,7 @@ class DrugScheduleRequest(DrugRequest):
 
 
 @dataclass
-class DrugScheduleAnswer:
+class DrugScheduleAnswer(StatedTruth):
     """A drug schedule under each reading, with leakage and warnings."""
 
     model: str
@@ -147,13 +148,6 @@ class DrugScheduleAnswer:
     effective_diffusivity_cm2_s: float
     timescale_seconds: float | None
     note: str
-    interfacial_length: float = 0.0
-    bead_dry_radius_um: float | None = None
-    truth: str = ""
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain-data form (JSON-ready)."""
-        return asdict(self)
 
 
 class _Runner:
