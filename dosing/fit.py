@@ -31,7 +31,9 @@ from solver.fit.equilibrium import SIZE_POWER
 from solver.fit.kinetics import KineticsData, RadiusModel, fit_kinetics
 from solver.gel import Gel
 
-from .request import resolve_gel, resolve_jump
+from .model_choice import choose_model, front_model_name, front_run
+from .planner import Planner
+from .request import resolve_dry_radius, resolve_gel, resolve_jump
 from .scenario import Scenario, SolverSettings
 from .units import BOLTZMANN, PhysicalConstants
 
@@ -147,8 +149,6 @@ def front_radius_model(gel: Gel, t_start: float, t_end: float, branch: str,
                        sharp: bool = True) -> RadiusModel:
     """beta -> a(t) from the step-function front model (sharp-interface, or the paper's),
     constant after the front reaches the centre."""
-    from .planner import front_run
-
     def for_beta(beta: float | None):
         g = gel if beta is None else gel.with_permeability("power", float(beta))
         fr = front_run(g, t_start, t_end, branch, sharp)
@@ -186,8 +186,6 @@ def full_radius_model(gel: Gel, t_start: float, t_end: float, branch: str,
 def choose_kinetics_model(gel: Gel, t_start: float, t_end: float, branch: str,
                           settings: SolverSettings, model: str = "auto") -> tuple[str, str]:
     """(model, why): 'auto' takes the front model where the planner would."""
-    from .planner import choose_model, front_model_name
-
     if model not in KINETICS_MODELS:
         raise ParameterError("model", model, ", ".join(KINETICS_MODELS))
     if model != "auto":
@@ -223,8 +221,6 @@ def fit_shrinking(data: KineticsData, gel: Gel | str | dict[str, Any], t_start: 
     model only k0 k(phi_+) enters the curve, so beta cannot be fitted there
     (ParameterError); with 'full' each beta costs a solver run.
     """
-    from .request import resolve_dry_radius
-
     try:
         opts = replace(options or KineticsOptions(), **option_fields)
     except TypeError as exc:
@@ -244,8 +240,6 @@ def fit_shrinking(data: KineticsData, gel: Gel | str | dict[str, Any], t_start: 
         g = g.with_permeability("power", beta)
     owned = None
     if name == "full" and planner is None:
-        from .planner import Planner
-
         planner = owned = Planner(executor=ThreadPoolExecutor(1))
     try:
         if name == "full":

@@ -22,6 +22,8 @@ from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.fit.equilibrium import gel_from_internal
 from solver.gel import Gel
 
+from .gel_store import record_for
+from .model_choice import front_run
 from .units import radius_after_dose
 
 Z95 = 1.959963984540054
@@ -39,8 +41,6 @@ def _internal(record: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, float]:
 def dose_time(gel: Gel, t_start: float, t_end: float, branch: str, fraction: float,
               sharp: bool) -> float:
     """The front model's dimensionless time to release ``fraction`` of the stored fluid."""
-    from .planner import front_run
-
     a0 = equilibrium(gel, t_start, branch).stretch
     fr = front_run(gel, t_start, t_end, branch, sharp)
     return float(fr.time_to_radius(radius_after_dose(a0, fraction)))
@@ -101,8 +101,6 @@ def sample_dose_times(record: dict[str, Any], gel: Gel, t_start: float, t_end: f
 def attach_parameter_interval(req: Any, answer: Any) -> Any:
     """Set ``answer.parameter_interval`` for a dose of a stored fitted gel (front model
     answers only; the full solver is too slow to differentiate per request)."""
-    from .gel_store import record_for
-
     rec = record_for(req.gel)
     if rec is None or not (rec.get("swelling") or {}).get("fit"):
         return answer

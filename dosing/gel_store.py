@@ -19,6 +19,7 @@ from solver.errors import ParameterError
 from solver.gel import PRESETS, Gel
 
 from .cache import default_path
+from .scenario import code_version
 
 ENV = "THERMOGEL_GELS"
 SCHEMA = 1
@@ -49,8 +50,6 @@ def _code_version() -> str:
         pkg = version("thermogel")
     except Exception:
         pkg = "unknown"
-    from .scenario import code_version
-
     return f"thermogel {pkg}, solver {code_version()}"
 
 

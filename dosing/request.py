@@ -17,8 +17,9 @@ from solver.equilibrium import equilibrium, nearest_stable
 from solver.errors import ParameterError, require_finite_positive
 from solver.gel import Gel, Permeability, check_temperature
 
+from .gel_store import lookup
 from .scenario import DIRECT_ELL_RANGE, TRUTH, SolverSettings
-from .units import PhysicalConstants, stored_volume, ul_to_volume, volume_to_ul
+from .units import PhysicalConstants, stored_volume, timescale, ul_to_volume, volume_to_ul
 
 BRANCHES = ("swollen", "shrunken")
 
@@ -35,8 +36,6 @@ def gel_with(base: str, overrides: dict[str, Any] | None = None,
     name when nothing changes and is called 'custom' otherwise; a bad parameter is a
     ParameterError naming ``gel.<parameter>``.
     """
-    from .gel_store import lookup
-
     gel = lookup(base)
     custom = {k: float(v) for k, v in (overrides or {}).items() if v is not None}
     unknown = sorted(set(custom) - set(GEL_FIELDS))
@@ -334,8 +333,6 @@ def resolve_rests(rests: Sequence[float] | None, rests_seconds: Sequence[float] 
         if dry is None:
             raise ParameterError("dry_radius_um", None, "a finite number > 0 (um; or "
                                  "swollen_radius_um) to turn rests_seconds into tau units")
-        from .units import timescale
-
         tau = timescale(dry, t_end, constants).seconds
         out = [x / tau for x in out]
     return tuple(out)

@@ -27,6 +27,7 @@ from solver.gel import Gel
 from solver.json_safe import json_safe
 
 from .jobs import QueueFullError
+from .model_choice import front_answer, jump_class
 from .request import DoseRequest, resolve_gel
 from .scenario import SolverSettings
 from .units import PhysicalConstants, timescale
@@ -193,8 +194,6 @@ def _row(point: dict[str, Any]) -> dict[str, Any]:
 def answer_point(point: dict[str, Any]) -> dict[str, Any]:
     """One row of the table: the front model's answer, or why there is none (never raises
     for a bad point: its status is 'error' with the message and the field)."""
-    from .planner import front_answer, jump_class
-
     row = _row(point)
     try:
         req = point_request(point)

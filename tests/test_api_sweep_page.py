@@ -17,7 +17,7 @@ import pytest
 from api_support import asgi, fake_full_solver, fake_planner
 
 from api.http import create_app
-from dosing.planner import front_run
+from dosing.model_choice import front_run
 from dosing.request import resolve_jump
 from dosing.sweep import SweepGrid, run_sweep
 from solver.gel import preset

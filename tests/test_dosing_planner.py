@@ -233,7 +233,8 @@ def test_regularized_schedule_runs_the_protocol_at_the_coarsest_rung(planner, fa
 def test_front_answer_keys_the_truth_run_of_the_validation(settings, dry) -> None:
     """A sweep point's scenario key (built alone, without the other validation runs) is
     the first validation run's: /v1/validations and the cache find the same row."""
-    from dosing.planner import front_answer, request_scenarios
+    from dosing.model_choice import front_answer
+    from dosing.planner import request_scenarios
 
     kw = {} if settings is None else {"settings": settings}
     req = DoseRequest(**FRONT, dose_fraction=0.5, dry_radius_um=dry, **kw)

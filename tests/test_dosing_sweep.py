@@ -176,7 +176,7 @@ def test_a_failing_executor_chunk_is_reported_not_raised() -> None:
 def test_gel_parameters_are_an_axis() -> None:
     """vary_gel: the product of parameter axes, each gel named by its values; a sweep over
     them answers each gel as the planner answers that gel alone."""
-    from dosing.planner import front_time
+    from dosing.model_choice import front_time
     from dosing.units import radius_after_dose
     from solver.gel import ANB
 

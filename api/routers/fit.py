@@ -13,7 +13,7 @@ from typing import Any
 from fastapi import APIRouter
 from fastapi.responses import JSONResponse
 
-from dosing import PhysicalConstants, SolverSettings
+from dosing import PhysicalConstants, SolverSettings, UnknownValidationError
 from dosing.fit import data_dict, fit_shrinking, fit_swelling, kinetics_data, swelling_data
 from dosing.gel_store import GelStore, check_name
 from solver.errors import ParameterError
@@ -122,8 +122,6 @@ async def fit_kinetics_route(body: KineticsFitRequest, state: StateDep) -> Any:
 
 def _status(state: Any, job_id: str) -> dict[str, Any]:
     if not job_id.startswith(tuple(k + "-" for k in KINDS.values())):
-        from dosing import UnknownValidationError
-
         raise UnknownValidationError(job_id)
     out = stored_jobs.status(state, job_id)
     kind = out["kind"].removeprefix("fit-")

@@ -18,6 +18,11 @@ from fastapi import APIRouter, HTTPException, Query
 from fastapi.responses import FileResponse, HTMLResponse, Response
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
+from dosing.model_choice import choose_model, front_model_name, front_run
+from dosing.request import resolve_jump
+from dosing.scenario import SolverSettings
+from solver.errors import NotApplicableError
+
 from ..schemas import (
     T_MAX,
     T_MIN,
@@ -30,6 +35,7 @@ from ..schemas import (
     interfacial_length_field,
     temperature_field,
 )
+from ..service import to_gel
 from .compute import compute
 
 router = APIRouter()
@@ -88,13 +94,6 @@ async def asset(name: str) -> Response:
 
 def front_curve_answer(body: FrontCurveRequest) -> dict[str, Any]:
     """The trajectory the planner's front model follows for this jump (blocking)."""
-    from dosing.planner import choose_model, front_model_name, front_run
-    from dosing.request import resolve_jump
-    from dosing.scenario import SolverSettings
-    from solver.errors import NotApplicableError
-
-    from ..service import to_gel
-
     gel = to_gel(body.gel)
     jump = resolve_jump(gel, body.t_start, body.t_end, body.branch)
     model, why = choose_model(gel, jump.t_start, jump.t_end, jump.branch)
@@ -140,10 +139,7 @@ class PhaseMapQuery(GelParameters):
 @functools.lru_cache(maxsize=32)
 def phase_map_svg(query_json: str) -> bytes:
     """The phase map of the query's gel with its jump drawn (blocking; memoised)."""
-    from dosing.request import resolve_jump
-
-    from ..plots.phase_map import draw_phase_map
-    from ..service import to_gel
+    from ..plots.phase_map import draw_phase_map  # matplotlib: only where a map is drawn
 
     q = PhaseMapQuery.model_validate_json(query_json)
     gel = to_gel(q)

@@ -21,7 +21,7 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import JSONResponse, Response
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from dosing import JobRunner, UnknownValidationError
+from dosing import JobRunner, SolverSettings, UnknownValidationError
 from dosing.sweep import COLUMNS, SweepGrid, SweepResult, fill_validations, run_sweep
 from solver.json_safe import json_safe
 
@@ -35,6 +35,7 @@ from ..schemas import (
     interfacial_length_field,
     temperature_field,
 )
+from ..service import to_gel
 from .compute import compute
 
 router = APIRouter(tags=["design maps"])
@@ -166,9 +167,6 @@ def _sweeps(request: Request) -> _Sweeps:
 
 def to_grid(body: SweepRequest) -> SweepGrid:
     """The dosing grid of a request (gels as the service reads them)."""
-    from dosing import SolverSettings
-
-    from ..service import to_gel
 
     return SweepGrid(t_ends=body.t_ends, dry_radii_um=body.dry_radii_um, doses=body.doses,
                      gels=[to_gel(g) for g in body.gels], t_start=body.t_start,
