@@ -12,6 +12,9 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from .outputs import Out as _Out
+from .outputs import UncertaintyOut
+
 
 class _StrictIn(BaseModel):
     """Strict and finite like every request model (api.schemas.RequestModel, which imports
@@ -75,8 +78,6 @@ class DrugIn(_StrictIn):
         return self.model_dump(exclude={"wait", "wait_seconds"}, exclude_none=True)
 
 
-class _Out(BaseModel):
-    model_config = ConfigDict(extra="allow")
 
 
 class _StatedTruthOut(_Out):
@@ -129,6 +130,11 @@ class DrugDoseResponse(_StatedTruthOut):
                           "error estimate)")
     scenario_key: str | None = Field(None, description="key of the drug run")
     note: str = Field(description="caveats, in words")
+    uncertainty: UncertaintyOut | None = Field(
+        None, description="the drug dose time's uncertainty in three parts: numerical (the "
+                          "drug run at n / 2 cells), and the mechanics' interfacial-length "
+                          "and model-form parts (from the fluid validation at the same fluid "
+                          "fraction where it is cached, else null with how to measure them)")
 
 
 class DrugScheduleResponse(_StatedTruthOut):

@@ -24,6 +24,8 @@ from pydantic import (
 )
 
 from .drug_schemas import DrugIn  # the optional drug of the dose and schedule requests
+from .outputs import Out as _Out
+from .outputs import UncertaintyOut
 
 T_MIN = 273.15  # K, same bounds as solver.gel.check_temperature
 T_MAX = 373.15
@@ -103,10 +105,6 @@ class RequestModel(BaseModel):
         return _positive_zero(value)
 
 
-class _Out(BaseModel):
-    """Base of answers: tolerant of fields a newer server adds."""
-
-    model_config = ConfigDict(extra="allow")
 
 
 # ----------------------------------------------------------------------------- gels
@@ -375,41 +373,6 @@ class LimitOut(_Out):
     error: float = Field(description="its absolute error bound (1.25 x the extrapolation)")
     order: float | None = Field(None, description="observed order in ell (null: none trusted)")
     method: str = Field(description="how the limit was taken, in words")
-
-
-class UncertaintyPart(_Out):
-    """One part of the truth's uncertainty, in numbers and in words."""
-
-    relative: float | None = Field(None, description="its size relative to the truth's time "
-                                                     "(null: not measured or not applicable)")
-    text: str = Field(description="what it is and how it was measured, in words")
-
-
-class UncertaintyOut(_Out):
-    """The direct truth's uncertainty in three parts (dosing.truth.Uncertainty)."""
-
-    numerical: UncertaintyPart = Field(
-        description="grid and time step: the relative gap of the run at n and n / 2 cells")
-    interfacial_length_range: UncertaintyPart = Field(
-        description="the largest relative change of the time over ell = xi_dry / a_d with "
-                    "xi_dry over its plausible range (needs a bead size)")
-    model_form: UncertaintyPart = Field(
-        description="the delayed-transition front law (the ell = 0 lattice) against this "
-                    "local-equilibrium (Maxwell) answer: |ratio - 1|; not in the estimate")
-    interfacial_lengths: list[float] | None = Field(
-        None, description="the ends of the ell range that were run, dry radii")
-    interfacial_length_times: list[float] | None = Field(
-        None, description="the truth's time at those ells, dimensionless")
-    delayed_transition_time: float | None = Field(
-        None, description="the delayed-transition time (finest lattice), dimensionless")
-    delayed_transition_ratio: float | None = Field(
-        None, description="delayed-transition time / the truth's time")
-    delayed_transition_ns: list[int] | None = Field(
-        None, description="the lattice sizes N of the delayed-transition runs")
-    delayed_transition_times: list[float] | None = Field(
-        None, description="the delayed-transition time at each N")
-    delayed_transition_spread: float | None = Field(
-        None, description="(max - min) / finest of those times: its N-independence")
 
 
 class ValidationReport(_Out):

@@ -13,7 +13,7 @@ front model's shell is offered.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -32,6 +32,7 @@ from .drug import (
     runs_for,
 )
 from .request import DoseRequest, Jump, _resolve_scenario
+from .truth import Part, Uncertainty
 from .units import PhysicalConstants, timescale, volume_to_ul
 
 MAX_HORIZON = 64.0
@@ -154,6 +155,7 @@ class DrugDoseAnswer(StatedTruth):
     fluid_answer: dict[str, Any] | None
     scenario_key: str | None
     note: str
+    uncertainty: Uncertainty | None = None
 
 
 def mechanism(squeezed: float, diffused: float) -> str:
@@ -199,6 +201,7 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
             mechanism=mechanism(1.0, 0.0), fluid_fraction=req.fraction,
             medium_concentration_ug_per_ul=_conc(req, req.fraction, fluid.final_radius),
             mass_balance_error=0.0, fluid_answer=fluid.to_dict(), scenario_key=None,
+            uncertainty=fluid.uncertainty,
             note=("No diffusion (D0 = 0): a uniformly loaded bead releases drug in proportion "
                   "to fluid on one heating, exactly, so this is the fluid answer "
                   f"({fluid.model}) for the same fraction; nothing leaks while it waits at "
@@ -223,9 +226,10 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
                     f"after waiting {req.lead:.4g} tau, heating for {horizon:g} tau releases "
                     "at most that") from None
             horizon *= 4.0
+    unc = drug_uncertainty(planner, req, runs, sc, t_hit, _fluid_fraction(req, rel, t_hit))
     before = rel.released_at(req.lead)
     squeezed = rel.advected_at(t_hit) - rel.advected_at(req.lead)
-    fluid = (float(rel.radius[0]) ** 3 - _a3_at(rel, t_hit)) / (req.start_radius**3 - 1.0)
+    fluid = _fluid_fraction(req, rel, t_hit)
     time = t_hit - req.lead
     conc = _conc(req, rel.released_at(t_hit), _a3_at(rel, t_hit) ** (1.0 / 3.0))
     s = drug_settings(req.settings)
@@ -235,7 +239,7 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
         squeezed_fraction=squeezed, diffused_fraction=req.fraction - squeezed,
         mechanism=mechanism(squeezed, req.fraction - squeezed), fluid_fraction=fluid,
         medium_concentration_ug_per_ul=conc, mass_balance_error=rel.mass_balance_error,
-        fluid_answer=None, scenario_key=sc.key(),
+        fluid_answer=None, scenario_key=sc.key(), uncertainty=unc,
         note=(f"Full solver ({s.grid} grid, N = {s.n}, interfacial length "
               f"{s.interfacial_length:g}) with the drug on its cells: D0 = {d0:.3g} cm^2/s "
               f"({solute.diffusivity:.3g} x the gel's {d_gel:.3g}), hindered by "
@@ -244,6 +248,53 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
               f"{solute.partition:g}; "
               + ("a perfect sink" if solute.release_volume is None else "a well-mixed medium")
               + f". At T_start the bead leaks 10% of its load in {t10:.3g} tau."), **common)
+
+
+def _fluid_fraction(req: DrugDoseRequest, rel: Any, t: float) -> float:
+    """The fraction of the stored fluid expelled by ``t`` in a drug run (eq. FluidVolExpelled)."""
+    return (float(rel.radius[0]) ** 3 - _a3_at(rel, t)) / (req.start_radius**3 - 1.0)
+
+
+def drug_uncertainty(planner: Any, req: DrugDoseRequest, runs: DrugRuns, sc: DrugScenario,
+                     t_hit: float, fluid_fraction: float) -> Uncertainty:
+    """The drug answer's uncertainty in the fluid answers' three parts (dosing.truth).
+
+    Numerical: the drug run again with n / 2 cells (mechanics and solute), the relative gap
+    of the dose time.  Interfacial length and model form are the mechanics' parts: taken
+    from the fluid validation of the same bead and jump at the fluid fraction expelled by
+    then where that validation is cached (none is run here), else not measured, with how to
+    measure them."""
+    time = t_hit - req.lead
+    s = sc.settings
+    check = replace(sc, settings=replace(s, n=max(s.n // 2, 10)))
+    try:
+        t_check = runs.run(check).time_to_release(req.fraction, after=req.lead) - req.lead
+        gap = abs(t_check - time) / time if time > 0 else 0.0
+        numerical = Part(gap, f"numerical: {gap:.2%}, the gap between the drug run on "
+                              f"{s.n} cells ({time:.6g}) and on {check.settings.n} cells "
+                              f"({t_check:.6g}) at ell = {s.interfacial_length:.3g}")
+    except ValueError as exc:
+        numerical = Part(None, f"numerical: the check run on {check.settings.n} cells does not "
+                               f"reach the dose ({exc})")
+    fluid = None
+    if 0.0 < fluid_fraction < 1.0:
+        fluid = planner.answer_now(DoseRequest(
+            req.gel, req.t_start, req.t_end, dose_fraction=fluid_fraction,
+            dry_radius_um=req.bead_dry_radius_um, constants=req.constants, branch=req.branch,
+            settings=req.settings))
+    u = fluid.uncertainty if fluid is not None else None
+    if u is None:
+        how = (f"not measured for this drug answer: validate the fluid dose (no drug) of the "
+               f"same bead and jump at dose_fraction = {fluid_fraction:.3g} (the fluid expelled "
+               "by then; HTTP validate_full, CLI --validate), then ask again")
+        return Uncertainty(numerical, Part(None, f"interfacial length (the mechanics'): {how}"),
+                           Part(None, f"model form (the mechanics'): {how}"))
+    src = (f" (the mechanics' part, from the fluid validation at the {fluid_fraction:.1%} of "
+           "the fluid expelled by the drug dose)")
+    return replace(u, numerical=numerical,
+                   interfacial_length_range=Part(u.interfacial_length_range.relative,
+                                                 u.interfacial_length_range.text + src),
+                   model_form=Part(u.model_form.relative, u.model_form.text + src))
 
 
 def _a3_at(rel: Any, t: float) -> float:

@@ -205,3 +205,26 @@ def test_release_plot_and_file(tmp_path) -> None:
     back = ReleaseResult.load(rel.save(tmp_path / "rel.npz"))
     assert np.array_equal(back.released_fraction, rel.released_fraction)
     assert back.mass_balance_error == rel.mass_balance_error < BALANCE
+
+
+@pytest.mark.slow
+def test_drug_answer_states_its_uncertainty_in_three_parts(planner) -> None:
+    """Every answer states its error in parts: the drug run at n / 2 cells gives the
+    numerical part; the mechanics' interfacial-length and model-form parts come from the
+    fluid validation at the fluid fraction expelled by then, once it is cached (before, they
+    are not measured and the text says how to measure them)."""
+    drug = DrugModel(diffusivity_cm2_s=1e-7, mesh_size_nm=23.0, load_ug=1.0)
+    req = DrugDoseRequest("ANB", 302, 308, drug, dose_fraction=0.5, dry_radius_um=50,
+                          settings=SETTINGS)
+    ans = plan_drug_dose(planner, req)
+    u = ans.uncertainty
+    assert u.numerical.relative is not None and u.numerical.relative < 0.01, u.numerical.text
+    assert u.interfacial_length_range.relative is None and u.model_form.relative is None
+    assert f"dose_fraction = {ans.fluid_fraction:.3g}" in u.interfacial_length_range.text
+    fluid = planner.dose(DoseRequest("ANB", 302, 308, dose_fraction=ans.fluid_fraction,
+                                     dry_radius_um=50, settings=SETTINGS), validate=True)
+    again = plan_drug_dose(planner, req).uncertainty
+    assert again.numerical == u.numerical
+    for part in ("interfacial_length_range", "model_form"):
+        assert getattr(again, part).relative == getattr(fluid.uncertainty, part).relative
+        assert "from the fluid validation" in getattr(again, part).text

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import textwrap
 from typing import Any
 
 from solver.errors import ParameterError
@@ -102,3 +103,17 @@ def checked_cache(path: str | None) -> str | None:
         raise ParameterError("--cache", path or str(default_path()), exc.valid,
                              getattr(exc, "reason", "")) from None
     return path
+
+
+def wrap(text: str) -> str:
+    """A paragraph of the CLI's output, indented by two spaces, 96 columns."""
+    return textwrap.fill(text, width=96, initial_indent="  ", subsequent_indent="  ")
+
+
+def print_uncertainty(u: Any, what: str = "the truth") -> None:
+    """The three parts of an answer's uncertainty (dosing.truth.Uncertainty), in words."""
+    if u is None:
+        return
+    print(f"  uncertainty of {what}, in three parts:")
+    for part in (u.numerical, u.interfacial_length_range, u.model_form):
+        print(wrap(f"- {part.text}"))

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import textwrap
 from typing import Any
 
 from dosing.scenario import GRIDS, METHODS
@@ -17,6 +16,8 @@ from .common import (
     gel_bounds,
     gel_from_args,
     print_json,
+    print_uncertainty,
+    wrap,
 )
 from .drug_cli import add_wait_options, run_drug_dose
 from .drug_options import add_drug_options, drug_from_args
@@ -118,10 +119,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _wrap(text: str) -> str:
-    return textwrap.fill(text, width=96, initial_indent="  ", subsequent_indent="  ")
-
-
 def run(args: argparse.Namespace) -> int:
     """Print the answer."""
     from api.schemas import DoseTimeRequest
@@ -159,21 +156,17 @@ def run(args: argparse.Namespace) -> int:
           f"{ans.final_radius:.4g} dry radii)")
     secs = "" if ans.seconds is None else f" = {ans.seconds:.4g} s"
     print(f"  {ans.model} model: heat for t = {ans.time:.4g} (dimensionless){secs}")
-    print(_wrap(f"truth: {ans.truth}"))
+    print(wrap(f"truth: {ans.truth}"))
     if ans.expelled_volume_ul is not None:
         print(f"  expels {ans.expelled_volume_ul:.4g} uL of {ans.stored_volume_ul:.4g} uL "
               f"stored; final radius {ans.final_radius_um:.4g} um")
-    print(_wrap(ans.timescale_formula))
+    print(wrap(ans.timescale_formula))
     print(f"  error estimate {ans.error_estimate:.1%}:")
-    print(_wrap(ans.error_explanation))
-    if ans.uncertainty is not None:
-        print("  uncertainty of the truth, in three parts:")
-        for part in (ans.uncertainty.numerical, ans.uncertainty.interfacial_length_range,
-                     ans.uncertainty.model_form):
-            print(_wrap(f"- {part.text}"))
+    print(wrap(ans.error_explanation))
+    print_uncertainty(ans.uncertainty)
     if ans.validation:
         runs = ", ".join(f"{e['grid']} N={e['n']} ell={e['interfacial_length']:g}: "
                          + (f"{e['time']:.5g}" if "time" in e else "failed")
                          for e in ans.validation.runs)
-        print(_wrap(f"full solver: {runs}"))
+        print(wrap(f"full solver: {runs}"))
     return 0

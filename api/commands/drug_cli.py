@@ -7,7 +7,7 @@ from typing import Any
 
 from solver.errors import ParameterError
 
-from .common import print_json
+from .common import print_json, print_uncertainty, wrap
 
 
 def add_wait_options(p: argparse.ArgumentParser) -> None:
@@ -62,7 +62,9 @@ def run_drug_dose(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any]) -
           f"the stored fluid; D_eff = {ans.effective_diffusivity_cm2_s:.3g} cm^2/s")
     if ans.medium_concentration_ug_per_ul is not None:
         print(f"  release medium concentration {ans.medium_concentration_ug_per_ul:.4g} ug/uL")
-    print(f"  {ans.note}")
+    print(wrap(f"truth of the drug runs: {ans.truth}"))
+    print_uncertainty(ans.uncertainty, "the drug dose time")
+    print(wrap(ans.note))
     return 0
 
 

@@ -6,8 +6,8 @@ import argparse
 
 from solver.errors import ParameterError
 
-from .common import check_bounds, checked_cache, print_json
-from .dose import _wrap, add_planning_options, planning_kwargs, planning_values
+from .common import check_bounds, checked_cache, print_json, wrap
+from .dose import add_planning_options, planning_kwargs, planning_values
 from .drug_cli import add_wait_options, run_drug_schedule
 from .drug_options import add_drug_options, drug_from_args
 
@@ -83,8 +83,8 @@ def run(args: argparse.Namespace) -> int:
         print(_row("  relative error", res["relative_errors"], "{:+.2%}"))
         if res.get("actuation_seconds"):
             print(_row("  actuation seconds", res["actuation_seconds"]))
-    print(_wrap(ans.timescale_formula))
+    print(wrap(ans.timescale_formula))
     if ans.truth:
-        print(_wrap(f"truth of the protocol runs: {ans.truth}"))
-    print(_wrap(ans.note))
+        print(wrap(f"truth of the protocol runs: {ans.truth}"))
+    print(wrap(ans.note))
     return 0
