@@ -64,7 +64,7 @@ class MeshOptions:
     edge_cells: float = 4.0
     finest: float = 50.0
     grading: float = 0.1
-    check_every: int = 4
+    check_every: int = 2
     tolerance: float = 0.3
     rezone: bool = True
     nodes: tuple[float, ...] | None = None
