@@ -15,16 +15,17 @@ target mesh that equidistributes the monitor M = 1/h*, with the target spacing
 
 limited to grow by at most ``grading`` per unit distance (h* Lipschitz, so neighbouring
 cells differ by at most that fraction), iterated twice towards its fixed point so it does
-not depend on the current mesh.  Between checks the nodes move at the target's velocity
-(``ale.py``: the ALE term keeps the unknowns the radii of the moving nodes), used only while
-two successive estimates agree.  Each interface then gets about Delta ln J / delta
-cells whatever its width (the steep side shrinks like Omega^-1/2 at large Omega), the edge,
-where the front nucleates, stays resolved at the ell scale, and the rest of the cells go
-to the bulk.  When a node is more than ``tolerance`` of its cell off its target, the state
-is remapped: in the dry coordinate the solid is exact under any remap, and the cumulative
-fluid volume W(s) = r^3 - s (s = rho^3) is interpolated monotonically (PCHIP, strictly
-increasing since J > 1), so every new cell has 0 < phi < 1 and the total volume, a = r_n,
-is unchanged.  After every check the one-step Rosenbrock integrator restarts with a
+not depend on the current mesh. Between checks the nodes move at the target's velocity
+(``ale.py``: the ALE term keeps the unknowns the radii of the moving nodes; its mean over
+the last interval, extrapolated by the change since the one before), used only while two
+successive estimates agree in cells per unit time. Each interface then gets about Delta ln J
+/ delta cells whatever its width (the steep side shrinks like Omega^-1/2 at large Omega),
+the edge, where the front nucleates, stays resolved at the ell scale, and the rest of the
+cells go to the bulk. When a node is more than ``tolerance`` of its cell off its target, the
+state is remapped: in the dry coordinate the solid is exact under any remap, and the
+cumulative fluid volume W(s) = r^3 - s (s = rho^3) is interpolated monotonically (PCHIP,
+strictly increasing since J > 1), so every new cell has 0 < phi < 1 and the total volume, a
+= r_n, is unchanged. After every check the one-step Rosenbrock integrator restarts with a
 fresh Jacobian.
 """
 
