@@ -137,7 +137,11 @@ def test_moving_jacobian_matches_central_differences() -> None:
     np.testing.assert_allclose(f, ws.rhs(y, par), rtol=1e-12, atol=1e-12)
     scale = np.abs(central).max(axis=1, keepdims=True)
     scale[scale == 0.0] = 1.0
-    assert np.max(np.abs(dense_jacobian(ws) - central) / scale) < 1e-6
+    err = np.abs(dense_jacobian(ws) - central) / scale
+    assert np.max(err[:, :n]) < 1e-6  # analytic (measured 4e-9)
+    # the time column: a central difference moving the fastest node 0.1 of the smallest
+    # cell (ale.TIME_STEP), second order: measured 1.3e-6 here
+    assert np.max(err[:, n]) < 1e-5
 
 
 def test_moving_result_round_trip_and_restart(tmp_path: object) -> None:

@@ -133,7 +133,7 @@ def linearize(grid, y, f, par, geo, work, lower, upper, jband, jc, jd, je,
         ok = eulerian.jacobian(y, par, geo, work, upper, jband, jc, jd, je, f)
     elif grid == MOVING:
         ok = ale.jacobian(y, par, geo, work, upper, jband, jc, jd, je, f, ytmp, ftmp)
-        return 3 if ok and np.isfinite(f[f.size - 2]) else -1
+        return 4 if ok and np.isfinite(f[f.size - 2]) else -1  # + the time column's 2
     else:
         ok = lagrangian.jacobian(y, par, geo, work, upper, jband, jc, jd, je, f)
     return 2 if ok and np.isfinite(f[f.size - 1]) else -1
