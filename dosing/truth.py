@@ -52,6 +52,12 @@ def delayed_settings(settings: SolverSettings) -> list[SolverSettings]:
             for k in DELAYED_NS]
 
 
+def is_model_form_run(settings: SolverSettings) -> bool:
+    """True for a model-form run of a direct validation (the ell = 0 lattice at DELAYED_NS)."""
+    return (settings.grid == "lagrangian" and settings.interfacial_length == 0.0
+            and settings.rtol == DELAYED_RTOL and settings.n in DELAYED_NS)
+
+
 def role(truth: SolverSettings, s: SolverSettings) -> str:
     """'truth', 'check', 'ell_range' or 'model_form' for a run of a direct validation."""
     if not s.regularized:

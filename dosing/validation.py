@@ -269,10 +269,10 @@ def _paper(model: str, time: float, rep: ValidationReport) -> tuple[float, str]:
 
 
 VALIDATION_COST = ("two moving-grid runs of the regularized model at the bead's ell (400 "
-                   "and 200 cells: seconds for ANB and HHT, about a minute for a stiffer gel "
-                   "such as Omega = 300), two at the ends of the mesh length's "
-                   "range and, once per gel and jump, the ell = 0 lattice at N = 200/400/800 "
-                   "for the model-form part")
+                   "and 200 cells: about a second each for ANB, HHT or an Omega = 300 gel), "
+                   "two at the ends of the mesh length's range and, once per gel and jump, "
+                   "the ell = 0 lattice at N = 200/400/800 for the model-form part (a few "
+                   "seconds): about 10 s in all the first time, then cached")
 
 
 def _no_prior(gel: Gel) -> tuple[float, str]:

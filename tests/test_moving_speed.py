@@ -19,6 +19,7 @@ from solver.equilibrium import equilibrium
 from solver.front.result import fraction_radius
 from solver.full import moving, simulate
 from solver.full.integrate import Segment, Stats, StepControl, Workspace, run_implicit
+from solver.full.kernels import KernelParams
 from solver.full.system import JAC_ANALYTIC, MOVING, linearize
 from solver.gel import ANB
 
@@ -37,8 +38,8 @@ def test_time_column_at_a_running_thin_front() -> None:
     nodes = moving.initial_nodes(eq.stretch, lambda x: np.full(x.size - 1, eq.porosity), n,
                                  opts, ELL)
     ws = Workspace(MOVING, moving.geometry(nodes), interfacial=True)
-    par = np.array([CUSTOM.omega, CUSTOM.chi0(308), CUSTOM.chi1(308),
-                    float(CUSTOM.permeability.code), CUSTOM.permeability.beta, ELL**2])
+    par = KernelParams(CUSTOM.omega, CUSTOM.chi0(308), CUSTOM.chi1(308),
+                       CUSTOM.permeability.code, CUSTOM.permeability.beta, ELL**2)
     y0 = moving.state(moving.state_from_profile(eq.stretch, np.full(n, eq.porosity), nodes))
     rz = moving.Rezoner(opts, ELL)
     y = run_implicit(ws, y0, [Segment(0.0, 0.005, 308.0, par)], np.array([0.005]),
