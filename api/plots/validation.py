@@ -45,7 +45,7 @@ def _direct_figure(plt: Any, answer: dict[str, Any], rep: dict[str, Any]) -> Any
 
     ell, truth = float(rep["interfacial_length"]), float(rep["time"])
     unc = rep.get("uncertainty") or {}
-    fig, ax = plt.subplots(figsize=(6.0, 4.2))
+    fig, ax = plt.subplots(figsize=(6.0, 5.4))
     span = [float(x) for x in unc.get("interfacial_lengths") or []]
     times = [t for t in unc.get("interfacial_length_times") or [] if t is not None]
     if len(span) == 2:
@@ -72,7 +72,7 @@ def _direct_figure(plt: Any, answer: dict[str, Any], rep: dict[str, Any]) -> Any
     ax.set_title(f"{answer['dose_fraction']:.0%} dose, direct validation: error estimate "
                  f"{answer['error_estimate']:.1%}", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), frameon=False)
     return fig
 
 
