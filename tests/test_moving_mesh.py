@@ -13,14 +13,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from jacobian_support import dense_jacobian
+from moving_support import running_state
 from scipy.interpolate import PchipInterpolator
 
 from solver.equilibrium import equilibrium
 from solver.errors import ParameterError
 from solver.front.result import fraction_radius
 from solver.full import FullResult, moving, rezone, simulate
-from solver.full.integrate import Segment, Stats, StepControl, Workspace, run_implicit
-from solver.full.kernels import KernelParams
 from solver.full.system import JAC_ANALYTIC, MOVING, linearize
 from solver.gel import ANB
 
@@ -110,19 +109,7 @@ def test_remap_keeps_volume_solid_and_porosity_range() -> None:
 
 def test_moving_jacobian_matches_central_differences() -> None:
     n, ell = 40, 0.05
-    eq = equilibrium(ANB, 302.0, "swollen")
-    opts = moving.MeshOptions()
-    nodes = moving.initial_nodes(eq.stretch, lambda x: np.full(x.size - 1, eq.porosity), n,
-                                 opts, ell)
-    geo = moving.geometry(nodes)
-    par = KernelParams(ANB.omega, ANB.chi0(308), ANB.chi1(308), 1, 1.5, ell**2)
-    ws = Workspace(MOVING, geo, interfacial=True)
-    y0 = moving.state(moving.state_from_profile(eq.stretch, np.full(n, eq.porosity), nodes))
-    rz = moving.Rezoner(opts, ell)
-    y = run_implicit(ws, y0, [Segment(0.0, 0.03, 308.0, par)], np.array([0.03]),
-                     lambda t, y: None, StepControl(1e-7, 1e-10, 100000), None, Stats(),
-                     rezoner=rz)
-    rz(y, ws.geo)
+    ws, y, par = running_state(ANB, n, ell, 0.03, 1e-7, 1e-10, perm=(1, 1.5))
     assert np.any(ws.geo[moving.ale.R_VEL] != 0.0)  # the nodes move
     central = np.zeros((n + 1, n + 1))
     for j in range(n + 1):

@@ -14,12 +14,11 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+from moving_support import running_state
 
 from solver.equilibrium import equilibrium
 from solver.front.result import fraction_radius
 from solver.full import moving, simulate
-from solver.full.integrate import Segment, Stats, StepControl, Workspace, run_implicit
-from solver.full.kernels import KernelParams
 from solver.full.system import JAC_ANALYTIC, MOVING, linearize
 from solver.gel import ANB
 
@@ -33,19 +32,7 @@ def test_time_column_at_a_running_thin_front() -> None:
     rounding noise is ~1e-3 of the column there (it falls as 1/step: 4e-2 at 3e-4 of a
     cell, 1e-3 at 3e-2); the old column was off by up to 145x."""
     n = 200
-    eq = equilibrium(CUSTOM, 302.0, "swollen")
-    opts = moving.MeshOptions()
-    nodes = moving.initial_nodes(eq.stretch, lambda x: np.full(x.size - 1, eq.porosity), n,
-                                 opts, ELL)
-    ws = Workspace(MOVING, moving.geometry(nodes), interfacial=True)
-    par = KernelParams(CUSTOM.omega, CUSTOM.chi0(308), CUSTOM.chi1(308),
-                       CUSTOM.permeability.code, CUSTOM.permeability.beta, ELL**2)
-    y0 = moving.state(moving.state_from_profile(eq.stretch, np.full(n, eq.porosity), nodes))
-    rz = moving.Rezoner(opts, ELL)
-    y = run_implicit(ws, y0, [Segment(0.0, 0.005, 308.0, par)], np.array([0.005]),
-                     lambda t, y: None, StepControl(1e-5, 1e-9, 100000), None, Stats(),
-                     rezoner=rz)
-    rz(y, ws.geo)
+    ws, y, par = running_state(CUSTOM, n, ELL, 0.005, 1e-5, 1e-9)
     vel = ws.geo[moving.ale.R_VEL]
     h = np.diff(ws.geo[0])
     assert np.abs(vel).max() > 0.0 and h.min() < 0.1 * ELL  # a running front, thin cells
