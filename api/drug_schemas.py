@@ -161,3 +161,7 @@ class DrugScheduleResponse(_StatedTruthOut):
         description="hindered diffusivity in the start state, cm^2/s")
     timescale_seconds: float | None = Field(None, description="tau in s (eq. timescale)")
     note: str = Field(description="caveats, in words")
+    uncertainty: UncertaintyOut | None = Field(
+        None, description="a simulated schedule's uncertainty: numerical (the same protocol "
+                          "on n / 2 cells: the largest change of a delivered dose); the other "
+                          "two parts are the single doses' (null here, with how to get them)")

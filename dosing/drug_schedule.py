@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from itertools import accumulate
 from typing import Any
 
@@ -41,6 +41,7 @@ from .protocol import heat_cool_protocol, windows
 from .request import Jump, ScheduleRequest, _resolve_scenario, resolve_rests
 from .scenario import Step
 from .schedule import hold_schedule
+from .truth import Part, Uncertainty
 from .units import PhysicalConstants, timescale, volume_to_ul
 
 MAX_EXTENSIONS = 4
@@ -148,15 +149,19 @@ class DrugScheduleAnswer(StatedTruth):
     effective_diffusivity_cm2_s: float
     timescale_seconds: float | None
     note: str
+    uncertainty: Uncertainty | None = None
 
 
 class _Runner:
     """Drug runs of protocols for one request."""
 
-    def __init__(self, planner: Any, req: DrugScheduleRequest, runs: DrugRuns) -> None:
+    def __init__(self, planner: Any, req: DrugScheduleRequest, runs: DrugRuns,
+                 cells: int | None = None) -> None:
         self.req, self.runs = req, runs
         self.solute = req.solute
         self.count = 0
+        s = drug_settings(req.settings)
+        self.settings = s if cells is None else replace(s, n=cells)
 
     def steps(self, durations: Sequence[float]) -> tuple[Step, ...]:
         r = self.req
@@ -167,7 +172,7 @@ class _Runner:
         r = self.req
         self.count += 1
         return self.runs.run(DrugScenario(r.gel, r.t_start, self.steps(durations), self.solute,
-                                          r.branch, drug_settings(r.settings)))
+                                          r.branch, self.settings))
 
     def windows(self, durations: Sequence[float]) -> list[tuple[float, float]]:
         return [(a + self.req.lead, b + self.req.lead)
@@ -215,6 +220,29 @@ def _reading(run: _Runner, rel: Any, durations: Sequence[float]) -> dict[str, An
                                                                       - at(a3, e)))
                 for _, e in win]
     return out
+
+
+def _schedule_uncertainty(planner: Any, req: DrugScheduleRequest, runs: DrugRuns,
+                          reading: dict[str, Any] | None, s: Any) -> Uncertainty | None:
+    """A simulated schedule's uncertainty in the three parts: numerical, the same protocol
+    run on n / 2 cells (the largest change of a delivered dose, relative to the dose); the
+    interfacial-length and model-form parts are the single doses' (not measured here)."""
+    if reading is None:
+        return None
+    times = reading["actuation_times"]
+    half = _Runner(planner, req, runs, cells=max(s.n // 2, 10))
+    coarse = _reading(half, half(times), times)["delivered_fractions"]
+    fine = reading["delivered_fractions"]  # (a schedule not met has fewer heatings)
+    gap = max(abs(c - f) / d for c, f, d in zip(coarse, fine, req.fractions[:len(fine)],
+                                                strict=True))
+    numerical = Part(gap, f"numerical: {gap:.2%}, the largest change of a delivered dose when "
+                          f"the protocol ({', '.join(f'{t:.4g}' for t in times)}) runs on "
+                          f"{half.settings.n} cells instead of {s.n} (ell = "
+                          f"{s.interfacial_length:.3g})")
+    how = ("not measured for a schedule: validate the single fluid doses of the same bead "
+           "and jump (HTTP validate_full, CLI dose --validate); their answers state it")
+    return Uncertainty(numerical, Part(None, f"interfacial length: {how}"),
+                       Part(None, f"model form: {how}"))
 
 
 def _leak_warnings(req: DrugScheduleRequest, reading: dict[str, Any], label: str) -> list[str]:
@@ -351,6 +379,7 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
     _seconds(checked, tau)
     _seconds(corrected, tau)
     s = drug_settings(req.settings)
+    unc = _schedule_uncertainty(planner, req, runs, corrected or checked, s)
     d0 = req.drug.d0_cm2_s(req.t_end, req.constants)
     phi0 = 1.0 - 1.0 / req.start_radius**3
     of_load = "" if load is None else f" ({load:.4g} ug)"
@@ -373,4 +402,5 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
                                                                            req.start_radius),
         effective_diffusivity_cm2_s=d0 * float(solute.hindrance.factor(phi0)),
         timescale_seconds=tau, note=note, interfacial_length=s.interfacial_length,
-        bead_dry_radius_um=req.bead_dry_radius_um, truth=drug_truth_text(req))
+        bead_dry_radius_um=req.bead_dry_radius_um, truth=drug_truth_text(req),
+        uncertainty=unc)

@@ -109,6 +109,11 @@ def test_anb_drug_schedule_without_diffusion_dilutes(planner) -> None:
     assert max(abs(x) for x in cor["rest_leak_fractions"]) < 1e-12  # no diffusion: no leak
     assert ans.protocol_check["delivered_fractions"][0] < 0.3  # hold times: too short first
     assert not ans.warnings
+    # the simulated schedule's numerical part: the corrected protocol on n / 2 cells
+    # (measured 1.3e-4 of a dose at ell = 0.01)
+    u = ans.uncertainty
+    assert 0.0 < u.numerical.relative < 0.01 and "200 cells instead of 400" in u.numerical.text
+    assert u.interfacial_length_range.relative is None and "--validate" in u.model_form.text
 
 
 @pytest.mark.slow

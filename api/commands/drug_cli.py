@@ -108,7 +108,9 @@ def run_drug_schedule(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any
             print(_row("  actuation seconds", res["actuation_seconds"]))
     for w in ans.warnings:
         print(f"  WARNING: {w}")
-    print(f"  {ans.note}")
+    print(wrap(f"truth of the drug runs: {ans.truth}"))
+    print_uncertainty(ans.uncertainty, "the simulated schedule")
+    print(wrap(ans.note))
     return 0
 
 
