@@ -33,9 +33,7 @@ from solver.gel import Gel
 from solver.solute import Hindrance, ReleaseResult, Solute, crank_sphere
 
 from .cache import ValidationCache
-from .request import DoseRequest
 from .scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
-from .truth import truth_text
 from .units import BOLTZMANN, UM3_PER_UL, PhysicalConstants
 
 # mechanics samples per unit time (at least MIN_SAMPLES per step): benchmarks/drug.py measures
@@ -476,24 +474,18 @@ class StatedTruth:
         return asdict(self)
 
 
-def drug_truth_text(req: Any) -> str:
-    """The model a drug answer's runs use, in words: the fluid answers' truth for the same
-    bead, jump and settings (issue 12: one truth)."""
-    fluid = DoseRequest(req.gel, req.t_start, req.t_end, dose_fraction=0.5,
-                        dry_radius_um=req.bead_dry_radius_um, constants=req.constants,
-                        branch=req.branch, settings=req.settings)
-    return truth_text(fluid)
-
-
 class DrugRequest:
     """What drug dose and schedule requests share (their dataclasses hold ``jump``,
-    ``drug``, ``t_end``, ``constants`` and ``bead_dry_radius_um``)."""
+    ``drug``, ``t_end``, ``constants`` and ``bead_dry_radius_um``; the request resolver sets
+    ``settings`` and ``interfacial_range`` as for fluid requests, so ``truth.truth_text``
+    reads a drug request as it reads a fluid one)."""
 
     jump: Any
     drug: DrugModel
     t_end: float
     constants: Any
     bead_dry_radius_um: float | None
+    interfacial_range: tuple[float, float] | None
 
     @property
     def start_radius(self) -> float:

@@ -27,12 +27,11 @@ from .drug import (
     DrugScenario,
     StatedTruth,
     drug_settings,
-    drug_truth_text,
     leak_time,
     runs_for,
 )
 from .request import DoseRequest, Jump, _resolve_scenario
-from .truth import Part, Uncertainty
+from .truth import Part, Uncertainty, truth_text
 from .units import PhysicalConstants, timescale, volume_to_ul
 
 MAX_HORIZON = 64.0
@@ -191,7 +190,7 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
                   effective_diffusivity_cm2_s=d_eff, drug_diffusivity_cm2_s=d0,
                   timescale_seconds=tau,
                   interfacial_length=drug_settings(req.settings).interfacial_length,
-                  bead_dry_radius_um=dry, truth=drug_truth_text(req))
+                  bead_dry_radius_um=dry, truth=truth_text(req))
     if solute.diffusivity == 0.0:
         fluid = planner.dose(req.fluid_request(req.fraction))
         return DrugDoseAnswer(

@@ -32,7 +32,6 @@ from .drug import (
     DrugScenario,
     StatedTruth,
     drug_settings,
-    drug_truth_text,
     leak_time,
     runs_for,
 )
@@ -41,7 +40,7 @@ from .protocol import heat_cool_protocol, windows
 from .request import Jump, ScheduleRequest, _resolve_scenario, resolve_rests
 from .scenario import Step
 from .schedule import hold_schedule
-from .truth import Part, Uncertainty
+from .truth import Part, Uncertainty, truth_text
 from .units import PhysicalConstants, timescale, volume_to_ul
 
 MAX_EXTENSIONS = 4
@@ -402,5 +401,5 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
                                                                            req.start_radius),
         effective_diffusivity_cm2_s=d0 * float(solute.hindrance.factor(phi0)),
         timescale_seconds=tau, note=note, interfacial_length=s.interfacial_length,
-        bead_dry_radius_um=req.bead_dry_radius_um, truth=drug_truth_text(req),
+        bead_dry_radius_um=req.bead_dry_radius_um, truth=truth_text(req),
         uncertainty=unc)
