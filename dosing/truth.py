@@ -26,7 +26,7 @@ import math
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
-from .scenario import SolverSettings
+from .scenario import TRUTH, SolverSettings
 
 DELAYED_NS = (200, 400, 800)  # the ell = 0 lattice's N (its answer: the finest)
 DELAYED_RTOL = 1e-5
@@ -53,9 +53,8 @@ def delayed_settings(settings: SolverSettings) -> list[SolverSettings]:
 
 
 def is_model_form_run(settings: SolverSettings) -> bool:
-    """True for a model-form run of a direct validation (the ell = 0 lattice at DELAYED_NS)."""
-    return (settings.grid == "lagrangian" and settings.interfacial_length == 0.0
-            and settings.rtol == DELAYED_RTOL and settings.n in DELAYED_NS)
+    """True for a model-form run of a direct validation (one of :func:`delayed_settings`)."""
+    return settings in delayed_settings(TRUTH)
 
 
 def role(truth: SolverSettings, s: SolverSettings) -> str:

@@ -15,7 +15,7 @@ from dosing_fakes import ELL_C, ELL_ORDER, MOVING_C, FakeSolver, exact_time
 
 from dosing import DoseRequest, Planner, ScheduleRequest
 from dosing.scenario import GRIDS, LADDER, PAPER, Scenario, SolverSettings
-from dosing.truth import DELAYED_NS, Uncertainty
+from dosing.truth import DELAYED_NS, Uncertainty, delayed_settings
 from dosing.units import PhysicalConstants, radius_after_dose
 from dosing.validation import NO_PRIOR_ESTIMATE, front_prior
 from solver import HHT
@@ -256,3 +256,13 @@ def test_schedule_first_dose_is_the_single_dose_truth(real_planner, gel, t_start
     first = ans.corrected["actuation_times"][0]
     truth = single.validation.time
     assert abs(first / truth - 1.0) <= single.uncertainty.numerical.relative, (first, truth)
+
+
+def test_model_form_runs_are_recognised_and_nothing_else() -> None:
+    """The planner starts these runs at a short horizon (dosing.planner.MODEL_FORM_REACH)."""
+    from dosing.truth import is_model_form_run
+
+    assert all(is_model_form_run(s) for s in delayed_settings(SolverSettings()))
+    paper_lattice = SolverSettings(grid="lagrangian", n=400, interfacial_length=0.0)
+    assert not any(is_model_form_run(s) for s in (SolverSettings(), PAPER, LADDER,
+                                                   paper_lattice))
