@@ -78,7 +78,6 @@ def one_truth() -> None:
     import tempfile
     from concurrent.futures import ThreadPoolExecutor
 
-    from benchmarks.planner_truth import report_dict
     from dosing import DoseRequest, Planner
     from dosing.drug import DrugModel
     from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
@@ -94,7 +93,7 @@ def one_truth() -> None:
         drug = plan_drug_dose(planner, DrugDoseRequest("ANB", 302, 308, protein,
                                                        dose_fraction=0.5, dry_radius_um=50))
         w_drug = time.perf_counter() - w
-    truth = report_dict(fluid)["time"]
+    truth = fluid.validation.time
     print(f"ANB 302 -> 308 K, 50 um, 50 %: fluid truth {truth:.6f} (ell = "
           f"{fluid.interfacial_length:.3g}, numerical bound "
           f"{fluid.uncertainty.numerical.relative:.3%}; validation {w_fluid:.1f} s); drug "

@@ -56,9 +56,9 @@ def schedule(planner: Planner, dry: float | None) -> None:
         print(f"{gel} {t0:g}->{t1:g}  {single.time:12.6f}{_pct(single.error_estimate):>11}"
               f"{first:15.6f}{_pct(gap):>9}{str(abs(gap) <= single.error_estimate):>8}"
               f"{time.perf_counter() - w:8.1f}", flush=True)
-        print(f"    single dose's truth {report_dict(single)['time']:.6f} (ell = "
+        print(f"    single dose's truth {single.validation.time:.6f} (ell = "
               f"{single.interfacial_length:.3g}); corrected first - truth "
-              f"{_pct((first - report_dict(single)['time']) / report_dict(single)['time'])}")
+              f"{_pct((first - single.validation.time) / single.validation.time)}")
         print(f"    corrected times {[round(t, 6) for t in ans.corrected['actuation_times']]}, "
               f"delivered {[round(f, 4) for f in ans.corrected['delivered_fractions']]}, "
               f"hold {[round(r['actuation_time'], 6) for r in ans.hold]}")
@@ -74,7 +74,7 @@ def small(planner: Planner, dry: float) -> None:
         ans = planner.dose(DoseRequest("HHT", 304.0, 308.0, dose_fraction=f, dry_radius_um=dry),
                            validate=True)
         u = ans.uncertainty
-        print(f"{f:5.1f}{ans.model:>13}{ans.time:11.6f}{report_dict(ans)['time']:11.6f}"
+        print(f"{f:5.1f}{ans.model:>13}{ans.time:11.6f}{ans.validation.time:11.6f}"
               f"{_pct(ans.error_estimate):>10}{_pct(u.numerical.relative):>11}"
               f"{_pct(u.interfacial_length_range.relative):>11}"
               f"{u.delayed_transition_time:10.5f}{u.delayed_transition_ratio:8.2f}"
@@ -95,20 +95,14 @@ def custom(planner: Planner, dry: float | None) -> None:
         w = time.perf_counter()
         ans = planner.dose(req, validate=True)
         wall = time.perf_counter() - w
-        walls = {e.get("role"): e.get("wall_seconds") for e in report_dict(ans)["runs"]}
+        walls = {e.get("role"): e.get("wall_seconds") for e in ans.validation.runs}
         u = ans.uncertainty
         print(f"  dry radius {size} um: ell = {ans.interfacial_length:.3g}, truth "
-              f"{report_dict(ans)['time']:.6f}, numerical bound {_pct(u.numerical.relative)}, "
+              f"{ans.validation.time:.6f}, numerical bound {_pct(u.numerical.relative)}, "
               f"ell range {_pct(u.interfacial_length_range.relative)}, delayed-transition "
               f"ratio {u.delayed_transition_ratio:.3f}; validation wall {wall:.1f} s "
               f"({len(runs)} runs; truth run {walls.get('truth') or 0:.1f} s, check "
               f"{walls.get('check') or 0:.1f} s)", flush=True)
-
-
-def report_dict(ans: object) -> dict:
-    """The validation report as plain data (a dict or an object with ``to_dict``)."""
-    rep = ans.validation  # type: ignore[attr-defined]
-    return rep if isinstance(rep, dict) else rep.to_dict()
 
 
 def validation(workers: int, dry: float) -> None:
@@ -127,7 +121,7 @@ def validation(workers: int, dry: float) -> None:
                 planner.dose(DoseRequest(gel, t0, t1, dose_fraction=0.5, dry_radius_um=size),
                              validate=True)
                 second = time.perf_counter() - w
-            runs = report_dict(ans)["runs"]
+            runs = ans.validation.runs
             own = sum(e.get("wall_seconds") or 0 for e in runs if e.get("role") != "model_form")
             shared = sum(e.get("wall_seconds") or 0 for e in runs
                          if e.get("role") == "model_form")

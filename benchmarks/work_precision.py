@@ -147,7 +147,7 @@ class Plan:
 FULL = Plan("full", tuple(c.name for c in CASES), (50, 100, 200, 400, 800, 1600), 1e-6,
             (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8), 400, (400, 800, 1600), 1e-9,
             (1e-8, 5e-9, 2e-9, 1e-9), 50_000, 5, 6.0, 200, 600.0, (100, 400, 1600),
-            moving_ns=(50, 100, 200, 400, 800))
+            moving_ns=(100, 200, 400, 800))  # 50 cells cannot hold ell = 1e-4: step budget
 SMOKE = Plan("smoke", ("ANB 308->302", "ANB 302->308"), (50, 100), 1e-6, (1e-4, 1e-6, 1e-8),
              100, (50, 100, 200), 1e-9, (1e-8, 5e-9), 2_000, 3, 0.5, 20, 60.0)
 PLANS = {"full": FULL, "smoke": SMOKE}
