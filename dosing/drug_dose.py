@@ -265,7 +265,7 @@ def drug_uncertainty(planner: Any, req: DrugDoseRequest, runs: DrugRuns, sc: Dru
     measure them."""
     time = t_hit - req.lead
     s = sc.settings
-    check = replace(sc, settings=replace(s, n=max(s.n // 2, 10)))
+    check = replace(sc, settings=s.check())
     try:
         t_check = runs.run(check).time_to_release(req.fraction, after=req.lead) - req.lead
         gap = abs(t_check - time) / time if time > 0 else 0.0

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from itertools import accumulate
 from typing import Any
 
@@ -38,7 +38,7 @@ from .drug import (
 from .drug_dose import resolve_wait
 from .protocol import heat_cool_protocol, windows
 from .request import Jump, ScheduleRequest, _resolve_scenario, resolve_rests
-from .scenario import Step
+from .scenario import SolverSettings, Step
 from .schedule import hold_schedule
 from .truth import Part, Uncertainty, truth_text
 from .units import PhysicalConstants, timescale, volume_to_ul
@@ -155,12 +155,11 @@ class _Runner:
     """Drug runs of protocols for one request."""
 
     def __init__(self, planner: Any, req: DrugScheduleRequest, runs: DrugRuns,
-                 cells: int | None = None) -> None:
+                 settings: SolverSettings | None = None) -> None:
         self.req, self.runs = req, runs
         self.solute = req.solute
         self.count = 0
-        s = drug_settings(req.settings)
-        self.settings = s if cells is None else replace(s, n=cells)
+        self.settings = settings or drug_settings(req.settings)
 
     def steps(self, durations: Sequence[float]) -> tuple[Step, ...]:
         r = self.req
@@ -229,7 +228,7 @@ def _schedule_uncertainty(planner: Any, req: DrugScheduleRequest, runs: DrugRuns
     if reading is None:
         return None
     times = reading["actuation_times"]
-    half = _Runner(planner, req, runs, cells=max(s.n // 2, 10))
+    half = _Runner(planner, req, runs, settings=s.check())
     coarse = _reading(half, half(times), times)["delivered_fractions"]
     fine = reading["delivered_fractions"]  # (a schedule not met has fewer heatings)
     gap = max(abs(c - f) / d for c, f, d in zip(coarse, fine, req.fractions[:len(fine)],

@@ -128,6 +128,11 @@ class SolverSettings:
         """These settings at interfacial length ``ell`` (n, grid and rtol kept)."""
         return replace(self, interfacial_length=ell)
 
+    def check(self) -> SolverSettings:
+        """The numerical check of these settings: the same run on n / 2 cells (at least
+        N_RANGE[0]); its gap to this run is the numerical part of an answer's error."""
+        return replace(self, n=max(self.n // 2, N_RANGE[0]))
+
     def rungs(self) -> list[SolverSettings]:
         """The validation runs: direct, this run and its check with n / 2 cells; a ladder,
         ell / 2^k with n 2^k cells (k < RUNGS); the paper's model, this grid and then the
@@ -140,7 +145,7 @@ class SolverSettings:
             if self.n // 2 < N_RANGE[0]:
                 raise ParameterError("settings.n", self.n, f"an integer {2 * N_RANGE[0]}-"
                                      f"{N_RANGE[1]} (the check run has n / 2 cells)")
-            return [self, replace(self, n=self.n // 2)]
+            return [self, self.check()]
         scale = 1 << (RUNGS - 1)
         if not ELL_RANGE[0] * scale <= self.interfacial_length <= LADDER_TOP:
             raise ParameterError("settings.interfacial_length", self.interfacial_length,

@@ -38,8 +38,8 @@ def range_settings(settings: SolverSettings,
     range, or where the range collapses onto ell)."""
     if ell_range is None or not settings.direct:
         return []
-    n = settings.n // 2
-    return [replace(settings, n=n, interfacial_length=e) for e in ell_range
+    check = settings.check()
+    return [replace(check, interfacial_length=e) for e in ell_range
             if not math.isclose(e, settings.interfacial_length, rel_tol=1e-9)]
 
 
