@@ -171,6 +171,7 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
                    ) -> DrugDoseAnswer:
     """The actuation time for a drug dose (see the module docstring)."""
     solute = req.solute
+    settings = drug_settings(req.settings)  # the fluid answers' truth (issue 12)
     c = req.constants
     dry = req.bead_dry_radius_um
     tau = timescale(dry, req.t_end, c).seconds if dry is not None else None
@@ -189,7 +190,7 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
                   leak_time_10pct_seconds=None if tau is None or math.isinf(t10) else t10 * tau,
                   effective_diffusivity_cm2_s=d_eff, drug_diffusivity_cm2_s=d0,
                   timescale_seconds=tau,
-                  interfacial_length=drug_settings(req.settings).interfacial_length,
+                  interfacial_length=settings.interfacial_length,
                   bead_dry_radius_um=dry, truth=truth_text(req))
     if solute.diffusivity == 0.0:
         fluid = planner.dose(req.fluid_request(req.fraction))
@@ -210,7 +211,7 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
     while True:
         steps = ((req.lead, req.t_start),) if req.lead > 0.0 else ()
         sc = DrugScenario(req.gel, req.t_start, (*steps, (horizon, req.t_end)), solute,
-                          req.branch, drug_settings(req.settings))
+                          req.branch, settings)
         rel = runs.run(sc)
         try:
             t_hit = rel.time_to_release(req.fraction, after=req.lead)
@@ -231,7 +232,7 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
     fluid = _fluid_fraction(req, rel, t_hit)
     time = t_hit - req.lead
     conc = _conc(req, rel.released_at(t_hit), _a3_at(rel, t_hit) ** (1.0 / 3.0))
-    s = drug_settings(req.settings)
+    s = settings
     return DrugDoseAnswer(
         model="full", time=time, seconds=None if tau is None else time * tau,
         leaked_before_heating=before, leaked_before_heating_ug=ug(before),
