@@ -1,0 +1,126 @@
+"""Physical quantities at the edges: one unit table, parsed with pint.
+
+Every way in (Python, CLI, HTTP, the page) accepts a physical quantity as a plain number in
+the field's documented unit, a string with a unit ("50 um", "29 degC", "10 min", "5 K/min")
+or a pint ``Quantity``; ``to_unit`` returns the plain float in the documented unit or raises
+a ``ParameterError`` naming the field.  Nothing else in the code converts units by hand.
+
+pint is imported on first use only (about 0.3 s), so a call that passes plain numbers pays
+nothing for it.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+from typing import Any
+
+from solver.errors import ParameterError
+
+# The documented unit of each kind of field (the plain-number unit of every way in).
+UNITS: dict[str, str] = {
+    "temperature": "kelvin",
+    "temperature_rate": "kelvin / second",
+    "time": "second",
+    "length": "micrometer",
+    "mesh_length": "nanometer",
+    "volume": "microliter",
+    "mass": "microgram",
+    "concentration": "microgram / microliter",
+    "viscosity": "pascal * second",
+    "permeability": "meter ** 2",
+    "molecular_volume": "meter ** 3",
+    "diffusivity": "centimeter ** 2 / second",
+}
+
+# Short spellings labs write, in pint's grammar (pint reads "um" as micrometre already).
+_ALIASES = (
+    ("µ", "u"), ("μ", "u"), ("°C", "degC"), ("ºC", "degC"), ("°F", "degF"),
+    ("°K", "K"), ("℃", "degC"),
+)
+
+
+@lru_cache(maxsize=1)
+def registry() -> Any:
+    """The one pint UnitRegistry (offset units such as degC are allowed in products)."""
+    import pint
+
+    ureg = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
+    ureg.formatter.default_format = "~P"
+    return ureg
+
+
+def _normalise(text: str) -> str:
+    for old, new in _ALIASES:
+        text = text.replace(old, new)
+    return text.strip()
+
+
+def _is_quantity(value: Any) -> bool:
+    return hasattr(value, "magnitude") and hasattr(value, "units") and hasattr(value, "to")
+
+
+def parse(value: Any, field: str) -> Any:
+    """A pint Quantity from a string or Quantity (a plain number stays a number)."""
+    if _is_quantity(value):
+        return value
+    if isinstance(value, str):
+        ureg = registry()
+        text = _normalise(value)
+        if not text:
+            raise ParameterError(field, value, "a number or a quantity with a unit")
+        try:
+            return ureg.Quantity(text)
+        except Exception:  # pint raises many kinds (undefined unit, syntax, ...)
+            raise ParameterError(field, value, "a number or a quantity with a unit, e.g. "
+                                 "'50 um', '29 degC', '10 min'") from None
+    return value
+
+
+def to_unit(value: Any, kind: str, field: str) -> float:
+    """``value`` as a float in the documented unit of ``kind`` (see ``UNITS``).
+
+    Plain numbers are taken as already in that unit; strings and pint Quantities are
+    converted.  A wrong dimension ("50 K" for a length) or a non-finite value raises a
+    ``ParameterError`` naming ``field``.
+    """
+    unit = UNITS[kind]
+    q = parse(value, field)
+    if _is_quantity(q):
+        ureg = registry()
+        if q.dimensionless and not ureg.Quantity(1, unit).dimensionless:
+            # a bare number in a string ("308") is in the documented unit
+            out = float(q.to("dimensionless").magnitude)
+        else:
+            try:
+                out = float(q.to(unit).magnitude)
+            except Exception:
+                raise ParameterError(field, str(value),
+                                     f"a quantity of dimension {unit} "
+                                     f"(got {q.dimensionality})") from None
+    elif isinstance(value, bool):
+        raise ParameterError(field, value, f"a number in {unit} or a quantity with a unit")
+    else:
+        try:
+            out = float(q)
+        except (TypeError, ValueError):
+            raise ParameterError(field, value,
+                                 f"a number in {unit} or a quantity with a unit") from None
+    if not math.isfinite(out):
+        raise ParameterError(field, value, "a finite value")
+    return out
+
+
+def kelvin(value: Any, field: str = "temperature") -> float:
+    """A temperature in K from K, degC ("29 degC") or a Quantity."""
+    return to_unit(value, "temperature", field)
+
+
+def seconds(value: Any, field: str = "time") -> float:
+    """A duration in s from s, min, h ("10 min") or a Quantity."""
+    return to_unit(value, "time", field)
+
+
+def micrometres(value: Any, field: str = "length") -> float:
+    """A length in um from um, mm, nm ("50 um") or a Quantity."""
+    return to_unit(value, "length", field)
