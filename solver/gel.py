@@ -122,6 +122,15 @@ HHT = Gel(omega=720.0, a0=-62.22, b0=0.20470, a1=-58.28, b1=0.19044, name="HHT")
 PRESETS: dict[str, Gel] = {"ANB": ANB, "HHT": HHT}
 
 
+def as_gel(gel: Gel | str) -> Gel:
+    """A Gel, or the preset of that name: every public physics function accepts both."""
+    if isinstance(gel, Gel):
+        return gel
+    if isinstance(gel, str):
+        return preset(gel)
+    raise ParameterError("gel", gel, "a Gel or a preset name (" + ", ".join(sorted(PRESETS)) + ")")
+
+
 def preset(name: str) -> Gel:
     """Look up a preset gel by name (case-insensitive)."""
     g = PRESETS.get(str(name).upper())

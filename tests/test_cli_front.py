@@ -47,3 +47,23 @@ def test_front_started_from_the_full_solver(capsys) -> None:
     out = json.loads(capsys.readouterr().out)
     assert out["start"] == "full@0.01" and out["t"][0] == 0.01
     assert out["t"][-1] == pytest.approx(0.123, rel=0.04)  # the paper's HHT 80% dose
+
+
+def test_front_sharp_text(capsys) -> None:
+    """The sharp model's text output names the radius at which its front reaches the centre."""
+    assert main(["front", "--gel", "HHT", "--t-start", "304", "--t-end", "308", "--sharp"]) == 0
+    out = capsys.readouterr().out
+    assert "front-sharp" in out and "with radius 1.1" in out
+
+
+def test_cli_piped_into_head_exits_quietly() -> None:
+    """A reader that closes the pipe early (``| head -c 10``) gives no traceback."""
+    import subprocess
+    import sys
+
+    cmd = (f"{sys.executable} -m api.cli front --gel HHT --t-start 304 --t-end 308 --sharp "
+           "--json --every 0.0001 | head -c 10")
+    done = subprocess.run(["bash", "-o", "pipefail", "-c", cmd], capture_output=True,
+                          text=True, timeout=120)
+    assert done.stdout.startswith('{"gel"')
+    assert "Traceback" not in done.stderr and "BrokenPipe" not in done.stderr
