@@ -71,7 +71,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     k.add_argument("--beta", type=float, default=None,
                    help="permeability exponent (fixed, or the start with --fit-beta)")
     k.add_argument("--interfacial-length", type=float, default=None, metavar="L",
-                   help="full solver's interfacial length (default 0.005)")
+                   help="full solver's interfacial length (default: the bead's own, "
+                        "xi_dry / a_d, as in `thermogel dose`)")
     k.add_argument("--size-rel-sigma", type=float, default=0.01, help="relative size noise")
     k.add_argument("--cache", default=None, help="validation cache file for full-solver runs")
     _common(k)
