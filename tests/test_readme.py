@@ -26,7 +26,7 @@ def python_blocks() -> list[tuple[str, str]]:
     out = []
     for page in PAGES:
         text = page.read_text()
-        for k, m in enumerate(re.finditer(r"^```python\n(.*?)^```", text, re.S | re.M)):
+        for m in re.finditer(r"^```python\n(.*?)^```", text, re.S | re.M):
             line = text[:m.start()].count("\n") + 1
             out.append((f"{page.name}:{line}", m.group(1)))
     return out

@@ -33,6 +33,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     model.add_argument("--paper", dest="paper", action="store_true",
                        help="the paper's own front condition (front-leading; its full model "
                             "without interfacial energy is ill-posed)")
+    p.set_defaults(paper=False)
     p.add_argument("--until", type=float, default=None, help="stop at this dimensionless time")
     p.add_argument("--target-radius", type=float, default=None,
                    help="stop when the radius reaches this value")
