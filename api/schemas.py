@@ -9,6 +9,7 @@ radius, time by tau of eq. timescale).  Fields ending in ``_um``, ``_ul``, ``_ug
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Annotated, Any, Literal
 
 from pydantic import (
@@ -22,6 +23,8 @@ from pydantic import (
     field_validator,
     model_validator,
 )
+
+from dosing.request import ScheduleRequest as PlannerSchedule
 
 from .drug_schemas import DrugIn  # the optional drug of the dose and schedule requests
 from .outputs import Out as _Out
@@ -421,6 +424,9 @@ class PendingResponse(_Out):
     validation_id: str = Field(description="id to poll at /v1/validations/{id}")
     validation_url: str = Field(description="path of the validation to poll")
     note: str = Field(description="what is queued and what to do next, in words")
+    hold: list[dict[str, Any]] | None = Field(
+        None, description="a schedule's hold reading while its protocol check runs: a rough "
+                          "reading (one continuous heating, doses read off cumulatively)")
 
 
 class DoseTimeResponse(_Out):
@@ -491,6 +497,10 @@ Rest = Annotated[float, Field(ge=0.0, le=1.0e3)]
 RestSeconds = Annotated[float, Field(ge=0.0, le=1.0e7)]
 
 
+# the planner's defaults, written once (dosing.request.ScheduleRequest): every way in agrees
+_SCHEDULE_DEFAULTS = {f.name: f.default for f in dataclasses.fields(PlannerSchedule)}
+
+
 class ScheduleRequest(RequestModel):
     """Several doses released one after another, resting at T_start between heatings.
 
@@ -523,9 +533,13 @@ class ScheduleRequest(RequestModel):
     branch: Branch | None = Field(None, description="start branch at T_start (default swollen)")
     constants: ConstantsIn | None = Field(None, description="timescale constants")
     check_protocol: bool = Field(
-        False, description="simulate the heat/rest protocol with the full solver (a job)")
+        _SCHEDULE_DEFAULTS["check_protocol"],
+        description="simulate the heat/rest protocol with the full solver (a job; on by "
+                    "default everywhere: the hold reading alone is rough)")
     correct: bool = Field(
-        False, description="shoot on the full solver for times meeting every dose (a job)")
+        _SCHEDULE_DEFAULTS["correct"],
+        description="shoot on the full solver for times meeting every dose (a job; on by "
+                    "default everywhere)")
     tolerance: float = Field(0.01, gt=0.0, le=0.2,
                              description="relative tolerance of the corrected doses, 0-0.2")
     validation_method: Method = method_field()

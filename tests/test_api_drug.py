@@ -70,7 +70,7 @@ async def test_drug_schedule_hold_at_once_then_a_job(clients) -> None:
     _, raw = clients
     body = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "doses": [0.3, 0.3],
             "rests": [0.5], "dry_radius_um": 50.0, "interfacial_length": 0.01,
-            "drug": {"load_ug": 1.0}}
+            "drug": {"load_ug": 1.0}, "check_protocol": False, "correct": False}
     r = await raw.post("/v1/schedule", json=body)
     assert r.status_code == 200 and len(r.json()["hold"]) == 2, r.text
     r = await raw.post("/v1/schedule", json={**body, "check_protocol": True,

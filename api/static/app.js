@@ -373,6 +373,27 @@ function poll(vid, onDone) {
   step();
 }
 
+function pollSchedule(vid, rows, tau) {
+  // a schedule job: when done, the corrected actuation times replace the rough hold reading
+  const step = async () => {
+    const res = await api("GET", `/v1/validations/${encodeURIComponent(vid)}`);
+    if (res.status !== 200) { showServerError(res); return; }
+    const v = res.data;
+    if (v.status === "failed") { $("schedule-note").textContent = `Protocol check failed: ${v.error || ""}`; return; }
+    if (v.status !== "done") { setTimeout(step, 1000); return; }
+    const c = v.result && v.result.corrected;
+    if (!c) { $("schedule-note").textContent = "Protocol checked (no correction asked)."; return; }
+    const fixed = rows.map((r, k) => ({ ...r, actuation_time: c.actuation_times[k],
+      actuation_seconds: c.actuation_seconds ? c.actuation_seconds[k] : null,
+      error_estimate: Math.abs(c.relative_errors[k]) }));
+    scheduleTable(fixed, tau);
+    $("schedule-note").textContent = "Corrected by the full solver: each heating meets its dose " +
+      `within ${pct(c.max_relative_error)} in the real heat/rest protocol.`;
+    document.body.dataset.schedule = "corrected";
+  };
+  step();
+}
+
 async function plan(ev) {
   if (ev) ev.preventDefault();
   const f = readForm();
@@ -420,7 +441,13 @@ async function run(f) {
     if (f.rests.length) body.rests = f.rests;
     const sch = await api("POST", "/v1/schedule", body);
     if (sch.status >= 400) { showServerError(sch); document.body.dataset.state = "server-error"; return; }
-    rows = sch.data.status === "answered" ? sch.data.hold : null;
+    // the protocol check and correction are on by default (as in Python and the CLI): a 202
+    // carries the hold reading, shown as the rough reading it is until the job corrects it
+    rows = sch.data.hold || null;
+    $("schedule-note").textContent = sch.status === 202
+      ? "Hold reading (rough: one continuous heating). Checking the real heat/rest protocol with the full solver…"
+      : "";
+    if (sch.status === 202 && rows) pollSchedule(sch.data.validation_id, rows, a.timescale_seconds);
   } else {
     rows = [{ dose_fraction: a.dose_fraction, cumulative_fraction: a.dose_fraction, start: 0, end: a.time,
       actuation_time: a.time, actuation_seconds: a.seconds, error_estimate: a.error_estimate }];
