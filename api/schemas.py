@@ -25,18 +25,18 @@ from pydantic import (
 )
 
 from dosing.request import ScheduleRequest as PlannerSchedule
+from dosing.scenario import DEFAULT_INTERFACIAL_LENGTH
+from solver.limits import T_MAX, T_MIN, TRUTH_DIRECT_ELL_RANGE, TRUTH_LADDER_START_RANGE
 
 from .drug_schemas import DrugIn  # the optional drug of the dose and schedule requests
 from .outputs import Out as _Out
 from .outputs import UncertaintyOut
 
-T_MIN = 273.15  # K, same bounds as solver.gel.check_temperature
-T_MAX = 373.15
-# interfacial length of the ladder truth (dosing.scenario: DEFAULT_INTERFACIAL_LENGTH,
-# and the coarsest ladder rung's range) and of a direct run (DIRECT_ELL_RANGE)
-ELL_DEFAULT = 0.005
-ELL_RANGE = (0.0025, 0.01)
-DIRECT_ELL_RANGE = (2e-5, 0.02)
+# the ranges are solver.limits' (one definition): temperatures, the ladder's coarsest ell
+# (its rungs go down to ell / 4) and a direct run's ell
+ELL_DEFAULT = DEFAULT_INTERFACIAL_LENGTH
+ELL_RANGE = TRUTH_LADDER_START_RANGE
+DIRECT_ELL_RANGE = TRUTH_DIRECT_ELL_RANGE
 Method = Literal["direct", "ladder"]
 
 # a preset ('ANB', 'HHT') or a stored fitted gel (dosing.gel_store; an unknown name is a 422)

@@ -13,9 +13,8 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Any, Literal
 
 from .errors import ParameterError, require_finite, require_finite_positive
+from .limits import T_MAX, T_MIN
 
-T_MIN = 273.15
-T_MAX = 373.15
 BETA_RANGE = (0.0, 10.0)
 
 PermeabilityLaw = Literal["constant", "power"]
