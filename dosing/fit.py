@@ -266,6 +266,8 @@ def fit_shrinking(data: KineticsData, gel: Gel | str | dict[str, Any], t_start: 
                       "dry_radius_um": dry})
     if dry is not None:
         c = constants or PhysicalConstants()
+        res.extra.update(diffusivity_report(res.parameters["tau"], res.intervals["tau"], dry,
+                                            jump.t_end))
         res.extra["k0_m2"] = k0_from_tau(res.parameters["tau"], dry, jump.t_end, c)
         iv = res.intervals["tau"]
         res.extra["k0_interval_m2"] = None if iv is None else sorted(
@@ -280,3 +282,17 @@ def k0_from_tau(tau_s: float, dry_radius_um: float, t_end: float,
     r = dry_radius_um * 1.0e-6
     return (constants.viscosity(t_end) * constants.polymer_volume_m3 * r * r
             / (tau_s * BOLTZMANN * t_end))
+
+
+def diffusivity_report(tau_s: float, tau_interval_s: list[float] | None, dry_radius_um: float,
+                       t_end: float) -> dict[str, Any]:
+    """What a kinetics fit pins: the effective diffusivity D = R^2 / tau = k0 k_B T_end /
+    (eta Omega_p) (eq. timescale) at T_end, with its 95% interval.  k0 alone needs eta and
+    Omega_p, which the curve does not fix."""
+    r2 = (dry_radius_um * 1e-6) ** 2
+    d = r2 / tau_s
+    iv = None if tau_interval_s is None else sorted(r2 / v * 1e4 for v in tau_interval_s)
+    return {"diffusivity_m2_s": d, "diffusivity_cm2_s": d * 1e4,
+            "diffusivity_interval_cm2_s": iv, "diffusivity_t_k": t_end,
+            "pinned": "the effective diffusivity D = k0 k_B T / (eta Omega_p) (eq. timescale) "
+                      "at t_end; k0_m2 follows only with the eta and Omega_p given"}

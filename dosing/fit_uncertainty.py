@@ -22,9 +22,9 @@ from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.fit.equilibrium import gel_from_internal
 from solver.gel import Gel
 
-from .gel_store import record_for
+from .gel_store import diffusivity_interval, record_for
 from .model_choice import front_run
-from .units import radius_after_dose
+from .units import PhysicalConstants, radius_after_dose, timescale_uncertainty
 
 Z95 = 1.959963984540054
 
@@ -99,8 +99,14 @@ def sample_dose_times(record: dict[str, Any], gel: Gel, t_start: float, t_end: f
 
 
 def attach_parameter_interval(req: Any, answer: Any) -> Any:
-    """Set ``answer.parameter_interval`` for a dose of a stored fitted gel (front model
-    answers only; the full solver is too slow to differentiate per request)."""
+    """Set ``answer.timescale_uncertainty`` (every answer: the seconds' range from the
+    timescale constants, or the kinetics fit's interval of D) and, for a dose of a stored
+    fitted gel, ``answer.parameter_interval`` (front model answers only; the full solver
+    is too slow to differentiate per request)."""
+    d_iv = diffusivity_interval(req.gel) if req.constants.calibrated else None
+    answer.timescale_uncertainty = timescale_uncertainty(
+        req.gel.omega, req.t_end, req.constants, answer.seconds,
+        None if d_iv is None else _scaled_interval(d_iv, req.t_end, req.constants))
     rec = record_for(req.gel)
     if rec is None or not (rec.get("swelling") or {}).get("fit"):
         return answer
@@ -113,17 +119,23 @@ def attach_parameter_interval(req: Any, answer: Any) -> Any:
                             req.settings.regularized)
     if iv.get("time") is not None and answer.seconds is not None:
         rel = iv["relative_half_width"]
-        kin = (rec.get("kinetics") or {}).get("fit") or {}
-        k0, k0_iv = kin.get("k0_m2"), kin.get("k0_interval_m2")
-        if k0 and k0_iv and abs(req.constants.permeability_m2 / k0 - 1.0) < 1e-6:
-            rel_k = 0.5 * math.log(k0_iv[1] / k0_iv[0])
+        if d_iv is not None:
+            rel_k = 0.5 * math.log(d_iv[1] / d_iv[0])
             rel = math.hypot(rel, rel_k)
-            iv["note"] += "; seconds include the kinetics fit's k0 uncertainty"
-        elif k0:
-            iv["note"] += (f"; the kinetics fit's k0 = {k0:.4g} m^2 is not the one used "
-                           f"(constants.permeability_m2 = {req.constants.permeability_m2:.4g})")
+            iv["note"] += ("; seconds include the kinetics fit's uncertainty in D (added in "
+                           "quadrature, as if independent of the swelling fit)")
+        else:
+            iv["note"] += ("; the seconds also carry the timescale constants' uncertainty "
+                           "(timescale_uncertainty), not included here")
         s = answer.seconds
         iv["seconds"] = [s * math.exp(-rel), s * math.exp(rel)]
         iv["seconds_relative_half_width"] = rel
     answer.parameter_interval = iv
     return answer
+
+
+def _scaled_interval(d_iv: tuple[float, float], t_end: float,
+                     constants: PhysicalConstants) -> tuple[float, float]:
+    """A kinetics fit's interval of D (at its temperature) carried to T_end as D itself."""
+    f = constants.diffusivity(t_end) / constants.diffusivity_m2_s / 1.0
+    return d_iv[0] * f, d_iv[1] * f
