@@ -14,9 +14,6 @@ unit), optional ``weight``.  Kinetics CSV: ``time_s`` and one size column, optio
 
 from __future__ import annotations
 
-import csv
-import io
-import math
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
@@ -31,6 +28,7 @@ from solver.fit.equilibrium import SIZE_POWER
 from solver.fit.kinetics import KineticsData, RadiusModel, fit_kinetics
 from solver.gel import Gel
 
+from .fit_csv import read_table
 from .model_choice import choose_model, front_model_name, front_run
 from .planner import Planner
 from .request import resolve_dry_radius, resolve_gel, resolve_jump
@@ -42,65 +40,26 @@ KINETICS_MODELS = ("auto", "front", "front-sharp", "full")
 
 
 # ---------------------------------------------------------------- CSV
-def _read_table(source: str | Path, what: str, first: str) -> tuple[dict[str, np.ndarray], str]:
-    """Columns of a CSV (file path or the text itself) as float arrays, and the size column."""
-    text = source if isinstance(source, str) and "\n" in source else None
-    if text is None:
-        p = Path(source)
-        if not p.is_file():
-            raise ParameterError("file", str(source), "a readable CSV file")
-        try:
-            text = p.read_text(encoding="utf-8-sig")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ParameterError("file", str(source), "a readable UTF-8 CSV file",
-                                 str(exc)) from None
-    try:
-        rows = [r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r)
-                and not r[0].lstrip().startswith("#")]
-    except csv.Error as exc:
-        raise ParameterError("file", str(source)[:80], "a CSV file", str(exc)) from None
-    if not rows:
-        raise ParameterError("file", "empty", f"a CSV with a header row ({first}, one of "
-                             f"{', '.join(SIZE_COLUMNS)})")
-    header = [h.strip() for h in rows[0]]
-    allowed = {first, "weight", *SIZE_COLUMNS}
-    unknown = [h for h in header if h not in allowed]
-    if unknown:
-        raise ParameterError("columns", unknown, f"{what} columns {first}, one of "
-                             f"{', '.join(SIZE_COLUMNS)}, optional weight",
-                             f"unknown column name(s) {', '.join(map(repr, unknown))}")
-    if len(set(header)) != len(header):
-        raise ParameterError("columns", header, "each column once")
-    if first not in header:
-        raise ParameterError("columns", header, f"a {first} column")
-    sizes = [h for h in header if h in SIZE_COLUMNS]
-    if len(sizes) != 1:
-        raise ParameterError("columns", header, f"exactly one size column among "
-                             f"{', '.join(SIZE_COLUMNS)}")
-    cols: dict[str, list[float]] = {h: [] for h in header}
-    for i, row in enumerate(rows[1:], start=2):
-        if len(row) != len(header):
-            raise ParameterError(f"line {i}", row, f"{len(header)} values ({', '.join(header)})")
-        for h, cell in zip(header, row, strict=False):
-            c = cell.strip()
-            try:
-                v = float(c) if c else math.nan
-            except ValueError:
-                raise ParameterError(f"line {i}, {h}", c, "a number") from None
-            cols[h].append(v)
-    return {h: np.array(v, dtype=float) for h, v in cols.items()}, sizes[0]
+def read_swelling_csv(source: str | Path, info: dict[str, Any] | None = None) -> SwellingData:
+    """Equilibrium swelling data from a lab's CSV (``dosing.fit_csv``: degC or K, radius,
+    diameter or volume ratio in um, mm or arbitrary units, header or not, ``,`` or ``;``);
+    ``info`` receives how it was read.  ParameterError names the line and column."""
+    tab = read_table(source, "temperature", SIZE_COLUMNS)
+    if info is not None:
+        info.update(tab.to_dict())
+    kind = next(k for k in SIZE_COLUMNS if k in tab.columns)
+    return SwellingData(tab.columns["temperature"], tab.columns[kind], kind,
+                        tab.columns.get("weight"))
 
 
-def read_swelling_csv(source: str | Path) -> SwellingData:
-    """Equilibrium swelling data from a CSV (module doc); ParameterError names the problem."""
-    cols, kind = _read_table(source, "swelling", "temperature_K")
-    return SwellingData(cols["temperature_K"], cols[kind], kind, cols.get("weight"))
-
-
-def read_kinetics_csv(source: str | Path) -> KineticsData:
-    """A shrinking curve from a CSV (module doc); ParameterError names the problem."""
-    cols, kind = _read_table(source, "kinetics", "time_s")
-    return KineticsData(cols["time_s"], cols[kind], kind, cols.get("weight"))
+def read_kinetics_csv(source: str | Path, info: dict[str, Any] | None = None) -> KineticsData:
+    """A shrinking curve from a lab's CSV (time in s, min or h; one size column, as
+    :func:`read_swelling_csv`); ParameterError names the line and column."""
+    tab = read_table(source, "time", SIZE_COLUMNS)
+    if info is not None:
+        info.update(tab.to_dict())
+    kind = next(k for k in SIZE_COLUMNS if k in tab.columns)
+    return KineticsData(tab.columns["time"], tab.columns[kind], kind, tab.columns.get("weight"))
 
 
 def swelling_data(temperature_K: Any, size: Any, kind: str = "radius",

@@ -98,10 +98,12 @@ def run_swelling(args: argparse.Namespace) -> int:
 
     if args.save:
         check_name(args.save)
-    data = read_swelling_csv(args.file)
+    read: dict[str, Any] = {}
+    data = read_swelling_csv(args.file, read)
     res = fit_swelling(data, sigma_t=args.sigma_t, size_rel_sigma=args.size_rel_sigma,
                        fixed=dict(args.fix), n_starts=args.starts)
     report = res.to_dict()
+    report["read"] = read
     dd = data_dict(data)
     if args.save:
         from solver.fit import fit_gel
@@ -148,7 +150,8 @@ def run_kinetics(args: argparse.Namespace) -> int:
 
     if args.save:
         check_name(args.save)
-    data = read_kinetics_csv(args.file)
+    read: dict[str, Any] = {}
+    data = read_kinetics_csv(args.file, read)
     store = GelStore(args.gels_dir)
     gel = lookup(args.gel, store)
     settings = SolverSettings() if args.interfacial_length is None else SolverSettings(
@@ -168,6 +171,7 @@ def run_kinetics(args: argparse.Namespace) -> int:
         planner.close()
         planner.jobs.executor.shutdown(wait=True)
     report = res.to_dict()
+    report["read"] = read
     dd = data_dict(data)
     if args.save:
         from solver.gel import Gel
