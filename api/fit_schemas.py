@@ -73,6 +73,11 @@ class SwellingFitRequest(_In):
         None, description="parameters kept fixed (omega, scale, b0, b1; a0 with b0, a1 with b1)"
     )
     n_starts: int = Field(6, ge=1, le=50, description="polished starts of the global search")
+    objective: Literal["orthogonal", "temperature"] = Field(
+        "orthogonal", description="'orthogonal' (errors in both variables, judged by "
+        "chi-square under the stated noise) or 'temperature' (the paper's residual)")
+    dry_size: float | None = Field(
+        None, gt=0, description="a measured dry size in the data's unit: fixes the scale")
 
 
 class KineticsFitRequest(_In):
@@ -127,6 +132,7 @@ class FitJobResponse(BaseModel):
     status_url: str = Field(description="where to poll")
     result: dict[str, Any] | None = Field(
         None,
-        description="the fit report: parameters, intervals (95%), rms_residual_K, warnings, ...",
+        description="the fit report: parameters, intervals (95%), chi2, aic, bic, "
+        "rms_orthogonal_K, rms_temperature_residual_K, not_pinned, warnings, ...",
     )
     error: str | None = Field(None, description="why a failed fit failed")

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from solver.errors import NotApplicableError, ParameterError, SolverError
+from solver.errors import NotApplicableError, ParameterError, SolverError, require_finite_positive
 from solver.fit import FitResult, SwellingData, fit_equilibrium, fit_gel
 from solver.fit.equilibrium import SIZE_POWER
 from solver.fit.kinetics import KineticsData, RadiusModel, fit_kinetics
@@ -78,19 +78,125 @@ def kinetics_data(time_s: Any, size: Any, kind: str = "radius",
 
 # ---------------------------------------------------------------- equilibrium
 def fit_swelling(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma: float = 0.01,
-                 fixed: Mapping[str, float] | None = None, n_starts: int = 6) -> FitResult:
-    """Fit Omega, A0, B0, A1, B1 and the size scale (``solver.fit.fit_equilibrium``); the
-    result's ``extra`` carries the fitted gel."""
+                 fixed: Mapping[str, float] | None = None, n_starts: int = 6,
+                 objective: str = "orthogonal", dry_size: float | None = None,
+                 below_dry_sigmas: float = 2.0, profile: tuple[str, ...] = ()) -> FitResult:
+    """Fit Omega, A0, B0, A1, B1 and the size scale (``solver.fit.fit_equilibrium``) under
+    ``objective`` ('orthogonal' or the paper's 'temperature'); ``dry_size`` fixes the scale
+    (the dry size in the data's unit); ``profile`` names parameters to give profile-likelihood
+    intervals beside the linearised ones.  The result's ``extra`` carries the fitted gel and
+    ``not_pinned``, what the data do not determine."""
+    fixed = dict(fixed or {})
+    if dry_size is not None:
+        fixed["scale"] = require_finite_positive("dry_size", dry_size)
     try:
         res = fit_equilibrium(data, sigma_t=sigma_t, size_rel_sigma=size_rel_sigma,
-                              fixed=fixed, n_starts=n_starts)
+                              fixed=fixed, n_starts=n_starts, objective=objective,
+                              below_dry_sigmas=below_dry_sigmas)
     except (np.linalg.LinAlgError, ArithmeticError) as exc:
         raise SolverError(f"the swelling fit failed numerically: {exc}") from exc
     try:
         res.extra["gel"] = fit_gel(res).to_dict()
     except ParameterError as exc:  # a fit at a bound can leave an invalid gel
         res.warnings.append(f"the fitted parameters do not make a valid gel: {exc}")
+    if profile:
+        from solver.fit.profile import profile_interval
+
+        rep = res.to_dict()
+        res.extra["profile_intervals"] = {k: profile_interval(data, rep, k) for k in profile}
+    res.extra["not_pinned"] = not_pinned(res)
     return res
+
+
+def not_pinned(res: FitResult) -> list[str]:
+    """What a swelling fit leaves open, in words: unidentifiable or strongly correlated
+    parameters, a dry size at its data bound, and always the timescale."""
+    out = [w for w in res.warnings if "not identifiable" in w or "correlated" in w]
+    bound = res.extra.get("dry_size_bound") or {}
+    if bound.get("at_bound"):
+        out.append("the dry size (scale) sits at its bound from the data ("
+                   f"{bound['rule']}): only the nearly dry collapsed branch pins it, and "
+                   "the dose time moves with it; give a measured dry size (--dry-size)")
+    iv = res.intervals.get("scale")
+    if iv and res.parameters["scale"] > 0:
+        rel = 0.5 * (iv[1] - iv[0]) / res.parameters["scale"]
+        if rel > 0.05:
+            out.append(f"the dry size is known only to +-{rel:.0%} (95%): the dose time "
+                       "depends on it through the start and final stretches")
+    out.append("the timescale tau (seconds): a swelling curve is dimensionless; pin it by a "
+               "kinetics fit (thermogel fit kinetics ... --save NAME)")
+    return out
+
+
+def dose_under_objectives(data: SwellingData, t_start: float, t_end: float, fraction: float,
+                          *, sigma_t: float = 0.05, size_rel_sigma: float = 0.01,
+                          fixed: Mapping[str, float] | None = None,
+                          fits: Mapping[str, FitResult] | None = None,
+                          sharp: bool = True) -> dict[str, Any]:
+    """The dimensionless dose time (front model) of one jump under both objectives, each with
+    its delta-method 95% interval, flagged when the intervals do not overlap (the choice of
+    objective then matters more than the stated noise)."""
+    from .fit_uncertainty import dose_time_interval
+
+    out: dict[str, Any] = {"t_start": t_start, "t_end": t_end, "dose_fraction": fraction,
+                           "model": "front-sharp" if sharp else "front"}
+    fits = dict(fits or {})
+    for obj in ("orthogonal", "temperature"):
+        res = fits.get(obj) or fit_swelling(data, sigma_t=sigma_t,
+                                            size_rel_sigma=size_rel_sigma, fixed=fixed,
+                                            objective=obj)
+        try:
+            gel = fit_gel(res)
+            jump = resolve_jump(gel, t_start, t_end, None)
+            iv = dose_time_interval({"swelling": {"fit": res.to_dict()}}, gel,
+                                    jump.t_start, jump.t_end, jump.branch, fraction, sharp)
+            out[obj] = {"time": iv.get("time_center"), "interval": iv.get("time"),
+                        "parameters": res.parameters, "chi2": res.extra.get("chi2"),
+                        "rms_temperature_residual_K": res.extra.get(
+                            "rms_temperature_residual_K"), "note": iv.get("note")}
+        except (ParameterError, NotApplicableError, SolverError) as exc:
+            out[obj] = {"time": None, "interval": None, "note": str(exc)}
+    a, b = out["orthogonal"].get("interval"), out["temperature"].get("interval")
+    if a and b:
+        out["disagree"] = bool(a[1] < b[0] or b[1] < a[0])
+        out["ratio"] = out["orthogonal"]["time"] / out["temperature"]["time"]
+        out["note"] = ("the two objectives' dose times disagree beyond their 95% intervals: "
+                       "the data do not decide the dose time; the parameter interval is "
+                       "understated; measure the dry size or points across the transition"
+                       if out["disagree"] else "the two objectives agree within their "
+                       "intervals")
+    else:
+        out["disagree"] = None
+        out["note"] = "no interval under one objective: compare the times themselves"
+    return out
+
+
+def compare_chi_models(data: SwellingData, *, sigma_t: float = 0.05,
+                       size_rel_sigma: float = 0.01, objective: str = "orthogonal",
+                       fixed: Mapping[str, float] | None = None) -> dict[str, Any]:
+    """AIC and BIC of nested chi models of eq. FloryParam on the same data: the full model,
+    chi1 constant in T (B1 = 0) and chi independent of the polymer fraction (A1 = B1 = 0),
+    each judged by the orthogonal chi-square under the stated noise (known noise: AIC =
+    chi2 + 2k, BIC = chi2 + k ln n; lowest is preferred, a difference above ~2 matters)."""
+    base = dict(fixed or {})
+    models = {"full": {}, "b1=0": {"b1": 0.0}, "a1=b1=0": {"a1": 0.0, "b1": 0.0}}
+    rows = {}
+    for name, extra in models.items():
+        try:
+            r = fit_swelling(data, sigma_t=sigma_t, size_rel_sigma=size_rel_sigma,
+                             fixed={**base, **extra}, objective=objective)
+            rows[name] = {"k": len(r.names) - len(r.fixed), "chi2": r.extra["chi2"],
+                          "aic": r.extra["aic"], "bic": r.extra["bic"],
+                          "parameters": r.parameters}
+        except (ParameterError, SolverError) as exc:
+            rows[name] = {"error": str(exc)}
+    ok = {k: v for k, v in rows.items() if "aic" in v}
+    best = {c: min(ok, key=lambda k: ok[k][c]) if ok else None for c in ("aic", "bic")}
+    for v in ok.values():
+        v["delta_aic"] = v["aic"] - ok[best["aic"]]["aic"]
+        v["delta_bic"] = v["bic"] - ok[best["bic"]]["bic"]
+    return {"models": rows, "best_aic": best["aic"], "best_bic": best["bic"],
+            "criterion": "chi2 under the stated noise; AIC = chi2 + 2k, BIC = chi2 + k ln n"}
 
 
 def data_dict(data: SwellingData | KineticsData) -> dict[str, Any]:

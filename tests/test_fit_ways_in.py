@@ -17,7 +17,7 @@ from dosing.units import timescale
 from solver.fit.synthetic import synthetic_swelling
 from solver.gel import HHT
 
-REPORT_KEYS = {"parameters", "intervals", "rms_residual_K", "warnings", "transitions",
+REPORT_KEYS = {"parameters", "intervals", "rms_orthogonal_K", "warnings", "transitions",
                "correlation", "covariance", "success"}
 
 

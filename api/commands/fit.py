@@ -46,6 +46,26 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="keep a parameter fixed (omega, scale, b0, b1; a0 with b0, a1 with "
                         "b1), e.g. --fix omega=100; repeatable")
     s.add_argument("--starts", type=int, default=6, help="polished starts (default 6)")
+    s.add_argument("--objective", choices=["orthogonal", "temperature"], default="orthogonal",
+                   help="'orthogonal' (default): errors in both variables, judged by "
+                        "chi-square under the stated noise; 'temperature': the paper's "
+                        "residual T(lambda_i) - T_i")
+    s.add_argument("--dry-size", type=float, default=None,
+                   help="the measured dry (or preparation) size in the data's unit: fixes "
+                        "the scale instead of fitting it")
+    s.add_argument("--below-dry-sigmas", type=float, default=2.0,
+                   help="no point more than this many size-noise widths below the fitted "
+                        "dry size (default 2)")
+    s.add_argument("--profile", default="", metavar="NAMES",
+                   help="profile-likelihood intervals for these parameters, e.g. scale,omega "
+                        "(a refit per point: seconds each)")
+    s.add_argument("--compare-models", action="store_true",
+                   help="AIC/BIC of nested chi models (full, b1=0, a1=b1=0): three fits")
+    s.add_argument("--jump", default=None, metavar="T0:T1",
+                   help="also state the dose time of this jump under both objectives, "
+                        "flagged when they disagree beyond their intervals")
+    s.add_argument("--dose-fraction", type=float, default=0.8,
+                   help="the dose of --jump (fraction of the stored fluid, default 0.8)")
     _common(s)
     s.set_defaults(func=run_swelling)
     k = fs.add_parser("kinetics", help="fit tau (hence k0) to a shrinking curve after a jump "
@@ -100,10 +120,30 @@ def run_swelling(args: argparse.Namespace) -> int:
         check_name(args.save)
     read: dict[str, Any] = {}
     data = read_swelling_csv(args.file, read)
+    prof = tuple(x.strip() for x in args.profile.split(",") if x.strip())
+    bad = [x for x in prof if x not in ("omega", "b0", "b1", "scale")]
+    if bad:
+        raise ParameterError("profile", bad[0], "omega, b0, b1 or scale")
+    jump = _jump(args.jump)
     res = fit_swelling(data, sigma_t=args.sigma_t, size_rel_sigma=args.size_rel_sigma,
-                       fixed=dict(args.fix), n_starts=args.starts)
+                       fixed=dict(args.fix), n_starts=args.starts, objective=args.objective,
+                       dry_size=args.dry_size, below_dry_sigmas=args.below_dry_sigmas,
+                       profile=prof)
     report = res.to_dict()
     report["read"] = read
+    if args.compare_models:
+        from dosing.fit import compare_chi_models
+
+        report["model_comparison"] = compare_chi_models(
+            data, sigma_t=args.sigma_t, size_rel_sigma=args.size_rel_sigma,
+            objective=args.objective, fixed=dict(args.fix))
+    if jump is not None:
+        from dosing.fit import dose_under_objectives
+
+        report["dose_time_by_objective"] = dose_under_objectives(
+            data, jump[0], jump[1], args.dose_fraction, sigma_t=args.sigma_t,
+            size_rel_sigma=args.size_rel_sigma, fixed=dict(args.fix),
+            fits={args.objective: res})
     dd = data_dict(data)
     if args.save:
         from solver.fit import fit_gel
@@ -119,9 +159,15 @@ def run_swelling(args: argparse.Namespace) -> int:
     if args.json:
         print_json(report)
         return 0
-    print(f"swelling fit of {len(data)} points ({data.kind}): "
-          f"{'converged' if res.success else 'NOT converged'}, rms {res.rms_residual:.3g} K "
-          f"(chi2/dof {res.chi2_reduced:.3g}, {res.nfev} evaluations)")
+    x = res.extra
+    print(f"swelling fit of {len(data)} points ({data.kind}), {x['objective']} objective: "
+          f"{'converged' if res.success else 'NOT converged'}; chi2 {x['chi2']:.4g} on "
+          f"{x['dof']} dof (p = {x['chi2_p_value']:.3g}) under the stated noise, "
+          f"AIC {x['aic']:.4g}, BIC {x['bic']:.4g}")
+    tr = x["rms_temperature_residual_K"]
+    print(f"  temperature residual rms {'-' if tr is None else f'{tr:.3g}'} K over "
+          f"{x['n_temperature_residual']} points above the dry size; "
+          f"{x['points_below_dry']} below it (at most {x['max_below_dry_relative']:.2%})")
     for name in res.names:
         tag = " (fixed)" if name in res.fixed else ""
         print(f"  {name:6s} {res.parameters[name]:12.6g}  95% {_interval(res.intervals[name])}"
@@ -129,8 +175,37 @@ def run_swelling(args: argparse.Namespace) -> int:
     for tr in res.extra.get("transitions", []):
         print(f"  transition ({tr['kind']}) {tr['temperature']:.3f} K  95% "
               f"{_interval(tr.get('interval'))}")
+    for name, pr in (res.extra.get("profile_intervals") or {}).items():
+        iv = pr.get("interval")
+        print(f"  {name:6s} profile-likelihood 95% "
+              + ("-" if iv is None else "[" + ", ".join("open" if v is None else f"{v:.5g}"
+                                                       for v in iv) + "]"))
+    for name, m in (report.get("model_comparison") or {}).get("models", {}).items():
+        print(f"  chi model {name:9s} " + (m["error"] if "error" in m else
+              f"k {m['k']}  chi2 {m['chi2']:.4g}  dAIC {m['delta_aic']:.3g}  "
+              f"dBIC {m['delta_bic']:.3g}"))
+    dj = report.get("dose_time_by_objective")
+    if dj:
+        for obj in ("orthogonal", "temperature"):
+            o = dj[obj]
+            print(f"  dose {dj['dose_fraction']:.0%} {dj['t_start']:g} -> {dj['t_end']:g} K "
+                  f"({obj}): " + (f"none ({o['note']})" if o["time"] is None else
+                                  f"t = {o['time']:.4g}  95% {_interval(o['interval'])}"))
+        print(f"  {'DISAGREE: ' if dj.get('disagree') else ''}{dj['note']}")
+    for w in res.extra.get("not_pinned", []):
+        print(f"  not pinned: {w}")
     _print_notes(res, report)
     return 0
+
+
+def _jump(text: str | None) -> tuple[float, float] | None:
+    if text is None:
+        return None
+    try:
+        a, b = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise ParameterError("jump", text, "T0:T1 in K, e.g. 304:308") from None
+    return a, b
 
 
 def _print_notes(res: Any, report: dict[str, Any]) -> None:

@@ -43,7 +43,8 @@ def _swelling(_: Any, body: SwellingFitRequest) -> dict[str, Any]:
     """The swelling fit's report (a stored job's run; eq. EqlEqn)."""
     data = _swelling_data(body)
     res = fit_swelling(data, sigma_t=body.sigma_t, size_rel_sigma=body.size_rel_sigma,
-                       fixed=body.fixed, n_starts=body.n_starts)
+                       fixed=body.fixed, n_starts=body.n_starts,
+                       objective=body.objective, dry_size=body.dry_size)
     report = json_safe(res.to_dict())
     if body.save:
         GelStore().save(body.save, fit_gel(res, body.save),
