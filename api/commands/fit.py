@@ -96,6 +96,26 @@ def register(sub: argparse._SubParsersAction) -> None:
     k.add_argument("--cache", default=None, help="validation cache file for full-solver runs")
     _common(k)
     k.set_defaults(func=run_kinetics)
+    r = fs.add_parser("release", help="fit a drug's free diffusivity D0 to a cumulative "
+                      "release curve (CSV: time and released as a fraction, %% or ug)")
+    r.add_argument("file", help="CSV file; time 0 is the start of release")
+    r.add_argument("--gel", default="ANB", help="preset or stored fitted gel (default ANB)")
+    r.add_argument("--t-start", type=float, required=True, help="temperature in K")
+    r.add_argument("--t-end", type=float, default=None,
+                   help="equal to --t-start (isothermal; jumps are not built yet)")
+    r.add_argument("--dry-radius-um", type=float, required=True, help="dry bead radius, um")
+    r.add_argument("--hindrance", choices=["none", "free-volume", "ogston"], default="none",
+                   help="hindrance of the drug by the gel (default none)")
+    r.add_argument("--mesh-size-nm", type=float, default=None,
+                   help="swollen mesh size for the free-volume sieve, nm")
+    r.add_argument("--fiber-radius-nm", type=float, default=None,
+                   help="polymer fibre radius for Ogston's law, nm")
+    r.add_argument("--loaded-ug", type=float, default=None,
+                   help="the load, when the release is given in ug")
+    r.add_argument("--json", action="store_true", help="print one JSON object")
+    r.add_argument("--plot", default=None, metavar="PNG",
+                   help="draw data, fit and its 95%% band (matplotlib)")
+    r.set_defaults(func=run_release)
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -279,3 +299,53 @@ def run_kinetics(args: argparse.Namespace) -> int:
               f"{_interval(res.extra['k0_interval_m2'])}")
     _print_notes(res, report)
     return 0
+
+
+def run_release(args: argparse.Namespace) -> int:
+    """Fit D0 to a release curve, print (or JSON), plot."""
+    from dosing.release_fit import fit_release, read_release_csv
+
+    read: dict[str, Any] = {}
+    t, y = read_release_csv(args.file, args.loaded_ug, read)
+    rep = fit_release(t, y, args.gel, args.t_start, args.t_end, args.dry_radius_um,
+                      hindrance=args.hindrance, mesh_size_nm=args.mesh_size_nm,
+                      fiber_radius_nm=args.fiber_radius_nm)
+    rep["read"] = read
+    if args.plot:
+        rep["plots"] = [_plot_release(rep, args.plot)]
+    if args.json:
+        print_json(rep)
+        return 0
+    d = rep["parameters"]["drug_diffusivity_cm2_s"]
+    print(f"release fit of {rep['n_points']} points: D0 = {d:.4g} cm^2/s  95% "
+          f"{_interval(rep['intervals']['drug_diffusivity_cm2_s'])}; effective "
+          f"{rep['effective_diffusivity_cm2_s']:.4g} cm^2/s (hindrance {rep['hindrance']}, "
+          f"factor {rep['hindrance_factor']:.3g})")
+    print(f"  f2 of the fit against the data {rep['f2']:.1f} (>= 50: similar); rms "
+          f"{rep['rms_residual']:.3g} of the load")
+    for w in rep["warnings"] + [f"not pinned: {x}" for x in rep["not_pinned"]]:
+        print(f"  {w}")
+    return 0
+
+
+def _plot_release(rep: dict[str, Any], path: str) -> str:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    b = rep["band"]
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.fill_between(b["time_s"], b["lower"], b["upper"], color="C1", alpha=0.3,
+                    label="95% band (D0)")
+    ax.plot(b["time_s"], b["released"], "C1-", label="fit")
+    ax.plot(rep["time_s"], rep["released"], "C0o", ms=4, label="data")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("released fraction")
+    ax.set_title(f"D0 = {rep['parameters']['drug_diffusivity_cm2_s']:.3g} cm^2/s, "
+                 f"f2 = {rep['f2']:.1f}", fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return str(path)
