@@ -93,6 +93,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     k.add_argument("--interfacial-length", type=float, default=None, metavar="L",
                    help="full solver's interfacial length (default 0.005)")
     k.add_argument("--size-rel-sigma", type=float, default=0.01, help="relative size noise")
+    k.add_argument("--compare-laws", action="store_true",
+                   help="also fit under both front laws (Maxwell: front-sharp; delayed: the "
+                        "ell = 0 lattice, one full-solver run) and compare them by AIC")
     k.add_argument("--cache", default=None, help="validation cache file for full-solver runs")
     _common(k)
     k.set_defaults(func=run_kinetics)
@@ -262,10 +265,21 @@ def run_kinetics(args: argparse.Namespace) -> int:
                             fit_beta=args.fit_beta, beta=args.beta, model=args.model,
                             settings=settings, size_rel_sigma=args.size_rel_sigma,
                             planner=planner)
+        laws = None
+        if args.compare_laws:
+            from dosing.fit import fit_front_laws
+
+            laws = fit_front_laws(data, gel, args.t_start, args.t_end, branch=args.branch,
+                                  dry_radius_um=args.dry_radius_um, planner=planner,
+                                  size_rel_sigma=args.size_rel_sigma)
+            for v in laws["laws"].values():
+                v.pop("report")
     finally:
         planner.close()
         planner.jobs.executor.shutdown(wait=True)
     report = res.to_dict()
+    if laws is not None:
+        report["front_laws"] = laws
     report["read"] = read
     dd = data_dict(data)
     if args.save:
@@ -294,6 +308,14 @@ def run_kinetics(args: argparse.Namespace) -> int:
           f"{100 * res.rms_residual:.3g}% (chi2/dof {res.chi2_reduced:.3g})")
     for name in res.names:
         print(f"  {name:6s} {res.parameters[name]:12.6g}  95% {_interval(res.intervals[name])}")
+    if "diffusivity_cm2_s" in res.extra:
+        print(f"  D      {res.extra['diffusivity_cm2_s']:12.6g} cm^2/s at "
+              f"{res.extra['diffusivity_t_k']:g} K  95% "
+              f"{_interval(res.extra['diffusivity_interval_cm2_s'])} (what the curve pins)")
+    if laws is not None:
+        for law, v in laws["laws"].items():
+            print(f"  law {law:8s} tau {v['tau_s']:.5g} s  AIC {v['aic']:.4g}")
+        print(f"  {laws['note']}")
     if "k0_m2" in res.extra:
         print(f"  k0     {res.extra['k0_m2']:12.6g} m^2  95% "
               f"{_interval(res.extra['k0_interval_m2'])}")
