@@ -119,11 +119,18 @@ def attach_parameter_interval(req: Any, answer: Any) -> Any:
                             req.settings.regularized)
     if iv.get("time") is not None and answer.seconds is not None:
         rel = iv["relative_half_width"]
-        if d_iv is not None:
+        joint = joint_relative_half_width(rec, req) if d_iv is not None else None
+        if joint is not None:
+            rel = joint
+            iv["note"] += ("; seconds: swelling and kinetics jointly (tau refitted as the "
+                           "swelling parameters move: their correlation kept)")
+            iv["method"] = "delta, joint"
+        elif d_iv is not None:
             rel_k = 0.5 * math.log(d_iv[1] / d_iv[0])
             rel = math.hypot(rel, rel_k)
             iv["note"] += ("; seconds include the kinetics fit's uncertainty in D (added in "
-                           "quadrature, as if independent of the swelling fit)")
+                           "quadrature: the kinetics fit was not made on this gel's swelling "
+                           "fit with the front model)")
         else:
             iv["note"] += ("; the seconds also carry the timescale constants' uncertainty "
                            "(timescale_uncertainty), not included here")
@@ -139,3 +146,55 @@ def _scaled_interval(d_iv: tuple[float, float], t_end: float,
     """A kinetics fit's interval of D (at its temperature) carried to T_end as D itself."""
     f = constants.diffusivity(t_end) / constants.diffusivity_m2_s / 1.0
     return d_iv[0] * f, d_iv[1] * f
+
+
+def _half_time(gel: Gel, t_start: float, t_end: float, branch: str, sharp: bool) -> float:
+    """The front model's dimensionless time to half the radius change of a jump: what a
+    kinetics fit matches (tau = t_data / t_model), so tau moves as 1 / this."""
+    fr = front_run(gel, t_start, t_end, branch, sharp)
+    lo, hi = fr.radius_range
+    return float(fr.time_to_radius(0.5 * (lo + hi)))
+
+
+def joint_relative_half_width(record: dict[str, Any], req: Any) -> float | None:
+    """The 95% half-width of log(seconds) from the swelling and kinetics fits together.
+
+    seconds = t_dose(theta) tau(theta), and a kinetics fit made on this gel matched its data
+    with the model's own times, so tau(theta) = tau_fit h(theta_fit) / h(theta) (h: the
+    model's time to half the kinetics jump's change).  The delta method on
+    log t_dose - log h over the swelling covariance keeps their correlation (both move
+    with the dry size and chi); the kinetics fit's own tau uncertainty (given theta) adds in
+    quadrature.  None when the kinetics fit used the full solver or a front model fails."""
+    kin = (record.get("kinetics") or {}).get("fit") or {}
+    if kin.get("model") not in ("front", "front-sharp") or kin.get("t_start") is None:
+        return None
+    d_iv = kin.get("diffusivity_interval_cm2_s")
+    if not d_iv:
+        return None
+    q, cov, t_ref = _internal(record)
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    if np.any(sd > 1e3):
+        return None
+    sharp_k = kin["model"] == "front-sharp"
+    dose_args = (req.t_start, req.t_end, req.branch, req.fraction, req.settings.regularized)
+    kin_args = (float(kin["t_start"]), float(kin["t_end"]), kin.get("branch") or "swollen",
+                sharp_k)
+
+    def log_ratio(qq: np.ndarray) -> float:
+        g = gel_from_internal(qq, t_ref, name=req.gel.name).with_permeability(
+            req.gel.permeability.law, req.gel.permeability.beta)
+        return math.log(dose_time(g, *dose_args)) - math.log(_half_time(g, *kin_args))
+
+    grad = np.zeros(q.size)
+    try:
+        for j in np.nonzero(sd > 0.0)[0]:
+            h = 0.1 * sd[j]
+            qp, qm = q.copy(), q.copy()
+            qp[j] += h
+            qm[j] -= h
+            grad[j] = (log_ratio(qp) - log_ratio(qm)) / (2 * h)
+    except (ParameterError, NotApplicableError, SolverError, ValueError):
+        return None
+    rel_s = Z95 * math.sqrt(max(float(grad @ cov @ grad), 0.0))
+    rel_k = 0.5 * math.log(d_iv[1] / d_iv[0])
+    return math.hypot(rel_s, rel_k)

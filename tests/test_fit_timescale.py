@@ -139,3 +139,31 @@ async def test_http_lists_fitted_gels_and_doses_with_their_timescale(calibrated,
             ans = r.json()
             assert ans["timescale_seconds"] == pytest.approx(kin["tau_s"], rel=1e-9)
             assert ans["timescale_uncertainty"]["calibrated"] is True
+
+
+def test_joint_interval_of_a_gel_fitted_to_swelling_and_kinetics(env, capsys) -> None:
+    """A gel with both fits: the seconds' interval comes from both jointly (tau refitted as
+    the swelling parameters move), and is narrower than the two added as if independent,
+    since the dose time and the kinetics half-time move together with the dry size."""
+    from solver.fit.synthetic import synthetic_swelling
+    from solver.gel import HHT
+
+    d = synthetic_swelling(HHT, scale=41.27, seed=3)
+    sw = env / "s.csv"
+    sw.write_text("temperature_K,radius\n" + "".join(
+        f"{t:.4f},{y:.5f}\n" for t, y in zip(d.temperature, d.size, strict=True)))
+    assert main(["fit", "swelling", str(sw), "--save", "both", "--json"]) == 0
+    capsys.readouterr()
+    csv = _kinetics_csv(env / "k.csv", SLOWER * timescale(DRY_UM, 310.0).seconds)
+    assert main(["fit", "kinetics", str(csv), "--gel", "both", "--t-start", "300", "--t-end",
+                 "310", "--dry-radius-um", str(DRY_UM), "--save", "both", "--json"]) == 0
+    capsys.readouterr()
+    ans = plan_dose(DoseRequest("both", 300.0, 310.0, dose_fraction=0.5, dry_radius_um=DRY_UM))
+    iv = ans.parameter_interval
+    assert iv["method"] == "delta, joint" and "jointly" in iv["note"]
+    lo, hi = iv["seconds"]
+    assert lo < ans.seconds < hi
+    rec_kin = json.loads((env / "gels" / "both.json").read_text())["kinetics"]["fit"]
+    d_lo, d_hi = rec_kin["diffusivity_interval_cm2_s"]
+    added = np.hypot(iv["relative_half_width"], 0.5 * np.log(d_hi / d_lo))
+    assert iv["seconds_relative_half_width"] < added
