@@ -78,6 +78,10 @@ class SwellingFitRequest(_In):
         "chi-square under the stated noise) or 'temperature' (the paper's residual)")
     dry_size: float | None = Field(
         None, gt=0, description="a measured dry size in the data's unit: fixes the scale")
+    dose_jump: list[float] | None = Field(
+        None, min_length=2, max_length=2, description="[T_start, T_end] in K: also state the "
+        "dose time of this jump under both objectives, flagged when they disagree")
+    dose_fraction: float = Field(0.8, gt=0, lt=1, description="the dose of dose_jump")
 
 
 class KineticsFitRequest(_In):

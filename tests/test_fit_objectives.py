@@ -123,3 +123,18 @@ def test_dose_time_interval_coverage_over_50_seeds() -> None:
     # is not met, so only the lower bound (no under-coverage) is asserted
     assert hits / n >= 0.90, hits
     assert np.isfinite(true_t)
+
+
+def test_http_swelling_fit_states_the_dose_under_both_objectives(data, tmp_path,
+                                                                  monkeypatch) -> None:
+    from api.fit_schemas import SwellingFitRequest
+    from api.routers.fit import _swelling
+
+    monkeypatch.setenv("THERMOGEL_GELS", str(tmp_path / "gels"))
+    body = SwellingFitRequest(temperature_K=data.temperature.tolist(),
+                              radius=data.size.tolist(), dose_jump=[304.0, 308.0],
+                              objective="orthogonal")
+    rep = _swelling(None, body)
+    dj = rep["dose_time_by_objective"]
+    assert dj["orthogonal"]["time"] > 0 and "temperature" in dj and "disagree" in dj
+    assert rep["objective"] == "orthogonal" and rep["not_pinned"]
