@@ -197,6 +197,10 @@ class GelsResponse(_Out):
     """Every preset gel."""
 
     gels: list[GelPreset] = Field(description="the presets (ANB, HHT)")
+    fitted: list[dict[str, Any]] = Field(
+        default_factory=list, description="the stored fitted gels (thermogel fit ... --save "
+        "NAME): name, gel parameters, folds, every fitted parameter with its 95% interval, "
+        "and the timescale a kinetics fit pinned (null: uncalibrated)")
 
 
 # ----------------------------------------------------------------------------- physics
@@ -456,6 +460,12 @@ class DoseTimeResponse(_Out):
     seconds: float | None = Field(None, description="actuation time in s (with a bead size)")
     timescale_seconds: float | None = Field(None, description="tau in s (eq. timescale)")
     timescale_formula: str = Field(description="how tau was computed")
+    timescale_uncertainty: dict[str, Any] | None = Field(
+        None, description="the seconds' uncertainty: uncalibrated, the range over the "
+                          "timescale constants (one to two orders of magnitude) and how to "
+                          "pin it (a kinetics fit); calibrated, the kinetics fit's interval")
+    parameter_interval: dict[str, Any] | None = Field(
+        None, description="a stored fitted gel's 95% interval of the time from its fit")
     start_radius: float = Field(description="radius at T_start, dry radii")
     final_radius: float = Field(description="radius after the dose, dry radii")
     final_radius_um: float | None = Field(None, description="radius after the dose in um")

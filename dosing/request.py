@@ -17,7 +17,7 @@ from solver.equilibrium import equilibrium, nearest_stable
 from solver.errors import ParameterError, require_finite_positive
 from solver.gel import Gel, Permeability, check_temperature
 
-from .gel_store import lookup
+from .gel_store import calibrated_constants, lookup
 from .scenario import DIRECT_ELL_RANGE, TRUTH, SolverSettings
 from .units import PhysicalConstants, stored_volume, timescale, ul_to_volume, volume_to_ul
 
@@ -143,7 +143,7 @@ def _resolve_scenario(req: Any) -> tuple[Jump, float | None]:
     """Validate and normalise the fields a dose and a schedule request share (in place)."""
     gel = resolve_gel(req.gel)
     object.__setattr__(req, "gel", gel)
-    object.__setattr__(req, "constants", _constants(req.constants))
+    object.__setattr__(req, "constants", calibrated_constants(gel, _constants(req.constants)))
     object.__setattr__(req, "settings", _settings(req.settings))
     jump = resolve_jump(gel, req.t_start, req.t_end, req.branch)
     object.__setattr__(req, "jump", jump)

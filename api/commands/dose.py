@@ -161,6 +161,14 @@ def run(args: argparse.Namespace) -> int:
         print(f"  expels {ans.expelled_volume_ul:.4g} uL of {ans.stored_volume_ul:.4g} uL "
               f"stored; final radius {ans.final_radius_um:.4g} um")
     print(wrap(ans.timescale_formula))
+    if ans.timescale_uncertainty and ans.seconds is not None:
+        tu = ans.timescale_uncertainty
+        lo, hi = tu["seconds_range"]
+        print(wrap(("calibrated" if tu["calibrated"] else "UNCALIBRATED")
+                   + f" seconds: {lo:.3g}-{hi:.3g} s over "
+                   + ("the kinetics fit's 95% interval of D" if tu["calibrated"] else
+                      f"the timescale constants' range (a factor {tu['factor']:.3g}); "
+                      + tu["how_to_pin"])))
     print(f"  error estimate {ans.error_estimate:.1%}:")
     print(wrap(ans.error_explanation))
     print_uncertainty(ans.uncertainty)

@@ -16,6 +16,7 @@ const SAVED_KEY = "thermogel.gels";
 for (const p of GEL_PARAMS) LABELS[`gel_${p}`] = p === "omega" ? "Omega" : p.toUpperCase();
 LABELS.gel_name = "gel name";
 let presets = {}; // preset name -> its parameters (from /v1/gels)
+let fittedGels = {}; // stored fitted gel name -> its parameters (from /v1/gels, on the server)
 let bounds = {};
 let requestCount = 0; // requests this page sent to /v1 (shown in the page state)
 let pollTimer = null;
@@ -571,6 +572,7 @@ function gelOptions(selected) {
     sel.appendChild(o);
   };
   for (const [name, p] of Object.entries(presets)) add(name, name, p.folds);
+  for (const [name, p] of Object.entries(fittedGels)) add(name, `${name} (fitted)`, p.folds);
   for (const name of Object.keys(savedGels())) add(`saved:${name}`, `${name} (saved)`);
   if (selected) sel.value = selected;
 }
@@ -644,6 +646,10 @@ async function init() {
   const gels = await (await fetch("/v1/gels")).json();
   for (const g of gels.gels) {
     presets[g.gel.name] = { gel: g.gel,
+      folds: g.folds.map((x) => `${x.kind} at ${fmt(x.temperature, 5)} K`).join(", ") };
+  }
+  for (const g of gels.fitted || []) {
+    fittedGels[g.name] = { gel: g.gel, timescale: g.timescale,
       folds: g.folds.map((x) => `${x.kind} at ${fmt(x.temperature, 5)} K`).join(", ") };
   }
   gelOptions("ANB");
