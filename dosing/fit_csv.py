@@ -247,10 +247,7 @@ def read_table(source: str | Path, first: str, sizes: tuple[str, ...]) -> Table:
         conv, u = _unit_factor(n, units[j], col)
         x = np.array(raw[n], dtype=float)
         if n == "temperature" and conv is None:
-            if np.nanmin(x) > 200.0:
-                conv, u = (lambda v: v), "K"
-            else:
-                conv, u = (lambda v: v + 273.15), "degC"
+            conv, u = _unit_factor(n, "K" if np.nanmin(x) > 200.0 else "degC", col)
             notes.append(f"temperature without a unit read as {u} (values "
                          f"{np.nanmin(x):.4g}-{np.nanmax(x):.4g})")
         cols[n] = np.asarray(conv(x), dtype=float)
