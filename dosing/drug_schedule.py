@@ -31,6 +31,7 @@ from .drug import (
     DrugRuns,
     DrugScenario,
     StatedTruth,
+    carried_by_fluid,
     drug_settings,
     leak_time,
     runs_for,
@@ -181,15 +182,18 @@ def _reading(run: _Runner, rel: Any, durations: Sequence[float]) -> dict[str, An
     """What each heating delivers (drug, its squeezed part, fluid) and each rest leaks."""
     req = run.req
     win = run.windows(durations)
-    a3 = rel.radius**3
     import numpy as np
+
+    a3 = rel.radius**3
 
     def at(arr: Any, t: float) -> float:
         return float(np.interp(t, rel.t, arr))
 
     scale = req.start_radius**3 - 1.0
     drug = [at(rel.released_fraction, e) - at(rel.released_fraction, s) for s, e in win]
-    squeezed = [at(rel.advected_fraction, e) - at(rel.advected_fraction, s) for s, e in win]
+    sq = rel.squeezed_fraction if np.size(rel.squeezed_fraction) == np.size(rel.t) \
+        else rel.advected_fraction  # the D0 = 0 twin's release (grid-independent)
+    squeezed = [at(sq, e) - at(sq, s) for s, e in win]
     fluid = [(at(a3, s) - at(a3, e)) / scale for s, e in win]
     leaks = [at(rel.released_fraction, win[k + 1][0]) - at(rel.released_fraction, win[k][1])
              for k in range(len(win) - 1)]
@@ -336,7 +340,7 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
     dry = req.bead_dry_radius_um
     tau = timescale(dry, req.t_end, req.constants).seconds if dry is not None else None
     warnings: list[str] = []
-    if solute.diffusivity == 0.0:
+    if carried_by_fluid(solute):
         model, rows = hold_schedule(planner, req.fluid_schedule())
         hold = [row.to_dict() for row in rows]
         model = f"{model} (D0 = 0: drug = fluid on one heating)"
@@ -387,7 +391,12 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
             f"N = {s.n}, interfacial length {s.interfacial_length:g}, with the drug on its "
             "cells): during each rest the bead leaks drug by diffusion and takes up drug-free "
             "medium, which dilutes the fluid the next heating expels. The corrected times "
-            f"meet each drug dose within {req.tolerance:.0%} on the same solver.")
+            f"meet each drug dose within {req.tolerance:.0%} on the same solver. A heating's "
+            "squeezed part is the release of the same mechanics with D0 = 0, the diffused "
+            "part the rest. " + req.drug.mesh_note(req.start_radius, req.constants)
+            + f" D0 = {d0:.3g} cm^2/s at T_end ({req.drug.reference_temperature_k:g} K "
+            "reference, Stokes-Einstein with water's viscosity). The permeability does not "
+            "depend on temperature at fixed porosity (k0 as given).")
     if "front" in model and s.regularized and not s.direct:
         note += (" With D0 = 0 the hold times are the front model's sharp-interface limit "
                  "(ell -> 0) while the protocol runs use the ladder's coarsest ell, whose front "
