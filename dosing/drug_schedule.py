@@ -204,6 +204,7 @@ def _reading(run: _Runner, rel: Any, durations: Sequence[float]) -> dict[str, An
            "delivered_fractions": drug, "relative_errors": [
                g / f - 1.0 for g, f in zip(drug, req.fractions, strict=False)],
            "squeezed_fractions": squeezed,
+           "peclet_numbers": [rel.peclet(s, e) for s, e in win],
            "diffused_fractions": [d - s for d, s in zip(drug, squeezed, strict=True)],
            "fluid_fractions": fluid,
            "drug_per_fluid": [d / f if f > 0 else None for d, f in zip(drug, fluid,

@@ -137,22 +137,25 @@ def test_anb_drug_schedule_without_diffusion_dilutes(planner) -> None:
 
 @pytest.mark.slow
 def test_anb_drug_schedule_of_a_protein(planner) -> None:
+    # Issue 28: the protein passes the swollen gel (r_s / xi = 0.41) and is held by the
+    # collapsed shell, so a rest at T_start, not a heating, lets most of it out: measured on
+    # 200 cells, a 0.02 heating releases 0.35 and the 0.5 rest after it 0.65 of the load.
     req = DrugScheduleRequest("ANB", 302, 308, PROTEIN, doses=[0.3] * 3, rests=[0.5, 0.5],
                               dry_radius_um=50, settings=SETTINGS)
     ans = plan_drug_schedule(planner, req)
-    cor = _check(ans, [0.3] * 3)
+    assert not ans.corrected["met"]
+    assert any("rest 1 leaks" in w for w in ans.warnings)
+    check = ans.protocol_check
+    assert check["rest_leak_fractions"][0] > 0.3  # more than a dose leaks in the first rest
+    assert sum(check["delivered_fractions"]) + sum(check["rest_leak_fractions"]) + \
+        check["in_gel_after"] == pytest.approx(1.0, abs=1e-9)
     # the same schedule into 1 uL of medium (1000 bead volumes: nearly a sink)
     finite = DrugScheduleRequest("ANB", 302, 308, DrugModel(**{**PROTEIN.to_dict(),
                                                                 "release_volume_ul": 1.0}),
                                  doses=[0.3] * 3, rests=[0.5, 0.5], dry_radius_um=50,
                                  settings=SETTINGS, correct=False)
     conc = plan_drug_schedule(planner, finite).protocol_check["medium_concentration_ug_per_ul"]
-    assert len(conc) == 3 and 0.3 / 1.01 < conc[0] < 0.3 and np.all(np.diff(conc) > 0)
-    leaks = cor["rest_leak_fractions"]
-    assert leaks[0] > 0.03  # the re-swelling edge lets it out during the first rest
-    assert any("rest 1 leaks" in w for w in ans.warnings)  # more than a tenth of the dose
-    assert sum(cor["delivered_fractions"]) + sum(leaks) + cor["in_gel_after"] == \
-        pytest.approx(1.0, abs=1e-9)
+    assert len(conc) == 3 and 0.3 / 1.01 < conc[0] < 0.3 * 1.01 and np.all(np.diff(conc) >= 0)
 
 
 @pytest.mark.slow

@@ -16,7 +16,7 @@ BALANCE = 1e-10
 
 
 def test_published_hindrance_laws() -> None:
-    # Ogston, Preston & Wells 1973 (Amsden 1998, eq. 2): D/D0 = exp(-sqrt(v) (1 + r_s/r_f))
+    # Ogston, Preston & Wells 1973 (as reviewed by Amsden 1998): D/D0 = exp(-sqrt(v) (1 + r_s/r_f))
     for v, ratio in ((0.09, 3.0), (0.5, 0.2), (0.7, 5.0)):
         og = Hindrance("ogston", fiber=ratio)
         assert og.factor(1.0 - v) == pytest.approx(math.exp(-math.sqrt(v) * (1 + ratio)),

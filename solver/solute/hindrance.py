@@ -23,10 +23,11 @@ Diffusion, D = D0 f (``Hindrance.law``):
   f = (1 - r_s / xi) exp(-Y v / (1 - v)); 0 once the mesh is smaller than the solute.
   Y ~ 1 (the ratio of the solute's critical volume to the free volume of water).
 - ``"ogston"``: the obstruction law of Ogston, Preston & Wells, Proc. R. Soc. Lond. A 333
-  (1973) 297, in the form reviewed by Amsden (Macromolecules 31 (1998) 8382, eq. 2):
+  (1973) 297, in the form reviewed by Amsden (Macromolecules 31 (1998) 8382):
   f = exp(-sqrt(v) (1 + r_s / r_f)), r_f the fibre radius (``fiber`` = r_s / r_f).  It
   has no mesh cut-off (random fibres), so it never excludes a solute by size alone.
-- ``"amsden"``: Amsden's obstruction-scaling law (Macromolecules 31 (1998) 8382),
+- ``"amsden"``: Amsden's obstruction law (Polym. Gels Networks 6 (1998) 13; reviewed in
+  Macromolecules 31 (1998) 8382),
   f = exp(-pi ((r_s + r_f) / (xi + 2 r_f))^2), here with the affine local mesh xi above
   (Amsden's own closure is the scaling xi = k_s r_f v^(-1/2); affine is ours, stated).
 - ``"none"``: f = 1 (free diffusion in the pore fluid; the analytic tests).
