@@ -35,7 +35,7 @@ from .request import DoseRequest, Jump, _resolve_scenario
 from .truth import Part, Uncertainty, truth_text
 from .units import PhysicalConstants, timescale, volume_to_ul
 
-MAX_HORIZON = 64.0
+MAX_HORIZON = 32.0  # tau: one simulate step holds at most 100000 samples (2000 per tau)
 SPLIT = ("Squeezed out: the release of the same mechanics with D0 = 0 (the fluid's motion "
          "alone, sieved by the mesh); diffused: the rest (the extra release diffusion makes).")
 DEFAULT_HORIZON = 0.5

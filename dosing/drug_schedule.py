@@ -36,7 +36,7 @@ from .drug import (
     leak_time,
     runs_for,
 )
-from .drug_dose import resolve_wait
+from .drug_dose import MAX_HORIZON, resolve_wait
 from .protocol import heat_cool_protocol, windows
 from .request import Jump, ScheduleRequest, _resolve_scenario, resolve_rests
 from .scenario import SolverSettings, Step
@@ -276,7 +276,12 @@ def _read_off(run: _Runner, durations: list[float], k: int, guess: float
             return rel.time_to_release(target, after=start) - start, 0.0
         except ValueError:
             most = float(rel.released_fraction[-1] - rel.released_at(start))
-            horizon *= 4.0
+            late = float(rel.released_fraction[-1] - rel.released_at(start + horizon / 2.0))
+            # a drug the collapsed shell holds: even the late rate kept to the cap falls short
+            if horizon >= MAX_HORIZON or most + max(late, 0.0) * (
+                    MAX_HORIZON - horizon) / (horizon / 2.0) < target:
+                break
+            horizon = min(4.0 * horizon, MAX_HORIZON)
     return None, most
 
 
@@ -356,11 +361,11 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
                         for c in accumulate(req.fractions)]
                 break
             except ValueError:
-                if horizon > 60:
+                if horizon >= MAX_HORIZON:
                     raise ParameterError("doses", list(req.fractions), f"summing to below "
                                          f"{rel.released_fraction[-1]:.4f}", "one continuous "
                                          "heating releases at most that") from None
-                horizon *= 4.0
+                horizon = min(4.0 * horizon, MAX_HORIZON)
         prev = 0.0
         for d, c, e in zip(req.fractions, accumulate(req.fractions), ends, strict=True):
             hold.append({"dose_fraction": d, "cumulative_fraction": c, "start": prev, "end": e,
