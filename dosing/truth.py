@@ -115,15 +115,20 @@ class Uncertainty:
 
 
 # Without a bead size the truth runs at ell = 1e-4 (scenario.LIMIT_INTERFACIAL_LENGTH) for the
-# sharp limit ell -> 0.  The ell ladder 1e-4 / 5e-5 / 2.5e-5 (issue 28's review) pins it for
-# ANB at 10-90 % and for HHT at >= 50 % (within 0.4 %), not for HHT's small doses.
+# sharp limit ell -> 0.  The ladder ell = 1e-4 / 5e-5 / 2.5e-5 (benchmarks/sharp_limit.py,
+# moving grid, 400 cells; the limit by Richardson extrapolation, the changes going down ~4x
+# per halving) pins it for ANB (10 %: 0.0006175 / 0.0006142 / 0.0006133, +0.7 % at 1e-4;
+# 30 %: +0.06 %) and for HHT doses of 50 % or more, not for HHT's small doses (10 %:
+# 0.000756 / 0.000577 / 0.000530, limit ~0.000515, +47 % at 1e-4; 30 %: 0.0056 / 0.00546 /
+# 0.005446, +2.9 %); 80 %: ANB +0.18 %, HHT -0.34 % (scenario.py).
 SHARP_LIMIT_NOTE = (
-    "ell = 1e-4 is within 0.4 % of the sharp limit for ANB (10-90 %) and for HHT doses of "
-    "50 % or more; it is NOT the limit for HHT's small doses: its 10 % dose is 0.000756 / "
-    "0.000577 / 0.000530 at ell = 1e-4 / 5e-5 / 2.5e-5 (not converged: the answer may be "
-    "43 % or more above the limit) and its 30 % dose 2.8 % off (a small dose's time is "
-    "mostly the front's nucleation delay at the edge, which shrinks with ell); give a bead "
-    "size for the bead's own ell = xi_dry / a_d")
+    "ell = 1e-4 is within 1 % of the sharp limit for ANB (10-90 % doses) and within 0.4 % for "
+    "HHT doses of 50 % or more; it is NOT the limit for HHT's small doses: its 10 % dose is "
+    "0.000756 / 0.000577 / 0.000530 at ell = 1e-4 / 5e-5 / 2.5e-5 (extrapolated limit "
+    "~0.000515: the ell = 1e-4 time is ~47 % above it) and its 30 % dose 2.9 % above "
+    "(a small dose's time is mostly the front's nucleation delay at the edge, which shrinks "
+    "with ell; benchmarks/sharp_limit.py); give a bead size for the bead's own "
+    "ell = xi_dry / a_d")
 
 
 def _pct(x: float) -> str:
