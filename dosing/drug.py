@@ -244,14 +244,20 @@ class DrugModel:
                          partition_law=self.partition_law_used(), convective=self.sieving,
                          mesh_stretch=self.mesh_stretch)
 
-    def load(self, stored_fluid_ul: float | None) -> float | None:
-        """The drug per bead in ug (given, or K c_loading x the stored fluid), or None
-        (K = K0 here; with Ogston's partition the load is K0 K_s(phi0) c_loading x the
-        stored fluid: ``load_ug`` states it exactly)."""
+    def load(self, stored_fluid_ul: float | None, start_radius: float | None = None,
+             constants: PhysicalConstants | None = None) -> float | None:
+        """The drug per bead in ug: given, or K c_loading x the stored fluid with
+        K = K0 K_s(phi0) (the steric part at the start state when ``start_radius`` and
+        ``constants`` are given and the partition law is Ogston's; else K0), or None."""
         if self.load_ug is not None:
             return self.load_ug
         if self.loading_concentration_ug_per_ul is not None and stored_fluid_ul is not None:
-            return self.partition * self.loading_concentration_ug_per_ul * stored_fluid_ul
+            steric = 1.0
+            if start_radius is not None and constants is not None:
+                law = self.hindrance_law(start_radius, 298.15, constants)
+                steric = float(law.steric_partition(1.0 - 1.0 / start_radius**3))
+            return (self.partition * steric * self.loading_concentration_ug_per_ul
+                    * stored_fluid_ul)
         return None
 
     def solute(self, start_radius: float, t_end: float, constants: PhysicalConstants,

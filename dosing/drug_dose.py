@@ -93,7 +93,7 @@ class DrugDoseRequest(DrugRequest):
         drug = DrugModel.from_any(self.drug)
         object.__setattr__(self, "drug", drug)
         stored_ul = None if dry is None else volume_to_ul(jump.stored_volume, dry)
-        load = drug.load(stored_ul)
+        load = drug.load(stored_ul, jump.start_radius, self.constants)
         object.__setattr__(self, "load_ug", load)
         object.__setattr__(self, "fraction", resolve_drug_amount(
             "dose_fraction", self.dose_fraction, "drug_mass_ug", self.drug_mass_ug, load))

@@ -82,7 +82,8 @@ class DrugScheduleRequest(DrugRequest):
         jump, dry = _resolve_scenario(self)
         drug = DrugModel.from_any(self.drug)
         object.__setattr__(self, "drug", drug)
-        load = drug.load(None if dry is None else volume_to_ul(jump.stored_volume, dry))
+        load = drug.load(None if dry is None else volume_to_ul(jump.stored_volume, dry),
+                         jump.start_radius, self.constants)
         object.__setattr__(self, "load_ug", load)
         object.__setattr__(self, "fractions", self._resolve_doses(load))
         object.__setattr__(self, "rests", resolve_rests(self.rests, self.rests_seconds,

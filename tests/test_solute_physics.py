@@ -160,3 +160,16 @@ def test_reswelling_reabsorbs_what_the_partition_predicts() -> None:
         assert got == pytest.approx(want, rel=1e-3)
     # without diffusion the inflowing medium carries c_med, not K c_med: K changes nothing
     assert ends[0.0, 2.0][0] == pytest.approx(ends[0.0, 1.0][0], rel=1e-12)
+
+
+def test_loading_concentration_uses_the_partition_at_the_start_state() -> None:
+    # Ogston's partition (default with a fibre radius): the pore holds K0 K_s(phi0) c_load
+    drug = DrugModel(solute_radius_nm=2.0, fiber_radius_nm=1.0, partition=2.0,
+                     loading_concentration_ug_per_ul=1.0)
+    assert drug.partition_law_used() == "ogston"
+    a0, stored = 2.0, 10.0
+    want = 2.0 * math.exp(-(1.0 / a0**3) * (1.0 + 2.0) ** 2) * 1.0 * stored
+    assert drug.load(stored, a0, PhysicalConstants()) == pytest.approx(want, rel=1e-12)
+    assert drug.load(stored) == pytest.approx(2.0 * stored)  # no start state: K0 only
+    sol = drug.solute(a0, 308.0, PhysicalConstants(), None)
+    assert sol.partition_at(1.0 - 1.0 / a0**3) * stored == pytest.approx(want, rel=1e-12)
