@@ -60,6 +60,10 @@ def run_drug_dose(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any]) -
              else f" ({ans.leak_time_10pct_seconds:.4g} s)"))
     print(f"  mechanism: {ans.mechanism}; fluid expelled meanwhile {ans.fluid_fraction:.4g} of "
           f"the stored fluid; D_eff = {ans.effective_diffusivity_cm2_s:.3g} cm^2/s")
+    if ans.split:
+        print(wrap(f"  {ans.split}"))
+    if ans.mesh:
+        print(wrap(f"  {ans.mesh}"))
     if ans.medium_concentration_ug_per_ul is not None:
         print(f"  release medium concentration {ans.medium_concentration_ug_per_ul:.4g} ug/uL")
     print(wrap(f"truth of the drug runs: {ans.truth}"))
