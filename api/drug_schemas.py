@@ -12,6 +12,9 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from dosing.drug import REFERENCE_TEMPERATURE_K
+from solver.limits import T_MAX, T_MIN
+
 from .outputs import Out as _Out
 from .outputs import UncertaintyOut
 
@@ -48,7 +51,8 @@ class DrugIn(_StrictIn):
         "overriding for the drug the gel's dry mesh (constants.mesh_length_nm, the "
         "interfacial length's); unset: the gel's mesh, affine in the local stretch")
     reference_temperature_k: float = Field(
-        298.15, ge=273.15, le=373.15, description="temperature at which diffusivity_cm2_s is "
+        REFERENCE_TEMPERATURE_K, ge=T_MIN, le=T_MAX,
+        description="temperature at which diffusivity_cm2_s is "
         "given, K (default 25 degC); carried to t_end by Stokes-Einstein with water's "
         "viscosity")
     sieving: bool = Field(True, description="convective sieving of the expelled fluid's "

@@ -44,6 +44,7 @@ import numpy as np
 
 from solver.errors import ParameterError, SolverError
 from solver.gel import Gel
+from solver.limits import T_MAX, T_MIN
 from solver.solute import Hindrance, ReleaseResult, Solute, crank_sphere
 
 from .cache import ValidationCache
@@ -56,7 +57,8 @@ SAMPLES_PER_TAU = 2000
 MIN_SAMPLES = 200
 D_RANGE_CM2_S = (0.0, 1e-3)
 HINDRANCE_LAWS = ("free-volume", "ogston", "amsden", "none")
-T_REF_RANGE = (273.15, 373.15)
+T_REF_RANGE = (T_MIN, T_MAX)  # solver.limits
+REFERENCE_TEMPERATURE_K = 298.15  # 25 degC: where D0 is given unless stated
 DRUG_ARRAYS = ("t", "radius", "released_fraction", "advected_fraction", "expelled_fraction",
                "in_gel_fraction", "medium_concentration", "temperature", "profile_t",
                "profiles", "profile_radii", "squeezed_fraction")
@@ -101,7 +103,7 @@ class DrugModel:
     release_volume_ul: float | None = None
     load_ug: float | None = None
     loading_concentration_ug_per_ul: float | None = None
-    reference_temperature_k: float = 298.15
+    reference_temperature_k: float = REFERENCE_TEMPERATURE_K
     sieving: bool = True
     partition_law: str | None = None
     mesh_stretch: str = "smallest"
