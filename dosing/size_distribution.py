@@ -218,7 +218,9 @@ class SizeDistribution:
                 mu = math.log(self.mean_um) - 0.5 * sig**2
             if self.weighting == "volume":
                 mu -= 3.0 * sig**2  # Hatch-Choate: volume -> number
-            return _LognormalLaw(mu + math.log(s), sig)
+                return _LognormalLaw(mu + math.log(s), sig)
+            exact = None if self.mean_um is None else self.mean_um * s
+            return _LognormalLaw(mu + math.log(s), sig, exact)
         sd = self.sd_um if self.sd_um is not None else self.cv * self.mean_um
         return _NormalLaw(self.mean_um * s, sd * s, self.weighting == "volume")
 
@@ -314,8 +316,8 @@ class _LognormalLaw(_Continuous):
     """ln R ~ N(mu, sig) (number-weighted); z the volume-weighted law's standard normal
     variable, ln R = mu + 3 sig^2 + sig z (Hatch-Choate)."""
 
-    def __init__(self, mu: float, sig: float) -> None:
-        self.mu, self.sig = mu, sig
+    def __init__(self, mu: float, sig: float, mean: float | None = None) -> None:
+        self.mu, self.sig, self._mean = mu, sig, mean
         self.zlo, self.zhi = -Z_SPAN, Z_SPAN
 
     @property
@@ -332,11 +334,11 @@ class _LognormalLaw(_Continuous):
         return np.exp(-0.5 * np.asarray(z) ** 2)
 
     def mean(self) -> float:
-        return math.exp(self.mu + 0.5 * self.sig**2)
+        return self._mean if self._mean is not None else math.exp(self.mu + 0.5 * self.sig**2)
 
     def cdf(self, r: Any) -> Any:
         if self.degenerate:
-            return np.where(np.asarray(r) >= math.exp(self.mu), 1.0, 0.0)
+            return np.where(np.asarray(r) >= self.mean(), 1.0, 0.0)
         from scipy.special import ndtr
 
         return ndtr((np.log(r) - self.mu) / self.sig)
@@ -345,7 +347,7 @@ class _LognormalLaw(_Continuous):
         from scipy.special import ndtri
 
         return np.exp(self.mu + self.sig * ndtri(p)) if self.sig > 0 else (
-            np.full(np.shape(p), math.exp(self.mu)))
+            np.full(np.shape(p), self.mean()))
 
     def rvs(self, n: int, rng: np.random.Generator) -> np.ndarray:
         return np.exp(self.mu + self.sig * rng.standard_normal(n))
@@ -353,7 +355,7 @@ class _LognormalLaw(_Continuous):
     def nodes(self, n: int, cuts: tuple[float, ...] = ()) -> tuple[np.ndarray, np.ndarray]:
         """Split Gauss-Legendre in ln R (``nodes_between``), or the single size."""
         if self.degenerate:
-            return np.array([math.exp(self.mu)]), np.ones(1)
+            return np.array([self.mean()]), np.ones(1)
         return self.nodes_between(n, cuts)
 
     def hermite(self, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -599,8 +601,9 @@ def request_sizes(req: Any) -> None:
         d = d.with_mean(micrometres(size, own))
     else:
         mean = d.number_mean_um()
-        if size is not None and not math.isclose(micrometres(size, own), mean, rel_tol=1e-9):
+        if size is None:
+            object.__setattr__(req, own, mean)
+        elif not math.isclose(micrometres(size, own), mean, rel_tol=1e-9):
             raise ParameterError(own, size, f"None or the size_distribution's number-weighted "
                                  f"mean {mean:.6g} um")
-        object.__setattr__(req, own, mean)
     object.__setattr__(req, "size_distribution", d)
