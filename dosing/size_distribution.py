@@ -253,20 +253,20 @@ class SizeDistribution:
     def describe(self) -> str:
         """The distribution in words."""
         w, st = self.weighting, self.state
-        m = "diameter" if self.measure == "diameter" else "radius"
+        m = "diameters" if self.measure == "diameter" else "radii"
         if self.kind == "table":
             n = len(self.sizes_um)
-            return (f"a measured table of {n} {st} {m}s"
+            return (f"a measured table of {n} {st} {m}"
                     + ("" if self.counts is None else " with counts")
                     + f" ({w}-weighted)")
         if self.kind == "lognormal":
             if self.median_um is not None:
-                return (f"a {w}-weighted lognormal of {st} {m}s, median {self.median_um:.4g} um,"
+                return (f"a {w}-weighted lognormal of {st} {m}, median {self.median_um:.4g} um,"
                         f" geometric SD {self.gsd:.4g}")
-            return (f"a {w}-weighted lognormal of {st} {m}s, mean {self.mean_um:.4g} um, "
+            return (f"a {w}-weighted lognormal of {st} {m}, mean {self.mean_um:.4g} um, "
                     f"CV {self.cv:.3g}")
         sd = self.sd_um if self.sd_um is not None else self.cv * self.mean_um
-        return (f"a {w}-weighted normal of {st} {m}s, mean {self.mean_um:.4g} um, SD "
+        return (f"a {w}-weighted normal of {st} {m}, mean {self.mean_um:.4g} um, SD "
                 f"{sd:.4g} um (truncated to > {NORMAL_CUT:g} x mean)")
 
 
@@ -540,7 +540,7 @@ def read_sizes_csv(source: str, field_name: str = f"{F}.sizes_um",
     radii in um) and an optional second column of counts.  ``spec`` sets ``weighting``,
     ``state`` (and ``measure`` for a headerless file)."""
     text = source
-    if "\n" not in source and "," not in source:
+    if "\n" not in source:  # a path (CSV text has at least one line break)
         try:
             with open(source, encoding="utf-8-sig") as fh:
                 text = fh.read()
