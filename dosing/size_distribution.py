@@ -341,7 +341,8 @@ class _LognormalLaw(_Continuous):
             return np.where(np.asarray(r) >= self.mean(), 1.0, 0.0)
         from scipy.special import ndtr
 
-        return ndtr((np.log(r) - self.mu) / self.sig)
+        with np.errstate(divide="ignore"):
+            return ndtr((np.log(r) - self.mu) / self.sig)
 
     def ppf(self, p: Any) -> Any:
         from scipy.special import ndtri

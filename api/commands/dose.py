@@ -171,6 +171,9 @@ def print_batch(b: Any) -> None:
           f"the 10th-90th percentile bead's own time {p10:.4g}-{p90:.4g}{unit}")
     q = b.quadrature
     print(f"  quadrature: {q.rule}; {q.nodes} nodes, error {q.error:.1e}")
+    for part in (b.uncertainty or {}).values():
+        if isinstance(part, dict) and "text" in part:
+            print(wrap(part["text"]))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -210,9 +213,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {draw_validation(ans.to_dict(), args.plot)}", file=sys.stderr)
     batch = None
     if dist is not None:
-        from dosing.batch import batch_answer
+        from dosing.batch_truth import plan_batch
 
-        batch = batch_answer(req)
+        batch = plan_batch(req, validate=args.validate, cache_path=args.cache)
     if args.json:
         print_json(ans.to_dict() if batch is None else {**ans.to_dict(),
                                                         "batch": batch.to_dict()})
