@@ -151,3 +151,16 @@ def test_release_curves_reach_the_dose_at_the_dose_time() -> None:
     assert np.all(np.diff(v[:-1]) >= -1e-12) and v[0] == 0.0
     p10, p90 = np.array(c["size_classes"]["p10"]), np.array(c["size_classes"]["p90"])
     assert np.all(p10[:-1] >= p90[:-1] - 1e-12)  # small beads release first
+
+
+def test_design_map_and_the_tolerated_spread() -> None:
+    from dosing.batch import design_map, tolerated_cv, with_cv
+
+    base = _req(0.8)
+    m = design_map(base, [0.0, 0.1, 0.2], [0.3, 0.8])
+    d = np.array(m["delay"])
+    assert np.all(d[:, 0] == 0.0) and np.all(np.diff(d, axis=1) > 0)
+    assert d[1, 2] == batch_answer(_req(0.8, cv=0.2)).delay  # the map is the answers
+    c = tolerated_cv(base, 0.1)
+    assert batch_answer(with_cv(base, c)).delay == pytest.approx(0.1, abs=1e-6)
+    assert 0.1 < c < 0.2  # CV 0.1 delays the 80 % dose 5.6 %, CV 0.2 24 %
