@@ -122,6 +122,17 @@ class BatchRelease:
         def g(t: float) -> float:
             return self(t) - fraction
 
+        # the tabulated F is within 1e-7 of the curve s_f came from: widen the bracket
+        # until it holds (never more than a few steps)
+        for _ in range(60):
+            if g(lo) <= 0.0:
+                break
+            lo *= 0.9
+        for _ in range(60):
+            if g(hi) >= 0.0:
+                break
+            hi *= 1.1
+
         if guess is not None and lo < guess < hi:
             a, b = max(lo, 0.98 * guess), min(hi, 1.02 * guess)
             if g(a) < 0.0 < g(b):
