@@ -71,6 +71,14 @@ def test_cli_refuses_an_empty_or_negative_table(capsys, tmp_path) -> None:
         assert "--sizes" in capsys.readouterr().err
 
 
+def test_cli_refuses_a_batch_with_a_drug(capsys, tmp_path) -> None:
+    # a batch's shared finite medium is not built: refused, not answered as one bead
+    assert main([*ARGS, "--dry-radius-um", "50", "--size-cv", "0.2",
+                 "--drug-diffusivity-cm2-s", "1e-7", "--cache",
+                 str(tmp_path / "c.sqlite")]) == 2
+    assert "--size-cv" in capsys.readouterr().err
+
+
 @pytest.fixture
 def anyio_backend() -> str:
     return "asyncio"
@@ -103,6 +111,9 @@ async def test_http_size_distribution_matches_python(tmp_path) -> None:
             r = await raw.post("/v1/dose-time", json={**body, "size_distribution": {
                 "kind": "table", "sizes_um": [50.0, -1.0]}})
             assert r.status_code == 422 and "sizes_um" in r.text
+            r = await raw.post("/v1/dose-time", json={**body, "drug": {
+                "diffusivity_cm2_s": 1e-7}})
+            assert r.status_code == 422 and "size_distribution" in r.text
     finally:
         planner.close()
         planner.jobs.executor.shutdown(wait=True)
