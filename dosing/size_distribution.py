@@ -190,11 +190,12 @@ class SizeDistribution:
         if self.kind == "table" or self.median_um is not None:
             raise ParameterError(f"{F}.mean_um", mean_um, "only for a lognormal or normal "
                                  "given by its CV")
+        if self.weighting != "number":
+            raise ParameterError(f"{F}.weighting", self.weighting, "'number' without mean_um "
+                                 "(the request's bead size is the number-weighted mean); give "
+                                 "mean_um for a volume-weighted law")
         d = self.to_dict()
-        d.update(mean_um=mean_um, weighting="number")
-        if self.sd_um is not None:  # keep the CV, not the SD, of a weighting changed here
-            d["sd_um"] = None
-            d["cv"] = self.sd_um / self.mean_um if self.mean_um else None
+        d.update(mean_um=mean_um)
         return SizeDistribution.from_dict(d)
 
     def number_mean_um(self) -> float:

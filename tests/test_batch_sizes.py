@@ -138,6 +138,16 @@ def test_batch_request_refusals(kw, field) -> None:
     assert e.value.field == field
 
 
+def test_a_spread_without_a_size_takes_the_request_size() -> None:
+    r = DoseRequest(**JUMP, dose_fraction=0.5, dry_radius_um=50.0,
+                    size_distribution={"kind": "normal", "sd_um": 10.0})
+    assert r.size_distribution.mean_um == 50.0 and r.size_distribution.sd_um == 10.0
+    with pytest.raises(ParameterError) as e:  # the request's size is a number-weighted mean
+        DoseRequest(**JUMP, dose_fraction=0.5, dry_radius_um=50.0,
+                    size_distribution={"cv": 0.2, "weighting": "volume"})
+    assert e.value.field == "size_distribution.weighting"
+
+
 def test_a_size_on_both_must_agree() -> None:
     ok = DoseRequest(**JUMP, dose_fraction=0.5, dry_radius_um=50.0,
                      size_distribution={"mean_um": 50.0, "cv": 0.2})
