@@ -12,13 +12,16 @@ The batch's dose time solves
 
 on Gauss-Legendre panels split at the band edges (F jumps there) and at the front model's
 kink, with 32 and 64 nodes per panel (their gap is the quadrature error).  Each part of the
-uncertainty is the same sum on the other runs: numerical (every band's n / 2 run),
-interfacial length (every band's xi_lo and xi_hi runs), model form (the delayed-transition
-lattice for every bead).  A bead's ell differs from its band's by at most the band's
-half-width in ln R (a factor ~1.3 at CV 0.3 with 3 bands), inside the mesh length's range
-(a factor 2 either way), so the band's approximation is bounded by the interfacial-length
-part.  Beads past the end of their band's run (the smallest: their own time is shorter
-than the run's need) take the run's last release, which they have all but reached.
+uncertainty is the same sum on the other runs: numerical (the n / 2 runs), interfacial
+length (the xi_lo and xi_hi runs), model form (the delayed-transition lattice for every
+bead); by default only the central band runs the check and interfacial-length runs and the
+other bands take its relative change (their truth curves stretched in time by it: the
+parts vary little with the band), ``every_band=True`` runs them in every band.  A bead's
+ell differs from its band's by at most the band's half-width in ln R (a factor ~1.3 at
+CV 0.3 with 3 bands), inside the mesh length's range (a factor 2 either way), so the band's
+approximation is bounded by the interfacial-length part.  Beads past the end of their
+band's run (the smallest: their own time is shorter than the run's need) take the run's
+last release, which they have all but reached.
 """
 
 from __future__ import annotations
@@ -119,9 +122,12 @@ class BandRelease:
                             rtol=1e-11))
 
 
-def validated_batch(planner: Any, req: DoseRequest, n_bands: int = BANDS) -> BatchAnswer:
+def validated_batch(planner: Any, req: DoseRequest, n_bands: int = BANDS,
+                    every_band: bool = False) -> BatchAnswer:
     """The batch's answer from the truth per interfacial-length band, with the three-part
-    uncertainty and the quadrature error (blocking: runs what the cache lacks)."""
+    uncertainty and the quadrature error (blocking: runs what the cache lacks).
+    ``every_band``: the check and interfacial-length runs in every band (else in the
+    central band, its relative change carried to the others: fewer runs)."""
     ans = batch_answer(req)
     sizes = batch_sizes(req)
     edges, reps = band_edges(sizes, n_bands)
@@ -139,7 +145,8 @@ def validated_batch(planner: Any, req: DoseRequest, n_bands: int = BANDS) -> Bat
     guess = ans.time
     needs = REACH * guess / rho_lower
     for _ in range(4):  # until every band's run covers its smallest central bead
-        runs, delayed = _band_runs(planner, breqs, target, needs, a0)
+        runs, delayed = _band_runs(planner, breqs, target, needs, a0, every_band,
+                                   req.fraction)
         t_of = {}
         for k, curves in runs.items():
             rel = BandRelease(sizes, edges, curves, kink)
@@ -155,13 +162,15 @@ def validated_batch(planner: Any, req: DoseRequest, n_bands: int = BANDS) -> Bat
     num = abs(t_of["check"][-1] - t_truth) / t_truth
     ell_times = [t_of["ell_lo"][-1], t_of["ell_hi"][-1]]
     ell = max(abs(x - t_truth) / t_truth for x in ell_times)
+    where = ("" if every_band or len(reps) == 1 else
+             " (run in the central band, its relative change carried to the others)")
     unc: dict[str, Any] = {
         "numerical": {"relative": num, "text": (
-            f"numerical: {num:.2g}, the batch's time on every band's n / 2 run "
+            f"numerical: {num:.2g}, the batch's time on the n / 2 runs{where} "
             f"({t_of['check'][-1]:.5g}) against n ({t_truth:.5g})")},
         "interfacial_length_range": {"relative": ell, "text": (
-            f"interfacial length: {ell:.2g}, the batch's time with every band at xi_lo and "
-            f"xi_hi ({ell_times[0]:.5g}, {ell_times[1]:.5g}); it also bounds the bands' "
+            f"interfacial length: {ell:.2g}, the batch's time at xi_lo and xi_hi{where} "
+            f"({ell_times[0]:.5g}, {ell_times[1]:.5g}); it also bounds the bands' "
             "approximation of each bead's own ell")},
         "quadrature": {"relative": quad, "text": (
             f"quadrature: {quad:.2g}, {PANEL_NODES[0]} against {PANEL_NODES[1]} Gauss-Legendre "
@@ -208,29 +217,62 @@ def validated_batch(planner: Any, req: DoseRequest, n_bands: int = BANDS) -> Bat
                    note=note, uncertainty=unc, model="truth-bands")
 
 
+def _roles(breq: DoseRequest, scs: list[Any], trajs: list[Any]) -> tuple[dict[str, Any], Any]:
+    """The runs of one band by role ('truth', 'check', 'ell_lo', 'ell_hi'), and its finest
+    model-form run (None when not among them)."""
+    by: dict[str, Any] = {}
+    delayed = None
+    for sc, t in zip(scs, trajs, strict=True):
+        if isinstance(t, BaseException):
+            raise t
+        k = role(breq.settings, sc.settings)
+        if k == "ell_range":
+            k = ("ell_lo" if sc.settings.interfacial_length
+                 < breq.settings.interfacial_length else "ell_hi")
+        if k == "model_form":
+            if sc.settings == delayed_settings(breq.settings)[-1]:
+                delayed = t
+            continue
+        by[k] = t
+    return by, delayed
+
+
 def _band_runs(planner: Any, breqs: list[DoseRequest], target: float, needs: np.ndarray,
-               a0: float) -> tuple[dict[str, list[Any]], Any]:
-    """Per role, every band's release curve; and the finest model-form run (shared)."""
-    runs: dict[str, list[Any]] = {"truth": [], "check": [], "ell_lo": [], "ell_hi": []}
+               a0: float, every_band: bool,
+               fraction: float) -> tuple[dict[str, list[Any]], Any]:
+    """Per role, every band's release curve; and the finest model-form run (shared, run to
+    the smallest beads' need).  Without ``every_band`` only the central band runs the check
+    and interfacial-length runs; the other bands take its relative change of the dose time
+    (their truth curve stretched in time by it)."""
+    roles = ("truth", "check", "ell_lo", "ell_hi")
+    c = len(breqs) // 2
+    curves: list[dict[str, Any]] = []
     delayed: Any = None
-    for breq, need in zip(breqs, needs, strict=True):
+    for b, (breq, need) in enumerate(zip(breqs, needs, strict=True)):
         scs = planner.scenarios(breq)
-        trajs = planner._trajectories(scs, target, float(need))
-        by: dict[str, Any] = {}
-        for sc, t in zip(scs, trajs, strict=True):
-            if isinstance(t, BaseException):
-                raise t
-            k = role(breq.settings, sc.settings)
-            if k == "ell_range":
-                k = ("ell_lo" if sc.settings.interfacial_length
-                     < breq.settings.interfacial_length else "ell_hi")
-            if k == "model_form":
-                if sc.settings == delayed_settings(breq.settings)[-1]:
-                    delayed = t
-                continue
-            by[k] = t
-        for k in runs:
-            runs[k].append(_release(by.get(k, by["truth"]), a0))
+        mf = [sc for sc in scs if not sc.settings.regularized]
+        own = [sc for sc in scs if sc.settings.regularized]
+        if not (every_band or b == c):
+            own = own[:1]  # the truth run alone
+        by, _ = _roles(breq, own, planner._trajectories(own, target, float(need)))
+        if b == c and mf:
+            _, delayed = _roles(breq, mf, planner._trajectories(mf, target,
+                                                               float(max(needs))))
+        curves.append({k: _release(t, a0) for k, t in by.items()})
+    central = curves[c]
+
+    def own_time(curve: tuple[np.ndarray, np.ndarray]) -> float:
+        return float(np.interp(fraction, curve[1], curve[0]))
+
+    runs: dict[str, list[Any]] = {k: [] for k in roles}
+    for cur in curves:
+        for k in roles:
+            if k in cur:
+                runs[k].append(cur[k])
+            else:
+                ratio = own_time(central.get(k, central["truth"])) / own_time(central["truth"])
+                s_, f_ = cur["truth"]
+                runs[k].append((s_ * ratio, f_))
     return runs, delayed
 
 

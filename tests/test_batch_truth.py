@@ -31,10 +31,11 @@ def _rate(ell: float, n: int) -> float:
     return RATES["moving"] / (1.0 + ELL_C * ell**ELL_ORDER) / (1.0 + MOVING_C / n)
 
 
-def test_bands_follow_each_beads_own_ell(planner) -> None:
+@pytest.mark.parametrize("every_band", [False, True])
+def test_bands_follow_each_beads_own_ell(planner, every_band) -> None:
     req = DoseRequest(**JUMP, dose_fraction=0.5, dry_radius_um=10.0,
                       size_distribution={"cv": 0.3})
-    b = validated_batch(planner, req)
+    b = validated_batch(planner, req, every_band=every_band)
     sizes = req.size_distribution.resolve(req.start_radius)
     edges, reps = band_edges(sizes)
     assert len(reps) == 3 and np.all(np.diff(reps) > 0)
