@@ -299,6 +299,78 @@ class ConstantsIn(RequestModel):
         return v
 
 
+class SizeDistributionIn(RequestModel):
+    """A batch of beads (dosing.size_distribution; docs/batch.md): a lognormal by mean_um
+    and cv (or median_um and gsd), a normal by mean_um and cv (or sd_um; truncated to > 1 %
+    of the mean), or a measured table of sizes_um (with counts or not); number- or
+    volume-weighted; dry or swollen (at T_start) sizes; radii or diameters.  Without a
+    size, the request's dry_radius_um (swollen_radius_um) is the number-weighted mean."""
+
+    kind: Literal["lognormal", "normal", "table"] = Field(
+        "lognormal", description="the law: 'lognormal' (default), 'normal' or 'table'")
+    mean_um: float | None = Field(None, gt=0.0, le=1.0e6, examples=[50.0],
+                                  description="mean size in um (lognormal, normal)")
+    cv: float | None = Field(None, ge=0.0, le=2.0, examples=[0.2],
+                             description="coefficient of variation, 0 <= CV <= 2")
+    median_um: float | None = Field(None, gt=0.0, le=1.0e6,
+                                    description="median size in um (lognormal, with gsd)")
+    gsd: float | None = Field(None, ge=1.0, le=10.0,
+                              description="geometric standard deviation >= 1 (lognormal)")
+    sd_um: float | None = Field(None, ge=0.0, le=1.0e6,
+                                description="standard deviation in um (normal)")
+    sizes_um: list[float] | None = Field(
+        None, min_length=1, max_length=100_000,
+        description="measured sizes in um, > 0 each, 1-100000 rows (table)")
+    counts: list[float] | None = Field(
+        None, min_length=1, max_length=100_000,
+        description="beads (or, volume-weighted, volume fractions) per size, >= 0 (table; "
+                    "default one per row)")
+    weighting: Literal["number", "volume"] = Field(
+        "number", description="'number' (default) or 'volume'-weighted sizes")
+    state: Literal["dry", "swollen"] = Field(
+        "dry", description="'dry' (default) sizes or 'swollen' at T_start")
+    measure: Literal["radius", "diameter"] = Field(
+        "radius", description="'radius' (default) or 'diameter'")
+
+
+class QuadratureOut(_Out):
+    """The quadrature over sizes of a batch's answer."""
+
+    rule: str = Field(description="the rule, in words")
+    nodes: int = Field(description="the nodes needed (in all)")
+    error: float = Field(description="relative change of the dose time from the previous "
+                                     "rung (0: an exact sum)")
+    converged: bool = Field(description="whether the change fell below the tolerance")
+    table: list[tuple[int, float]] = Field(description="(nodes, dose time) per rung")
+
+
+class BatchOut(_Out):
+    """A batch's dose (dosing.batch.BatchAnswer): times in the reference (number-weighted
+    mean) bead's tau and in seconds."""
+
+    distribution: dict[str, Any] = Field(description="the size distribution as resolved")
+    description: str = Field(description="the distribution in words")
+    model: str = Field(description="the model of the one dimensionless trajectory")
+    dose_fraction: float = Field(description="dose / the batch's stored fluid")
+    reference_dry_radius_um: float = Field(
+        description="the number-weighted mean dry radius (the reference bead), um")
+    time: float = Field(description="the batch's dose time, dimensionless (reference tau)")
+    seconds: float | None = Field(None, description="the batch's dose time in s")
+    timescale_seconds: float | None = Field(None, description="the reference bead's tau, s")
+    mean_bead_time: float = Field(description="the reference bead's own dose time")
+    mean_bead_seconds: float | None = Field(None, description="... in s")
+    delay: float = Field(description="batch time / reference bead's time - 1")
+    fraction_delivered: float = Field(
+        description="fraction of the beads (by number) that have delivered their own dose "
+                    "by the batch's dose time")
+    percentile_radii_um: list[float] = Field(description="10th, 50th, 90th percentile dry "
+                                                         "radius (by number), um")
+    percentile_times: list[float] = Field(description="their own dose times, dimensionless")
+    percentile_seconds: list[float] | None = Field(None, description="... in s")
+    quadrature: QuadratureOut = Field(description="the quadrature over sizes")
+    note: str = Field(description="the batch's answer in words")
+
+
 class DoseTimeRequest(RequestModel):
     """How long to hold a bead at T_end to release a dose.
 
@@ -338,6 +410,10 @@ class DoseTimeRequest(RequestModel):
     validation_method: Method = method_field()
     interfacial_length: float | None = interfacial_length_field()
     drug: DrugIn | None = Field(None, description="a drug in the pore fluid: doses are drug")
+    size_distribution: SizeDistributionIn | None = Field(
+        None, description="a batch of beads: the answer adds 'batch' (its dose time, the "
+                          "fraction of beads delivered, the 10th-90th percentile bead; "
+                          "docs/batch.md); dose_fraction only")
     validate_full: bool = Field(
         False, alias="validate",
         description="also queue a full-solver validation of this dose (poll "
@@ -487,6 +563,9 @@ class DoseTimeResponse(_Out):
         None, description="with validate: id of the queued validation, poll "
                           "/v1/validations/{id}")
     validation_url: str | None = Field(None, description="with validate: path to poll")
+    batch: BatchOut | None = Field(
+        None, description="with a size_distribution: the batch's dose (the fields above are "
+                          "its number-weighted mean bead's)")
 
 
 class ValidationResponse(_Out):

@@ -191,7 +191,9 @@ def to_dose_request(body: s.DoseTimeRequest) -> DoseRequest:
         dry_radius_um=body.dry_radius_um, swollen_radius_um=body.swollen_radius_um,
         constants=_constants(body.constants), branch=body.branch,
         settings=SolverSettings(interfacial_length=body.interfacial_length,
-                                method=body.validation_method))
+                                method=body.validation_method),
+        size_distribution=None if body.size_distribution is None
+        else body.size_distribution.model_dump(exclude_none=True))
 
 
 def to_schedule_request(body: s.ScheduleRequest) -> ScheduleRequest:
@@ -224,11 +226,19 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest) -> dict[str, Any] | Acc
     one planner call (:meth:`dosing.Planner.answer`).  A dose with a drug is answered by
     :mod:`api.drug_service`."""
     if body.drug is not None:
+        if body.size_distribution is not None:
+            raise ParameterError("size_distribution", "a batch", "null with a drug (a "
+                                 "batch's drug dose is not built yet)")
         return drug_service.dose_answer(planner, body, to_gel)
-    out = planner.answer(to_dose_request(body), validate=body.validate_full)
+    req = to_dose_request(body)
+    out = planner.answer(req, validate=body.validate_full)
     if isinstance(out, Pending):
         return Accepted(out.validation_id, DOSE_PENDING_NOTE)
     answer = {"status": "answered", **out.answer.to_dict()}
+    if req.size_distribution is not None:  # a batch (issue 26)
+        from dosing.batch import batch_answer
+
+        answer["batch"] = batch_answer(req).to_dict()
     if out.validation_id is not None:
         answer.update(validation_id=out.validation_id,
                       validation_url=validation_url(out.validation_id))

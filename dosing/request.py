@@ -243,6 +243,7 @@ class DoseRequest:
     constants: PhysicalConstants | dict[str, Any] | None = None
     branch: str | None = None
     settings: SolverSettings | dict[str, Any] | None = None
+    size_distribution: Any = None  # a batch (dosing.size_distribution; dosing.batch answers)
     jump: Jump = field(init=False, repr=False, compare=False)
     bead_dry_radius_um: float | None = field(init=False, repr=False, compare=False)
     interfacial_range: tuple[float, float] | None = field(init=False, repr=False,
@@ -250,6 +251,9 @@ class DoseRequest:
     fraction: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        from .size_distribution import request_sizes
+
+        request_sizes(self)  # a batch: its number-weighted mean is the bead size
         jump, dry = _resolve_scenario(self)
         object.__setattr__(self, "fraction", self._resolve_fraction(jump, dry))
 
@@ -303,7 +307,9 @@ class DoseRequest:
         return {"gel": self.gel.to_dict(), "t_start": self.t_start, "t_end": self.t_end,
                 "branch": self.branch, "dose_fraction": self.fraction,
                 "dry_radius_um": self.bead_dry_radius_um,
-                "constants": self.constants.to_dict(), "settings": self.settings.to_dict()}
+                "constants": self.constants.to_dict(), "settings": self.settings.to_dict(),
+                **({} if self.size_distribution is None
+                   else {"size_distribution": self.size_distribution.to_dict()})}
 
 
 def resolve_rests(rests: Sequence[float] | None, rests_seconds: Sequence[float] | None,
