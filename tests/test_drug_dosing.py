@@ -254,3 +254,21 @@ def test_drug_answer_states_its_uncertainty_in_three_parts(planner) -> None:
     for part in ("interfacial_length_range", "model_form"):
         assert getattr(again, part).relative == getattr(fluid.uncertainty, part).relative
         assert "from the fluid validation" in getattr(again, part).text
+
+
+@pytest.mark.slow
+def test_release_at_its_defaults_meets_the_validated_dose(tmp_path, capsys) -> None:
+    """One truth for every way in (issue 21): a D0 = 0 ``thermogel release`` at its defaults
+    (the planner's truth: moving grid at the bead's own ell), run to the validated 80 %
+    time, releases 0.800 +- 0.004 of the load (drug = fluid exactly when D0 = 0)."""
+    from dosing import DoseRequest, plan_dose
+
+    ans = plan_dose(DoseRequest("ANB", 302.0, 308.0, dose_fraction=0.8, dry_radius_um=50.0),
+                    validate=True, cache_path=str(tmp_path / "c.sqlite"))
+    t80 = ans.validation.time
+    assert main(["release", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--until",
+                 repr(t80), "--dry-radius-um", "50", "--drug-diffusivity-cm2-s", "0",
+                 "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["grid"] == "moving" and out["interfacial_length"] == ans.interfacial_length
+    assert out["released_fraction"][-1] == pytest.approx(0.8, abs=0.004)

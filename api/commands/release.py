@@ -29,11 +29,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     c.add_argument("--polymer-volume-m3", type=float, default=3.0e-25, help="Omega_p in m^3")
     c.add_argument("--k0-m2", type=float, default=8.0e-20, help="k0 in m^2")
     add_drug_options(p, required=True)
-    p.add_argument("--n", type=int, default=400, help="Lagrangian cells (default 400)")
-    p.add_argument("--interfacial-length", type=float, default=0.01, metavar="L",
-                   help="interfacial length ell in dry radii (default 0.01; 0: the paper's "
-                        "model on the Lagrangian grid)")
-    p.add_argument("--rtol", type=float, default=1e-5, help="mechanics tolerance (1e-5)")
+    p.add_argument("--n", type=int, default=None,
+                   help="cells (default: the planner's truth, 400 on the moving grid)")
+    p.add_argument("--interfacial-length", type=float, default=None, metavar="L",
+                   help="interfacial length ell in dry radii (default: the planner's truth, "
+                        "the bead's own xi_dry / a_d with --dry-radius-um, else 1e-4 for "
+                        "the sharp limit; 0: the paper's model on the Lagrangian grid)")
+    p.add_argument("--mesh-length-nm", type=float, default=None, metavar="XI",
+                   help="the gel's dry mesh length xi_dry in nm (default 4)")
+    p.add_argument("--rtol", type=float, default=None,
+                   help="mechanics tolerance (default: the truth's, 1e-5)")
     p.add_argument("--samples", type=int, default=2000,
                    help="mechanics samples the drug is integrated on (default 2000)")
     p.add_argument("--out", default=None, help="save the release result to this .npz file")
@@ -46,6 +51,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Simulate, then print (or JSON) the release."""
+    from dosing.drug import drug_settings
+    from dosing.request import bead_settings
+    from dosing.scenario import SolverSettings
     from dosing.units import PhysicalConstants, timescale
     from solver.equilibrium import equilibrium
     from solver.gel import check_temperature
@@ -56,15 +64,22 @@ def run(args: argparse.Namespace) -> int:
     gel = gel_from_args(args)
     temps = [T for _, T in args.protocol] if args.protocol else [args.t_end]
     t_ref = check_temperature(max(temps), "t_end")
-    constants = PhysicalConstants(args.viscosity, args.polymer_volume_m3, args.k0_m2)
+    constants = PhysicalConstants(args.viscosity, args.polymer_volume_m3, args.k0_m2,
+                                  **({} if args.mesh_length_nm is None
+                                     else {"mesh_length_nm": args.mesh_length_nm}))
+    # the planner's truth (one set of defaults): the drug dose's mechanics at the bead's ell
+    settings = drug_settings(bead_settings(
+        SolverSettings(n=args.n, rtol=args.rtol, interfacial_length=args.interfacial_length),
+        constants, args.dry_radius_um)[0])
     branch = args.branch or ("swollen" if temps[0] >= args.t_start else "shrunken")
     a0 = equilibrium(gel, check_temperature(args.t_start, "t_start"), branch).stretch
     drug = drug_from_args(args, always=True)
     solute = drug.solute(a0, t_ref, constants, args.dry_radius_um)
     res, rel = simulate_release(gel, args.t_start, solute, t_end=args.t_end, until=args.until,
-                                protocol=args.protocol, n=args.n, branch=args.branch,
-                                interfacial_length=args.interfacial_length, rtol=args.rtol,
-                                samples=args.samples)
+                                protocol=args.protocol, branch=args.branch,
+                                grid=settings.grid, n=settings.n,
+                                interfacial_length=settings.interfacial_length,
+                                rtol=settings.rtol, samples=args.samples)
     tau = timescale(args.dry_radius_um, t_ref, constants) if args.dry_radius_um else None
     d_gel = constants.diffusivity(t_ref) * 1e4
     d_eff = rel.effective_diffusivity * d_gel
@@ -83,6 +98,8 @@ def run(args: argparse.Namespace) -> int:
            "drug_diffusivity_cm2_s": drug.d0_cm2_s(t_ref, constants),
            "gel_diffusivity_cm2_s": d_gel, "timescale_seconds": tau and tau.seconds,
            "solute": solute.to_dict(), "mass_balance_error": rel.mass_balance_error,
+           "grid": settings.grid, "n": settings.n,
+           "interfacial_length": settings.interfacial_length,
            "mechanics_seconds": res.diagnostics.get("wall_time"),
            "solute_seconds": rel.diagnostics.get("wall_time")}
     if args.release_volume_ul is not None:
