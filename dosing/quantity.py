@@ -12,6 +12,7 @@ nothing for it.
 from __future__ import annotations
 
 import math
+import re
 from functools import lru_cache
 from typing import Any
 
@@ -50,10 +51,27 @@ def registry() -> Any:
     return ureg
 
 
+MAX_TEXT = 100  # characters of one quantity string
+# pint evaluates powers exactly: "9**9**9 s" would never finish.  A unit may carry a small
+# power ("m^2", "cm**2/s"); a number or a bracket raised to a power, a power of more than
+# one digit or a chained power is refused before pint sees it.
+_BAD_POWER = re.compile(r"(?:[\d.)\]]\s*(?:\*\*|\^))|(?:(?:\*\*|\^)\s*[-+]?\s*"
+                        r"(?:\d\s*\d|\d\s*(?:\*\*|\^)|[^\d\s+-]))")
+
+
 def _normalise(text: str) -> str:
     for old, new in _ALIASES:
         text = text.replace(old, new)
     return text.strip()
+
+
+def _safe(text: str, value: Any, field: str) -> str:
+    if len(text) > MAX_TEXT:
+        raise ParameterError(field, value[:40] + "...", f"at most {MAX_TEXT} characters")
+    if _BAD_POWER.search(text):
+        raise ParameterError(field, value, "a number and a unit; powers only on units, "
+                             "of one digit (e.g. 'cm^2/s')")
+    return text
 
 
 def _is_quantity(value: Any) -> bool:
@@ -66,7 +84,7 @@ def parse(value: Any, field: str) -> Any:
         return value
     if isinstance(value, str):
         ureg = registry()
-        text = _normalise(value)
+        text = _safe(_normalise(value), value, field)
         if not text:
             raise ParameterError(field, value, "a number or a quantity with a unit")
         try:

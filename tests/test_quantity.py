@@ -32,3 +32,18 @@ def test_refused_naming_the_field(bad):
 
 def test_plain_numbers_need_no_pint():
     assert math.isclose(kelvin(300.5), 300.5)
+
+
+@pytest.mark.parametrize("bad", ["9**9**9 s", "2**99 um", "(3)^9 s", "m**22", "9 ^ 9 s",
+                                 "1" * 101])
+def test_powers_that_would_hang_pint_are_refused(bad):
+    """pint evaluates powers exactly: a number raised to a power, a long or chained power
+    and over-long strings are refused at once, naming the field."""
+    with pytest.raises(ParameterError) as err:
+        to_unit(bad, "time", "protocol[0].duration")
+    assert err.value.field == "protocol[0].duration"
+
+
+def test_unit_powers_still_read():
+    assert to_unit("1e-7 cm^2/s", "diffusivity", "d0") == pytest.approx(1e-7)
+    assert to_unit("3 m ** 2", "permeability", "k0") == pytest.approx(3.0)
