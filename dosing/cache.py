@@ -181,6 +181,21 @@ class ValidationCache:
             return None
         return Trajectory.from_npz(bytes(row[1]), json.loads(row[0]))
 
+    def get_many(self, keys: list[str] | tuple[str, ...]
+                 ) -> dict[str, tuple[dict[str, Any], bytes]]:
+        """(metadata, npz blob) of every stored key among ``keys``, in one query (absent
+        keys are left out; no decoding: the caller decodes what it keeps)."""
+        out: dict[str, tuple[dict[str, Any], bytes]] = {}
+        con = self._con()
+        uniq = list(dict.fromkeys(keys))
+        for i in range(0, len(uniq), 500):  # SQLite's bound-parameter limit
+            part = uniq[i:i + 500]
+            marks = ",".join("?" * len(part))
+            for key, meta, data in con.execute(
+                    f"SELECT key, meta, data FROM trajectories WHERE key IN ({marks})", part):
+                out[key] = (json.loads(meta), bytes(data))
+        return out
+
     def get_raw(self, key: str) -> tuple[dict[str, Any], bytes] | None:
         """(metadata, npz blob) as stored, or None (no decoding)."""
         row = self._con().execute("SELECT meta, data FROM trajectories WHERE key = ?",
