@@ -107,15 +107,23 @@ class Planner:
                  max_pending: int = 64, horizon: float = DEFAULT_HORIZON,
                  lease_seconds: float = DEFAULT_LEASE_SECONDS,
                  solver: Solver | None = None) -> None:
-        if solver is None:  # imported here: the solver's kernels load only when a planner runs
-            from solver.full import simulate as solver
-        self.solver = solver
+        self._solver = solver  # None: solver.full.simulate, imported when a run is queued
         self.cache = ValidationCache(cache_path)
         self.jobs = JobRunner(executor, max_pending, leases=self.cache,
                               lease_seconds=lease_seconds)
         self.horizon = float(horizon)
         self._mem: OrderedDict[str, Trajectory] = OrderedDict()
         self._mem_lock = threading.Lock()
+
+    @property
+    def solver(self) -> Solver:
+        """What runs a scenario (default ``solver.full.simulate``, imported on first use: a
+        front-model answer loads no kernels)."""
+        if self._solver is None:
+            from solver.full import simulate
+
+            self._solver = simulate
+        return self._solver
 
     # ------------------------------------------------------------------ trajectories
     def scenarios(self, req: DoseRequest | ScheduleRequest) -> list[Scenario]:
