@@ -153,14 +153,10 @@ class Planner:
                     need_time: float = 0.0) -> list[Trajectory | None]:
         """:meth:`cached` of several runs with one cache query (for the runs this planner
         does not hold in memory already; only rows found are decoded, once)."""
-        out: list[Trajectory | None] = []
-        ask: list[int] = []
         with self._mem_lock:
-            for i, sc in enumerate(scs):
-                traj = self._mem.get(sc.key())
-                if traj is None or not _covers(traj, sc, need_radius, need_time):
-                    ask.append(i)
-                out.append(traj)
+            out: list[Trajectory | None] = [self._mem.get(sc.key()) for sc in scs]
+        ask = [i for i, (sc, t) in enumerate(zip(scs, out, strict=True))
+               if t is None or not _covers(t, sc, need_radius, need_time)]
         if ask:
             rows = self.cache.get_many([scs[i].key() for i in ask])
             for i in ask:
@@ -175,6 +171,8 @@ class Planner:
                     while len(self._mem) > 64:
                         self._mem.popitem(last=False)
                 out[i] = traj
+        if all(t is None for t in out):
+            return out
         return [t if t is not None and _covers(t, sc, need_radius, need_time) else None
                 for sc, t in zip(scs, out, strict=True)]
 

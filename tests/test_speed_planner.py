@@ -135,3 +135,25 @@ def test_validated_answer_is_the_same_with_stopping_runs(tmp_path: Path) -> None
     assert stopped.model == whole.model == "full"
     assert stopped.time == pytest.approx(whole.time, rel=1e-4)
     assert stopped.error_estimate == pytest.approx(whole.error_estimate, rel=0.05, abs=1e-5)
+
+
+def test_get_many_sees_every_write_after_remembering_absent_keys(tmp_path: Path) -> None:
+    """Absent keys are remembered only while the file is unchanged: a write by this
+    connection, by another thread's, or by another cache object (another process) shows."""
+    import threading
+
+    from dosing.cache import ValidationCache
+
+    path = tmp_path / "c.sqlite"
+    with ValidationCache(path) as cache, ValidationCache(path) as other:
+        keys = ["mine", "thread", "process"]
+        assert cache.get_many(keys) == {}
+        assert cache.get_many(keys) == {}  # remembered, still right
+        cache.put("mine", {"h": 1}, b"1")
+        assert set(cache.get_many(keys)) == {"mine"}
+        th = threading.Thread(target=cache.put, args=("thread", {"h": 2}, b"2"))
+        th.start()
+        th.join()
+        assert set(cache.get_many(keys)) == {"mine", "thread"}
+        other.put("process", {"h": 3}, b"3")
+        assert set(cache.get_many(keys)) == {"mine", "thread", "process"}
