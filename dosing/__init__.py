@@ -9,22 +9,57 @@ given.  Nothing here imports fastapi or matplotlib.
 
 from __future__ import annotations
 
+import importlib
 from concurrent.futures import Executor, ThreadPoolExecutor
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from .answers import Answered, DoseAnswer, ModelChoice, Pending, ValidationReport, ValidationStatus
-from .cache import ValidationCache
-from .jobs import JobRunner, QueueFullError
-from .planner import Planner, UnknownValidationError
-from .request import DoseRequest, ScheduleRequest
-from .scenario import LADDER, PAPER, TRUTH, Scenario, SolverSettings, Trajectory
-from .schedule import ScheduleAnswer
-from .truth import Uncertainty
-from .units import PhysicalConstants, Timescale, timescale, water_viscosity
+if TYPE_CHECKING:
+    from .answers import (
+        Answered,
+        DoseAnswer,
+        ModelChoice,
+        Pending,
+        ValidationReport,
+        ValidationStatus,
+    )
+    from .cache import ValidationCache
+    from .jobs import JobRunner, QueueFullError
+    from .planner import Planner, UnknownValidationError
+    from .request import DoseRequest, ScheduleRequest
+    from .scenario import LADDER, PAPER, TRUTH, Scenario, SolverSettings, Trajectory
+    from .schedule import ScheduleAnswer
+    from .truth import Uncertainty
+    from .units import PhysicalConstants, Timescale, timescale, water_viscosity
+
+# imported on first use (PEP 562): ``import dosing.x`` or a CLI command pays only for the
+# modules it touches
+_LAZY = {
+    **dict.fromkeys(("Answered", "DoseAnswer", "ModelChoice", "Pending", "ValidationReport",
+                     "ValidationStatus"), ".answers"),
+    "ValidationCache": ".cache", "JobRunner": ".jobs", "QueueFullError": ".jobs",
+    "Planner": ".planner", "UnknownValidationError": ".planner",
+    "DoseRequest": ".request", "ScheduleRequest": ".request",
+    **dict.fromkeys(("LADDER", "PAPER", "TRUTH", "Scenario", "SolverSettings", "Trajectory"),
+                    ".scenario"),
+    "ScheduleAnswer": ".schedule", "Uncertainty": ".truth",
+    **dict.fromkeys(("PhysicalConstants", "Timescale", "timescale", "water_viscosity"),
+                    ".units"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
 
 
 def _one_shot(cache_path: str | None, executor: Executor | None, **kw: Any) -> Planner:
     # A one-shot call runs any full-solver work in this process (no pool start-up).
+    from .planner import Planner
+
     return Planner(cache_path=cache_path, executor=executor or ThreadPoolExecutor(2), **kw)
 
 

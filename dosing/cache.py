@@ -181,6 +181,38 @@ class ValidationCache:
             return None
         return Trajectory.from_npz(bytes(row[1]), json.loads(row[0]))
 
+    def get_many(self, keys: list[str] | tuple[str, ...]
+                 ) -> dict[str, tuple[dict[str, Any], bytes]]:
+        """(metadata, npz blob) of every stored key among ``keys``, in one query (absent
+        keys are left out; no decoding: the caller decodes what it keeps).
+
+        Keys found absent are remembered with the file's version (``PRAGMA data_version``,
+        which changes when another connection, thread or process commits, and this
+        connection's own ``total_changes``): while neither has moved, asking for them again
+        costs that one pragma instead of the lookup (a warm answer whose runs are not
+        computed yet)."""
+        out: dict[str, tuple[dict[str, Any], bytes]] = {}
+        con = self._con()
+        uniq = list(dict.fromkeys(keys))
+        version = (con.execute("PRAGMA data_version").fetchone()[0], con.total_changes)
+        absent = getattr(self._local, "absent", None)
+        if absent is not None and absent[0] == version:
+            if absent[1].issuperset(uniq):
+                return out
+        else:
+            absent = (version, set())
+        for i in range(0, len(uniq), 500):  # SQLite's bound-parameter limit
+            part = uniq[i:i + 500]
+            marks = ",".join("?" * len(part))
+            for key, meta, data in con.execute(
+                    f"SELECT key, meta, data FROM trajectories WHERE key IN ({marks})", part):
+                out[key] = (json.loads(meta), bytes(data))
+        absent[1].update(k for k in uniq if k not in out)
+        if len(absent[1]) > 4096:
+            absent = (version, {k for k in uniq if k not in out})
+        self._local.absent = absent
+        return out
+
     def get_raw(self, key: str) -> tuple[dict[str, Any], bytes] | None:
         """(metadata, npz blob) as stored, or None (no decoding)."""
         row = self._con().execute("SELECT meta, data FROM trajectories WHERE key = ?",

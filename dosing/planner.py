@@ -23,15 +23,13 @@ import threading
 import time
 from collections import OrderedDict
 from concurrent.futures import Executor, Future, ThreadPoolExecutor, wait
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from solver.errors import SolverError
-from solver.full import simulate
 from solver.gel import Gel
 
 from .answers import Answered, DoseAnswer, ModelChoice, Pending, ValidationStatus
 from .cache import ValidationCache
-from .fit_uncertainty import attach_parameter_interval
 from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner
 from .model_choice import (
     build_answer,
@@ -40,9 +38,11 @@ from .model_choice import (
 )
 from .request import DoseRequest, ScheduleRequest
 from .scenario import Scenario, Solver, SolverSettings, Trajectory, run_scenario
-from .schedule import ScheduleAnswer, hold_now, plan_schedule_with
 from .truth import delayed_settings, is_model_form_run, range_settings
 from .validation import error_estimate, failure, validation_report
+
+if TYPE_CHECKING:
+    from .schedule import ScheduleAnswer
 
 DEFAULT_HORIZON = 1.0  # first simulated time of a jump (extended x4 when a dose needs more)
 # the moving grid's first horizon: a direct run at the bead's ell costs most after the front
@@ -64,9 +64,25 @@ def validation_scenarios(gel: Gel, t_start: float, t_end: float, branch: str,
                          settings: SolverSettings,
                          ell_range: tuple[float, float] | None = None) -> tuple[Scenario, ...]:
     """A jump's validation runs: the settings' rungs, then, for the direct truth, the
-    interfacial-length runs at ``ell_range`` and the model-form runs (module ``truth``)."""
+    interfacial-length runs at ``ell_range`` and the model-form runs (module ``truth``).
+
+    Memoised per (jump, settings, range): the scenarios are immutable and their keys (a
+    sha256 of canonical JSON) are computed once, so a warm answer builds neither."""
+    return _validation_scenarios(gel, float(t_start), float(t_end), branch, settings,
+                                 settings.auto_length,
+                                 None if ell_range is None else tuple(ell_range))
+
+
+@functools.lru_cache(maxsize=1024)
+def _validation_scenarios(gel: Gel, t_start: float, t_end: float, branch: str,
+                          settings: SolverSettings, auto_length: bool,
+                          ell_range: tuple[float, float] | None) -> tuple[Scenario, ...]:
+    # auto_length is not a field (settings equal without it): keyed apart all the same
     runs = [*settings.rungs(), *range_settings(settings, ell_range), *delayed_settings(settings)]
-    return tuple(Scenario(gel, t_start, t_end, branch=branch, settings=s) for s in runs)
+    scs = tuple(Scenario(gel, t_start, t_end, branch=branch, settings=s) for s in runs)
+    for sc in scs:
+        sc.key()  # computed once, here
+    return scs
 
 
 def request_scenarios(req: DoseRequest | ScheduleRequest) -> tuple[Scenario, ...]:
@@ -89,14 +105,25 @@ class Planner:
 
     def __init__(self, cache_path: str | None = None, executor: Executor | None = None,
                  max_pending: int = 64, horizon: float = DEFAULT_HORIZON,
-                 lease_seconds: float = DEFAULT_LEASE_SECONDS, solver: Solver = simulate) -> None:
-        self.solver = solver
+                 lease_seconds: float = DEFAULT_LEASE_SECONDS,
+                 solver: Solver | None = None) -> None:
+        self._solver = solver  # None: solver.full.simulate, imported when a run is queued
         self.cache = ValidationCache(cache_path)
         self.jobs = JobRunner(executor, max_pending, leases=self.cache,
                               lease_seconds=lease_seconds)
         self.horizon = float(horizon)
         self._mem: OrderedDict[str, Trajectory] = OrderedDict()
         self._mem_lock = threading.Lock()
+
+    @property
+    def solver(self) -> Solver:
+        """What runs a scenario (default ``solver.full.simulate``, imported on first use: a
+        front-model answer loads no kernels)."""
+        if self._solver is None:
+            from solver.full import simulate
+
+            self._solver = simulate
+        return self._solver
 
     # ------------------------------------------------------------------ trajectories
     def scenarios(self, req: DoseRequest | ScheduleRequest) -> list[Scenario]:
@@ -120,6 +147,34 @@ class Planner:
                 while len(self._mem) > 64:
                     self._mem.popitem(last=False)
         return traj if _covers(traj, sc, need_radius, need_time) else None
+
+    def cached_many(self, scs: list[Scenario] | tuple[Scenario, ...],
+                    need_radius: float | None = None,
+                    need_time: float = 0.0) -> list[Trajectory | None]:
+        """:meth:`cached` of several runs with one cache query (for the runs this planner
+        does not hold in memory already; only rows found are decoded, once)."""
+        with self._mem_lock:
+            out: list[Trajectory | None] = [self._mem.get(sc.key()) for sc in scs]
+        ask = [i for i, (sc, t) in enumerate(zip(scs, out, strict=True))
+               if t is None or not _covers(t, sc, need_radius, need_time)]
+        if ask:
+            rows = self.cache.get_many([scs[i].key() for i in ask])
+            for i in ask:
+                key = scs[i].key()
+                raw = rows.get(key)
+                if raw is None:
+                    continue
+                traj = Trajectory.from_npz(raw[1], raw[0])
+                with self._mem_lock:
+                    self._mem[key] = traj
+                    self._mem.move_to_end(key)
+                    while len(self._mem) > 64:
+                        self._mem.popitem(last=False)
+                out[i] = traj
+        if all(t is None for t in out):
+            return out
+        return [t if t is not None and _covers(t, sc, need_radius, need_time) else None
+                for sc, t in zip(scs, out, strict=True)]
 
     def _store(self, fut: Future) -> None:
         meta, blob = fut.result()
@@ -209,7 +264,7 @@ class Planner:
         """(model choice, validation runs, the answer from the cache alone or None)."""
         choice = self.model_answer(req)
         scs = self.scenarios(req)
-        trajs = [self.cached(sc, choice.radius, choice.front_time or 0.0) for sc in scs]
+        trajs = self.cached_many(scs, choice.radius, choice.front_time or 0.0)
         complete = all(t is not None for t in trajs)
         if choice.needs_full and not complete:
             return choice, scs, None
@@ -224,7 +279,7 @@ class Planner:
         if choice.needs_full or validate:
             trajs: list[Any] = self._trajectories(scs, choice.radius, need_time)
         else:
-            trajs = [self.cached(sc, choice.radius, need_time) for sc in scs]
+            trajs = self.cached_many(scs, choice.radius, need_time)
             if any(t is None for t in trajs):
                 trajs = []
         return self._dose(req, choice, scs, trajs)
@@ -243,6 +298,12 @@ class Planner:
         est, explain = error_estimate(choice.model, time, rep, req.fraction, req.gel,
                                       req.settings.method)
         ans = build_answer(req, choice, time, est, explain, rep, scs[0].key())
+        from .gel_store import record_for
+
+        if record_for(req.gel) is None:  # a preset or custom gel: no fit, no interval
+            return ans
+        from .fit_uncertainty import attach_parameter_interval  # scipy.stats: fitted gels only
+
         return attach_parameter_interval(req, ans)
 
     # ------------------------------------------------------------------ validations
@@ -315,11 +376,15 @@ class Planner:
     def schedule(self, req: ScheduleRequest) -> ScheduleAnswer:
         """Plan a multi-dose schedule (hold assumption, protocol check, shooting:
         :func:`dosing.schedule.plan_schedule_with`)."""
+        from .schedule import plan_schedule_with
+
         return plan_schedule_with(self, req)
 
     def schedule_now(self, req: ScheduleRequest) -> ScheduleAnswer | None:
         """The hold schedule when no dose needs a new full-solver run and neither the
         protocol check nor the correction is asked for, else None (queues nothing)."""
+        from .schedule import hold_now
+
         return hold_now(self, req)
 
     def close(self) -> None:

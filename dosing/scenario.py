@@ -25,8 +25,7 @@ from typing import Any
 import numpy as np
 
 from solver.errors import ParameterError, SolverError, require_finite_positive
-from solver.full import GRIDS as _GRID_REGISTRY
-from solver.full import FullResult, simulate
+from solver.full.result import FullResult
 from solver.gel import Gel, check_temperature
 from solver.json_safe import json_safe
 from solver.limits import (
@@ -38,7 +37,10 @@ from solver.limits import (
 )
 
 SCHEMA = 1
-GRIDS = tuple(_GRID_REGISTRY)  # the solver's grid registry (solver.full.grids)
+# the names of the solver's grid registry (solver.full.grids.GRIDS, in its order; written
+# out so that settings and the CLI's options load no kernels: tests/test_speed_imports.py
+# checks that they agree)
+GRIDS = ("eulerian", "lagrangian", "moving")
 INTEGRATORS = ("implicit", "explicit")
 METHODS = ("direct", "ladder")
 N_RANGE = TRUTH_N_RANGE  # the ranges are solver.limits' (one definition)
@@ -289,15 +291,25 @@ without profiles (:meth:`FullResult.without_profiles`), with its cache ``meta``.
 Solver = Callable[..., FullResult]
 """What the planner runs a scenario with: ``solver.full.simulate`` or a stand-in taking its
 arguments (``gel, t_start, protocol=, grid=, n=, integrator=, rtol=, branch=,
-interfacial_length=, max_seconds=``) and returning a :class:`FullResult`."""
+interfacial_length=, max_seconds=``, and ``stop=`` for a jump run that may end at its dose)
+and returning a :class:`FullResult`."""
+
+# a jump's run ends where its radius reaches the dose's (simulate's terminal event): at the
+# dose radius less this relative margin, so that the stored run covers the dose itself
+# (the event's radius is exact to ~1e-8; 1e-6 of the radius moves an 80 % dose time by
+# ~2e-6 relative, far inside every numerical bound)
+STOP_MARGIN = 1e-6
 
 
-def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver) -> FullResult:
-    """One run of ``sc`` (a jump runs for ``horizon``) within ``budget`` s, as stored."""
+def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver,
+              stop: float | None = None) -> FullResult:
+    """One run of ``sc`` (a jump runs for ``horizon``, or until its radius reaches
+    ``stop``) within ``budget`` s, as stored."""
     s = sc.settings
+    more = {} if stop is None else {"stop": stop}
     res = solver(sc.gel, sc.t_start, protocol=sc.steps(horizon), grid=s.grid, n=s.n,
                  integrator=s.integrator, rtol=s.rtol, branch=sc.branch,
-                 interfacial_length=s.interfacial_length, max_seconds=budget)
+                 interfacial_length=s.interfacial_length, max_seconds=budget, **more)
     rec = res.without_profiles()
     if rec.t.size < 2 or not (np.all(np.isfinite(rec.t)) and np.all(np.isfinite(rec.radius))):
         raise SolverError("the full solver returned no finite a(t)", {"scenario": sc.key_dict()})
@@ -307,21 +319,32 @@ def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver) -> Fu
 
 def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: float | None = None,
                  need_time: float = 0.0, max_horizon: float = 64.0, budget: float = RUN_BUDGET_S,
-                 solver: Solver = simulate) -> tuple[dict, bytes]:
+                 solver: Solver | None = None, stop: bool = True) -> tuple[dict, bytes]:
     """Run the full solver for a scenario: plain data in, (metadata, npz blob) out.
 
     A jump is simulated for ``horizon``, extended (x4, up to ``max_horizon``) until a(t)
-    falls to ``need_radius`` and t reaches ``need_time``; each run gets ``budget`` seconds
+    falls to ``need_radius`` and t reaches ``need_time``; with ``stop`` (default) the run
+    ends where a(t) reaches ``need_radius`` (a terminal event: nothing past the dose is
+    computed; a run that stopped before ``need_time`` is run again to it without the
+    event); each run gets ``budget`` seconds
     of wall time, on ``solver`` (the planner's: a module-level function pickles by name).
     Top-level and free of shared state, so process pools and Dask workers can run it.
     """
+    if solver is None:
+        from solver.full import simulate as solver
     sc = Scenario.from_dict(scenario)
     wall = time.perf_counter()
     h = float(horizon)
     runs = 0
+    end = (need_radius * (1.0 - STOP_MARGIN)
+           if stop and sc.protocol is None and need_radius is not None
+           and sc.settings.integrator == "implicit" else None)  # events need the implicit one
     while True:
-        traj = _simulate(sc, max(h, need_time), budget, solver)
+        traj = _simulate(sc, max(h, need_time), budget, solver, end)
         runs += 1
+        if end is not None and traj.status == "stopped" and traj.horizon < need_time:
+            traj = _simulate(sc, need_time, budget, solver)  # the truth's front-time need
+            runs += 1
         if sc.protocol is not None or need_radius is None or traj.radius.min() <= need_radius:
             break
         if h >= max_horizon:

@@ -12,7 +12,7 @@ three parts, each in words and numbers:
   numerical error is the check run's, far below the ell-dependence they measure); matters
   for small doses, whose time is mostly the nucleation delay at the edge;
 * model form: the delayed-transition front law, the ell = 0 Lagrangian lattice at
-  N = 200 / 400 / 800 (N-independent: its N-spread is reported), against the local-equilibrium
+  N = 200 / 400 (N-independent: its N-spread is reported), against the local-equilibrium
   (Maxwell) front of the regularized model (docs/interfacial.md, sec. 10).  Bead-size
   independent, so its runs are cached per gel and jump.
 
@@ -28,7 +28,10 @@ from typing import Any
 
 from .scenario import TRUTH, SolverSettings
 
-DELAYED_NS = (200, 400, 800)  # the ell = 0 lattice's N (its answer: the finest)
+# the ell = 0 lattice's N (its answer: the finest).  N = 800 cost two thirds of a cold
+# validation and moved the ANB 80 % bound by 0.4 % (issue 23), inside the N-spread the
+# answer states; the model form is a ratio of ~1.5 for ANB, ~3 for HHT
+DELAYED_NS = (200, 400)
 DELAYED_RTOL = 1e-5
 
 
@@ -189,7 +192,8 @@ def uncertainty(truth: SolverSettings, runs: list[dict[str, Any]], time: float,
             "Helmers & Herrmann; Novick-Cohen & Pego), gives "
             f"{t_d:.5g} (the ell = 0 Lagrangian lattice, N = "
             f"{'/'.join(str(k) for k, _ in mf)}: {', '.join(f'{t:.5g}' for t in ts)}, "
-            f"N-spread {_pct(spread)}). Which law holds is for experiment to decide "
+            f"N-spread {_pct(spread)}; N = 800 moves it by under 1 %: ANB 80 % 0.4 %). "
+            "Which law holds is for experiment to decide "
             "(docs/interfacial.md, sec. 10); it is not part of the error estimate"))
     else:
         model = Part(None, "model form: the delayed-transition runs (ell = 0 lattice) failed "

@@ -11,6 +11,7 @@ Two truths (``SolverSettings.interfacial_length``):
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -65,7 +66,12 @@ def front_prior(fraction: float, model: str = "front-sharp") -> float:
 
 def has_prior(gel: Gel | None) -> bool:
     """True when the priors were measured on this gel (a preset of PRIOR_GELS)."""
-    return gel is None or any(gel.key() == preset(name).key() for name in PRIOR_GELS)
+    return gel is None or gel.key() in _prior_keys()
+
+
+@functools.cache
+def _prior_keys() -> frozenset[tuple[float, ...]]:
+    return frozenset(preset(name).key() for name in PRIOR_GELS)
 
 
 def _run_entry(sc: Scenario, traj: Trajectory | BaseException | None, start_radius: float,

@@ -4,10 +4,55 @@ Everything here is dimensionless as in Butler & Montenegro-Johnson (lengths by t
 radius, time by tau of eq. timescale, stresses by k_B T / Omega_p); temperatures in K.
 """
 
-from .equilibrium import Equilibrium, Fold, equilibria, equilibrium, equilibrium_curve, folds
+from __future__ import annotations
+
+import importlib
+import sys
+import types
+from typing import TYPE_CHECKING, Any
+
 from .errors import NotApplicableError, ParameterError, SolverError
 from .gel import ANB, HHT, PRESETS, Gel, Permeability, as_gel, check_temperature, preset
-from .phase import JumpClass, classify_jump, coexistence_curve, spinodal_curve
+
+if TYPE_CHECKING:
+    from .equilibrium import (
+        Equilibrium,
+        Fold,
+        equilibria,
+        equilibrium,
+        equilibrium_curve,
+        folds,
+    )
+    from .phase import JumpClass, classify_jump, coexistence_curve, spinodal_curve
+
+# imported on first use (PEP 562): scipy.optimize and numba load only when a caller needs
+# an equilibrium or the phase map, not with ``solver.errors`` or ``solver.gel``
+_LAZY = {**dict.fromkeys(("Equilibrium", "Fold", "equilibria", "equilibrium",
+                          "equilibrium_curve", "folds"), ".equilibrium"),
+         **dict.fromkeys(("JumpClass", "classify_jump", "coexistence_curve",
+                          "spinodal_curve"), ".phase")}
+
+
+class _Package(types.ModuleType):
+    """This package's module type: the import system binds a submodule on its package once
+    loaded, and the function ``equilibrium`` has always shadowed its module here."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name in _LAZY and isinstance(value, types.ModuleType):
+            value = getattr(value, name)
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
 
 __all__ = [
     "ANB", "HHT", "PRESETS", "Equilibrium", "Fold", "Gel", "JumpClass", "NotApplicableError",

@@ -224,7 +224,7 @@ def test_hht_small_doses_have_a_numerical_bound_below_10_percent(real_planner) -
         # the delayed transition comes later (6-9x at these doses) and its N-spread is stated
         # (N-independent at large doses: 1.5 % at 80 %, docs/moving_mesh.md; up to ~9 % here)
         assert u.delayed_transition_ratio > 1.0 and u.delayed_transition_spread is not None
-        assert u.delayed_transition_ns == [200, 400, 800]
+        assert u.delayed_transition_ns == list(DELAYED_NS)
 
 
 def test_sweep_keeps_the_bead_ell_unresolved() -> None:

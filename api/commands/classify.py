@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import argparse
 
-from solver.phase import classify_jump
-
 from .common import add_gel_options, gel_from_args, print_json
 
 
@@ -23,6 +21,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the classification."""
+    from solver.phase import classify_jump
+
     c = classify_jump(gel_from_args(args), args.t_start, args.t_end, args.branch)
     if args.json:
         print_json(c.to_dict())

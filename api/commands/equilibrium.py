@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import argparse
 
-from solver.equilibrium import equilibria, folds
-
 from .common import add_gel_options, gel_from_args, print_json
 
 
@@ -20,6 +18,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the equilibria and the fold temperatures."""
+    from solver.equilibrium import equilibria, folds
+
     gel = gel_from_args(args)
     eqs = equilibria(gel, args.temperature)
     fl = folds(gel)

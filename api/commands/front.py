@@ -5,8 +5,6 @@ from __future__ import annotations
 import argparse
 
 from solver.errors import ParameterError, SolverError
-from solver.front import front_trajectory
-from solver.front.sharp import sharp_front_trajectory
 
 from .common import add_gel_options, gel_from_args, print_json
 
@@ -57,6 +55,9 @@ def _full_start(args: argparse.Namespace, gel: object) -> tuple[float, float, fl
 
 def run(args: argparse.Namespace) -> int:
     """Print the trajectory (JSON: the series t, radius, front, flux and diagnostics)."""
+    from solver.front import front_trajectory
+    from solver.front.sharp import sharp_front_trajectory
+
     gel = gel_from_args(args)
     if not args.paper and args.paper_start:
         raise ParameterError("paper_start", True,

@@ -7,14 +7,33 @@ integrator (RODASP), front tracking and a plain-data result object; ``simulate``
 discretisation as a ``SolverOptions`` (or its fields as keywords).
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from .numba_cache import refresh as _refresh_cache
 
 _refresh_cache()
 
-from .grids import GRIDS  # noqa: E402
-from .moving import MeshOptions  # noqa: E402
-from .options import SolverOptions  # noqa: E402
-from .result import FullResult  # noqa: E402
-from .run import simulate  # noqa: E402
+if TYPE_CHECKING:
+    from .grids import GRIDS
+    from .moving import MeshOptions
+    from .options import SolverOptions
+    from .result import FullResult
+    from .run import simulate
+
+# imported on first use (PEP 562): reading a stored run (``result``) loads no kernels
+_LAZY = {"GRIDS": ".grids", "MeshOptions": ".moving", "SolverOptions": ".options",
+         "FullResult": ".result", "simulate": ".run"}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
 
 __all__ = ["GRIDS", "FullResult", "MeshOptions", "SolverOptions", "simulate"]

@@ -184,6 +184,8 @@ class Rezoner:
         self.remaps = 0
         self._last: tuple[float, np.ndarray] | None = None
         self._raw: tuple[np.ndarray, float] | None = None
+        self._hist: np.ndarray | None = None  # the compiled check's history (rezone.mesh_check)
+        self._scal = np.zeros(4)
 
     def reset(self, y: np.ndarray, geo: np.ndarray) -> None:
         """Stop the nodes where they are and forget the target's history (at a protocol
@@ -194,10 +196,36 @@ class Rezoner:
         ale.set_mesh(geo, geo[0].copy(), np.zeros(n + 1), t)
         self._last = None
         self._raw = None
+        self._scal[:] = 0.0
 
     def __call__(self, y: np.ndarray, geo: np.ndarray) -> bool:
         """Update the mesh motion (and remap y in place when the mesh is off); True when
-        the right-hand side changed (the integrator restarts)."""
+        the right-hand side changed (the integrator restarts).  One compiled call
+        (``rezone.mesh_check``: the target mesh, the remap, the node velocity), the same
+        arithmetic as :meth:`check_python`."""
+        self.checks += 1
+        n = geo.shape[1] - 1
+        t = float(y[n])
+        ale.refresh(geo, t)
+        if self._hist is None or self._hist.shape[1] != n + 1:
+            self._hist = np.zeros((2, n + 1))
+            self._scal[:] = 0.0
+        o = self.opts
+        mesh = np.empty(n + 1)
+        velocity = np.empty(n + 1)
+        off = rezone.mesh_check(
+            y, geo[0].copy(), o.resolution, o.bulk / n, self.ell / o.edge_cells if self.ell
+            > 0.0 else 0.0, self.ell / o.finest if self.ell > 0.0 else 0.0, o.grading,
+            self.ITERATIONS, o.tolerance, self.AGREEMENT, self.HORIZON, self._hist,
+            self._scal, mesh, velocity)
+        if off:
+            self.remaps += 1
+        ale.set_mesh(geo, mesh, velocity, t)
+        return True
+
+    def check_python(self, y: np.ndarray, geo: np.ndarray) -> bool:
+        """:meth:`__call__` step by step in Python (the reference the compiled check is
+        tested against; it keeps its own history)."""
         self.checks += 1
         n = geo.shape[1] - 1
         t = float(y[n])

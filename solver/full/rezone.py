@@ -142,3 +142,75 @@ def offset(nodes, new):
         cell = min(nodes[k] - nodes[k - 1], nodes[k + 1] - nodes[k])
         worst = max(worst, abs(new[k] - nodes[k]) / cell)
     return worst
+
+
+@njit(cache=True)
+def _agree(raw, prev, nodes, agreement):
+    """moving._agree in compiled code: two velocity estimates agree, in cells per time."""
+    n = nodes.size - 1
+    big = 1e-300
+    diff = 0.0
+    for k in range(n + 1):
+        if k == 0:
+            cell = nodes[1] - nodes[0]
+        elif k == n:
+            cell = nodes[n] - nodes[n - 1]
+        else:
+            cell = min(nodes[k] - nodes[k - 1], nodes[k + 1] - nodes[k])
+        big = max(big, abs(raw[k]) / cell)
+        diff = max(diff, abs(raw[k] - prev[k]) / cell)
+    return diff <= agreement * big
+
+
+@njit(cache=True)
+def mesh_check(y, nodes, resolution, h_bulk, h_edge, h_min, grading, iterations, tolerance,
+               agreement, horizon, hist, scal, mesh, velocity):
+    """One check of the moving grid (moving.Rezoner.__call__) in one compiled call.
+
+    ``y`` the state (node radii, then t; remapped in place when the mesh is off),
+    ``nodes`` the current nodes at t.  Writes the mesh to keep (the target when remapped,
+    else ``nodes``) to ``mesh`` and its node velocity to ``velocity``; returns True when
+    it remapped.  ``hist`` (2, n + 1): the last target and the last raw velocity; ``scal``:
+    last check time, has a last target, has a raw velocity, its interval (all kept between
+    calls; zeros: none yet).
+    """
+    n = nodes.size - 1
+    t = y[n]
+    radii = y[:n]
+    new = np.empty(n + 1)
+    nxt = np.empty(n + 1)
+    tmp = np.empty(n)
+    target_nodes(radii, nodes, resolution, h_bulk, h_edge, h_min, grading, new)
+    for _ in range(iterations):  # towards the fixed point, independent of the mesh
+        remap(radii, nodes, new, tmp)
+        target_nodes(tmp, new, resolution, h_bulk, h_edge, h_min, grading, nxt)
+        new[:] = nxt
+    velocity[:] = 0.0
+    off = offset(nodes, new) > tolerance
+    if off:
+        remap(radii, nodes, new, tmp)
+        radii[:] = tmp
+    if scal[1] > 0.0 and t > scal[0]:
+        dt = t - scal[0]
+        raw = (new - hist[0]) / dt
+        # follow the target only while it translates steadily: two successive estimates
+        # agree (a nucleating front makes the target jump, not move)
+        if scal[2] > 0.0 and _agree(raw, hist[1], new, agreement):
+            # the target's mean velocity over the next interval (as long as the last),
+            # extrapolated linearly from the last two intervals' means
+            velocity[:] = raw + (raw - hist[1]) * (2.0 * dt) / (dt + scal[3])
+            base = new if off else nodes
+            worst = -np.inf
+            for k in range(n):
+                worst = max(worst, -(velocity[k + 1] - velocity[k]) / (base[k + 1] - base[k]))
+            worst *= horizon * dt
+            if worst > 0.5:
+                velocity *= 0.5 / worst
+        hist[1] = raw
+        scal[2] = 1.0
+        scal[3] = dt
+    hist[0] = new
+    scal[0] = t
+    scal[1] = 1.0
+    mesh[:] = new if off else nodes
+    return off

@@ -1,0 +1,295 @@
+"""Issue 23's speed figures, in CPU seconds, this tree side by side with other revisions.
+
+Run:  .venv/bin/python -m benchmarks.speed [--before 4aa7d90] [--only help,dose,warm]
+
+Each figure is measured in a fresh interpreter per tree (``PYTHONPATH`` = that tree), in
+CPU seconds (user + system, ``resource.getrusage`` of the children, threads and worker
+processes included), so the machine's other load changes them little; the trees run
+alternately and each figure is the median of ``--repeats``.  ``--before`` names git
+revisions (checked out into temporary worktrees, removed at the end) or existing trees.
+
+Figures (``--only``):
+
+* ``help``: ``thermogel dose --help``;
+* ``dose``: a front-model ``thermogel dose --gel ANB --t-start 302 --t-end 308
+  --fraction 0.8 --dry-radius-um 50`` (numba caches warm, the validation cache fresh);
+* ``warm``: ``Planner.dose`` on a kept planner, milliseconds of CPU per answer (nine
+  front-model requests in turn, 3,000 answers);
+* ``load``: the HTTP service's requests per second (benchmarks/load.py, short: 600
+  requests over 16 connections; wall-clock throughput, so its ratio is what counts);
+* ``validation``: a cold (fresh cache) validation of the ANB 302 -> 308 K 80 % dose of a
+  50 um bead (``Planner.dose(validate=True)``), with its answer, the truth's numerical
+  bound and the model-form lattice, so that the answers can be compared;
+* ``schedule``: a cold three-dose schedule with the protocol check;
+* ``moving``: the moving grid (400 cells, rtol 1e-5) at ell = 1e-3 and 3e-5, ANB 302 ->
+  308 K to t = 0.08: CPU, accepted and rejected steps, remaps, the 80 % dose time.
+
+The first call of each tree compiles or loads its numba kernels and is not counted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PY = sys.executable
+DOSE_ARGS = ["--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction", "0.8",
+             "--dry-radius-um", "50"]
+
+WARM = """
+import json, resource
+from concurrent.futures import ThreadPoolExecutor
+from dosing import DoseRequest, Planner
+p = Planner(cache_path={cache!r}, executor=ThreadPoolExecutor(1))
+reqs = [DoseRequest("ANB", 302, 308, dose_fraction=f, dry_radius_um=r)
+        for f in (0.3, 0.5, 0.8) for r in (20, 50, 100)]
+for r in reqs:
+    p.dose(r)
+def cpu():
+    u = resource.getrusage(resource.RUSAGE_SELF)
+    return u.ru_utime + u.ru_stime
+n = 3000
+t0 = cpu()
+for i in range(n):
+    p.dose(reqs[i % len(reqs)])
+print(json.dumps({{"ms": 1e3 * (cpu() - t0) / n}}))
+p.close()
+"""
+
+KERNELS = """
+from solver.errors import ParameterError
+from solver.full import simulate
+for grid, ell in (("moving", 1e-3), ("lagrangian", 0.0), ("eulerian", 0.0)):
+    try:
+        simulate("ANB", 302, 308, until=1e-3, grid=grid, n=40, interfacial_length=ell)
+    except ParameterError:  # a revision without this grid
+        pass
+"""
+
+VALIDATION = KERNELS + """
+import json, resource
+from concurrent.futures import ThreadPoolExecutor
+from dosing import DoseRequest, Planner
+def cpu():
+    u = resource.getrusage(resource.RUSAGE_SELF)
+    return u.ru_utime + u.ru_stime
+t0 = cpu()
+p = Planner(cache_path={cache!r}, executor=ThreadPoolExecutor(2))
+ans = p.dose(DoseRequest("ANB", 302, 308, dose_fraction=0.8, dry_radius_um=50),
+             validate=True)
+took = cpu() - t0
+v = ans.validation
+u = (v.uncertainty if hasattr(v, "uncertainty") else v.get("uncertainty")) or {{}}
+runs = v.runs if hasattr(v, "runs") else v["runs"]
+print(json.dumps({{"cpu": took, "time": v.time if hasattr(v, "time") else v["time"],
+                  "numerical": (u.get("numerical") or {{}}).get("relative"),
+                  "model_form_ns": u.get("delayed_transition_ns"),
+                  "model_form_times": u.get("delayed_transition_times"),
+                  "model_form_spread": u.get("delayed_transition_spread"),
+                  "runs": [[e["grid"], e["n"], e["interfacial_length"], e.get("time")]
+                           for e in runs]}}))
+p.close()
+"""
+
+SCHEDULE = KERNELS + """
+import json, resource
+from concurrent.futures import ThreadPoolExecutor
+from dosing import Planner, ScheduleRequest
+def cpu():
+    u = resource.getrusage(resource.RUSAGE_SELF)
+    return u.ru_utime + u.ru_stime
+t0 = cpu()
+p = Planner(cache_path={cache!r}, executor=ThreadPoolExecutor(2))
+ans = p.schedule(ScheduleRequest("ANB", 302, 308, doses=[0.2, 0.2, 0.2], rests=[0.05, 0.05],
+                                 check_protocol=True))
+d = ans.to_dict()
+print(json.dumps({{"cpu": cpu() - t0, "times": d.get("actuation_times"),
+                  "checked": (d.get("protocol_check") or {{}}).get("actuation_times")}}))
+p.close()
+"""
+
+MOVING = KERNELS + """
+import json, resource
+from solver.full import simulate
+def cpu():
+    u = resource.getrusage(resource.RUSAGE_SELF)
+    return u.ru_utime + u.ru_stime
+out = {{}}
+for ell in (1e-3, 3e-5):
+    t0 = cpu()
+    res = simulate("ANB", 302, 308, until=0.08, grid="moving", n=400, interfacial_length=ell,
+                   rtol=1e-5)
+    d = res.diagnostics
+    out[f"{{ell:g}}"] = {{"cpu": cpu() - t0, "steps": d["steps"], "rejected": d["rejected"],
+                         "remaps": d.get("remaps"), "t80": res.time_to_radius(1.4749)}}
+print(json.dumps({{"cpu": sum(v["cpu"] for v in out.values()), **out}}))
+"""
+
+
+def cpu_children() -> float:
+    u = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return u.ru_utime + u.ru_stime
+
+
+def run(tree: Path, argv: list[str], env: dict[str, str] | None = None,
+        timeout: float = 900.0) -> tuple[float, str]:
+    """(CPU seconds, stdout) of one child process in ``tree``."""
+    e = dict(os.environ, PYTHONPATH=str(tree), **(env or {}))
+    t0 = cpu_children()
+    done = subprocess.run(argv, cwd=tree, env=e, capture_output=True, text=True,
+                          timeout=timeout)
+    took = cpu_children() - t0
+    if done.returncode != 0:
+        raise RuntimeError(f"{tree}: {' '.join(argv[:4])}... failed:\n{done.stderr[-2000:]}")
+    return took, done.stdout
+
+
+def _json(out: str) -> dict:
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def fig_help(tree: Path, tmp: Path) -> tuple[float, str]:
+    took, _ = run(tree, [PY, "-m", "api.cli", "dose", "--help"])
+    return took, ""
+
+
+def fig_dose(tree: Path, tmp: Path) -> tuple[float, str]:
+    cache = tmp / f"dose-{tree.name}.sqlite"
+    took, out = run(tree, [PY, "-m", "api.cli", "dose", *DOSE_ARGS],
+                    env={"THERMOGEL_CACHE": str(cache)})
+    return took, out.splitlines()[1].strip() if out else ""
+
+
+def fig_warm(tree: Path, tmp: Path) -> tuple[float, str]:
+    _, out = run(tree, [PY, "-c", WARM.format(cache=str(tmp / f"warm-{tree.name}.sqlite"))])
+    return _json(out)["ms"], "ms of CPU per answer"
+
+
+def fig_load(tree: Path, tmp: Path) -> tuple[float, str]:
+    _, out = run(tree, [PY, str(tree / "benchmarks" / "load.py"), "--requests", "600",
+                        "--warmup", "100", "--concurrency", "16", "--json"], timeout=900)
+    res = json.loads(out[out.index("{"):])
+    closed = res.get("closed_loop") or res.get("closed") or res
+    return float(closed["throughput_rps"]), "requests/s (closed loop)"
+
+
+def _fresh(tmp: Path, name: str) -> Path:
+    path = tmp / name
+    for suffix in ("", "-wal", "-shm"):
+        Path(str(path) + suffix).unlink(missing_ok=True)
+    return path
+
+
+def fig_validation(tree: Path, tmp: Path) -> tuple[float, str]:
+    code = VALIDATION.format(cache=str(_fresh(tmp, f"val-{tree.name}.sqlite")))
+    _, out = run(tree, [PY, "-c", code], timeout=1800)
+    res = _json(out)
+    return res["cpu"], json.dumps({k: v for k, v in res.items() if k != "cpu"})
+
+
+def fig_schedule(tree: Path, tmp: Path) -> tuple[float, str]:
+    code = SCHEDULE.format(cache=str(_fresh(tmp, f"sch-{tree.name}.sqlite")))
+    _, out = run(tree, [PY, "-c", code], timeout=1800)
+    res = _json(out)
+    return res["cpu"], json.dumps({k: v for k, v in res.items() if k != "cpu"})
+
+
+def fig_moving(tree: Path, tmp: Path) -> tuple[float, str]:
+    _, out = run(tree, [PY, "-c", MOVING.format()], timeout=1800)
+    res = _json(out)
+    return res["cpu"], json.dumps({k: v for k, v in res.items() if k != "cpu"})
+
+
+FIGURES: dict[str, tuple[Callable[[Path, Path], tuple[float, str]], str, bool]] = {
+    # name: (measure, unit, lower is better)
+    "help": (fig_help, "s CPU", True),
+    "dose": (fig_dose, "s CPU", True),
+    "warm": (fig_warm, "ms CPU", True),
+    "load": (fig_load, "req/s", False),
+    "validation": (fig_validation, "s CPU", True),
+    "schedule": (fig_schedule, "s CPU", True),
+    "moving": (fig_moving, "s CPU", True),
+}
+WARMS = {"dose": True, "help": True}  # figures whose first call per tree is not counted
+
+
+def _tree(spec: str, tmp: Path) -> tuple[Path, bool]:
+    """An existing directory, or a git revision checked out under ``tmp`` (True: made)."""
+    if Path(spec).is_dir():
+        return Path(spec).resolve(), False
+    path = tmp / f"rev-{spec}"
+    subprocess.run(["git", "worktree", "add", "--detach", "-q", str(path), spec], cwd=ROOT,
+                   check=True)
+    return path, True
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Measure the figures asked for in every tree and print them side by side."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--before", action="append", default=None,
+                    help="revision or tree to compare with (repeatable; default 4aa7d90)")
+    ap.add_argument("--only", default="help,dose,warm",
+                    help=f"comma-separated figures among {', '.join(FIGURES)}")
+    ap.add_argument("--repeats", type=int, default=3)
+    args = ap.parse_args(argv)
+    names = [n.strip() for n in args.only.split(",") if n.strip()]
+    bad = [n for n in names if n not in FIGURES]
+    if bad:
+        ap.error(f"unknown figure(s) {bad}; choose among {list(FIGURES)}")
+    with tempfile.TemporaryDirectory() as tmpdir:
+        tmp = Path(tmpdir)
+        made: list[Path] = []
+        trees: list[tuple[str, Path]] = []
+        try:
+            for spec in args.before or ["4aa7d90"]:
+                path, new = _tree(spec, tmp)
+                trees.append((spec, path))
+                if new:
+                    made.append(path)
+            trees.append(("this tree", ROOT))
+            if {"validation", "schedule", "moving"} & set(names):
+                for tree in (t for _, t in trees):  # compile each tree's kernels once
+                    run(tree, [PY, "-c", KERNELS])
+            for name in names:
+                fn, unit, lower = FIGURES[name]
+                reps = 1 if name in ("validation", "schedule", "load", "moving") \
+                    else args.repeats
+                got: dict[Path, list[float]] = {t: [] for _, t in trees}
+                notes: dict[Path, str] = {}
+                for k in range(reps + (1 if name in WARMS else 0)):
+                    for _, tree in trees:
+                        try:
+                            value, note = fn(tree, tmp)
+                        except (RuntimeError, KeyError, ValueError,
+                                subprocess.TimeoutExpired) as exc:
+                            value, note = float("nan"), f"failed: {str(exc)[-300:]}"
+                        if name in WARMS and k == 0:
+                            continue
+                        got[tree].append(value)
+                        notes[tree] = note
+                last = statistics.median(got[ROOT])
+                print(f"{name} ({unit}, median of {reps}):")
+                for label, tree in trees:
+                    med = statistics.median(got[tree])
+                    ratio = med / last if lower else last / med
+                    print(f"  {label:<14} {med:10.4g}   ({ratio:.2f}x this tree's speed)"
+                          f"   {notes[tree][:400]}")
+                sys.stdout.flush()
+        finally:
+            for path in made:
+                subprocess.run(["git", "worktree", "remove", "--force", str(path)], cwd=ROOT,
+                               check=False)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
