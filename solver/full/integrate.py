@@ -285,7 +285,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
         if seg.jump:
             ctrl[0], ctrl[1] = min(ctrl[0], h0), 0.0
         ctrl[3] = 0.0
-        if rezoner is not None:
+        if rezoner is not None and seg.jump:
             rezoner.reset(y, ws.geo)  # a new temperature: the mesh stops until it is re-aimed
         k_out = _emit(out_times, k_out, seg.t0, partial(_copy, y), on_output)
         if ros.crossed(ctrl, y[ia]):  # already there: the event is at the segment's start

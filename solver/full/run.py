@@ -17,7 +17,7 @@ import numpy as np
 from ..equilibrium import equilibrium
 from ..errors import BudgetExceeded, ParameterError, SolverError
 from ..gel import Gel, check_temperature, preset
-from ..heating import UNTIL_LIMIT, Program
+from ..heating import UNTIL_LIMIT, Program, Radius, Released
 from . import front as fronts
 from . import moving
 from .grids import GridSpec, grid_spec
@@ -215,9 +215,13 @@ def _check_saveat(saveat: Any, horizon: float) -> np.ndarray:
     return np.unique(np.minimum(times, horizon))
 
 
-def _check_stop(stop: Any) -> float | None:
+def _check_stop(stop: Any, a0: float | None = None) -> float | None:
+    """The stop radius: a number, or a solver.heating Radius/Released (of start radius a0)."""
     if stop is None:
         return None
+    if isinstance(stop, (Radius, Released)):
+        stop = stop.check("stop")
+        return stop.radius(a0) if a0 is not None else 2.0  # checked again at a0
     try:
         a = float(stop)
     except (TypeError, ValueError):
@@ -245,7 +249,8 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     factor m(T) (docs/heating.md); ``until`` is then the run's horizon (default: the
     program's end, or with ``stop`` the program plus HOLD_AFTER at its last temperature).
 
-    ``stop`` (a radius, dry radii) is a terminal event: the run ends when the radius reaches
+    ``stop`` (a radius, dry radii, or a solver.heating ``Radius``/``Released`` condition,
+    the latter of the radius at t = 0) is a terminal event: the run ends when the radius reaches
     it from the side it starts on (it falls to a smaller target, rises to a larger one),
     located inside the accepted step (implicit integrator); the record says so
     (``status`` 'stopped', ``t_events``, ``terminal_time``; 'finished' when the horizon came
@@ -286,6 +291,7 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     if not isinstance(gel, Gel):
         raise ParameterError("gel", gel, "a Gel or a preset name")
     t_start = check_temperature(t_start, "t_start")
+    stop_given = stop
     stop = _check_stop(stop)
     if program is not None:
         if t_end is not None:
@@ -348,6 +354,9 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     mod = spec.module
     y0, geo, branch_used = _initial_state(spec, gel, t_start, first_t, branch, initial, n,
                                           mesh, ell)
+    a0 = float(y0[-2] if spec.moving else mod.radius(y0))
+    if isinstance(stop_given, (Radius, Released)):
+        stop = _check_stop(stop_given, a0)
     perm = gel.permeability
     done: list[Segment] = []
     ends: dict[int, float] = {}
@@ -362,7 +371,6 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
         segments[-1].t1 = total
         done = segments
     else:
-        a0 = float(y0[-2] if spec.moving else mod.radius(y0))
         segments = _program_segments(program, gel, t_start, a0, ell, total,
                                      stop is not None or until is not None, done, ends)
         if integrator != "implicit":
