@@ -8,9 +8,11 @@ The truth's settings (moving grid, the bead's own interfacial length ell = 4 nm 
 radius, 400 cells, rtol 1e-5): for each heating (the jump, ramps in K/min, baths with time
 constants in s, from T_start towards T_end) the time at which each dose fraction is
 reached, from the protocol's start, in seconds (tau at T_end, dosing.units.timescale) and
-as a multiple of the jump's (the step answer's error under that heating), with each
-run's wall time.  One run per heating: ``stop`` at the largest fraction, the smaller ones
-read from its dense record.  ``custom``: ANB's chi with Omega = 300.
+as a multiple of the jump's ("x": the step answer's error under that heating) and the
+error of the delayed-jump estimate t_c + t_jump (solver/front/heating.py; "dj": t_c the
+time T(t) reaches the coexistence onset of the start state, t_jump the full solver's jump
+answer), with each run's wall time.  One run per heating: ``stop`` at the largest
+fraction, the smaller ones read from its dense record.  ``custom``: ANB's chi with Omega = 300.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import time
 
 from dosing.units import PhysicalConstants, timescale
 from solver.equilibrium import equilibrium
+from solver.front.heating import onset_temperature, onset_time
 from solver.full import simulate
 from solver.gel import ANB, Gel, preset
 from solver.heating import Bath, Program, Ramp, Released
@@ -47,9 +50,11 @@ def run(args: argparse.Namespace) -> None:
                  for r in args.rates]
     heatings += [(f"bath {b:g} s", Program((Bath(t1, b / tau, duration=50.0),),
                                            mobility=args.mobility)) for b in args.baths]
+    t_c = onset_temperature(gel, a0, t0, t1)
+    assert t_c is not None, "no coexistence onset between the temperatures"
     print(f"{gel.name} {t0:g} -> {t1:g} K, dry radius {args.dry_radius_um:g} um, tau = "
-          f"{tau:.0f} s, ell = {ell:.2e}, mobility {args.mobility}")
-    head = "".join(f"{f'{f:.0%} s':>9}{'x':>6}" for f in args.fractions)
+          f"{tau:.0f} s, ell = {ell:.2e}, mobility {args.mobility}, onset T_c = {t_c:.2f} K")
+    head = "".join(f"{f'{f:.0%} s':>9}{'x':>7}{'dj':>7}" for f in args.fractions)
     print(f"{'heating':<18}{head}{'wall s':>8}")
     base: list[float] = []
     for name, prog in heatings:
@@ -62,7 +67,9 @@ def run(args: argparse.Namespace) -> None:
         times = [res.time_to_radius(a) * tau for a in targets]
         if not base:
             base = times
-        row = "".join(f"{t:9.1f}{t / b:6.2f}" for t, b in zip(times, base, strict=True))
+        delay = 0.0 if prog is None else onset_time(prog, t0, t_c) * tau
+        row = "".join(f"{t:9.1f}{t / b:7.2f}{(delay + b) / t - 1.0:7.1%}"
+                      for t, b in zip(times, base, strict=True))
         print(f"{name:<18}{row}{wall:8.1f}")
 
 
