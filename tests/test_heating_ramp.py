@@ -154,3 +154,20 @@ def test_time_derivative_is_the_rate_of_the_rhs_along_the_program() -> None:
     np.testing.assert_allclose(ft, (fp - fm) / (2 * dt), rtol=1e-5,
                                atol=1e-8 * np.max(np.abs(ft)))
     assert np.max(np.abs(ft)) > 0.0
+
+
+@pytest.mark.parametrize("grid", ["eulerian", "lagrangian", "moving"])
+def test_mobility_rescales_time_at_a_constant_temperature(grid: str) -> None:
+    """At a constant T every rate is m(T) times the unit-mobility one, so a hold of length
+    t with mobility 'water' (T_ref = 308 K) is the old protocol's run to m t (m = 0.954)."""
+    opts = {"grid": grid, "n": 40, "rtol": 1e-9, "atol": 1e-12}
+    if grid == "moving":
+        opts["interfacial_length"] = 0.02
+    prog = Program((Hold(306.0, 0.03),), mobility="water", reference=308.0)
+    m = prog.rate_factor(306.0)
+    assert m == pytest.approx(0.954, abs=1e-3)
+    new = simulate("ANB", 302.0, protocol=prog, saveat=[0.01, 0.03], **opts)
+    old = simulate("ANB", 302.0, 306.0, until=0.03 * m, saveat=[0.01 * m, 0.03 * m], **opts)
+    assert abs(new.radius[-1] - new.radius[0]) > 1e-2  # it moved
+    tol = 1e-4 if grid == "moving" else 1e-7  # the moving mesh's path differs in time
+    np.testing.assert_allclose(new.radius, old.radius, rtol=tol)
