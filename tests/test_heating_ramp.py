@@ -171,3 +171,19 @@ def test_mobility_rescales_time_at_a_constant_temperature(grid: str) -> None:
     assert abs(new.radius[-1] - new.radius[0]) > 1e-2  # it moved
     tol = 1e-4 if grid == "moving" else 1e-7  # the moving mesh's path differs in time
     np.testing.assert_allclose(new.radius, old.radius, rtol=tol)
+
+
+def test_a_linear_trace_is_the_ramp() -> None:
+    """A measured trace of a linear heating (50 rows, so 49 segments) gives the ramp's
+    radius to the integrator's tolerance."""
+    from solver.heating import Trace
+
+    duration = 0.1
+    times = np.linspace(0.0, duration, 50)
+    trace = Program((Trace(tuple(times), tuple(302.0 + 60.0 * times)),))
+    ramp = Program((Ramp(308.0, 60.0),))
+    opts = {**FINE, "saveat": [0.05, 0.1, 0.2], "until": 0.2}
+    a = simulate("ANB", 302.0, protocol=trace, **opts)
+    b = simulate("ANB", 302.0, protocol=ramp, **opts)
+    np.testing.assert_allclose(a.radius, b.radius, rtol=1e-7)
+    np.testing.assert_allclose(a.temperature, [305.0, 308.0, 308.0], atol=1e-9)
