@@ -1,0 +1,333 @@
+"""A dose under a heating protocol: the time from the protocol's start at which it is reached.
+
+The truth is the full solver (the request's ``SolverSettings``: by default the regularized
+model at the bead's own interfacial length on the moving grid, checked by a run on n / 2
+cells).  The dose radius follows from a^3 = a0^3 - f (a0^3 - 1) (eq. FluidVolExpelled); the
+answer is the first time a(t) reaches it, in tau and in seconds through tau at the
+protocol's hottest temperature (eq. timescale).  An until-step ("Hold at 308 K until 30 %
+released") ends when the truth run of the protocol so far reaches its radius; the steps
+after it start there.  After the last step the bead holds at the last temperature for a
+tail of ``TAIL`` tau, extended x4 (up to ``MAX_TAIL``) while the radius is not reached.
+
+The solver's protocol is still piecewise constant, so ramps, baths and traces run as a
+fine staircase of holds (``dosing.heating.staircase``, 0.05 K per stair; stated in the
+answer) until the continuous T(t) of the solver lands.  Runs are scenarios of the planner's
+cache; without them :func:`answer` queues them as a validation (HTTP 202) and the same
+request asked again answers from the cache.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from solver.equilibrium import nearest_stable
+from solver.errors import ParameterError, SolverError
+
+from .answers import Pending
+from .heating import STAIR_KELVIN, Piece, Protocol, Until, reference_text, staircase
+from .request import DoseRequest
+from .scenario import Scenario, Trajectory
+from .truth import truth_text
+from .units import expelled_volume, radius_after_dose, timescale, ul_to_volume, volume_to_ul
+from .validation import validation_report
+
+TAIL = 0.1  # tau held after the last step (the moving grid's first horizon of a jump)
+MAX_TAIL = 64.0
+CURVE_POINTS = 400
+
+
+@dataclass
+class UntilResult:
+    """When an until-step ended: its index and text, start and end in tau and seconds."""
+
+    step: int
+    text: str
+    start: float
+    end: float
+    start_seconds: float | None
+    end_seconds: float | None
+
+
+@dataclass
+class ProtocolDoseAnswer:
+    """How long from the protocol's start until the dose is out, and what the protocol is."""
+
+    model: str
+    truth: str
+    protocol: list[str]
+    protocol_steps: list[dict[str, Any]]
+    t_start: float
+    reference_temperature: float
+    reference: str
+    time: float
+    seconds: float | None
+    timescale_seconds: float | None
+    timescale_formula: str | None
+    program: str
+    dose_fraction: float
+    start_radius: float
+    final_radius: float
+    final_radius_um: float | None
+    expelled_volume: float
+    expelled_volume_ul: float | None
+    stored_volume_ul: float | None
+    temperature_at_dose: float
+    until_steps: list[UntilResult]
+    error_estimate: float | None
+    error_explanation: str
+    uncertainty: dict[str, Any] | None
+    validation: dict[str, Any] | None
+    scenario_key: str
+    interfacial_length: float
+    bead_dry_radius_um: float | None
+    curve: dict[str, list[float]]
+    note: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form (JSON-ready)."""
+        return asdict(self)
+
+
+def protocol_request(protocol: Any, **fields: Any) -> DoseRequest:
+    """A dose request under ``protocol`` (steps as texts, dicts or a Protocol), the other
+    fields as :class:`DoseRequest`'s (no t_end)."""
+    return DoseRequest(protocol=protocol, **fields)
+
+
+def _tau_seconds(req: DoseRequest) -> float | None:
+    dry = req.bead_dry_radius_um
+    return None if dry is None else timescale(dry, req.t_end, req.constants).seconds
+
+
+def until_radius(req: DoseRequest, until: Until, step: int) -> float:
+    """The dimensionless radius at which an until-condition holds."""
+    a0 = req.start_radius
+    dry = req.bead_dry_radius_um
+    where = f"protocol[{step}].until.{until.kind}"
+    if until.kind == "fraction":
+        return radius_after_dose(a0, until.value)
+    if dry is None:
+        raise ParameterError("dry_radius_um", None, f"a finite number > 0 (um) for {where}")
+    if until.kind == "radius_um":
+        return until.value / dry
+    vol = until.value
+    if until.kind == "mass_ug":
+        if req.concentration_ug_per_ul is None:
+            raise ParameterError("concentration_ug_per_ul", None,
+                                 f"a finite number > 0 (ug/uL) for {where}")
+        vol = until.value / req.concentration_ug_per_ul
+    f = ul_to_volume(vol, dry) / req.jump.stored_volume
+    if not 0.0 < f < 1.0:
+        raise ParameterError(where, until.value, f"less than the stored "
+                             f"{volume_to_ul(req.jump.stored_volume, dry):.4g} uL")
+    return radius_after_dose(a0, f)
+
+
+def _open(pieces: list[Piece], tail: float) -> list[tuple[float, float]]:
+    """The staircase of ``pieces`` whose last one may be open (no duration), held ``tail``."""
+    last = pieces[-1]
+    if last.duration is None and last.shape == "hold":
+        pieces = [*pieces[:-1], Piece("hold", last.t0, last.t1, 0.0, step=last.step)]
+    return staircase(pieces, tail)
+
+
+def _scenario(req: DoseRequest, steps: list[tuple[float, float]], settings: Any) -> Scenario:
+    return Scenario(req.gel, req.t_start, protocol=tuple(steps), branch=req.branch,
+                    settings=settings)
+
+
+Getter = Callable[[list[Scenario], float, float], list[Trajectory] | Pending]
+
+
+def _reach(req: DoseRequest, get: Getter, pieces: list[Piece], target: float, after: float,
+           field: str, check: bool) -> tuple[float, Trajectory, list[Scenario],
+                                             list[Any]] | Pending:
+    """First time >= ``after`` the truth run of ``pieces`` (+ a tail) reaches ``target``:
+    (time, truth trajectory, scenarios, their trajectories), or Pending."""
+    tail = TAIL
+    while True:
+        steps = _open(pieces, tail)
+        scs = [_scenario(req, steps, req.settings)]
+        if check:
+            scs += [_scenario(req, steps, req.settings.check())]
+            if req.interfacial_range is not None and check == "range":
+                scs += [_scenario(req, steps, req.settings.with_length(ell))
+                        for ell in req.interfacial_range]
+        trajs = get(scs, target, after)
+        if isinstance(trajs, Pending):
+            return trajs
+        traj = trajs[0]
+        if isinstance(traj, BaseException):
+            raise traj
+        try:
+            return traj.time_to_radius(target, after), traj, scs, trajs
+        except ValueError:
+            pass
+        a_end = float(traj.radius[-1])
+        t_last = steps[-1][1]
+        a_inf = nearest_stable(req.gel, t_last, a_end).stretch
+        if (a_inf - target) * (a_end - target) > 0.0 or tail >= MAX_TAIL:
+            raise ParameterError(field, target, f"a radius the bead reaches: held at "
+                                 f"{t_last:g} K it goes to {a_inf:.4g} dry radii (it is "
+                                 f"{a_end:.4g} at the run's end)")
+        tail = min(4.0 * tail, MAX_TAIL)
+
+
+def resolve_untils(req: DoseRequest, get: Getter) -> tuple[Protocol, list[UntilResult]] | Pending:
+    """The protocol with each until-step's duration found by its truth run, in order."""
+    prot: Protocol = req.heating
+    tau_s = _tau_seconds(req)
+    durations: dict[int, float] = {}
+    done: list[UntilResult] = []
+    for i in prot.until_steps:
+        pieces = prot.with_durations(durations).program(tau_s)[: i + 1]
+        start = sum(p.duration for p in pieces[:-1])
+        piece = pieces[-1]
+        target = until_radius(req, piece.until, i)
+        got = _reach(req, get, pieces, target, start, f"protocol[{i}].until", check=False)
+        if isinstance(got, Pending):
+            return got
+        t_hit = got[0]
+        durations[i] = max(t_hit - start, 0.0)
+        done.append(UntilResult(i, prot.steps[i].text, start, t_hit,
+                                None if tau_s is None else start * tau_s,
+                                None if tau_s is None else t_hit * tau_s))
+    return (prot.with_durations(durations) if durations else prot), done
+
+
+def protocol_dose(req: DoseRequest, get: Getter, ranges: bool = False
+                  ) -> ProtocolDoseAnswer | Pending:
+    """The dose under ``req.heating``: its until-steps resolved, then the time from the
+    protocol's start at which the truth run reaches the dose radius (with its check run,
+    and with ``ranges`` the interfacial-length range runs)."""
+    resolved = resolve_untils(req, get)
+    if isinstance(resolved, Pending):
+        return resolved
+    prot, untils = resolved
+    tau_s = _tau_seconds(req)
+    pieces = prot.program(tau_s)
+    target = radius_after_dose(req.start_radius, req.fraction)
+    got = _reach(req, get, pieces, target, 0.0, "dose_fraction",
+                 check="range" if ranges else True)
+    if isinstance(got, Pending):
+        return got
+    time, traj, scs, trajs = got
+    rep = validation_report(scs, trajs, req.start_radius, target, None)
+    return _answer(req, prot, untils, pieces, time, traj, scs, rep, tau_s)
+
+
+def temperature_curve(pieces: list[Piece], t_start: float, times: np.ndarray) -> np.ndarray:
+    """T(t) of the program (tau) at ``times``; after the last piece, its end temperature."""
+    out = np.full(times.shape, np.nan)
+    t0, cur = 0.0, t_start
+    for p in pieces:
+        d = p.duration
+        if d is None:
+            d = math.inf
+        sel = (times >= t0) & (times <= t0 + d) & np.isnan(out)
+        out[sel] = p.temperature(times[sel] - t0)
+        cur = float(p.temperature(np.array([d if math.isfinite(d) else 1e300]))[0])
+        t0 += d
+    out[np.isnan(out)] = cur
+    return out
+
+
+def _answer(req: DoseRequest, prot: Protocol, untils: list[UntilResult], pieces: list[Piece],
+            time: float, traj: Trajectory, scs: list[Scenario], rep: Any,
+            tau_s: float | None) -> ProtocolDoseAnswer:
+    dry = req.bead_dry_radius_um
+    a0 = req.start_radius
+    target = radius_after_dose(a0, req.fraction)
+    ts = timescale(dry, req.t_end, req.constants) if dry is not None else None
+    n_stairs = len(scs[0].protocol)
+    stored = req.jump.stored_volume
+    vol = expelled_volume(a0, target)
+    unc = rep.uncertainty
+    err = rep.error
+    explain = (unc or {}).get("text") if unc else None
+    if explain is None:
+        explain = ("numerical: the gap between the truth run and its check run on half the "
+                   "cells" if err is not None else "not measured (the check run failed)")
+    t = np.asarray(traj.t, dtype=float)
+    span = min(max(1.5 * time, sum(p.duration or 0.0 for p in pieces)), float(t[-1]))
+    tc = np.union1d(np.linspace(0.0, span, CURVE_POINTS), [time])
+    ac = np.interp(tc, t, np.asarray(traj.radius, dtype=float))
+    released = (a0**3 - ac**3) / (a0**3 - 1.0)
+    temps = temperature_curve(pieces, prot.t_start, tc)
+    curve = {"time": tc.tolist(), "temperature_k": temps.tolist(),
+             "released_fraction": released.tolist(),
+             "seconds": (tc * tau_s).tolist() if tau_s is not None else []}
+    t_dose = float(temperature_curve(pieces, prot.t_start, np.array([time]))[0])
+    program = (f"ramps, baths and traces run as a staircase of holds, {STAIR_KELVIN:g} K "
+               f"per stair, each at its stair's time-mean temperature ({n_stairs} steps "
+               "with the tail; the solver's continuous T(t) replaces it when it lands)")
+    return ProtocolDoseAnswer(
+        model="full", truth=truth_text(req), protocol=prot.texts,
+        protocol_steps=[s.to_dict() for s in prot.steps], t_start=prot.t_start,
+        reference_temperature=req.t_end, reference=reference_text(req.t_end),
+        time=float(time), seconds=None if tau_s is None else float(time * tau_s),
+        timescale_seconds=tau_s, timescale_formula=None if ts is None else ts.formula,
+        program=program, dose_fraction=req.fraction, start_radius=a0, final_radius=target,
+        final_radius_um=None if dry is None else target * dry, expelled_volume=vol,
+        expelled_volume_ul=None if dry is None else volume_to_ul(vol, dry),
+        stored_volume_ul=None if dry is None else volume_to_ul(stored, dry),
+        temperature_at_dose=t_dose, until_steps=untils,
+        error_estimate=err, error_explanation=explain, uncertainty=unc,
+        validation=rep.to_dict(), scenario_key=scs[0].key(),
+        interfacial_length=req.settings.interfacial_length, bead_dry_radius_um=dry,
+        curve=curve,
+        note="the time is from the protocol's start; after the last step the bead holds at "
+             "the last temperature")
+
+
+# ----------------------------------------------------------------------------- planners
+def blocking_getter(planner: Any) -> Getter:
+    """Runs (cached) on the planner, waiting for them."""
+    def get(scs: list[Scenario], target: float, after: float) -> list[Any]:
+        return planner._trajectories(scs, None, 0.0)
+    return get
+
+
+def queue_getter(planner: Any, fraction: float, start_radius: float) -> Getter:
+    """Cached runs now, else the missing ones queued as one validation (``Pending``)."""
+    def get(scs: list[Scenario], target: float, after: float) -> list[Any] | Pending:
+        trajs: list[Any] = []
+        for sc in scs:
+            traj = planner.cached(sc)
+            if traj is None and planner.jobs.state(sc.key()) == "failed":
+                exc = planner.jobs.get(sc.key()).exception()
+                traj = exc or SolverError("a full-solver run was cancelled")
+            trajs.append(traj)
+        if all(t is not None for t in trajs):
+            return trajs
+        keys = [sc.key() for sc in scs]
+        vid = hashlib.sha256(json.dumps([keys, round(target, 12)]).encode()).hexdigest()[:24]
+        record = {"scenarios": [sc.to_dict() for sc in scs], "keys": keys,
+                  "start_radius": start_radius, "target_radius": target,
+                  "fraction": fraction, "front_time": None}
+        planner._advance(record, vid)
+        if planner.cache.get_validation(vid) is None:
+            planner.cache.put_validation(vid, record)
+        return Pending(vid)
+    return get
+
+
+def dose(planner: Any, req: DoseRequest, validate: bool = False) -> ProtocolDoseAnswer:
+    """The dose under a protocol, blocking on the planner's runs (cached)."""
+    out = protocol_dose(req, blocking_getter(planner), ranges=validate)
+    assert not isinstance(out, Pending)
+    return out
+
+
+def answer(planner: Any, req: DoseRequest, validate: bool = False
+           ) -> ProtocolDoseAnswer | Pending:
+    """The dose under a protocol now from the cache, else Pending (its runs queued)."""
+    return protocol_dose(req, queue_getter(planner, req.fraction, req.start_radius),
+                         ranges=validate)
