@@ -785,8 +785,8 @@ def staircase(pieces: Sequence[Piece], tail: float, resolution: float = STAIR_KE
             raise ParameterError(f"protocol[{p.step}]", None, "a duration")
         if d <= 0.0:
             continue
-        if p.shape == "trace":
-            s = np.asarray(p.times)
+        if p.shape == "trace":  # the samples, refined to 1/8 stair between them
+            s = _refine(np.asarray(p.times), np.asarray(p.temps), resolution / 8.0)
         else:
             s = np.linspace(0.0, d, 2049)
         temps = p.temperature(s)
@@ -805,6 +805,15 @@ def staircase(pieces: Sequence[Piece], tail: float, resolution: float = STAIR_KE
     if len(merged) > MAX_STAIRS:
         return staircase(pieces, tail, resolution * 2.0)
     return [(float(d), float(round(temp, 9))) for d, temp in merged]
+
+
+def _refine(times: np.ndarray, temps: np.ndarray, step: float) -> np.ndarray:
+    """``times`` with points added so that T moves by at most ``step`` between them."""
+    parts = np.maximum(1, np.ceil(np.abs(np.diff(temps)) / step)).astype(int)
+    parts = np.minimum(parts, max(1, 400_000 // max(1, times.size)))
+    k = np.repeat(np.arange(times.size - 1), parts)
+    frac = np.concatenate([np.arange(n) / n for n in parts]) if parts.size else np.array([])
+    return np.append(times[k] + frac * np.diff(times)[k], times[-1])
 
 
 def _stairs(s: np.ndarray, temps: np.ndarray, resolution: float) -> list[tuple[float, float]]:

@@ -309,9 +309,12 @@ def queue_getter(planner: Any, fraction: float, start_radius: float) -> Getter:
             return trajs
         keys = [sc.key() for sc in scs]
         vid = hashlib.sha256(json.dumps([keys, round(target, 12)]).encode()).hexdigest()[:24]
+        # the poll reports the runs done; a run's own crossing is read when the dose is
+        # asked again (its tail may fall short and be extended), so the record's target
+        # is the start radius, which every run reaches at t = 0
         record = {"scenarios": [sc.to_dict() for sc in scs], "keys": keys,
-                  "start_radius": start_radius, "target_radius": target,
-                  "fraction": fraction, "front_time": None}
+                  "start_radius": start_radius, "target_radius": start_radius,
+                  "fraction": fraction, "front_time": None, "kind": "protocol runs"}
         planner._advance(record, vid)
         if planner.cache.get_validation(vid) is None:
             planner.cache.put_validation(vid, record)

@@ -1,0 +1,197 @@
+"""A dose under a heating protocol (dosing.protocol_dose) on the planner.
+
+The planner's logic runs on the closed-form fake solver (tests/dosing_fakes.py: a^3 relaxes
+exponentially to each step's equilibrium), so every expected time is computable; one slow
+test runs the real full solver.
+"""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pytest
+from dosing_fakes import FakeSolver
+
+from dosing import DoseRequest, Planner
+from dosing.answers import Answered, Pending
+from dosing.heating import Protocol
+from dosing.units import radius_after_dose, timescale
+from solver.errors import ParameterError
+
+BEAD = {"gel": "ANB", "t_start": 302.0, "dry_radius_um": 50.0}
+TAU = timescale(50.0, 308.0).seconds  # the reference: tau at the hottest temperature
+
+
+@pytest.fixture
+def fake() -> FakeSolver:
+    return FakeSolver(rate_scale=0.2)  # slow enough that a 72 s ramp matters
+
+
+@pytest.fixture
+def planner(tmp_path: Path, fake: FakeSolver):
+    p = Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(2), solver=fake)
+    yield p
+    p.close()
+
+
+def _req(protocol, fraction=0.3, **kw) -> DoseRequest:
+    return DoseRequest(**{**BEAD, **kw}, protocol=protocol, dose_fraction=fraction)
+
+
+def test_request_takes_a_protocol_in_place_of_t_end():
+    req = _req(["Heat to 308 K at 5 K/min"])
+    assert req.t_end == 308.0 and isinstance(req.heating, Protocol)
+    assert req.to_dict()["protocol"]["text"] == ["Heat to 308 K at 5 K/min"]
+    with pytest.raises(ParameterError) as e:
+        DoseRequest(**BEAD, t_end=308.0, protocol=["Heat to 308 K at 5 K/min"],
+                    dose_fraction=0.3)
+    assert e.value.field == "t_end"
+    with pytest.raises(ParameterError) as e:
+        DoseRequest(**BEAD, dose_fraction=0.3)
+    assert e.value.field == "t_end"
+    with pytest.raises(ParameterError) as e:
+        _req(["Heat to 308 K at 5 K/min", "Hold at 308 K for 2 parsecs"])
+    assert e.value.field == "protocol[1].for"
+
+
+def test_ramp_dose_is_later_than_the_jump_and_in_seconds(planner):
+    jump = planner.dose(_req(["Hold at 308 K"]))
+    ramp = planner.dose(_req(["Heat to 308 K at 5 K/min"]))
+    slow = planner.dose(_req(["Heat to 308 K at 1 K/min"]))
+    assert jump.time < ramp.time < slow.time
+    assert ramp.seconds == pytest.approx(ramp.time * TAU, rel=1e-12)
+    assert ramp.timescale_seconds == pytest.approx(TAU, rel=1e-12)
+    assert ramp.reference_temperature == 308.0 and "308 K" in ramp.reference
+    assert ramp.protocol == ["Heat to 308 K at 5 K/min"]
+    assert "staircase" in ramp.program
+    # the fake's jump: a^3 relaxes at rate 8 / (1 + 2 / 400) / (1 + 200 ell^1.5) * 0.2
+    a0, f = ramp.start_radius, 0.3
+    assert jump.final_radius == pytest.approx(radius_after_dose(a0, f), rel=1e-12)
+    assert jump.error_estimate is not None and jump.error_estimate < 0.01
+    c = ramp.curve
+    assert len(c["time"]) == len(c["temperature_k"]) == len(c["released_fraction"])
+    assert c["temperature_k"][0] == 302.0 and max(c["temperature_k"]) == pytest.approx(308.0)
+    k = int(np.argmin(np.abs(np.array(c["time"]) - ramp.time)))
+    assert c["released_fraction"][k] == pytest.approx(0.3, abs=2e-3)
+
+
+def test_fast_ramp_tends_to_the_jump(planner):
+    jump = planner.dose(_req(["Hold at 308 K"]))
+    fast = planner.dose(_req(["Heat to 308 K at 1e5 K/min"]))  # 3.6 ms of 2205 s
+    assert fast.time == pytest.approx(jump.time + 0.5 * 6.0 / (1e5 / 60.0) / TAU, rel=1e-3)
+
+
+def test_until_hold_after_ramp_ends_at_the_dose_time(planner):
+    """'Hold at 308 K until 30 % released' after a ramp ends when the dose answer for the
+    ramp says 30 % is out, to the printed digits (same runs, same crossing)."""
+    ramp = planner.dose(_req(["Heat to 308 K at 5 K/min"], 0.3))
+    then = planner.dose(_req(["Heat to 308 K at 5 K/min", "Hold at 308 K until 30 % released",
+                              "Rest at 302 K for 10 min"], 0.1))
+    (u,) = then.until_steps
+    assert u.step == 1 and u.text == "Hold at 308 K until 30 % released"
+    assert f"{u.end_seconds:.4g}" == f"{ramp.seconds:.4g}"
+    assert u.end == pytest.approx(ramp.time, rel=1e-12)
+    assert u.start_seconds == pytest.approx(72.0, rel=1e-12)
+
+
+def test_until_radius_and_mass(planner):
+    ramp = planner.dose(_req(["Heat to 308 K at 5 K/min"], 0.3))
+    r_um = ramp.final_radius_um
+    by_radius = planner.dose(_req(["Heat to 308 K at 5 K/min",
+                                   f"Hold at 308 K until radius {r_um!r} um",
+                                   "Rest at 302 K for 1 min"], 0.1))
+    assert by_radius.until_steps[0].end == pytest.approx(ramp.time, rel=1e-9)
+    conc = 10.0  # ug/uL: 30 % of the stored fluid is 10 * V30 ug
+    mass = ramp.expelled_volume_ul * conc
+    by_mass = planner.dose(_req(["Heat to 308 K at 5 K/min",
+                                 f"Hold at 308 K until {mass!r} ug released",
+                                 "Rest at 302 K for 1 min"], 0.1,
+                                concentration_ug_per_ul=conc))
+    assert by_mass.until_steps[0].end == pytest.approx(ramp.time, rel=1e-9)
+    with pytest.raises(ParameterError) as e:
+        planner.dose(_req(["Heat to 308 K at 5 K/min", "Hold at 308 K until 20 ug released"],
+                          0.1))
+    assert e.value.field == "concentration_ug_per_ul"
+
+
+def test_steps_after_an_until_start_there(planner):
+    """The rest after the until-hold starts when the until-hold ends: a dose of 40 % is then
+    reached only after the rest, in the second heating."""
+    p = ["Heat to 308 K at 5 K/min", "Hold at 308 K until 30 % released",
+         "Rest at 302 K for 10 min", "Hold at 308 K"]
+    ans = planner.dose(_req(p, 0.4))
+    u = ans.until_steps[0]
+    assert ans.seconds > u.end_seconds + 600.0
+    assert ans.temperature_at_dose == 308.0
+
+
+def test_unreachable_until_names_the_step(planner):
+    with pytest.raises(ParameterError) as e:
+        planner.dose(_req(["Heat to 303 K at 5 K/min", "Hold at 303 K until 60 % released",
+                           "Heat to 308 K at 5 K/min"], 0.1))
+    assert e.value.field == "protocol[1].until"
+    assert "held at 303 K" in e.value.valid
+
+
+def test_bath_is_slower_than_the_jump_and_faster_with_a_smaller_constant(planner):
+    jump = planner.dose(_req(["Hold at 308 K"]))
+    b30 = planner.dose(_req(["Bath at 308 K with a time constant of 30 s"]))
+    b5 = planner.dose(_req(["Bath at 308 K with a time constant of 5 s"]))
+    assert jump.time < b5.time < b30.time
+
+
+def test_trace_in_degc_and_seconds(planner):
+    trace = {"step": "trace", "csv": "time (s),T (degC)\n0,28.85\n36,31.85\n72,34.85\n"}
+    by_trace = planner.dose(_req([trace]))
+    ramp = planner.dose(_req(["Heat to 308 K at 5 K/min"]))
+    # the same linear ramp, written as a trace (the trace ends at 308 K; holds there); the
+    # two 0.05 K staircases cut at different sample points (a 2e-5 gap): not at 1e-3 apart
+    assert by_trace.time == pytest.approx(ramp.time, rel=1e-4)
+    assert by_trace.curve["temperature_k"][0] == pytest.approx(302.0)
+
+
+def test_answer_queues_then_answers_from_the_cache(planner):
+    req = _req(["Heat to 308 K at 2 K/min", "Hold at 308 K until 20 % released",
+                "Rest at 302 K for 1 min", "Hold at 308 K"], 0.35)
+    first = planner.answer(req)
+    assert isinstance(first, Pending)
+    for _ in range(10):  # each until-step is one more round of runs
+        out = planner.answer(req)
+        if isinstance(out, Answered):
+            break
+        assert planner.wait_validation(out.validation_id, timeout=60).status == "done"
+    assert isinstance(out, Answered)
+    assert out.answer.time == pytest.approx(planner.dose(req).time, rel=1e-15)
+
+
+def test_validate_adds_the_interfacial_length_range(planner, fake):
+    ans = planner.dose(_req(["Heat to 308 K at 5 K/min"]), validate=True)
+    roles = [r["role"] for r in ans.validation["runs"]]
+    assert roles == ["truth", "check", "ell_range", "ell_range"]
+    assert ans.uncertainty["interfacial_length_range"]["relative"] > 0.0
+
+
+def test_seconds_need_a_bead_size(planner):
+    req = DoseRequest("ANB", 302.0, protocol=["Heat to 308 K at 5 K/min"], dose_fraction=0.3)
+    with pytest.raises(ParameterError) as e:
+        planner.dose(req)
+    assert e.value.field == "dry_radius_um"
+    tau_only = DoseRequest("ANB", 302.0, protocol=["Heat to 308 K at 200 K/tau"],
+                           dose_fraction=0.3)
+    ans = planner.dose(tau_only)
+    assert ans.seconds is None and math.isfinite(ans.time)
+
+
+@pytest.mark.slow
+def test_real_solver_ramp_until_equals_dose(tmp_path):
+    """The full solver (moving grid, the bead's own ell): the 30 % dose under a 5 K/min ramp
+    is later than the jump's, and the until-hold ends at it to the printed digits."""
+    with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(2)) as p:
+        ramp = p.dose(_req(["Heat to 308 K at 5 K/min"], 0.3))
+        then = p.dose(_req(["Heat to 308 K at 5 K/min", "Hold at 308 K until 30 % released",
+                            "Rest at 302 K for 1 min"], 0.05))
+    assert f"{then.until_steps[0].end_seconds:.4g}" == f"{ramp.seconds:.4g}"
+    assert ramp.error_estimate < 0.02
