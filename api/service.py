@@ -178,10 +178,27 @@ def _constants(c: s.ConstantsIn | None) -> dict[str, Any] | None:
     return None if c is None else c.model_dump(exclude_none=True)
 
 
+def _protocol(body: s.DoseTimeRequest) -> Any:
+    """The request's heating protocol (no file paths over HTTP), or None."""
+    if body.protocol is None:
+        return None
+    from dosing.heating import Protocol
+
+    if body.t_end is not None:
+        raise ParameterError("t_end", body.t_end, "absent when a protocol is given (the "
+                             "protocol's steps set the heating)")
+    if body.drug is not None:
+        raise ParameterError("drug", "given", "absent with a protocol (a drug dose under a "
+                             "protocol is not planned yet)")
+    return Protocol(body.t_start, body.protocol, files=False)
+
+
 def to_dose_request(body: s.DoseTimeRequest) -> DoseRequest:
     """The planner's request (it checks the dose against the stored fluid: ParameterError)."""
+    protocol = _protocol(body)
     return DoseRequest(
-        to_gel(body.gel), body.t_start, body.t_end, dose_fraction=body.dose_fraction,
+        to_gel(body.gel), body.t_start, None if protocol is not None else body.t_end,
+        protocol=protocol, dose_fraction=body.dose_fraction,
         dose_volume_ul=body.dose_volume_ul, drug_mass_ug=body.drug_mass_ug,
         concentration_ug_per_ul=body.concentration_ug_per_ul,
         dry_radius_um=body.dry_radius_um, swollen_radius_um=body.swollen_radius_um,
@@ -215,7 +232,7 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest) -> dict[str, Any] | Acc
     """The answer (front model or cache; 200), or :class:`Accepted` with a validation id;
     one planner call (:meth:`dosing.Planner.answer`).  A dose with a drug is answered by
     :mod:`api.drug_service`."""
-    if body.drug is not None:
+    if body.drug is not None and body.protocol is None:
         return drug_service.dose_answer(planner, body, to_gel)
     out = planner.answer(to_dose_request(body), validate=body.validate_full)
     if isinstance(out, Pending):

@@ -167,9 +167,17 @@ def _reach(req: DoseRequest, get: Getter, pieces: list[Piece], target: float, af
         if isinstance(traj, BaseException):
             raise traj
         try:
-            return traj.time_to_radius(target, after), traj, scs, trajs
+            t_hit = traj.time_to_radius(target, after)
         except ValueError:
-            pass
+            t_hit = None
+        if t_hit is not None:
+            short = [k for k, tr in enumerate(trajs) if k and not _reaches(tr, target, after)]
+            if not short or tail >= MAX_TAIL:  # a check run short of it at the end: failed
+                trajs = [ValueError(f"the run does not reach radius {target:.6g}")
+                         if k in short else tr for k, tr in enumerate(trajs)]
+                return t_hit, traj, scs, trajs
+            tail = min(4.0 * tail, MAX_TAIL)
+            continue
         a_end = float(traj.radius[-1])
         t_last = steps[-1][1]
         a_inf = nearest_stable(req.gel, t_last, a_end).stretch
@@ -178,6 +186,16 @@ def _reach(req: DoseRequest, get: Getter, pieces: list[Piece], target: float, af
                                  f"{t_last:g} K it goes to {a_inf:.4g} dry radii (it is "
                                  f"{a_end:.4g} at the run's end)")
         tail = min(4.0 * tail, MAX_TAIL)
+
+
+def _reaches(traj: Any, target: float, after: float) -> bool:
+    if isinstance(traj, BaseException):
+        return True  # a failed run is reported as such, not extended
+    try:
+        traj.time_to_radius(target, after)
+    except ValueError:
+        return False
+    return True
 
 
 def resolve_untils(req: DoseRequest, get: Getter) -> tuple[Protocol, list[UntilResult]] | Pending:
@@ -251,10 +269,8 @@ def _answer(req: DoseRequest, prot: Protocol, untils: list[UntilResult], pieces:
     vol = expelled_volume(a0, target)
     unc = rep.uncertainty
     err = rep.error
-    explain = (unc or {}).get("text") if unc else None
-    if explain is None:
-        explain = ("numerical: the gap between the truth run and its check run on half the "
-                   "cells" if err is not None else "not measured (the check run failed)")
+    explain = (unc["numerical"]["text"] if unc else
+               "numerical: not measured (the check run failed)")
     t = np.asarray(traj.t, dtype=float)
     span = min(max(1.5 * time, sum(p.duration or 0.0 for p in pieces)), float(t[-1]))
     tc = np.union1d(np.linspace(0.0, span, CURVE_POINTS), [time])

@@ -195,3 +195,130 @@ def test_real_solver_ramp_until_equals_dose(tmp_path):
                             "Rest at 302 K for 1 min"], 0.05))
     assert f"{then.until_steps[0].end_seconds:.4g}" == f"{ramp.seconds:.4g}"
     assert ramp.error_estimate < 0.02
+
+
+# ----------------------------------------------------------------------------- CLI
+@pytest.fixture
+def cli_on_fake(monkeypatch, fake):
+    """``thermogel dose`` with its one-shot planner on the fake solver."""
+    import dosing
+
+    real = dosing._one_shot
+    monkeypatch.setattr(dosing, "_one_shot", lambda path, ex, **kw: real(path, ex, solver=fake,
+                                                                          **kw))
+
+
+def test_cli_protocol_dose_json_equals_python(cli_on_fake, capsys, tmp_path, fake):
+    import json
+
+    from api.cli import main
+
+    argv = ["dose", "--t-start", "302", "--protocol", "Heat to 308 K at 5 K/min",
+            "--fraction", "0.8", "--dry-radius-um", "50", "--json",
+            "--cache", str(tmp_path / "cli.sqlite")]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    with Planner(cache_path=tmp_path / "py.sqlite", executor=ThreadPoolExecutor(1),
+                 solver=fake) as p:
+        want = p.dose(_req(["Heat to 308 K at 5 K/min"], 0.8))
+    assert out["seconds"] == want.seconds and out["time"] == want.time
+    assert out["protocol"] == ["Heat to 308 K at 5 K/min"] and "308 K" in out["reference"]
+    assert main([*argv[:-3], "--protocol", "Hold at 308 K until 80 % released; Rest at 302 K"
+                 " for 1 min", "--cache", str(tmp_path / "cli.sqlite")]) == 0
+    text = capsys.readouterr().out
+    assert "step 1 'Hold at 308 K until 80 % released' ends at" in text
+    assert f"{want.seconds:.4g} s" in text
+
+
+@pytest.mark.parametrize("extra, needle", [
+    (["--protocol", "Heat to 308 K at 5 K/min", "--t-end", "308"], "--t-end"),
+    ([], "--t-end"),
+    (["--protocol", "Heat to 308 K at 5 K/min; Hold at 308 K for 2 K"], "protocol[1].for"),
+    (["--protocol", "Heat to 300 K at 5 K/min"], "protocol[0].to"),
+    (["--protocol", "Trace from /nonexistent/run.csv"], "protocol[0].trace"),
+])
+def test_cli_protocol_errors_exit_2(capsys, tmp_path, extra, needle):
+    from api.cli import main
+
+    assert main(["dose", "--t-start", "302", "--fraction", "0.3", "--dry-radius-um", "50",
+                 "--cache", str(tmp_path / "c.sqlite"), *extra]) == 2
+    assert needle in capsys.readouterr().err
+
+
+def test_cli_trace_file_in_degc(cli_on_fake, capsys, tmp_path):
+    import json
+
+    from api.cli import main
+
+    f = tmp_path / "bath.csv"
+    f.write_text("time (s),T (degC)\n0,28.85\n36,31.85\n72,34.85\n")
+    assert main(["dose", "--t-start", "302", "--protocol", f"Trace from {f}", "--fraction",
+                 "0.3", "--dry-radius-um", "50", "--json", "--cache",
+                 str(tmp_path / "c.sqlite")]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["protocol_steps"][0]["step"] == "trace" and out["seconds"] > 72.0
+
+
+# ----------------------------------------------------------------------------- HTTP
+@pytest.fixture
+def anyio_backend() -> str:
+    return "asyncio"
+
+
+@pytest.mark.anyio
+async def test_http_protocol_202_then_answer(tmp_path, fake):
+    import asyncio
+
+    from api_support import asgi, fake_planner
+
+    from api.http import create_app
+
+    body = {"gel": "ANB", "t_start": 302.0, "dose_fraction": 0.8, "dry_radius_um": 50.0,
+            "protocol": ["Heat to 308 K at 5 K/min"]}
+    with fake_planner(tmp_path / "c.sqlite", fake) as planner:
+        async with asgi(create_app(planner=planner, warm=False)) as (_, raw):
+            r = await raw.post("/v1/dose-time", json=body)
+            assert r.status_code == 202, r.text
+            for _ in range(6):  # a run whose tail falls short is queued again, longer
+                url = r.json()["validation_url"]
+                for _ in range(200):
+                    if (await raw.get(url)).json()["status"] == "done":
+                        break
+                    await asyncio.sleep(0.05)
+                r = await raw.post("/v1/dose-time", json=body)
+                if r.status_code == 200:
+                    break
+            assert r.status_code == 200, r.text
+            ans = r.json()
+            want = planner.dose(_req(["Heat to 308 K at 5 K/min"], 0.8))
+            assert ans["seconds"] == want.seconds and ans["model"] == "full"
+            assert ans["protocol"] == ["Heat to 308 K at 5 K/min"]
+            structured = {**body, "protocol": [{"step": "heat", "to": "35 degC",
+                                                "rate": "5 K/min"}]}
+            assert (await raw.post("/v1/dose-time", json=structured)).status_code in (200, 202)
+            trace = {**body, "protocol": [{"step": "trace", "csv":
+                                           "time (s),T (degC)\n0,28.85\n72,34.85\n"}]}
+            assert (await raw.post("/v1/dose-time", json=trace)).status_code in (200, 202)
+
+
+@pytest.mark.anyio
+@pytest.mark.parametrize("change, where", [
+    ({"t_end": 308.0}, "t_end"),
+    ({"protocol": ["Heat to 308 K at 5 K/min", "Hold at 308 K for 2 K"]}, "protocol[1].for"),
+    ({"protocol": ["Trace from /etc/passwd"]}, "protocol[0].trace"),
+    ({"protocol": [{"step": "trace", "csv": "time (s),T (K)\n0,302\n0,303\n"}]},
+     "line 3, column 1"),
+    ({"protocol": []}, "protocol"),
+])
+async def test_http_protocol_errors_422(tmp_path, fake, change, where):
+    from api_support import asgi, fake_planner
+
+    from api.http import create_app
+
+    body = {"gel": "ANB", "t_start": 302.0, "dose_fraction": 0.8, "dry_radius_um": 50.0,
+            "protocol": ["Heat to 308 K at 5 K/min"], **change}
+    with fake_planner(tmp_path / "c.sqlite", fake) as planner:
+        async with asgi(create_app(planner=planner, warm=False)) as (_, raw):
+            r = await raw.post("/v1/dose-time", json=body)
+    assert r.status_code == 422, r.text
+    assert where in r.text
