@@ -35,6 +35,7 @@ from .kernels import (
     korteweg,
     permeability,
     permeability_slope,
+    scale_rate,
 )
 
 # Jacobian structure: band half-widths of the s_1..s_{n-2} block and border size.
@@ -132,7 +133,7 @@ def mu_gradient(a, phi_b, geo, omega, chi0, chi1, ell2, work):
 
 
 @njit(cache=True)
-def rhs(y, par, geo, out, work):
+def _rhs(y, par, geo, out, work):
     """d(s_1..s_{n-1}, a)/dt; returns False for an unphysical state."""
     n = geo.shape[1] - 1
     omega, chi0, chi1, ell2 = par.omega, par.chi0, par.chi1, par.ell2
@@ -174,7 +175,7 @@ def _add(row, col, val, jband, jc, jd, je, upper):
 
 
 @njit(cache=True)
-def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):
+def _jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):
     """Analytic Jacobian of :func:`rhs` in the bordered band layout, and rhs into ``out``;
     False if unphysical.
 
@@ -408,3 +409,21 @@ def merge_core(y, geo):
         prev_s = y[i]
         prev_phi = phi
     return 0
+
+
+@njit(cache=True)
+def rhs(y, par, geo, out, work):
+    """The rates of :func:`_rhs` times the mobility ``par.mobility`` (docs/heating.md)."""
+    ok = _rhs(y, par, geo, out, work)
+    if par.mobility != 1.0:
+        out *= par.mobility
+    return ok
+
+
+@njit(cache=True)
+def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):
+    """:func:`_jacobian` times the mobility ``par.mobility`` (docs/heating.md)."""
+    ok = _jacobian(y, par, geo, work, upper, jband, jc, jd, je, out)
+    if ok:
+        scale_rate(par.mobility, out, jband, jc, jd, je)
+    return ok

@@ -8,7 +8,7 @@ enforce a step budget.  Failures raise :class:`SolverError` with the diagnostics
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Protocol
@@ -16,7 +16,9 @@ from typing import Protocol
 import numpy as np
 from numba import njit
 
+from ..crossing import hermite_root
 from ..errors import SolverError
+from ..heating import HEAD, temperature_rate
 from . import rosenbrock as ros
 from .kernels import KernelParams
 from .system import (
@@ -25,6 +27,7 @@ from .system import (
     dense_output,
     edge_porosity,
     fd_jacobian,
+    par_at,
     porosity,
     rhs,
 )
@@ -44,14 +47,35 @@ OutputFn = Callable[[float, np.ndarray], None]
 ProgressFn = Callable[[float], None]
 
 
+NO_HEAT = np.zeros((0, HEAD))
+
+
 @dataclass
 class Segment:
-    """A stretch of the protocol at one temperature: [t0, t1] with kernel parameters."""
+    """A stretch of the protocol: [t0, t1] with kernel parameters ``par`` at one
+    ``temperature``, or, with ``heat`` (a solver.heating header row and one piece row),
+    at the program's T(t) from ``temperature`` at t0.  ``until``: a radius that ends the
+    segment early (its time is then ``ended``); ``jump``: the temperature jumps at t0 (the
+    integrator restarts with a small step)."""
 
     t0: float
     t1: float
     temperature: float
     par: KernelParams
+    heat: np.ndarray = field(default_factory=lambda: NO_HEAT)
+    until: float | None = None
+    jump: bool = True
+    ended: float | None = None
+
+    def temperature_at(self, t: float) -> float:
+        """T at time t of this segment."""
+        if self.heat.shape[0] == 0:
+            return self.temperature
+        return float(temperature_rate(self.heat, float(t))[0])
+
+    def par_at(self, t: float) -> KernelParams:
+        """The kernel parameters at time t."""
+        return par_at(self.par, self.heat, float(t))
 
 
 @dataclass
@@ -68,6 +92,15 @@ class Stats:
     a: list = field(default_factory=list)
     da: list = field(default_factory=list)
     edge: list = field(default_factory=list)
+    t_stop: float | None = None  # the terminal event's time (the run stopped there)
+
+    def truncate(self, t: float) -> None:
+        """Drop the record past time t (a step that overshot an event)."""
+        k = len(self.t)
+        while k and self.t[k - 1] > t:
+            k -= 1
+        for rec in (self.t, self.a, self.da, self.edge):
+            del rec[k:]
 
     def record(self, t: float, a: float, da: float, edge: float) -> None:
         """Append one accepted step's time, radius, da/dt and edge-cell porosity."""
@@ -102,7 +135,7 @@ class Workspace:
         self.em = np.zeros((p, p))
         self.spiv = np.zeros(p, dtype=np.int64)
         self.zbuf = np.zeros(p)
-        self.u = np.zeros((ros.RODASP.m.size, self.n))
+        self.u = np.zeros((ros.RODASP.m.size + 1, self.n))  # stages and df/dt
         self.ytmp = np.zeros(self.n)
         self.ftmp = np.zeros(self.n)
         self.ynew = np.zeros(self.n)
@@ -168,10 +201,37 @@ class StepControl:
     jac_mode: int = JAC_ANALYTIC
 
 
-def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_times: np.ndarray,
-                 on_output: OutputFn, control: StepControl, progress: ProgressFn | None,
-                 stats: Stats, ticks: int = 200, method: ros.Method = ros.RODASP,
-                 rezoner: Rezoner | None = None) -> np.ndarray:
+def _copy(y: np.ndarray, _t: float) -> np.ndarray:
+    return y.copy()
+
+
+def _direction(a: float, target: float | None) -> float:
+    """-1 if a must fall to ``target``, +1 if it must rise, 0 without a target."""
+    if target is None:
+        return 0.0
+    return -1.0 if a > target else 1.0
+
+
+def _event_time(t0: float, t1: float, y0: np.ndarray, y1: np.ndarray, f0: np.ndarray,
+                f1: np.ndarray, ia: int, targets: list[tuple[float, float]]) -> float:
+    """The first time in [t0, t1] at which the radius (cubic Hermite of the accepted step,
+    the dense output of the state) reaches one of ``targets`` [(target, direction)]."""
+    best = t1
+    a0, a1 = float(y0[ia]), float(y1[ia])
+    for target, d in targets:
+        if d == 0.0 or (a1 - target) * d < 0.0:
+            continue
+        if (a0 - target) * d >= 0.0:
+            return t0
+        best = min(best, hermite_root(t0, t1, a0, a1, float(f0[ia]), float(f1[ia]), target))
+    return best
+
+
+def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
+                 out_times: np.ndarray, on_output: OutputFn, control: StepControl,
+                 progress: ProgressFn | None, stats: Stats, ticks: int = 200,
+                 method: ros.Method = ros.RODASP, rezoner: Rezoner | None = None,
+                 stop: float | None = None, total: float | None = None) -> np.ndarray:
     """Integrate with adaptive RODASP through every segment; returns the final state.
 
     The stepping loop runs in numba (rosenbrock.rodas_run) between stops: output times,
@@ -181,15 +241,25 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
     outputs up to the current time are out; the integrator restarts there with a fresh
     Jacobian and without the step controller's history (a one-step method needs nothing
     else).
+
+    Events: ``stop`` (a radius) ends the run when the radius reaches it, from the side it
+    is on at the first segment's start; a segment's ``until`` ends that segment (its time
+    in ``seg.ended``; the segments iterable may be a generator that reads it).  The time
+    is the root of the accepted step's cubic Hermite radius, the state there its dense
+    output; it is the last output of a stopped run (``stats.t_stop``), and the per-step
+    record ends there.  ``total`` is the planned end (default: the last segment's t1).
     """
     rtol, atol, max_steps, jac_mode = (control.rtol, control.atol, control.max_steps,
                                        control.jac_mode)
+    if total is None:
+        segments = list(segments)
+        total = segments[-1].t1
     counters = np.zeros(6, dtype=np.int64)
     rec = np.zeros((4, 4096))
     tt = np.zeros(2)
-    total = segments[-1].t1
     h0 = 1e-7 * max(1.0, total)
-    ctrl = np.array([h0, 0.0, 0.0, 0.0])
+    ctrl = np.zeros(ros.CTRL_SIZE)
+    ctrl[0] = h0
     y = y.copy()
     yold, fold = np.zeros_like(y), np.zeros_like(y)
     ia = ws.ia
@@ -197,17 +267,31 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
     reasons = {ros.RUN_BUDGET: f"step budget exhausted ({max_steps} steps)",
                ros.RUN_UNDERFLOW: "step size underflow",
                ros.RUN_BAD_STATE: "unphysical state"}
+    first = True
     for seg in segments:
-        f = ws.rhs(y, seg.par)
+        f = ws.rhs(y, seg.par_at(seg.t0))
         if f is None:
             raise _failure("unphysical state at the start of a protocol step", stats, seg.t0)
         tt[0] = seg.t0
         if not stats.t or stats.t[-1] != seg.t0:
             stats.record(seg.t0, y[ia], f[ia], edge_porosity(ws.grid, y, ws.geo))
-        ctrl[0], ctrl[1], ctrl[3] = min(ctrl[0], h0), 0.0, 0.0
+        if first:
+            ctrl[4], ctrl[5] = (stop or 0.0), _direction(float(y[ia]), stop)
+            first = False
+        ctrl[6], ctrl[7] = (seg.until or 0.0), _direction(float(y[ia]), seg.until)
+        if seg.jump:
+            ctrl[0], ctrl[1] = min(ctrl[0], h0), 0.0
+        ctrl[3] = 0.0
         if rezoner is not None:
             rezoner.reset(y, ws.geo)  # a new temperature: the mesh stops until it is re-aimed
-        k_out = _emit(out_times, k_out, seg.t0, lambda _t: y.copy(), on_output)
+        k_out = _emit(out_times, k_out, seg.t0, partial(_copy, y), on_output)
+        if ros.crossed(ctrl, y[ia]):  # already there: the event is at the segment's start
+            if ctrl[5] != 0.0 and (y[ia] - ctrl[4]) * ctrl[5] >= 0.0:
+                stats.t_stop = seg.t0
+                on_output(seg.t0, y.copy())
+                return y
+            seg.ended = seg.t0
+            continue
         while tt[0] < seg.t1:
             t_stop = seg.t1
             if progress is not None:
@@ -227,7 +311,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
                 ws.lower, ws.upper, ws.jband, ws.jc, ws.jd, ws.je, ws.lu, ws.ipiv, ws.cm,
                 ws.dm, ws.xm, ws.em, ws.spiv, ws.zbuf, ws.u, ws.ytmp, ws.ftmp, ws.ynew,
                 ws.fnew, ws.errv, ws.scale, rtol, atol, method.tableau, method.a, method.c,
-                method.m, method.e, counters, ctrl, rec, budget, jac_mode)
+                method.m, method.e, counters, ctrl, rec, budget, jac_mode, seg.heat)
             _flush(stats, rec, counters)
             check = status == ros.RUN_BUDGET and budget < max_steps
             if check:
@@ -244,8 +328,28 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
                                {"h": float(ctrl[0]), "phi_max": float(phi.max()),
                                 "phi_min": float(phi.min())})
             t0, t1 = float(tt[1]), float(tt[0])
-            k_out = _emit(out_times, k_out, t1,
-                          partial(_dense_state, ws, t0, t1, yold, y, fold, f), on_output)
+            dense = partial(_dense_state, ws, t0, t1, yold, y, fold, f)
+            if status == ros.RUN_EVENT:
+                t_stop_ev = _event_time(t0, t1, yold, y, fold, f, ia,
+                                        [(ctrl[4], ctrl[5])])
+                t_until = _event_time(t0, t1, yold, y, fold, f, ia, [(ctrl[6], ctrl[7])])
+                t_e = min(t_stop_ev, t_until)
+                k_out = _emit(out_times, k_out, t_e, dense, on_output)
+                y_e = dense(t_e)
+                stats.truncate(t_e)
+                if t_stop_ev <= t_until and ctrl[5] != 0.0 and (
+                        (y[ia] - ctrl[4]) * ctrl[5] >= 0.0):
+                    stats.t_stop = t_e
+                    f_e = ws.rhs(y_e, seg.par_at(t_e))
+                    stats.record(t_e, ctrl[4], f_e[ia] if f_e is not None else 0.0,
+                                 edge_porosity(ws.grid, y_e, ws.geo))
+                    if k_out == 0 or out_times[k_out - 1] != t_e:
+                        on_output(t_e, y_e)
+                    return y_e
+                seg.ended = t_e
+                y = y_e
+                break
+            k_out = _emit(out_times, k_out, t1, dense, on_output)
             if check and rezoner is not None and rezoner(y, ws.geo):
                 ctrl[1], ctrl[3] = 0.0, 0.0  # restart: new Jacobian, no controller history
             if progress is not None:
@@ -254,10 +358,11 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
 
 
 @njit(cache=True)
-def _euler_steps(grid, y, par, geo, work, f, dt, nsteps):
-    """nsteps forward Euler steps in place; returns the number done before a bad state."""
+def _euler_steps(grid, y, par, heat, t0, geo, work, f, dt, nsteps):
+    """nsteps forward Euler steps in place from time t0 (``heat``: the segment's temperature
+    program, solver.heating); returns the number done before a bad state."""
     for k in range(nsteps):
-        if not rhs(grid, y, par, geo, f, work):
+        if not rhs(grid, y, par_at(par, heat, t0 + k * dt), geo, f, work):
             return k
         for i in range(y.size):
             y[i] += dt * f[i]
@@ -328,7 +433,7 @@ def run_explicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
                 remaining = stop - t
                 step = dt
                 if step is None:
-                    step = 0.8 * stable_step(ws, y, seg.par)
+                    step = 0.8 * stable_step(ws, y, seg.par_at(t))
                     if not step > 0.0:
                         raise _failure(f"unphysical state at t={t:.6g}", stats, t)
                 nsteps = int(np.ceil(remaining / step - 1e-9))
@@ -340,7 +445,8 @@ def run_explicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
                     raise _failure(f"step budget exhausted: reaching t={stop:.6g} needs more "
                                    f"than {max_steps} explicit steps of dt={step:.3g} "
                                    f"(max_steps={max_steps})", stats, t, {"dt": step})
-                done = _euler_steps(ws.grid, y, seg.par, ws.geo, ws.work, f, h, nsteps)
+                done = _euler_steps(ws.grid, y, seg.par, seg.heat, t, ws.geo, ws.work, f, h,
+                                    nsteps)
                 stats.steps += done
                 stats.rhs_calls += done
                 if done < nsteps or not np.all(np.isfinite(y)):
@@ -350,7 +456,7 @@ def run_explicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
                 if progress is not None:
                     progress(min(1.0, t / total))
             t = stop
-            fcur = ws.rhs(y, seg.par)
+            fcur = ws.rhs(y, seg.par_at(t))
             if fcur is None:
                 raise _failure(f"unphysical state at t={t:.6g}", stats, t)
             stats.record(t, y[a_idx], fcur[a_idx], edge_porosity(ws.grid, y, ws.geo))

@@ -23,9 +23,12 @@ class KernelParams(NamedTuple):
     """The constants of one protocol segment, by name, as every grid's kernels read them.
 
     ``omega`` and ``chi0``, ``chi1`` at the segment's temperature (eq. FloryParam), the
-    permeability law ``perm_code`` with its exponent ``perm_beta`` (eq. Darcy) and ``ell2``,
-    the square of the interfacial length (0: the paper's model; docs/interfacial.md).  A
-    NamedTuple is a numba tuple type: fields cost no more than a float array's entries.
+    permeability law ``perm_code`` with its exponent ``perm_beta`` (eq. Darcy), ``ell2``,
+    the square of the interfacial length (0: the paper's model; docs/interfacial.md), and
+    ``mobility`` m(T), the rate factor of the temperature's mobility relative to the
+    reference temperature of tau (1: the paper's choice; docs/heating.md): every grid's
+    material velocity k(phi) dmu/dr is multiplied by it.  A NamedTuple is a numba tuple
+    type: fields cost no more than a float array's entries.
     """
 
     omega: float
@@ -34,6 +37,20 @@ class KernelParams(NamedTuple):
     perm_code: int
     perm_beta: float
     ell2: float
+    mobility: float = 1.0
+
+
+@njit(cache=True)
+def scale_rate(m, out, jband, jc, jd, je):
+    """Multiply a rate vector and its Jacobian blocks by the mobility m (in place)."""
+    if m == 1.0:
+        return
+    out *= m
+    jband *= m
+    jc *= m
+    jd *= m
+    je *= m
+
 
 EDGE_MAX_STEP = 0.05  # largest march step in log J while bracketing the edge root
 

@@ -25,6 +25,7 @@ from .kernels import (
     korteweg,
     permeability,
     permeability_slope,
+    scale_rate,
 )
 
 LOWER, UPPER, BORDER = 1, 1, 0
@@ -99,7 +100,7 @@ def mu_gradient(y, phi_b, geo, omega, chi0, chi1, ell2, work):
 
 
 @njit(cache=True)
-def rhs(y, par, geo, out, work):
+def _rhs(y, par, geo, out, work):
     """dr_k/dt = k(phi) dmu/dr at every node k = 1..n; False for an unphysical state."""
     n = geo.shape[1] - 1
     omega, chi0, chi1, ell2 = par.omega, par.chi0, par.chi1, par.ell2
@@ -118,7 +119,7 @@ def rhs(y, par, geo, out, work):
 
 
 @njit(cache=True)
-def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):
+def _jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):
     """Analytic Jacobian of :func:`rhs` (band layout: tridiagonal, pentadiagonal with the
     interfacial term), and rhs into ``out``; False if unphysical."""
     n = geo.shape[1] - 1
@@ -368,3 +369,21 @@ def cell_radii(y: np.ndarray, geo: np.ndarray) -> np.ndarray:
 def radius(y: np.ndarray) -> float:
     """The sphere radius a = r_n."""
     return float(y[-1])
+
+
+@njit(cache=True)
+def rhs(y, par, geo, out, work):
+    """The rates of :func:`_rhs` times the mobility ``par.mobility`` (docs/heating.md)."""
+    ok = _rhs(y, par, geo, out, work)
+    if par.mobility != 1.0:
+        out *= par.mobility
+    return ok
+
+
+@njit(cache=True)
+def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out):
+    """:func:`_jacobian` times the mobility ``par.mobility`` (docs/heating.md)."""
+    ok = _jacobian(y, par, geo, work, upper, jband, jc, jd, je, out)
+    if ok:
+        scale_rate(par.mobility, out, jband, jc, jd, je)
+    return ok

@@ -19,7 +19,8 @@ _STAMP = "thermogel_sources.sha256"
 
 def _digest() -> str:
     h = hashlib.sha256()
-    for path in sorted(_HERE.glob("*.py")) + [_HERE.parent / "thermo.py"]:
+    for path in sorted(_HERE.glob("*.py")) + [_HERE.parent / "thermo.py",
+                                              _HERE.parent / "heating.py"]:
         h.update(path.name.encode())
         h.update(path.read_bytes())
     return h.hexdigest()

@@ -83,6 +83,22 @@ class FullResult:
         """The last simulated time."""
         return float(self.t[-1])
 
+    @property
+    def status(self) -> str:
+        """'stopped' (the ``stop`` event ended the run) or 'finished' (the horizon did)."""
+        return str(self.diagnostics.get("status", "finished"))
+
+    @property
+    def t_events(self) -> np.ndarray:
+        """Times of the terminal event (scipy's ``solve_ivp``): one time, or none."""
+        return np.asarray(self.diagnostics.get("t_events") or [], dtype=float)
+
+    @property
+    def terminal_time(self) -> float | None:
+        """The time the ``stop`` event ended the run (its last output), or None."""
+        ev = self.t_events
+        return float(ev[0]) if ev.size else None
+
     def _dense(self) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """(t, a, da/dt) at every accepted step, or (t, a, None) at the outputs."""
         if self.step_t.size >= 2:

@@ -8,6 +8,15 @@ they are converted here to the transformed form of Hairer & Wanner (1996, sec. I
     y1 = y0 + sum_i m_i U_i,     error = sum_i (m_i - mhat_i) U_i,
 
 so each step needs one Jacobian, one factorization and six bordered band solves.
+
+A non-autonomous system y' = f(t, y) (a temperature program, ``heat``: docs/heating.md)
+evaluates stage i at t0 + alpha_i h and adds gamma_i h df/dt(t0, y0) to its right-hand side
+(Hairer & Wanner IV.7, eq. 7.4'), alpha_i = sum_j alpha_ij, gamma_i = sum_j gamma_ij; df/dt
+is (df/dT) dT/dt by a central difference in T.  An empty ``heat`` is the autonomous method.
+
+Terminal events: ``ctrl[4:8]`` holds two radius targets (target, direction), direction -1
+(the radius falls to it), +1 (rises to it) or 0 (off); an accepted step that reaches one
+ends the run with RUN_EVENT, and the driver locates the time inside the step.
 """
 
 from __future__ import annotations
@@ -18,7 +27,17 @@ import numpy as np
 from numba import njit
 
 from .banded import bordered_factor, bordered_solve
-from .system import edge_porosity, error_norm, event, linearize, radius_index, rhs, underflow
+from .system import (
+    edge_porosity,
+    error_norm,
+    event,
+    linearize,
+    par_at,
+    radius_index,
+    rhs,
+    time_derivative,
+    underflow,
+)
 
 GAMMA = 0.25
 _ALPHA = np.zeros((6, 6))
@@ -54,7 +73,8 @@ A_COEF, C_COEF, M_COEF, E_COEF = _transformed()
 
 
 class Method(NamedTuple):
-    """A Rosenbrock method in transformed form: [gamma, 1/(embedded order + 1)], a, c, m, e."""
+    """A Rosenbrock method in transformed form: tableau = [gamma, 1/(embedded order + 1),
+    alpha_i (stage times), gamma_i (weights of df/dt)], a, c, m, e."""
 
     tableau: np.ndarray
     a: np.ndarray
@@ -63,7 +83,10 @@ class Method(NamedTuple):
     e: np.ndarray
 
 
-RODASP = Method(np.array([GAMMA, 0.25]), A_COEF, C_COEF, M_COEF, E_COEF)
+ALPHA_SUM = _ALPHA.sum(axis=1)
+GAMMA_SUM = _BETA.sum(axis=1) - _ALPHA.sum(axis=1) + GAMMA
+RODASP = Method(np.concatenate([[GAMMA, 0.25], ALPHA_SUM, GAMMA_SUM]), A_COEF, C_COEF,
+                M_COEF, E_COEF)
 
 
 
@@ -84,8 +107,9 @@ def _combine(base, coef, row, scale, u, out):
 @njit(cache=True)
 def rodas_try(grid, y, f0, h, par, geo, work, lower, upper, jband, jc, jd, je, lu, ipiv,
               cm, dm, xm, em, spiv, zbuf, u, ytmp, ftmp, ynew, errv, rtol, atol,
-              gamma, acoef, ccoef, mcoef, ecoef):
-    """One RODASP step of size h from (y, f0 = f(y)) with Jacobian J.
+              gamma, acoef, ccoef, mcoef, ecoef, t, heat, tableau):
+    """One RODASP step of size h from (t, y, f0 = f(t, y)) with Jacobian J; with a
+    temperature program ``heat``, stage times t + alpha_i h and u[stages] = df/dt.
 
     Returns (status, error norm): status 0 done, 1 singular iteration matrix,
     2 an unphysical stage state (the caller shrinks the step).
@@ -118,8 +142,14 @@ def rodas_try(grid, y, f0, h, par, geo, work, lower, upper, jband, jc, jd, je, l
                 ftmp[i] = f0[i]
         else:
             _combine(y, acoef, s, 1.0, u, ytmp)
-            if not rhs(grid, ytmp, par, geo, ftmp, work):
+            par_s = par_at(par, heat, t + tableau[2 + s] * h)
+            if not rhs(grid, ytmp, par_s, geo, ftmp, work):
                 return 2, np.inf
+        if heat.shape[0] > 0:
+            gh = tableau[2 + stages + s] * h
+            ft = u[stages]
+            for i in range(n):
+                ftmp[i] += gh * ft[i]
         _combine(ftmp, ccoef, s, 1.0 / h, u, u[s])
         bordered_solve(lu, lower, upper, ipiv, dm, xm, em, spiv, u[s], zbuf)
     for i in range(n):
@@ -138,6 +168,18 @@ def rodas_try(grid, y, f0, h, par, geo, work, lower, upper, jband, jc, jd, je, l
 C_RHS, C_JAC, C_STEPS, C_REJECTED, C_MERGES = 0, 1, 2, 3, 4
 # run status
 RUN_REACHED, RUN_RECORD_FULL, RUN_BUDGET, RUN_UNDERFLOW, RUN_BAD_STATE = 0, 1, 2, 3, 4
+RUN_EVENT = 5
+CTRL_SIZE = 8  # [h, last h, last error, Jacobian valid, stop target, dir, step target, dir]
+
+
+@njit(cache=True)
+def crossed(ctrl, a):
+    """True if radius a has reached one of the event targets in ctrl[4:8]."""
+    for k in (4, 6):
+        d = ctrl[k + 1]
+        if d != 0.0 and (a - ctrl[k]) * d >= 0.0:
+            return True
+    return False
 SAFETY, FAC_MIN, FAC_MAX = 0.9, 0.2, 6.0
 
 
@@ -145,12 +187,14 @@ SAFETY, FAC_MIN, FAC_MAX = 0.9, 0.2, 6.0
 def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, upper,
               jband, jc, jd, je, lu, ipiv, cm, dm, xm, em, spiv, zbuf, u, ytmp, ftmp, ynew,
               fnew, errv, scale, rtol, atol, tableau, acoef, ccoef, mcoef, ecoef, counters,
-              ctrl, rec, max_steps, jac_mode):
-    """Adaptive RODASP steps from tt[0] until tt[0] >= t_stop (never past t_seg).
+              ctrl, rec, max_steps, jac_mode, heat):
+    """Adaptive RODASP steps from tt[0] until tt[0] >= t_stop (never past t_seg), or until
+    an accepted step reaches an event target (RUN_EVENT; ``crossed``).
 
     y and f = f(y) advance in place; yold, fold and tt[1] keep the last step's start for
     dense output.  ctrl = [h, h of the last accepted step, its error, Jacobian valid flag]
-    (Gustafsson's predictive controller, Hairer & Wanner IV.8).  An accepted step is
+    (Gustafsson's predictive controller, Hairer & Wanner IV.8), then the event targets.
+    ``heat``: the segment's temperature program row (empty: constant ``par``).  An accepted step is
     linearized at once (f and J at the new state; an unphysical new state rejects it).
     rec = (4, capacity) record of (t, a, da/dt, edge-cell porosity) per accepted step, its
     count in counters[5].  Returns a RUN_* status.
@@ -166,11 +210,12 @@ def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, 
             return RUN_RECORD_FULL
         t = tt[0]
         if ctrl[3] == 0.0:
-            calls = linearize(grid, y, f, par, geo, work, lower, upper, jband, jc, jd, je,
-                              ytmp, ftmp, scale, jac_mode)
+            calls = linearize(grid, y, f, par_at(par, heat, t), geo, work, lower, upper,
+                              jband, jc, jd, je, ytmp, ftmp, scale, jac_mode)
             counters[C_JAC] += 1
             if calls < 0:
                 return RUN_BAD_STATE
+            calls += time_derivative(grid, y, par, heat, t, geo, work, u[mcoef.size], ftmp)
             counters[C_RHS] += calls
             ctrl[3] = 1.0
         h = ctrl[0]
@@ -182,15 +227,19 @@ def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, 
             return RUN_UNDERFLOW
         status, err = rodas_try(grid, y, f, h, par, geo, work, lower, upper, jband, jc, jd,
                                 je, lu, ipiv, cm, dm, xm, em, spiv, zbuf, u, ytmp, ftmp, ynew,
-                                errv, rtol, atol, gamma, acoef, ccoef, mcoef, ecoef)
+                                errv, rtol, atol, gamma, acoef, ccoef, mcoef, ecoef, t, heat,
+                                tableau)
         counters[C_RHS] += mcoef.size - 1
         ok = status == 0 and err <= 1.0
+        t_new = t_seg if last else t + h
         if ok:
-            calls = linearize(grid, ynew, fnew, par, geo, work, lower, upper, jband, jc, jd,
-                              je, ytmp, ftmp, scale, jac_mode)
+            calls = linearize(grid, ynew, fnew, par_at(par, heat, t_new), geo, work, lower,
+                              upper, jband, jc, jd, je, ytmp, ftmp, scale, jac_mode)
             counters[C_JAC] += 1
             ok = calls >= 0
             if ok:
+                calls += time_derivative(grid, ynew, par, heat, t_new, geo, work,
+                                         u[mcoef.size], ftmp)
                 counters[C_RHS] += calls
             else:
                 ctrl[3] = 0.0  # J now belongs to no state: recompute at y
@@ -213,7 +262,7 @@ def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, 
             fold[i] = f[i]
             y[i] = ynew[i]
             f[i] = fnew[i]
-        tt[0] = t_seg if last else t + h
+        tt[0] = t_new
         ctrl[0] = h / quot
         counters[C_STEPS] += 1
         if event(grid, y, geo) > 0:
@@ -221,7 +270,7 @@ def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, 
             ctrl[3] = 0.0
             ctrl[0] = min(ctrl[0], 1e-2 * h)
             ctrl[1] = 0.0
-            if not rhs(grid, y, par, geo, f, work):
+            if not rhs(grid, y, par_at(par, heat, t_new), geo, f, work):
                 return RUN_BAD_STATE
             counters[C_RHS] += 1
         k = counters[5]
@@ -230,4 +279,6 @@ def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, 
         rec[2, k] = f[ia]
         rec[3, k] = edge_porosity(grid, y, geo)
         counters[5] = k + 1
+        if crossed(ctrl, y[ia]):
+            return RUN_EVENT
     return RUN_REACHED

@@ -1,14 +1,15 @@
 """simulate(): validate a scenario, build the grid and initial state, integrate, collect.
 
-Time is in units of tau (eq. timescale); tau is treated as the same for every protocol
-step (the paper's choice: the few-kelvin changes of k_B T and viscosity are neglected).
+Time is in units of tau (eq. timescale).  A ``protocol`` treats tau as the same for every
+step (the paper's choice: the few-kelvin changes of k_B T and viscosity are neglected); a
+``program`` (solver.heating) may carry the mobility factor m(T) (docs/heating.md).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -16,6 +17,7 @@ import numpy as np
 from ..equilibrium import equilibrium
 from ..errors import BudgetExceeded, ParameterError, SolverError
 from ..gel import Gel, check_temperature, preset
+from ..heating import UNTIL_LIMIT, Program
 from . import front as fronts
 from . import moving
 from .grids import GridSpec, grid_spec
@@ -28,6 +30,7 @@ from .system import JAC_ANALYTIC, JAC_FD, porosity, solid_error
 
 MAX_OUTPUTS = 100_000
 DEFAULT_OUTPUTS = 200
+HOLD_AFTER = 1e3  # tau: how long a program run with ``stop`` holds after its last step
 
 Initial = FullResult | tuple[float, Sequence[float]] | None
 
@@ -137,8 +140,97 @@ def _initial_state(spec: GridSpec, gel: Gel, t_start: float, first_t: float,
     return y, geo, "given"
 
 
+def _program_segments(program: Program, gel: Gel, t_start: float, a0: float, ell: float,
+                      horizon: float, hold: bool, out: list[Segment], ends: dict[int, float]
+                      ) -> Iterator[Segment]:
+    """The program's pieces as segments, one at a time (an until-step's piece ends at its
+    event: ``seg.ended``, read here before the next is made, and kept in ``ends`` by step),
+    then the hold at the last temperature up to ``horizon`` if ``hold``; each is appended
+    to ``out``."""
+    perm = gel.permeability
+    header = program.header(gel)
+
+    def par(temp: float) -> KernelParams:
+        return KernelParams(float(gel.omega), float(gel.chi0(temp)), float(gel.chi1(temp)),
+                            int(perm.code), float(perm.beta), float(ell * ell),
+                            program.rate_factor(temp))
+
+    t, temp = 0.0, float(t_start)
+    for k, step in enumerate(program.steps):
+        for piece in step.pieces(t, temp, k, a0):
+            if t >= horizon:
+                return
+            t1 = min(piece.t1, horizon)
+            if piece.constant:
+                seg = Segment(t, t1, piece.t_start, par(piece.t_start), until=piece.until,
+                              jump=piece.t_start != temp or t == 0.0)
+            else:
+                seg = Segment(t, t1, piece.t_start, par(piece.t_start),
+                              np.vstack([header, piece.row()]), piece.until,
+                              jump=piece.t_start != temp or t == 0.0)
+            out.append(seg)
+            yield seg
+            if seg.ended is not None:
+                seg.t1 = seg.ended
+                ends[k] = seg.ended
+                t, temp = seg.ended, piece.temperature(seg.ended)
+                break
+            t, temp = t1, piece.temperature(t1)
+    if hold and t < horizon:
+        seg = Segment(t, horizon, temp, par(temp), jump=False)
+        out.append(seg)
+        yield seg
+
+
+def _planned(program: Program, t_start: float) -> tuple[float, float]:
+    """(length without the unbounded until-waits, length with them at UNTIL_LIMIT)."""
+    pieces = program.pieces(t_start)
+    full = float(sum(p.t1 - p.t0 for p in pieces))
+    short = float(sum(p.t1 - p.t0 for p in pieces
+                      if not (p.until is not None and p.t1 - p.t0 == UNTIL_LIMIT)))
+    return short, full
+
+
+def _output_times(short: float, horizon: float) -> np.ndarray:
+    """The default outputs of a program run: 200 over its planned length, then 100
+    geometrically spaced to the horizon."""
+    if short <= 0.0:
+        short = min(horizon, 1.0)
+    times = np.linspace(0.0, short, DEFAULT_OUTPUTS + 1)
+    if horizon > short:
+        times = np.concatenate([times, short + np.geomspace(short / DEFAULT_OUTPUTS,
+                                                            horizon - short, 100)])
+    return np.unique(times[times <= horizon])
+
+
+def _check_saveat(saveat: Any, horizon: float) -> np.ndarray:
+    try:
+        times = np.asarray(saveat, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ParameterError("saveat", saveat, "a list of output times") from None
+    if not (1 <= times.size <= MAX_OUTPUTS) or not np.all(np.isfinite(times)) or np.any(
+            times < 0.0) or np.any(times > horizon * (1 + 1e-12)) or np.any(np.diff(times) < 0):
+        raise ParameterError("saveat", saveat, f"1-{MAX_OUTPUTS} nondecreasing times in "
+                             f"[0, {horizon:.6g}]")
+    return np.unique(np.minimum(times, horizon))
+
+
+def _check_stop(stop: Any) -> float | None:
+    if stop is None:
+        return None
+    try:
+        a = float(stop)
+    except (TypeError, ValueError):
+        a = math.nan
+    if isinstance(stop, bool) or not (math.isfinite(a) and 1.0 < a <= 1e3):
+        raise ParameterError("stop", stop, "None or a radius > 1 (dry radii)")
+    return a
+
+
 def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
              until: float | None = None, protocol: Sequence[tuple[float, float]] | None = None,
+             program: Program | None = None, stop: float | None = None,
+             saveat: Sequence[float] | None = None,
              every: float | None = None, branch: str | None = None, initial: Initial = None,
              progress: Callable[[float], None] | None = None,
              options: SolverOptions | None = None, **option_fields: Any) -> FullResult:
@@ -148,7 +240,19 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     when the first step heats, shrunken when it cools) or from ``initial`` (a FullResult's
     final state, remapped conservatively, or (radius, phi) on this grid), then follows
     ``protocol`` [(duration, temperature), ...] from t = 0; without a protocol it is
-    [(until, t_end)].  How it is discretised and integrated is a
+    [(until, t_end)].  Or it follows ``program``, a :class:`solver.heating.Program` of
+    Hold/Ramp/Bath/Trace steps with T(t) continuous inside the kernels and the mobility
+    factor m(T) (docs/heating.md); ``until`` is then the run's horizon (default: the
+    program's end, or with ``stop`` the program plus HOLD_AFTER at its last temperature).
+
+    ``stop`` (a radius, dry radii) is a terminal event: the run ends when the radius reaches
+    it from the side it starts on (it falls to a smaller target, rises to a larger one),
+    located inside the accepted step (implicit integrator); the record says so
+    (``status`` 'stopped', ``t_events``, ``terminal_time``; 'finished' when the horizon came
+    first).  ``saveat`` selects the output times (in place of ``every``); a stopped run's
+    last output is its terminal time.
+
+    How it is discretised and integrated is a
     :class:`~solver.full.options.SolverOptions`, given whole as ``options`` and/or field by
     field as keywords (scipy's ``solve_ivp(..., **options)``): ``grid`` 'eulerian' (the
     paper's, appendix Numerical scheme, the default), 'lagrangian' (uniform in the dry
@@ -174,7 +278,35 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     if not isinstance(gel, Gel):
         raise ParameterError("gel", gel, "a Gel or a preset name")
     t_start = check_temperature(t_start, "t_start")
-    steps = _protocol(t_end, until, protocol)
+    stop = _check_stop(stop)
+    if program is not None:
+        if not isinstance(program, Program):
+            raise ParameterError("program", program, "a solver.heating.Program")
+        if protocol is not None or t_end is not None:
+            raise ParameterError("program", "with protocol/t_end",
+                                 "either a program or a protocol/t_end, not both")
+        steps = None
+        short, full = _planned(program, t_start)
+        has_until = any(p.until is not None for p in program.pieces(t_start))
+        if until is not None:
+            try:
+                total = float(until)
+            except (TypeError, ValueError):
+                total = math.nan
+            if not (math.isfinite(total) and 0.0 < total <= 1e6):
+                raise ParameterError("until", until, "a horizon 0 < until <= 1e6 (tau)")
+        else:
+            total = full + (HOLD_AFTER if stop is not None else 0.0)
+        if total <= 0.0:
+            raise ParameterError("until", until, "a horizon > 0: the program has no length")
+        pieces = program.pieces(t_start)
+        first_t = pieces[0].temperature(pieces[0].t1) if pieces else t_start
+    else:
+        steps = _protocol(t_end, until, protocol)
+        total = float(sum(d for d, _ in steps))
+        has_until = False
+        short = total
+        first_t = steps[0][1]
     opts = SolverOptions.build(options, **option_fields)
     spec = grid_spec(opts.grid)
     grid, n, integrator, mesh = spec.name, opts.n, opts.integrator, opts.mesh
@@ -184,33 +316,54 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
         else JAC_ANALYTIC
     if progress is not None and not callable(progress):
         raise ParameterError("progress", progress, "a callable taking the fraction done")
-    total = float(sum(d for d, _ in steps))
-    if every is None:
-        every = total / DEFAULT_OUTPUTS
-    if not (isinstance(every, (int, float)) and math.isfinite(every) and every > 0.0):
-        raise ParameterError("every", every, "an output interval > 0")
-    if total / every > MAX_OUTPUTS:
-        raise ParameterError("every", every, f">= {total / MAX_OUTPUTS:.3g} "
-                             f"(at most {MAX_OUTPUTS} outputs)")
+    if integrator != "implicit" and (stop is not None or has_until):
+        raise ParameterError("integrator", integrator,
+                             "'implicit' for runs with events (stop, until-steps)")
+    if saveat is not None:
+        if every is not None:
+            raise ParameterError("saveat", saveat, "either saveat or every, not both")
+        out_times = _check_saveat(saveat, total)
+    else:
+        if every is None and program is not None:
+            out_times = _output_times(short, total)
+        else:
+            if every is None:
+                every = total / DEFAULT_OUTPUTS
+            if not (isinstance(every, (int, float)) and math.isfinite(every) and every > 0.0):
+                raise ParameterError("every", every, "an output interval > 0")
+            if total / every > MAX_OUTPUTS:
+                raise ParameterError("every", every, f">= {total / MAX_OUTPUTS:.3g} "
+                                     f"(at most {MAX_OUTPUTS} outputs)")
+            k_out = int(math.floor(total / every + 1e-9))
+            out_times = np.unique(np.concatenate([np.arange(k_out + 1) * every, [total]]))
+            out_times = out_times[out_times <= total]
 
     code = spec.code
     mod = spec.module
-    y0, geo, branch_used = _initial_state(spec, gel, t_start, steps[0][1], branch, initial, n,
+    y0, geo, branch_used = _initial_state(spec, gel, t_start, first_t, branch, initial, n,
                                           mesh, ell)
-    segments, t0 = [], 0.0
     perm = gel.permeability
-    for duration, temp in steps:
-        par = KernelParams(float(gel.omega), float(gel.chi0(temp)), float(gel.chi1(temp)),
-                           int(perm.code), float(perm.beta), float(ell * ell))
-        segments.append(Segment(t0, t0 + duration, temp, par))
-        t0 += duration
-    segments[-1].t1 = total
-    k_out = int(math.floor(total / every + 1e-9))
-    out_times = np.unique(np.concatenate([np.arange(k_out + 1) * every, [total]]))
-    out_times = out_times[out_times <= total]
+    done: list[Segment] = []
+    ends: dict[int, float] = {}
+    segments: Any
+    if steps is not None:
+        segments, t0 = [], 0.0
+        for duration, temp in steps:
+            par = KernelParams(float(gel.omega), float(gel.chi0(temp)), float(gel.chi1(temp)),
+                               int(perm.code), float(perm.beta), float(ell * ell))
+            segments.append(Segment(t0, t0 + duration, temp, par))
+            t0 += duration
+        segments[-1].t1 = total
+        done = segments
+    else:
+        a0 = float(y0[-2] if spec.moving else mod.radius(y0))
+        segments = _program_segments(program, gel, t_start, a0, ell, total,
+                                     stop is not None or until is not None, done, ends)
+        if integrator != "implicit":
+            segments = list(segments)
 
     ws = Workspace(code, geo, interfacial=ell > 0.0)
-    collector = _Collector(mod, code, geo, segments, out_times.size, n,
+    collector = _Collector(mod, code, geo, done, out_times.size + 2, n,
                            fronts.diffuse_window(ell, n) if ell > 0.0 else fronts.WINDOW,
                            moving=spec.moving, ell=ell)
     rezoner = Rezoner(mesh, ell) if spec.moving else None
@@ -218,8 +371,13 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     diag: dict[str, Any] = {
         "grid": grid, "n": n, "integrator": integrator, "rtol": rtol, "atol": atol,
         "jacobian": "fd" if jac_mode == JAC_FD else "analytic", "interfacial_length": ell,
-        "gel": gel.to_dict(), "t_start": t_start, "branch": branch_used,
-        "protocol": [list(s) for s in steps]}
+        "gel": gel.to_dict(), "t_start": t_start, "branch": branch_used}
+    if steps is not None:
+        diag["protocol"] = [list(s) for s in steps]
+    else:
+        diag["program"] = program.to_dict()
+    if stop is not None:
+        diag["stop"] = stop
     if spec.moving:
         diag["mesh"] = mesh.to_dict()
     if max_seconds is not None:
@@ -227,13 +385,13 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
                              f"{grid} grid, N = {n}, interfacial length {ell:g}")
     try:
         if integrator == "implicit":
-            run_implicit(ws, y0, segments, out_times, collector,
-                         StepControl(rtol, atol, max_steps, jac_mode), progress, stats,
-                         rezoner=rezoner)
+            y_end = run_implicit(ws, y0, segments, out_times, collector,
+                                 StepControl(rtol, atol, max_steps, jac_mode), progress, stats,
+                                 rezoner=rezoner, stop=stop, total=total)
         else:
             diag["dt"] = dt
-            run_explicit(ws, y0, segments, out_times, collector, dt, max_steps, progress,
-                         stats)
+            y_end = run_explicit(ws, y0, segments, out_times, collector, dt, max_steps,
+                                 progress, stats)
     except SolverError as exc:
         exc.diagnostics.update(diag)
         exc.diagnostics["wall_time"] = time.perf_counter() - started
@@ -244,9 +402,17 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
                           f"{collector.spinodal_time:.4g}: interior cells collapse at grid "
                           f"scale, the start is inside the spinodal region)",
                           exc.diagnostics) from exc
+    t_final = stats.t_stop if stats.t_stop is not None else (done[-1].t1 if done else 0.0)
+    if (saveat is None or stats.t_stop is not None) and (
+            collector.k == 0 or collector.t[collector.k - 1] < t_final):
+        collector(t_final, y_end)  # a program that ended before its planned horizon
     diag.update(steps=stats.steps, rejected=stats.rejected, jacobians=stats.jacobians,
                 rhs_calls=stats.rhs_calls, merges=stats.merges,
-                wall_time=time.perf_counter() - started)
+                wall_time=time.perf_counter() - started,
+                status="stopped" if stats.t_stop is not None else "finished",
+                t_events=[] if stats.t_stop is None else [stats.t_stop])
+    if steps is None:
+        diag["until_events"] = {str(k): t for k, t in ends.items()}
     if rezoner is not None:
         diag.update(mesh_checks=rezoner.checks, remaps=rezoner.remaps)
     result = collector.result(diag, stats)
@@ -303,8 +469,8 @@ class _Collector:
         """Temperature at output t: the protocol step with t0 < t <= t1 (the first at t = 0)."""
         for seg in self.segments:
             if t <= seg.t1:
-                return seg.temperature
-        return self.segments[-1].temperature
+                return seg.temperature_at(t)
+        return self.segments[-1].temperature_at(t)
 
     def result(self, diag: dict[str, Any], stats: Stats) -> FullResult:
         k = self.k

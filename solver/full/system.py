@@ -10,7 +10,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..heating import mobility_factor, temperature_rate
 from . import ale, eulerian, lagrangian
+from .kernels import KernelParams
 
 EULERIAN, LAGRANGIAN, MOVING = 0, 1, 2
 GRID_CODES = {"eulerian": EULERIAN, "lagrangian": LAGRANGIAN, "moving": MOVING}  # see grids.py
@@ -209,3 +211,52 @@ def event(grid, y, geo):
     if grid == EULERIAN:
         return eulerian.merge_core(y, geo)
     return 0
+
+
+HEAT_DT = 1e-3  # K: the central difference of f in T for df/dt (f is smooth in T)
+
+
+@njit(cache=True)
+def par_shift(par, heat, temp):
+    """``par`` at temperature ``temp``: chi0, chi1 (eq. FloryParam) and the mobility from
+    the program's header row heat[0] = [A0, B0, A1, B1, mobility kind, T_ref, ...]."""
+    head = heat[0]
+    return KernelParams(float(par.omega), head[0] + head[1] * temp, head[2] + head[3] * temp,
+                        par.perm_code, float(par.perm_beta), float(par.ell2),
+                        mobility_factor(int(head[4]), temp, head[5]))
+
+
+@njit(cache=True)
+def par_at(par, heat, t):
+    """The kernel parameters at time t: ``par`` itself without a program (empty ``heat``),
+    else at the program's temperature T(t) (solver.heating)."""
+    if heat.shape[0] == 0:
+        return par
+    temp, _ = temperature_rate(heat, t)
+    return par_shift(par, heat, temp)
+
+
+@njit(cache=True)
+def time_derivative(grid, y, par, heat, t, geo, work, ft, ftmp):
+    """df/dt at (t, y) into ``ft``: (df/dT) dT/dt, df/dT by a central difference of
+    HEAT_DT in T (chi and the mobility are smooth in T); zero without a program or while
+    T is constant.  Returns the rhs calls used (2 or 0)."""
+    if heat.shape[0] == 0:
+        return 0
+    temp, rate = temperature_rate(heat, t)
+    if rate == 0.0:
+        ft[:] = 0.0
+        return 0
+    ok = rhs(grid, y, par_shift(par, heat, temp + HEAT_DT), geo, ft, work)
+    ok = rhs(grid, y, par_shift(par, heat, temp - HEAT_DT), geo, ftmp, work) and ok
+    if grid == MOVING:
+        ale.refresh(geo, y[y.size - 1])
+    if not ok:
+        ft[:] = 0.0
+        return 2
+    scale = rate / (2.0 * HEAT_DT)
+    for i in range(ft.size):
+        ft[i] = (ft[i] - ftmp[i]) * scale
+    if grid == MOVING:
+        ft[ft.size - 1] = 0.0
+    return 2
