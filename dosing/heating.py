@@ -838,3 +838,66 @@ def reference_text(t_ref: float) -> str:
     """How the protocol's seconds become tau (stated in every answer)."""
     return (f"seconds -> tau through one timescale, tau at the protocol's hottest temperature "
             f"T_ref = {t_ref:g} K (eq. timescale)")
+
+
+# ----------------------------------------------------------------------------- solver program
+OPEN_BATH_CONSTANTS = 40.0  # an open bath runs 40 time constants (within e^-40 of the bath)
+MOBILITY_TEXT = {
+    "kT": "the mobility's temperature dependence m(T) = T / T_ref inside the rate (k_B T; "
+          "the viscosity held at its given value)",
+    "water": "the mobility's temperature dependence m(T) = (T / T_ref) eta_w(T_ref) / "
+             "eta_w(T) inside the rate (k_B T and water's viscosity)",
+    "constant": "the mobility held at its value at T_ref (the paper's choice)",
+}
+
+
+def program_spec(pieces: Sequence[Piece], mobility: str, reference: float) -> dict[str, Any]:
+    """The program as plain data for ``solver.heating.Program`` (:func:`solver_program`):
+    a last hold without a duration is dropped when it holds the temperature the bead is
+    at (the run holds there after its last step anyway), else kept for an instant; a bath
+    without an end runs ``OPEN_BATH_CONSTANTS`` time constants."""
+    steps: list[list[Any]] = []
+    cur = pieces[0].t0 if pieces else reference
+    for p in pieces:
+        if p.shape == "ramp":
+            if p.duration and p.t1 != p.t0:
+                steps.append(["ramp", p.t1, abs(p.t1 - p.t0) / p.duration])
+        elif p.shape == "hold":
+            if p.duration is None:
+                if p.t1 != cur:
+                    steps.append(["hold", p.t1, 1e-12])
+            elif p.duration > 0.0:
+                steps.append(["hold", p.t1, p.duration])
+        elif p.shape == "bath":
+            d = p.duration if p.duration is not None else OPEN_BATH_CONSTANTS * p.time_constant
+            if d > 0.0:
+                steps.append(["bath", p.t1, p.time_constant, d])
+        else:
+            steps.append(["trace", list(p.times), list(p.temps)])
+        if p.shape == "bath" and p.duration is not None:
+            cur = float(p.temperature(np.array([p.duration]))[0])
+        elif p.shape == "trace":
+            cur = p.temps[-1]
+        else:
+            cur = p.t1
+    if not steps:
+        steps.append(["hold", cur, 1e-12])
+    return {"steps": steps, "mobility": mobility, "reference": float(reference)}
+
+
+def solver_program(spec: dict[str, Any]) -> Any:
+    """A ``solver.heating.Program`` from :func:`program_spec`'s plain data."""
+    from solver import heating as sh
+
+    steps = []
+    for row in spec["steps"]:
+        kind = row[0]
+        if kind == "ramp":
+            steps.append(sh.Ramp(float(row[1]), float(row[2])))
+        elif kind == "hold":
+            steps.append(sh.Hold(float(row[1]), float(row[2])))
+        elif kind == "bath":
+            steps.append(sh.Bath(float(row[1]), float(row[2]), float(row[3])))
+        else:
+            steps.append(sh.Trace(tuple(row[1]), tuple(row[2])))
+    return sh.Program(tuple(steps), spec.get("mobility", "constant"), spec.get("reference"))

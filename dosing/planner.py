@@ -352,7 +352,7 @@ class Planner:
 
 
 def _covers(traj: Trajectory, sc: Scenario, need_radius: float | None, need_time: float) -> bool:
-    if sc.protocol is not None:
+    if sc.protocol is not None or sc.program is not None:
         return True
     if need_radius is not None and traj.radius.min() > need_radius:
         return False

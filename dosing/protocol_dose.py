@@ -9,11 +9,13 @@ released") ends when the truth run of the protocol so far reaches its radius; th
 after it start there.  After the last step the bead holds at the last temperature for a
 tail of ``TAIL`` tau, extended x4 (up to ``MAX_TAIL``) while the radius is not reached.
 
-The solver's protocol is still piecewise constant, so ramps, baths and traces run as a
-fine staircase of holds (``dosing.heating.staircase``, 0.05 K per stair; stated in the
-answer) until the continuous T(t) of the solver lands.  Runs are scenarios of the planner's
-cache; without them :func:`answer` queues them as a validation (HTTP 202) and the same
-request asked again answers from the cache.
+On the real solver a protocol runs as a continuous T(t) inside the kernels
+(``solver.heating.Program``, with the mobility's temperature dependence m(T) relative to
+T_ref) and every run stops at its target radius (``simulate(stop=...)``); a stand-in solver
+without programs (the tests' fake) gets a fine staircase of holds
+(``dosing.heating.staircase``, 0.05 K per stair).  The answer says which.  Runs are
+scenarios of the planner's cache; without them :func:`answer` queues them as a validation
+(HTTP 202) and the same request asked again answers from the cache.
 """
 
 from __future__ import annotations
@@ -31,7 +33,16 @@ from solver.equilibrium import nearest_stable
 from solver.errors import ParameterError, SolverError
 
 from .answers import Pending
-from .heating import STAIR_KELVIN, Piece, Protocol, Until, reference_text, staircase
+from .heating import (
+    MOBILITY_TEXT,
+    STAIR_KELVIN,
+    Piece,
+    Protocol,
+    Until,
+    program_spec,
+    reference_text,
+    staircase,
+)
 from .request import DoseRequest
 from .scenario import Scenario, Trajectory
 from .truth import truth_text
@@ -146,20 +157,82 @@ def _scenario(req: DoseRequest, steps: list[tuple[float, float]], settings: Any)
 Getter = Callable[[list[Scenario], float, float], list[Trajectory] | Pending]
 
 
+@dataclass(frozen=True)
+class Mode:
+    """How a protocol runs: ``continuous`` T(t) in the solver's kernels with a terminal
+    event at the target radius (``solver.heating.Program``, ``simulate(stop=...)``) and the
+    ``mobility`` law, or (False) the staircase of holds on the piecewise-constant protocol
+    (a stand-in solver that takes no program)."""
+
+    continuous: bool = True
+    mobility: str = "kT"
+
+
+def mode_for(planner: Any, req: DoseRequest) -> Mode:
+    """Continuous on the real solver (its mobility: 'water' with water's viscosity, else
+    'kT'); the staircase on a stand-in solver."""
+    from solver.full import simulate
+
+    mobility = "water" if req.constants.viscosity_pa_s == "water" else "kT"
+    return Mode(planner.solver is simulate, mobility)
+
+
+def _settings_list(req: DoseRequest, check: Any) -> list[Any]:
+    out = [req.settings]
+    if check:
+        out.append(req.settings.check())
+        if req.interfacial_range is not None and check == "range":
+            out += [req.settings.with_length(ell) for ell in req.interfacial_range]
+    return out
+
+
+def _reach_event(req: DoseRequest, get: Getter, pieces: list[Piece], target: float,
+                 after: float, field: str, check: Any, mode: Mode
+                 ) -> tuple[float, Trajectory, list[Scenario], list[Any]] | Pending:
+    """The continuous program of ``pieces`` run until the radius reaches ``target`` (a
+    terminal event; the solver holds at the last temperature after the last step)."""
+    spec = program_spec(pieces, mode.mobility, req.t_end)
+    scs = [Scenario(req.gel, req.t_start, program=spec, stop=target, branch=req.branch,
+                    settings=s) for s in _settings_list(req, check)]
+    trajs = get(scs, target, after)
+    if isinstance(trajs, Pending):
+        return trajs
+    traj = trajs[0]
+    if isinstance(traj, BaseException):
+        raise traj
+    t_hit = _event_time(traj, target)
+    if t_hit is None:
+        raise ParameterError(field, target, f"a radius the bead reaches: the run ends at "
+                             f"radius {float(traj.radius[-1]):.4g} dry radii after "
+                             f"{traj.horizon:.4g} tau, held at the last temperature")
+    trajs = [tr if k == 0 or isinstance(tr, BaseException) or _event_time(tr, target)
+             is not None else ValueError(f"the run does not reach radius {target:.6g}")
+             for k, tr in enumerate(trajs)]
+    return t_hit, traj, scs, trajs
+
+
+def _event_time(traj: Any, target: float) -> float | None:
+    t = getattr(traj, "terminal_time", None)
+    if t is not None:
+        return float(t)
+    try:
+        return traj.time_to_radius(target)
+    except ValueError:
+        return None
+
+
 def _reach(req: DoseRequest, get: Getter, pieces: list[Piece], target: float, after: float,
-           field: str, check: bool) -> tuple[float, Trajectory, list[Scenario],
-                                             list[Any]] | Pending:
+           field: str, check: Any, mode: Mode = Mode()) -> tuple[float, Trajectory,
+                                                                list[Scenario], list[Any]
+                                                                ] | Pending:
     """First time >= ``after`` the truth run of ``pieces`` (+ a tail) reaches ``target``:
     (time, truth trajectory, scenarios, their trajectories), or Pending."""
+    if mode.continuous:
+        return _reach_event(req, get, pieces, target, after, field, check, mode)
     tail = TAIL
     while True:
         steps = _open(pieces, tail)
-        scs = [_scenario(req, steps, req.settings)]
-        if check:
-            scs += [_scenario(req, steps, req.settings.check())]
-            if req.interfacial_range is not None and check == "range":
-                scs += [_scenario(req, steps, req.settings.with_length(ell))
-                        for ell in req.interfacial_range]
+        scs = [_scenario(req, steps, s) for s in _settings_list(req, check)]
         trajs = get(scs, target, after)
         if isinstance(trajs, Pending):
             return trajs
@@ -198,7 +271,8 @@ def _reaches(traj: Any, target: float, after: float) -> bool:
     return True
 
 
-def resolve_untils(req: DoseRequest, get: Getter) -> tuple[Protocol, list[UntilResult]] | Pending:
+def resolve_untils(req: DoseRequest, get: Getter, mode: Mode = Mode()
+                   ) -> tuple[Protocol, list[UntilResult]] | Pending:
     """The protocol with each until-step's duration found by its truth run, in order."""
     prot: Protocol = req.heating
     tau_s = _tau_seconds(req)
@@ -209,10 +283,10 @@ def resolve_untils(req: DoseRequest, get: Getter) -> tuple[Protocol, list[UntilR
         start = sum(p.duration for p in pieces[:-1])
         piece = pieces[-1]
         target = until_radius(req, piece.until, i)
-        got = _reach(req, get, pieces, target, start, f"protocol[{i}].until", check=False)
+        got = _reach(req, get, pieces, target, start, f"protocol[{i}].until", False, mode)
         if isinstance(got, Pending):
             return got
-        t_hit = got[0]
+        t_hit = max(got[0], start)  # met before the step: it ends at once
         durations[i] = max(t_hit - start, 0.0)
         done.append(UntilResult(i, prot.steps[i].text, start, t_hit,
                                 None if tau_s is None else start * tau_s,
@@ -220,12 +294,12 @@ def resolve_untils(req: DoseRequest, get: Getter) -> tuple[Protocol, list[UntilR
     return (prot.with_durations(durations) if durations else prot), done
 
 
-def protocol_dose(req: DoseRequest, get: Getter, ranges: bool = False
+def protocol_dose(req: DoseRequest, get: Getter, ranges: bool = False, mode: Mode = Mode()
                   ) -> ProtocolDoseAnswer | Pending:
     """The dose under ``req.heating``: its until-steps resolved, then the time from the
     protocol's start at which the truth run reaches the dose radius (with its check run,
     and with ``ranges`` the interfacial-length range runs)."""
-    resolved = resolve_untils(req, get)
+    resolved = resolve_untils(req, get, mode)
     if isinstance(resolved, Pending):
         return resolved
     prot, untils = resolved
@@ -233,12 +307,12 @@ def protocol_dose(req: DoseRequest, get: Getter, ranges: bool = False
     pieces = prot.program(tau_s)
     target = radius_after_dose(req.start_radius, req.fraction)
     got = _reach(req, get, pieces, target, 0.0, "dose_fraction",
-                 check="range" if ranges else True)
+                 "range" if ranges else True, mode)
     if isinstance(got, Pending):
         return got
     time, traj, scs, trajs = got
     rep = validation_report(scs, trajs, req.start_radius, target, None)
-    return _answer(req, prot, untils, pieces, time, traj, scs, rep, tau_s)
+    return _answer(req, prot, untils, pieces, time, traj, scs, rep, tau_s, mode)
 
 
 def temperature_curve(pieces: list[Piece], t_start: float, times: np.ndarray) -> np.ndarray:
@@ -259,12 +333,11 @@ def temperature_curve(pieces: list[Piece], t_start: float, times: np.ndarray) ->
 
 def _answer(req: DoseRequest, prot: Protocol, untils: list[UntilResult], pieces: list[Piece],
             time: float, traj: Trajectory, scs: list[Scenario], rep: Any,
-            tau_s: float | None) -> ProtocolDoseAnswer:
+            tau_s: float | None, mode: Mode) -> ProtocolDoseAnswer:
     dry = req.bead_dry_radius_um
     a0 = req.start_radius
     target = radius_after_dose(a0, req.fraction)
     ts = timescale(dry, req.t_end, req.constants) if dry is not None else None
-    n_stairs = len(scs[0].protocol)
     stored = req.jump.stored_volume
     vol = expelled_volume(a0, target)
     unc = rep.uncertainty
@@ -281,9 +354,15 @@ def _answer(req: DoseRequest, prot: Protocol, untils: list[UntilResult], pieces:
              "released_fraction": released.tolist(),
              "seconds": (tc * tau_s).tolist() if tau_s is not None else []}
     t_dose = float(temperature_curve(pieces, prot.t_start, np.array([time]))[0])
-    program = (f"ramps, baths and traces run as a staircase of holds, {STAIR_KELVIN:g} K "
-               f"per stair, each at its stair's time-mean temperature ({n_stairs} steps "
-               "with the tail; the solver's continuous T(t) replaces it when it lands)")
+    if mode.continuous:
+        program = (f"continuous T(t) inside the solver's kernels (solver.heating.Program, "
+                   f"T_ref = {req.t_end:g} K), {MOBILITY_TEXT[mode.mobility]}; each run stops "
+                   "at its target radius (a terminal event)")
+    else:
+        program = (f"ramps, baths and traces run as a staircase of holds, {STAIR_KELVIN:g} K "
+                   f"per stair, each at its stair's time-mean temperature "
+                   f"({len(scs[0].protocol)} steps with the tail; mobility held at T_ref: the "
+                   "stand-in solver takes no continuous program)")
     return ProtocolDoseAnswer(
         model="full", truth=truth_text(req), protocol=prot.texts,
         protocol_steps=[s.to_dict() for s in prot.steps], t_start=prot.t_start,
@@ -340,7 +419,7 @@ def queue_getter(planner: Any, fraction: float, start_radius: float) -> Getter:
 
 def dose(planner: Any, req: DoseRequest, validate: bool = False) -> ProtocolDoseAnswer:
     """The dose under a protocol, blocking on the planner's runs (cached)."""
-    out = protocol_dose(req, blocking_getter(planner), ranges=validate)
+    out = protocol_dose(req, blocking_getter(planner), validate, mode_for(planner, req))
     assert not isinstance(out, Pending)
     return out
 
@@ -349,4 +428,4 @@ def answer(planner: Any, req: DoseRequest, validate: bool = False
            ) -> ProtocolDoseAnswer | Pending:
     """The dose under a protocol now from the cache, else Pending (its runs queued)."""
     return protocol_dose(req, queue_getter(planner, req.fraction, req.start_radius),
-                         ranges=validate)
+                         validate, mode_for(planner, req))

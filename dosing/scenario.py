@@ -225,9 +225,18 @@ class Scenario:
     protocol: tuple[Step, ...] | None = None
     branch: str = "swollen"
     settings: SolverSettings = field(default_factory=SolverSettings)
+    # a continuous temperature program (dosing.heating.program_spec: plain data) and the
+    # radius at which its run stops (a terminal event); in place of t_end / protocol
+    program: Any = None
+    stop: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "t_start", check_temperature(self.t_start, "t_start"))
+        if self.program is not None:
+            if self.t_end is not None or self.protocol is not None:
+                raise ParameterError("program", "with t_end/protocol", "one of them")
+            object.__setattr__(self, "program", json.loads(json.dumps(self.program)))
+            return
         if (self.t_end is None) == (self.protocol is None):
             raise ParameterError("protocol", self.protocol, "exactly one of t_end or protocol")
         if self.t_end is not None:
@@ -243,6 +252,8 @@ class Scenario:
     def key_dict(self) -> dict[str, Any]:
         """Everything that defines the dimensionless answer (JSON-ready, canonical)."""
         what: dict[str, Any] = ({"t_end": self.t_end} if self.t_end is not None
+                                else {"program": self.program, "stop": self.stop}
+                                if self.program is not None
                                 else {"protocol": [list(s) for s in self.protocol]})
         return {"schema": SCHEMA, "gel": list(self.gel.key()), "t_start": self.t_start, **what,
                 "branch": self.branch, "settings": self.settings.to_dict(),
@@ -262,7 +273,9 @@ class Scenario:
         """Plain data for a worker process (and for humans)."""
         return {"gel": self.gel.to_dict(), "t_start": self.t_start, "t_end": self.t_end,
                 "protocol": None if self.protocol is None else [list(s) for s in self.protocol],
-                "branch": self.branch, "settings": self.settings.to_dict()}
+                "branch": self.branch, "settings": self.settings.to_dict(),
+                **({} if self.program is None else {"program": self.program,
+                                                    "stop": self.stop})}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Scenario:
@@ -270,7 +283,8 @@ class Scenario:
         prot = d.get("protocol")
         return cls(Gel.from_dict(d["gel"]), d["t_start"], d.get("t_end"),
                    None if prot is None else tuple(tuple(s) for s in prot),
-                   d.get("branch", "swollen"), SolverSettings(**d.get("settings", {})))
+                   d.get("branch", "swollen"), SolverSettings(**d.get("settings", {})),
+                   d.get("program"), d.get("stop"))
 
     def steps(self, horizon: float) -> list[Step]:
         """The protocol to simulate (a jump becomes one step of length ``horizon``)."""
@@ -292,7 +306,13 @@ interfacial_length=, max_seconds=``) and returning a :class:`FullResult`."""
 def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver) -> FullResult:
     """One run of ``sc`` (a jump runs for ``horizon``) within ``budget`` s, as stored."""
     s = sc.settings
-    res = solver(sc.gel, sc.t_start, protocol=sc.steps(horizon), grid=s.grid, n=s.n,
+    if sc.program is not None:  # a continuous temperature program (dosing.heating)
+        from .heating import solver_program
+
+        kw = {"program": solver_program(sc.program), "stop": sc.stop}
+    else:
+        kw = {"protocol": sc.steps(horizon)}
+    res = solver(sc.gel, sc.t_start, **kw, grid=s.grid, n=s.n,
                  integrator=s.integrator, rtol=s.rtol, branch=sc.branch,
                  interfacial_length=s.interfacial_length, max_seconds=budget)
     rec = res.without_profiles()
@@ -319,7 +339,8 @@ def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: fl
     while True:
         traj = _simulate(sc, max(h, need_time), budget, solver)
         runs += 1
-        if sc.protocol is not None or need_radius is None or traj.radius.min() <= need_radius:
+        if (sc.protocol is not None or sc.program is not None or need_radius is None
+                or traj.radius.min() <= need_radius):
             break
         if h >= max_horizon:
             raise SolverError(
