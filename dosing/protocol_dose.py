@@ -429,3 +429,55 @@ def answer(planner: Any, req: DoseRequest, validate: bool = False
     """The dose under a protocol now from the cache, else Pending (its runs queued)."""
     return protocol_dose(req, queue_getter(planner, req.fraction, req.start_radius),
                          validate, mode_for(planner, req))
+
+
+# ----------------------------------------------------------------------------- heater sweeps
+HEATERS = {"ramp": ("Heat to {t} K at {x:g} K/min", "K/min"),
+           "bath": ("Bath at {t} K with a time constant of {x:g} s", "s")}
+
+
+@dataclass
+class HeaterRow:
+    """One heater of a sweep: its kind and setting, the protocol and the dose's time."""
+
+    kind: str
+    value: float
+    unit: str
+    protocol: str
+    seconds: float | None
+    time: float
+    error_estimate: float | None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form."""
+        return asdict(self)
+
+
+def heater_sweep(planner: Any, kind: str, values: list[float], t_end: float,
+                 **fields: Any) -> list[HeaterRow]:
+    """The dose's time for each heater setting: ``kind`` 'ramp' (rates in K/min to
+    ``t_end``) or 'bath' (time constants in s, a bath at ``t_end``); ``fields`` are the
+    rest of the :class:`DoseRequest` (gel, t_start, the dose, the bead size, ...).
+    Blocking; every run is cached like any protocol dose's."""
+    if kind not in HEATERS:
+        raise ParameterError("kind", kind, "'ramp' or 'bath'")
+    if not values:
+        raise ParameterError("values", values, "at least one heating rate or time constant")
+    text, unit = HEATERS[kind]
+    rows = []
+    for x in values:
+        step = text.format(t=f"{float(t_end):g}", x=float(x))
+        ans = planner.dose(DoseRequest(protocol=[step], **fields))
+        rows.append(HeaterRow(kind, float(x), unit, step, ans.seconds, ans.time,
+                              ans.error_estimate))
+    return rows
+
+
+def heater_needed(rows: list[HeaterRow], within_seconds: float) -> HeaterRow | None:
+    """The least demanding heater of a sweep that reaches the dose within the time (the
+    slowest ramp, or the bath with the largest time constant), or None."""
+    ok = [r for r in rows if r.seconds is not None and r.seconds <= within_seconds]
+    if not ok:
+        return None
+    return min(ok, key=lambda r: r.value) if ok[0].kind == "ramp" else max(
+        ok, key=lambda r: r.value)

@@ -322,3 +322,25 @@ async def test_http_protocol_errors_422(tmp_path, fake, change, where):
             r = await raw.post("/v1/dose-time", json=body)
     assert r.status_code == 422, r.text
     assert where in r.text
+
+
+# ----------------------------------------------------------------------------- heater sweeps
+def test_heater_sweep_answers_which_heater(planner):
+    """'Which heater do I need for a 30 % dose within a time?': faster ramps and smaller
+    bath constants are sooner; the least demanding heater meeting the time is named."""
+    from dosing.protocol_dose import heater_needed, heater_sweep
+
+    fields = {**BEAD, "dose_fraction": 0.3}
+    ramps = heater_sweep(planner, "ramp", [1.0, 5.0, 50.0], 308.0, **fields)
+    secs = [r.seconds for r in ramps]
+    assert secs[0] > secs[1] > secs[2]
+    assert ramps[1].seconds == planner.dose(_req(["Heat to 308 K at 5 K/min"])).seconds
+    limit = 0.5 * (secs[0] + secs[1])
+    assert heater_needed(ramps, limit).value == 5.0
+    assert heater_needed(ramps, 0.5 * secs[2]) is None
+    baths = heater_sweep(planner, "bath", [5.0, 30.0, 120.0], 308.0, **fields)
+    assert [b.seconds for b in baths] == sorted(b.seconds for b in baths)
+    assert heater_needed(baths, baths[1].seconds).value == 30.0
+    with pytest.raises(ParameterError) as e:
+        heater_sweep(planner, "oven", [1.0], 308.0, **fields)
+    assert e.value.field == "kind"
