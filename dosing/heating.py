@@ -90,11 +90,23 @@ def _seconds_text(s: float) -> str:
     return f"{s:g} s"
 
 
+MAX_QUANTITY_CHARS = 80
+
+
 class _Where:
     """Names the step of an error: field ``protocol[i].<name>``, reason quoting the text."""
 
     def __init__(self, index: int, text: str) -> None:
         self.index, self.text = index, text
+
+    def guard(self, value: Any, name: str) -> Any:
+        """A quantity string pint may evaluate: no powers (pint computes '9**9**9' exactly,
+        for ever) and at most MAX_QUANTITY_CHARS characters."""
+        if isinstance(value, str) and ("**" in value or "^" in value
+                                       or len(value) > MAX_QUANTITY_CHARS):
+            raise self.error(name, value[:MAX_QUANTITY_CHARS], "a number and a unit, e.g. "
+                             f"'5 K/min' (no powers; at most {MAX_QUANTITY_CHARS} characters)")
+        return value
 
     def error(self, name: str, value: Any, valid: str) -> ParameterError:
         return ParameterError(f"protocol[{self.index}].{name}" if name else
@@ -102,6 +114,7 @@ class _Where:
                               f"in step {self.index}: {self.text!r}")
 
     def temperature(self, value: Any, name: str) -> float:
+        self.guard(value, name)
         try:
             t = kelvin(value, name)
         except ParameterError as exc:
@@ -115,6 +128,7 @@ class _Where:
              hi_s: float = DURATION_MAX_S) -> Span:
         valid = (f"{lo_s:g} s < {name} <= {hi_s:g} s (or 0 < {name} <= {TAU_MAX:g} tau); "
                  "units s, min, h or tau")
+        self.guard(value, name)
         if isinstance(value, Span):
             span = value
         else:
@@ -133,6 +147,7 @@ class _Where:
         return span
 
     def rate(self, value: Any, name: str = "rate") -> tuple[float, str]:
+        self.guard(value, name)
         lo, hi = RATE_RANGE_K_PER_MIN
         valid = f"{lo:g}-{hi:g} K/min (units K/s, K/min, K/h, degC/min or K/tau)"
         m = _TAU_RATE.match(value) if isinstance(value, str) else None
@@ -190,6 +205,7 @@ def _until(value: Any, where: _Where) -> Until:
         if len(value) != 1 or next(iter(value)) not in UNTIL_KINDS:
             raise where.error("until", value, valid)
         kind, raw = next(iter(value.items()))
+        where.guard(raw, f"until.{kind}")
         units = {"fraction": None, "mass_ug": "mass", "volume_ul": "volume",
                  "radius_um": "length"}
         try:
@@ -200,7 +216,7 @@ def _until(value: Any, where: _Where) -> Until:
         return _until_checked(kind, x, raw, where)
     if not isinstance(value, str):
         raise where.error("until", value, valid)
-    text = value.strip()
+    text = where.guard(value, "until").strip()
     m = re.match(r"^radius\s+(?:of\s+)?(.+)$", text, re.I)
     if m:
         try:

@@ -311,8 +311,23 @@ def protocol_dose(req: DoseRequest, get: Getter, ranges: bool = False, mode: Mod
     if isinstance(got, Pending):
         return got
     time, traj, scs, trajs = got
-    rep = validation_report(scs, trajs, req.start_radius, target, None)
+    rep = _report(scs, trajs, req.start_radius, target)
     return _answer(req, prot, untils, pieces, time, traj, scs, rep, tau_s, mode)
+
+
+def _report(scs: list[Scenario], trajs: list[Any], a0: float, target: float) -> Any:
+    """The runs' report at the dose radius; a run stopped at it by its terminal event may
+    end a rounding short of it (1e-7), so then the report reads the crossing of a radius
+    1e-9 relatively short of the target (the time moves by ~1e-9 / |d ln a / dt|)."""
+    try:
+        return validation_report(scs, trajs, a0, target, None)
+    except ValueError:
+        near = target * (1.0 + math.copysign(1e-9, a0 - target))
+        try:
+            return validation_report(scs, trajs, a0, near, None)
+        except ValueError:
+            near = target * (1.0 + math.copysign(1e-6, a0 - target))
+            return validation_report(scs, trajs, a0, near, None)
 
 
 def temperature_curve(pieces: list[Piece], t_start: float, times: np.ndarray) -> np.ndarray:

@@ -102,6 +102,11 @@ def test_structured_steps_with_units():
     ("Hold at 308 K until the cows come home", "protocol[0].until", "% released"),
     ("Bath at 308 K with a time constant of 0 s", "protocol[0].time_constant", "0.001 s"),
     ("Boil at 308 K", "protocol[0]", "Heat to 308 K at 5 K/min"),
+    # pint evaluates powers exactly: 9**9**9 would never finish (a request must not hang)
+    ("Hold at 308 K for 9**9**9 s", "protocol[0].for", "no powers"),
+    ("Heat to 308 K at 5 K/min^9", "protocol[0].rate", "no powers"),
+    ("Hold at 308 K until 9**9**9 ug released", "protocol[0].until", "no powers"),
+    ("Hold at 308 K for " + "1" * 90 + " s", "protocol[0].for", "at most 80"),
 ])
 def test_bad_steps_name_step_field_and_range(step, field, valid_part):
     with pytest.raises(ParameterError) as e:
@@ -139,6 +144,9 @@ def test_structured_errors():
     with pytest.raises(ParameterError) as e:
         Protocol(302.0, [{"step": "melt"}])
     assert e.value.field == "protocol[0].step"
+    with pytest.raises(ParameterError) as e:
+        Protocol(302.0, [{"step": "hold", "at": 308, "until": {"mass_ug": "9**9**9 ug"}}])
+    assert e.value.field == "protocol[0].until.mass_ug" and "no powers" in e.value.valid
     with pytest.raises(ParameterError) as e:
         Protocol(302.0, [])
     assert e.value.field == "protocol"
