@@ -225,6 +225,10 @@ DOSE_PENDING_NOTE = (
     "This scenario needs the full solver (no front model applies and no run is cached yet). "
     "Poll validation_url; once it is done, send the same request again: it is then answered "
     "at once from the cache.")
+PROTOCOL_PENDING_NOTE = (
+    "A dose under a heating protocol is a full-solver answer and its runs are not cached "
+    "yet. Poll validation_url; once it is done, send the same request again (a protocol "
+    "with until-steps may take one more round per until-step).")
 SCHEDULE_PENDING_NOTE = "The schedule needs the full solver; poll validation_url for the result."
 
 
@@ -236,7 +240,8 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest) -> dict[str, Any] | Acc
         return drug_service.dose_answer(planner, body, to_gel)
     out = planner.answer(to_dose_request(body), validate=body.validate_full)
     if isinstance(out, Pending):
-        return Accepted(out.validation_id, DOSE_PENDING_NOTE)
+        return Accepted(out.validation_id, DOSE_PENDING_NOTE if body.protocol is None
+                        else PROTOCOL_PENDING_NOTE)
     answer = {"status": "answered", **out.answer.to_dict()}
     if out.validation_id is not None:
         answer.update(validation_id=out.validation_id,
