@@ -15,7 +15,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from dosing.heating import Protocol, staircase
+from dosing.heating import Protocol
+from dosing.heating_program import staircase
 from dosing.units import radius_after_dose, timescale
 from solver.full import simulate
 from solver.gel import preset

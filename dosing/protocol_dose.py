@@ -13,7 +13,7 @@ On the real solver a protocol runs as a continuous T(t) inside the kernels
 (``solver.heating.Program``, with the mobility's temperature dependence m(T) relative to
 T_ref) and every run stops at its target radius (``simulate(stop=...)``); a stand-in solver
 without programs (the tests' fake) gets a fine staircase of holds
-(``dosing.heating.staircase``, 0.05 K per stair).  The answer says which.  Runs are
+(``dosing.heating_program.staircase``, 0.05 K per stair).  The answer says which.  Runs are
 scenarios of the planner's cache; without them :func:`answer` queues them as a validation
 (HTTP 202) and the same request asked again answers from the cache.
 """
@@ -33,16 +33,8 @@ from solver.equilibrium import nearest_stable
 from solver.errors import ParameterError, SolverError
 
 from .answers import Pending
-from .heating import (
-    MOBILITY_TEXT,
-    STAIR_KELVIN,
-    Piece,
-    Protocol,
-    Until,
-    program_spec,
-    reference_text,
-    staircase,
-)
+from .heating import Piece, Protocol, Until, reference_text
+from .heating_program import MOBILITY_TEXT, STAIR_KELVIN, program_spec, staircase
 from .request import DoseRequest
 from .scenario import Scenario, Trajectory
 from .truth import truth_text

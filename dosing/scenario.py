@@ -307,7 +307,7 @@ def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver) -> Fu
     """One run of ``sc`` (a jump runs for ``horizon``) within ``budget`` s, as stored."""
     s = sc.settings
     if sc.program is not None:  # a continuous temperature program (dosing.heating)
-        from .heating import solver_program
+        from .heating_program import solver_program
 
         kw = {"program": solver_program(sc.program), "stop": sc.stop}
     else:

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from dosing.heating import (
-    MAX_STAIRS,
     Bath,
     Hold,
     Protocol,
@@ -17,9 +16,9 @@ from dosing.heating import (
     Trace,
     Until,
     parse_step,
-    staircase,
     trace_from_csv,
 )
+from dosing.heating_program import MAX_STAIRS, staircase
 from solver.errors import ParameterError
 
 TAU = 2000.0  # s: a round timescale (a 50 um bead's is 2205 s at 308 K)
