@@ -1,14 +1,16 @@
 """Heating a lab can do (issue 24): dose times of the full solver under ramps and baths.
 
-    python -m benchmarks.heating [--gel ANB] [--dry-radius-um 50] [--fractions 0.3 0.8]
-                                 [--rates 1 5 100] [--baths 30] [--mobility constant]
+    python -m benchmarks.heating [--gel ANB|HHT|custom] [--dry-radius-um 50]
+                                 [--fractions 0.1 0.3 0.5 0.8 0.9] [--rates 0.5 1 5 20 100]
+                                 [--baths 1 10 30 100 300] [--mobility constant]
 
 The truth's settings (moving grid, the bead's own interfacial length ell = 4 nm / dry
 radius, 400 cells, rtol 1e-5): for each heating (the jump, ramps in K/min, baths with time
 constants in s, from T_start towards T_end) the time at which each dose fraction is
 reached, from the protocol's start, in seconds (tau at T_end, dosing.units.timescale) and
-as a multiple of the jump's, with each run's wall time.  One run per heating: ``stop`` at
-the largest fraction, the smaller ones read from its dense record.
+as a multiple of the jump's (the step answer's error under that heating), with each
+run's wall time.  One run per heating: ``stop`` at the largest fraction, the smaller ones
+read from its dense record.  ``custom``: ANB's chi with Omega = 300.
 """
 
 from __future__ import annotations
@@ -19,14 +21,20 @@ import time
 from dosing.units import PhysicalConstants, timescale
 from solver.equilibrium import equilibrium
 from solver.full import simulate
-from solver.gel import preset
+from solver.gel import ANB, Gel, preset
 from solver.heating import Bath, Program, Ramp, Released
 
-STARTS = {"ANB": 302.0, "HHT": 304.0}
+STARTS = {"ANB": 302.0, "HHT": 304.0, "custom": 302.0}
+
+
+def _gel(name: str) -> Gel:
+    if name == "custom":
+        return Gel(300.0, ANB.a0, ANB.b0, ANB.a1, ANB.b1, name="custom")
+    return preset(name)
 
 
 def run(args: argparse.Namespace) -> None:
-    gel = preset(args.gel)
+    gel = _gel(args.gel)
     t0, t1 = STARTS.get(gel.name, 302.0), 308.0
     tau = timescale(args.dry_radius_um, t1).seconds
     ell = PhysicalConstants().interfacial_lengths(args.dry_radius_um)[0]
@@ -41,7 +49,7 @@ def run(args: argparse.Namespace) -> None:
                                            mobility=args.mobility)) for b in args.baths]
     print(f"{gel.name} {t0:g} -> {t1:g} K, dry radius {args.dry_radius_um:g} um, tau = "
           f"{tau:.0f} s, ell = {ell:.2e}, mobility {args.mobility}")
-    head = "".join(f"{f'{f:.0%} s':>11}{'x jump':>8}" for f in args.fractions)
+    head = "".join(f"{f'{f:.0%} s':>9}{'x':>6}" for f in args.fractions)
     print(f"{'heating':<18}{head}{'wall s':>8}")
     base: list[float] = []
     for name, prog in heatings:
@@ -49,12 +57,12 @@ def run(args: argparse.Namespace) -> None:
         if prog is None:
             res = simulate(gel, t0, t1, until=2.0, stop=min(targets), **opts)
         else:
-            res = simulate(gel, t0, program=prog, until=50.0, stop=min(targets), **opts)
+            res = simulate(gel, t0, protocol=prog, until=50.0, stop=min(targets), **opts)
         wall = time.perf_counter() - w
         times = [res.time_to_radius(a) * tau for a in targets]
         if not base:
             base = times
-        row = "".join(f"{t:11.2f}{t / b:8.2f}" for t, b in zip(times, base, strict=True))
+        row = "".join(f"{t:9.1f}{t / b:6.2f}" for t, b in zip(times, base, strict=True))
         print(f"{name:<18}{row}{wall:8.1f}")
 
 
@@ -62,9 +70,9 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--gel", default="ANB")
     p.add_argument("--dry-radius-um", type=float, default=50.0)
-    p.add_argument("--fractions", type=float, nargs="+", default=[0.3, 0.8])
-    p.add_argument("--rates", type=float, nargs="*", default=[1.0, 5.0, 100.0])
-    p.add_argument("--baths", type=float, nargs="*", default=[30.0])
+    p.add_argument("--fractions", type=float, nargs="+", default=[0.1, 0.3, 0.5, 0.8, 0.9])
+    p.add_argument("--rates", type=float, nargs="*", default=[0.5, 1.0, 5.0, 20.0, 100.0])
+    p.add_argument("--baths", type=float, nargs="*", default=[1.0, 10.0, 30.0, 100.0, 300.0])
     p.add_argument("--mobility", default="constant", choices=["constant", "kT", "water"])
     run(p.parse_args())
 

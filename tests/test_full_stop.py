@@ -71,3 +71,15 @@ def test_bad_events_and_outputs_are_refused(kwargs: dict, field: str) -> None:
     with pytest.raises(ParameterError) as err:
         simulate("ANB", 302, 308, until=0.01, n=20, **kwargs)
     assert err.value.field == field
+
+
+def test_stop_takes_a_released_fraction_of_the_start_radius() -> None:
+    from solver.heating import Released
+
+    res = simulate("ANB", 302, 308, until=0.3, grid="lagrangian", stop=Released(0.5), **RUN)
+    a0 = res.radius[0]
+    assert res.status == "stopped"
+    assert res.radius[-1] ** 3 == pytest.approx(a0**3 - 0.5 * (a0**3 - 1.0), rel=1e-7)
+    with pytest.raises(ParameterError) as err:
+        simulate("ANB", 302, 308, until=0.3, n=20, stop=Released(1.5))
+    assert err.value.field == "stop.fraction"

@@ -37,7 +37,7 @@ def test_ramp_is_the_limit_of_refined_staircases(gel: str, t_start: float) -> No
     K = 16 -> 32); the integrator's own error (rtol 1e-10) is far below."""
     rate, duration = 60.0, (308.0 - t_start) / 60.0
     times = [duration, 2.0 * duration]
-    ramp = simulate(gel, t_start, program=Program((Ramp(308.0, rate),)),
+    ramp = simulate(gel, t_start, protocol=Program((Ramp(308.0, rate),)),
                     until=2.0 * duration, saveat=times, **FINE)
     errors = []
     for k in (8, 16, 32):
@@ -65,7 +65,7 @@ def test_fast_ramp_gives_the_step_answer() -> None:
     for fraction in (0.3, 0.8):
         target = float(Released(fraction).radius(a0))
         jump = simulate("ANB", 302.0, 308.0, until=1.0, stop=target, **opts)
-        ramp = simulate("ANB", 302.0, program=Program((Ramp(308.0, rate),)), until=1.0,
+        ramp = simulate("ANB", 302.0, protocol=Program((Ramp(308.0, rate),)), until=1.0,
                         stop=target, **opts)
         t_jump, t_ramp = jump.terminal_time, ramp.terminal_time
         assert t_jump is not None and t_ramp is not None
@@ -78,7 +78,7 @@ def _lag(dry_radius_um: float, per_min: float) -> np.ndarray:
     temperature along an ANB ramp 296 -> 300 K (single phase: the smooth regime)."""
     rate = per_min / 60.0 * timescale(dry_radius_um, 308.0).seconds  # K per tau
     prog = Program((Ramp(300.0, rate),))
-    res = simulate("ANB", 296.0, program=prog, saveat=np.linspace(0.0, 4.0 / rate, 21),
+    res = simulate("ANB", 296.0, protocol=prog, saveat=np.linspace(0.0, 4.0 / rate, 21),
                    grid="lagrangian", n=40, rtol=1e-8, atol=1e-11)
     temps = prog.temperature(296.0, res.t)
     np.testing.assert_allclose(res.temperature, temps, atol=1e-9)
@@ -103,10 +103,10 @@ def test_until_step_ends_at_the_dose_event_and_the_program_goes_on() -> None:
     ramp run with ``stop`` at that radius ends, and the next step starts there."""
     a0 = equilibrium(ANB, 302.0, "swollen").stretch
     target = float(Released(0.3).radius(a0))
-    dosed = simulate("ANB", 302.0, program=Program((Ramp(308.0, 60.0),)), until=1.0,
+    dosed = simulate("ANB", 302.0, protocol=Program((Ramp(308.0, 60.0),)), until=1.0,
                      stop=target, **FINE)
     prog = Program((Ramp(308.0, 60.0), Hold(308.0, until=Released(0.3)), Hold(302.0, 0.05)))
-    res = simulate("ANB", 302.0, program=prog, **FINE)
+    res = simulate("ANB", 302.0, protocol=prog, **FINE)
     t_until = res.diagnostics["until_events"]["1"]
     assert t_until == pytest.approx(dosed.terminal_time, rel=1e-9)
     assert res.status == "finished" and res.horizon == pytest.approx(t_until + 0.05)
@@ -123,11 +123,11 @@ def test_holds_are_the_old_protocol_and_ramps_conserve_solid(grid: str) -> None:
         opts["interfacial_length"] = 0.02
     protocol = [(0.01, 308.0), (0.01, 305.0)]
     old = simulate("ANB", 302.0, protocol=protocol, every=0.002, **opts)
-    new = simulate("ANB", 302.0, program=Program.from_protocol(protocol), every=0.002,
+    new = simulate("ANB", 302.0, protocol=Program.from_protocol(protocol), every=0.002,
                    **opts)
     np.testing.assert_array_equal(new.radius, old.radius)
     np.testing.assert_array_equal(new.temperature, old.temperature)
-    ramp = simulate("ANB", 302.0, program=Program((Ramp(308.0, 300.0), Hold(308.0, 0.01))),
+    ramp = simulate("ANB", 302.0, protocol=Program((Ramp(308.0, 300.0), Hold(308.0, 0.01))),
                     every=0.002, **opts)
     bound = 1e-6 if grid == "eulerian" else 1e-11  # Lagrangian cells hold solid exactly
     assert np.max(ramp.solid_error) < bound

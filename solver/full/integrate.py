@@ -193,12 +193,14 @@ def _emit(out_times: np.ndarray, k_out: int, t: float, fn: Callable[[float], np.
 @dataclass(frozen=True)
 class StepControl:
     """What bounds the implicit steps: tolerances on porosity and radius, the step budget,
-    and the Jacobian (``system.JAC_ANALYTIC`` or ``JAC_FD``)."""
+    the Jacobian (``system.JAC_ANALYTIC`` or ``JAC_FD``) and the terminal event ``stop``
+    (a radius; None: none)."""
 
     rtol: float = 1e-6
     atol: float = 1e-9
     max_steps: int = 500_000
     jac_mode: int = JAC_ANALYTIC
+    stop: float | None = None
 
 
 def _copy(y: np.ndarray, _t: float) -> np.ndarray:
@@ -231,7 +233,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
                  out_times: np.ndarray, on_output: OutputFn, control: StepControl,
                  progress: ProgressFn | None, stats: Stats, ticks: int = 200,
                  method: ros.Method = ros.RODASP, rezoner: Rezoner | None = None,
-                 stop: float | None = None, total: float | None = None) -> np.ndarray:
+                 total: float | None = None) -> np.ndarray:
     """Integrate with adaptive RODASP through every segment; returns the final state.
 
     The stepping loop runs in numba (rosenbrock.rodas_run) between stops: output times,
@@ -242,7 +244,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
     Jacobian and without the step controller's history (a one-step method needs nothing
     else).
 
-    Events: ``stop`` (a radius) ends the run when the radius reaches it, from the side it
+    Events: ``control.stop`` (a radius) ends the run when the radius reaches it, from the side it
     is on at the first segment's start; a segment's ``until`` ends that segment (its time
     in ``seg.ended``; the segments iterable may be a generator that reads it).  The time
     is the root of the accepted step's cubic Hermite radius, the state there its dense
@@ -251,6 +253,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
     """
     rtol, atol, max_steps, jac_mode = (control.rtol, control.atol, control.max_steps,
                                        control.jac_mode)
+    stop = control.stop
     if total is None:
         segments = list(segments)
         total = segments[-1].t1
@@ -282,7 +285,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
         if seg.jump:
             ctrl[0], ctrl[1] = min(ctrl[0], h0), 0.0
         ctrl[3] = 0.0
-        if rezoner is not None:
+        if rezoner is not None and seg.jump:
             rezoner.reset(y, ws.geo)  # a new temperature: the mesh stops until it is re-aimed
         k_out = _emit(out_times, k_out, seg.t0, partial(_copy, y), on_output)
         if ros.crossed(ctrl, y[ia]):  # already there: the event is at the segment's start

@@ -2,7 +2,7 @@
 
 Time is in units of tau (eq. timescale).  A ``protocol`` treats tau as the same for every
 step (the paper's choice: the few-kelvin changes of k_B T and viscosity are neglected); a
-``program`` (solver.heating) may carry the mobility factor m(T) (docs/heating.md).
+program (solver.heating) may carry the mobility factor m(T) (docs/heating.md).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 from ..equilibrium import equilibrium
 from ..errors import BudgetExceeded, ParameterError, SolverError
 from ..gel import Gel, check_temperature, preset
-from ..heating import UNTIL_LIMIT, Program
+from ..heating import UNTIL_LIMIT, Program, Radius, Released
 from . import front as fronts
 from . import moving
 from .grids import GridSpec, grid_spec
@@ -215,9 +215,13 @@ def _check_saveat(saveat: Any, horizon: float) -> np.ndarray:
     return np.unique(np.minimum(times, horizon))
 
 
-def _check_stop(stop: Any) -> float | None:
+def _check_stop(stop: Any, a0: float | None = None) -> float | None:
+    """The stop radius: a number, or a solver.heating Radius/Released (of start radius a0)."""
     if stop is None:
         return None
+    if isinstance(stop, (Radius, Released)):
+        stop = stop.check("stop")
+        return stop.radius(a0) if a0 is not None else 2.0  # checked again at a0
     try:
         a = float(stop)
     except (TypeError, ValueError):
@@ -228,10 +232,10 @@ def _check_stop(stop: Any) -> float | None:
 
 
 def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
-             until: float | None = None, protocol: Sequence[tuple[float, float]] | None = None,
-             program: Program | None = None, stop: float | None = None,
-             saveat: Sequence[float] | None = None,
-             every: float | None = None, branch: str | None = None, initial: Initial = None,
+             until: float | None = None,
+             protocol: Sequence[tuple[float, float]] | Program | None = None,
+             stop: float | None = None, saveat: Sequence[float] | float | None = None,
+             branch: str | None = None, initial: Initial = None,
              progress: Callable[[float], None] | None = None,
              options: SolverOptions | None = None, **option_fields: Any) -> FullResult:
     """Run the full poro-elastic model (eqs. PDE_Dimless to Boundary_Dimless).
@@ -240,17 +244,18 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     when the first step heats, shrunken when it cools) or from ``initial`` (a FullResult's
     final state, remapped conservatively, or (radius, phi) on this grid), then follows
     ``protocol`` [(duration, temperature), ...] from t = 0; without a protocol it is
-    [(until, t_end)].  Or it follows ``program``, a :class:`solver.heating.Program` of
+    [(until, t_end)].  Or ``protocol`` is a :class:`solver.heating.Program` of
     Hold/Ramp/Bath/Trace steps with T(t) continuous inside the kernels and the mobility
     factor m(T) (docs/heating.md); ``until`` is then the run's horizon (default: the
     program's end, or with ``stop`` the program plus HOLD_AFTER at its last temperature).
 
-    ``stop`` (a radius, dry radii) is a terminal event: the run ends when the radius reaches
+    ``stop`` (a radius, dry radii, or a solver.heating ``Radius``/``Released`` condition,
+    the latter of the radius at t = 0) is a terminal event: the run ends when the radius reaches
     it from the side it starts on (it falls to a smaller target, rises to a larger one),
     located inside the accepted step (implicit integrator); the record says so
     (``status`` 'stopped', ``t_events``, ``terminal_time``; 'finished' when the horizon came
-    first).  ``saveat`` selects the output times (in place of ``every``); a stopped run's
-    last output is its terminal time.
+    first).  ``saveat`` selects the output times, or is the output interval (a number; the
+    keyword ``every`` is the same); a stopped run's last output is its terminal time.
 
     How it is discretised and integrated is a
     :class:`~solver.full.options.SolverOptions`, given whole as ``options`` and/or field by
@@ -268,23 +273,30 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     finite-difference Jacobian with the term) or use the moving grid; ``max_steps`` and
     ``max_seconds`` (a wall-clock budget, checked at least every 4096 steps: past it the
     run stops with BudgetExceeded, a SolverError).
-    ``every`` is the output interval (default: 200 outputs); ``progress(fraction)`` is
-    called as the run advances.  Raises ParameterError for bad input and SolverError (with
-    diagnostics) for numerical failure.
+    By default 200 outputs (a program: 200 over its length, 100 after);
+    ``progress(fraction)`` is called as the run advances.  Raises ParameterError for bad
+    input and SolverError (with diagnostics) for numerical failure.
     """
     started = time.perf_counter()
+    every = option_fields.pop("every", None)
+    if isinstance(saveat, (int, float)) and not isinstance(saveat, bool):
+        if every is not None:
+            raise ParameterError("saveat", saveat, "either saveat or every, not both")
+        saveat, every = None, saveat
+    program = protocol if isinstance(protocol, Program) else None
+    if program is not None:
+        protocol = None
     if isinstance(gel, str):
         gel = preset(gel)
     if not isinstance(gel, Gel):
         raise ParameterError("gel", gel, "a Gel or a preset name")
     t_start = check_temperature(t_start, "t_start")
+    stop_given = stop
     stop = _check_stop(stop)
     if program is not None:
-        if not isinstance(program, Program):
-            raise ParameterError("program", program, "a solver.heating.Program")
-        if protocol is not None or t_end is not None:
-            raise ParameterError("program", "with protocol/t_end",
-                                 "either a program or a protocol/t_end, not both")
+        if t_end is not None:
+            raise ParameterError("protocol", "a program with t_end",
+                                 "either a program or t_end, not both")
         steps = None
         short, full = _planned(program, t_start)
         has_until = any(p.until is not None for p in program.pieces(t_start))
@@ -342,6 +354,9 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     mod = spec.module
     y0, geo, branch_used = _initial_state(spec, gel, t_start, first_t, branch, initial, n,
                                           mesh, ell)
+    a0 = float(y0[-2] if spec.moving else mod.radius(y0))
+    if isinstance(stop_given, (Radius, Released)):
+        stop = _check_stop(stop_given, a0)
     perm = gel.permeability
     done: list[Segment] = []
     ends: dict[int, float] = {}
@@ -356,7 +371,6 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
         segments[-1].t1 = total
         done = segments
     else:
-        a0 = float(y0[-2] if spec.moving else mod.radius(y0))
         segments = _program_segments(program, gel, t_start, a0, ell, total,
                                      stop is not None or until is not None, done, ends)
         if integrator != "implicit":
@@ -386,8 +400,8 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     try:
         if integrator == "implicit":
             y_end = run_implicit(ws, y0, segments, out_times, collector,
-                                 StepControl(rtol, atol, max_steps, jac_mode), progress, stats,
-                                 rezoner=rezoner, stop=stop, total=total)
+                                 StepControl(rtol, atol, max_steps, jac_mode, stop), progress,
+                                 stats, rezoner=rezoner, total=total)
         else:
             diag["dt"] = dt
             y_end = run_explicit(ws, y0, segments, out_times, collector, dt, max_steps,
