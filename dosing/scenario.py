@@ -225,7 +225,7 @@ class Scenario:
     protocol: tuple[Step, ...] | None = None
     branch: str = "swollen"
     settings: SolverSettings = field(default_factory=SolverSettings)
-    # a continuous temperature program (dosing.heating.program_spec: plain data) and the
+    # a continuous temperature program (dosing.heating_program.program_spec) and the
     # radius at which its run stops (a terminal event); in place of t_end / protocol
     program: Any = None
     stop: float | None = None
@@ -309,7 +309,7 @@ def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver) -> Fu
     if sc.program is not None:  # a continuous temperature program (dosing.heating)
         from .heating_program import solver_program
 
-        kw = {"program": solver_program(sc.program), "stop": sc.stop}
+        kw = {"protocol": solver_program(sc.program), "stop": sc.stop}
     else:
         kw = {"protocol": sc.steps(horizon)}
     res = solver(sc.gel, sc.t_start, **kw, grid=s.grid, n=s.n,
