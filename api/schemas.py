@@ -382,7 +382,10 @@ class DoseTimeRequest(RequestModel):
 
     gel: GelSpec = "ANB"
     t_start: float = temperature_field("start (loading) temperature", 302.0)
-    t_end: float = temperature_field("end (actuation) temperature", 308.0)
+    t_end: float | None = Field(  # required unless a protocol is given
+        None, ge=T_MIN, le=T_MAX, examples=[308.0],
+        description=f"end (actuation) temperature in K; liquid water, {T_MIN}-{T_MAX} K "
+                    "(required, unless a protocol is given in its place)")
     dose_fraction: float | None = Field(
         None, gt=0.0, le=1.0, examples=[0.8],
         description="dose as a fraction of the stored fluid, dimensionless, 0 < f <= 1 "
@@ -418,12 +421,28 @@ class DoseTimeRequest(RequestModel):
         False, alias="validate",
         description="also queue a full-solver validation of this dose (poll "
                     "/v1/validations/{id})")
+    protocol: list[str | dict[str, Any]] | None = Field(
+        None, min_length=1, max_length=1000,
+        examples=[["Heat to 308 K at 5 K/min"]],
+        description="a heating protocol in place of t_end (docs/heating.md): steps as text "
+                    "('Heat to 308 K at 5 K/min', 'Hold at 308 K until 30 % released', "
+                    "'Rest at 302 K for 10 min', 'Bath at 308 K with a time constant of 30 s') "
+                    "or structured ({'step': 'heat', 'to': '308 K', 'rate': '5 K/min'}; a "
+                    "measured trace as {'step': 'trace', 'csv': 'time (s),T (degC)\\n...'}); "
+                    "the answer is the time from the protocol's start (full solver: 202 "
+                    "until its runs are cached)")
 
     model_config = ConfigDict(extra="forbid", populate_by_name=True, json_schema_extra={
         "examples": [{"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.8,
                       "dry_radius_um": 50.0}]})
 
     _ell = field_validator("interfacial_length")(check_interfacial_length)
+
+    @model_validator(mode="after")
+    def _heating(self) -> DoseTimeRequest:
+        if (self.t_end is None) == (self.protocol is None):
+            raise ValueError("give exactly one of t_end and protocol")
+        return self
 
 
 class RunCheck(_Out):
@@ -566,6 +585,57 @@ class DoseTimeResponse(_Out):
     batch: BatchOut | None = Field(
         None, description="with a size_distribution: the batch's dose (the fields above are "
                           "its number-weighted mean bead's)")
+
+
+class UntilStepOut(_Out):
+    """When an until-step of a protocol ended (tau and seconds from the protocol's start)."""
+
+    step: int = Field(description="index of the step in the protocol")
+    text: str = Field(description="the step as text")
+    start: float = Field(description="start, tau")
+    end: float = Field(description="end (the condition met), tau")
+    start_seconds: float | None = Field(None, description="start in s")
+    end_seconds: float | None = Field(None, description="end in s")
+
+
+class ProtocolDoseResponse(_Out):
+    """HTTP 200: the time from a heating protocol's start at which the dose is out (the full
+    solver at the truth's settings; docs/heating.md)."""
+
+    status: Literal["answered"] = Field("answered", description="always 'answered'")
+    model: Literal["full"] = Field(description="'full': the PDE solver answers a protocol")
+    truth: str = Field(description="what the answer is checked against, in words")
+    protocol: list[str] = Field(description="the protocol's steps as text")
+    protocol_steps: list[dict[str, Any]] = Field(description="the steps, structured")
+    t_start: float = Field(description="start temperature, K")
+    reference_temperature: float = Field(
+        description="tau's reference temperature: the protocol's hottest, K")
+    reference: str = Field(description="how seconds become tau, in words")
+    time: float = Field(description="time from the protocol's start to the dose, tau")
+    seconds: float | None = Field(None, description="the same in s (with a bead size)")
+    timescale_seconds: float | None = Field(None, description="tau in s at the reference")
+    timescale_formula: str | None = Field(None, description="how tau was computed")
+    program: str = Field(description="how the protocol ran in the solver, in words")
+    dose_fraction: float = Field(description="dose / stored fluid, 0-1")
+    start_radius: float = Field(description="radius at T_start, dry radii")
+    final_radius: float = Field(description="radius after the dose, dry radii")
+    final_radius_um: float | None = Field(None, description="radius after the dose in um")
+    expelled_volume: float = Field(description="the dose in dry-radius^3 units")
+    expelled_volume_ul: float | None = Field(None, description="the dose in uL")
+    stored_volume_ul: float | None = Field(None, description="stored fluid in uL")
+    temperature_at_dose: float = Field(description="the protocol's temperature then, K")
+    until_steps: list[UntilStepOut] = Field(description="when each until-step ended")
+    error_estimate: float | None = Field(
+        None, description="relative numerical error (truth vs its n/2 check run)")
+    error_explanation: str = Field(description="the error in words")
+    uncertainty: UncertaintyOut | None = Field(None, description="the truth's parts")
+    validation: dict[str, Any] | None = Field(None, description="the runs' report")
+    scenario_key: str = Field(description="key of the truth run's scenario")
+    interfacial_length: float = Field(description="ell of the truth, dry radii")
+    bead_dry_radius_um: float | None = Field(None, description="dry bead radius, um")
+    curve: dict[str, list[float]] = Field(
+        description="time (tau), seconds, temperature_k and released_fraction on one axis")
+    note: str = Field("", description="caveats, in words")
 
 
 class ValidationResponse(_Out):

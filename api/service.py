@@ -182,10 +182,27 @@ def _constants(c: s.ConstantsIn | None) -> dict[str, Any] | None:
     return None if c is None else c.model_dump(exclude_none=True)
 
 
+def _protocol(body: s.DoseTimeRequest) -> Any:
+    """The request's heating protocol (no file paths over HTTP), or None."""
+    if body.protocol is None:
+        return None
+    from dosing.heating import Protocol
+
+    if body.t_end is not None:
+        raise ParameterError("t_end", body.t_end, "absent when a protocol is given (the "
+                             "protocol's steps set the heating)")
+    if body.drug is not None:
+        raise ParameterError("drug", "given", "absent with a protocol (a drug dose under a "
+                             "protocol is not planned yet)")
+    return Protocol(body.t_start, body.protocol, files=False)
+
+
 def to_dose_request(body: s.DoseTimeRequest) -> DoseRequest:
     """The planner's request (it checks the dose against the stored fluid: ParameterError)."""
+    protocol = _protocol(body)
     return DoseRequest(
-        to_gel(body.gel), body.t_start, body.t_end, dose_fraction=body.dose_fraction,
+        to_gel(body.gel), body.t_start, None if protocol is not None else body.t_end,
+        protocol=protocol, dose_fraction=body.dose_fraction,
         dose_volume_ul=body.dose_volume_ul, drug_mass_ug=body.drug_mass_ug,
         concentration_ug_per_ul=body.concentration_ug_per_ul,
         dry_radius_um=body.dry_radius_um, swollen_radius_um=body.swollen_radius_um,
@@ -219,21 +236,27 @@ SCHEDULE_PENDING_NOTE = (
     "for the result.  `hold`, when present, is the hold reading (the paper's assumption: one "
     "continuous heating, doses read off cumulatively): a rough reading only, since the gel "
     "takes up fluid while it rests and later doses then come out larger.")
+PROTOCOL_PENDING_NOTE = (
+    "A dose under a heating protocol is a full-solver answer and its runs are not cached "
+    "yet. Poll validation_url; once it is done, send the same request again (a protocol "
+    "with until-steps may take one more round per until-step).")
 
 
 def dose_time(planner: Planner, body: s.DoseTimeRequest) -> dict[str, Any] | Accepted:
     """The answer (front model or cache; 200), or :class:`Accepted` with a validation id;
     one planner call (:meth:`dosing.Planner.answer`).  A dose with a drug is answered by
     :mod:`api.drug_service`."""
-    if body.drug is not None:
-        if body.size_distribution is not None:
-            raise ParameterError("size_distribution", "a batch", "null with a drug (a "
-                                 "batch's drug dose is not built yet)")
+    if body.size_distribution is not None and (body.drug is not None
+                                               or body.protocol is not None):
+        raise ParameterError("size_distribution", "a batch", "null with a drug or a protocol "
+                             "(a batch's drug dose or protocol dose is not built yet)")
+    if body.drug is not None and body.protocol is None:
         return drug_service.dose_answer(planner, body, to_gel)
     req = to_dose_request(body)
     out = planner.answer(req, validate=body.validate_full)
     if isinstance(out, Pending):
-        return Accepted(out.validation_id, DOSE_PENDING_NOTE)
+        return Accepted(out.validation_id, DOSE_PENDING_NOTE if body.protocol is None
+                        else PROTOCOL_PENDING_NOTE)
     answer = {"status": "answered", **out.answer.to_dict()}
     if req.size_distribution is not None:  # a batch (issue 26)
         from dosing.batch import batch_answer

@@ -250,6 +250,11 @@ class Planner:
         the answer), else :class:`Pending` with the id of the validation queued for it.
         ``validate``: also queue the validation of an answered dose (its id in the answer).
         The one call the HTTP service makes per dose request."""
+        if getattr(req, "heating", None) is not None:  # a dose under a heating protocol
+            from . import protocol_dose
+
+            out = protocol_dose.answer(self, req, validate)
+            return out if isinstance(out, Pending) else Answered(out)  # type: ignore[arg-type]
         choice, scs, ans = self._now(req)
         if ans is None:
             return Pending(self._submit_validation(req, choice, scs))
@@ -273,6 +278,10 @@ class Planner:
     def dose(self, req: DoseRequest, validate: bool = False) -> DoseAnswer:
         """The actuation time for one dose (front model, or the full solver where needed:
         blocking; ``validate`` runs the validation too and waits for it)."""
+        if getattr(req, "heating", None) is not None:  # a dose under a heating protocol
+            from . import protocol_dose
+
+            return protocol_dose.dose(self, req, validate)  # type: ignore[return-value]
         choice = self.model_answer(req)
         scs = self.scenarios(req)
         need_time = choice.front_time or 0.0
@@ -400,7 +409,7 @@ class Planner:
 
 
 def _covers(traj: Trajectory, sc: Scenario, need_radius: float | None, need_time: float) -> bool:
-    if sc.protocol is not None:
+    if sc.protocol is not None or sc.program is not None:
         return True
     if need_radius is not None and traj.radius.min() > need_radius:
         return False

@@ -233,7 +233,7 @@ class DoseRequest:
 
     gel: Gel | str | dict[str, Any]
     t_start: float
-    t_end: float
+    t_end: float | None = None
     dose_fraction: float | None = None
     dose_volume_ul: float | None = None
     drug_mass_ug: float | None = None
@@ -249,8 +249,12 @@ class DoseRequest:
     interfacial_range: tuple[float, float] | None = field(init=False, repr=False,
                                                           compare=False)
     fraction: float = field(init=False, repr=False, compare=False)
+    # a heating protocol in place of t_end (dosing.heating; the dose: dosing.protocol_dose)
+    protocol: Any = None
+    heating: Any = field(init=False, repr=False, compare=False, default=None)
 
     def __post_init__(self) -> None:
+        _resolve_protocol(self)
         from .size_distribution import request_sizes
 
         request_sizes(self)  # a batch: its number-weighted mean is the bead size
@@ -263,7 +267,8 @@ class DoseRequest:
         if len(given) != 1:
             raise ParameterError(given[1] if len(given) > 1 else "dose_fraction", None,
                                  "exactly one of dose_fraction, dose_volume_ul, drug_mass_ug")
-        if self.concentration_ug_per_ul is not None and given[0] != "drug_mass_ug":
+        if (self.concentration_ug_per_ul is not None and given[0] != "drug_mass_ug"
+                and self.heating is None):  # a protocol's "until 20 ug released" uses it
             raise ParameterError("concentration_ug_per_ul", self.concentration_ug_per_ul,
                                  "None unless drug_mass_ug is given")
         if given[0] == "dose_fraction":
@@ -309,7 +314,26 @@ class DoseRequest:
                 "dry_radius_um": self.bead_dry_radius_um,
                 "constants": self.constants.to_dict(), "settings": self.settings.to_dict(),
                 **({} if self.size_distribution is None
-                   else {"size_distribution": self.size_distribution.to_dict()})}
+                   else {"size_distribution": self.size_distribution.to_dict()}),
+                **({} if self.heating is None else {"protocol": self.heating.to_dict()})}
+
+
+def _resolve_protocol(req: Any) -> None:
+    """A request's heating protocol (``dosing.heating.Protocol``) in place of t_end: its
+    hottest temperature is the jump's T_end (the dose's limit, tau's reference)."""
+    if req.protocol is None:
+        if req.t_end is None:
+            raise ParameterError("t_end", None, "a temperature in K (or give a protocol)")
+        return
+    from .heating import Protocol
+
+    if req.t_end is not None:
+        raise ParameterError("t_end", req.t_end, "None when a protocol is given (the "
+                             "protocol's steps set the heating)")
+    prot = Protocol.parse(req.t_start, req.protocol)
+    object.__setattr__(req, "heating", prot)
+    object.__setattr__(req, "t_start", prot.t_start)
+    object.__setattr__(req, "t_end", prot.hottest)
 
 
 def resolve_rests(rests: Sequence[float] | None, rests_seconds: Sequence[float] | None,

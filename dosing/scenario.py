@@ -230,9 +230,18 @@ class Scenario:
     protocol: tuple[Step, ...] | None = None
     branch: str = "swollen"
     settings: SolverSettings = field(default_factory=SolverSettings)
+    # a continuous temperature program (dosing.heating_program.program_spec) and the
+    # radius at which its run stops (a terminal event); in place of t_end / protocol
+    program: Any = None
+    stop: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "t_start", check_temperature(self.t_start, "t_start"))
+        if self.program is not None:
+            if self.t_end is not None or self.protocol is not None:
+                raise ParameterError("program", "with t_end/protocol", "one of them")
+            object.__setattr__(self, "program", json.loads(json.dumps(self.program)))
+            return
         if (self.t_end is None) == (self.protocol is None):
             raise ParameterError("protocol", self.protocol, "exactly one of t_end or protocol")
         if self.t_end is not None:
@@ -248,6 +257,8 @@ class Scenario:
     def key_dict(self) -> dict[str, Any]:
         """Everything that defines the dimensionless answer (JSON-ready, canonical)."""
         what: dict[str, Any] = ({"t_end": self.t_end} if self.t_end is not None
+                                else {"program": self.program, "stop": self.stop}
+                                if self.program is not None
                                 else {"protocol": [list(s) for s in self.protocol]})
         return {"schema": SCHEMA, "gel": list(self.gel.key()), "t_start": self.t_start, **what,
                 "branch": self.branch, "settings": self.settings.to_dict(),
@@ -267,7 +278,9 @@ class Scenario:
         """Plain data for a worker process (and for humans)."""
         return {"gel": self.gel.to_dict(), "t_start": self.t_start, "t_end": self.t_end,
                 "protocol": None if self.protocol is None else [list(s) for s in self.protocol],
-                "branch": self.branch, "settings": self.settings.to_dict()}
+                "branch": self.branch, "settings": self.settings.to_dict(),
+                **({} if self.program is None else {"program": self.program,
+                                                    "stop": self.stop})}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Scenario:
@@ -275,7 +288,8 @@ class Scenario:
         prot = d.get("protocol")
         return cls(Gel.from_dict(d["gel"]), d["t_start"], d.get("t_end"),
                    None if prot is None else tuple(tuple(s) for s in prot),
-                   d.get("branch", "swollen"), SolverSettings(**d.get("settings", {})))
+                   d.get("branch", "swollen"), SolverSettings(**d.get("settings", {})),
+                   d.get("program"), d.get("stop"))
 
     def steps(self, horizon: float) -> list[Step]:
         """The protocol to simulate (a jump becomes one step of length ``horizon``)."""
@@ -306,10 +320,15 @@ def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver,
     """One run of ``sc`` (a jump runs for ``horizon``, or until its radius reaches
     ``stop``) within ``budget`` s, as stored."""
     s = sc.settings
-    more = {} if stop is None else {"stop": stop}
-    res = solver(sc.gel, sc.t_start, protocol=sc.steps(horizon), grid=s.grid, n=s.n,
+    if sc.program is not None:  # a continuous temperature program (dosing.heating)
+        from .heating_program import solver_program
+
+        kw = {"protocol": solver_program(sc.program), "stop": sc.stop}
+    else:
+        kw = {"protocol": sc.steps(horizon), **({} if stop is None else {"stop": stop})}
+    res = solver(sc.gel, sc.t_start, **kw, grid=s.grid, n=s.n,
                  integrator=s.integrator, rtol=s.rtol, branch=sc.branch,
-                 interfacial_length=s.interfacial_length, max_seconds=budget, **more)
+                 interfacial_length=s.interfacial_length, max_seconds=budget)
     rec = res.without_profiles()
     if rec.t.size < 2 or not (np.all(np.isfinite(rec.t)) and np.all(np.isfinite(rec.radius))):
         raise SolverError("the full solver returned no finite a(t)", {"scenario": sc.key_dict()})
@@ -337,7 +356,7 @@ def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: fl
     h = float(horizon)
     runs = 0
     end = (need_radius * (1.0 - STOP_MARGIN)
-           if stop and sc.protocol is None and need_radius is not None
+           if stop and sc.protocol is None and sc.program is None and need_radius is not None
            and sc.settings.integrator == "implicit" else None)  # events need the implicit one
     while True:
         traj = _simulate(sc, max(h, need_time), budget, solver, end)
@@ -345,7 +364,8 @@ def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: fl
         if end is not None and traj.status == "stopped" and traj.horizon < need_time:
             traj = _simulate(sc, need_time, budget, solver)  # the truth's front-time need
             runs += 1
-        if sc.protocol is not None or need_radius is None or traj.radius.min() <= need_radius:
+        if (sc.protocol is not None or sc.program is not None or need_radius is None
+                or traj.radius.min() <= need_radius):
             break
         if h >= max_horizon:
             raise SolverError(

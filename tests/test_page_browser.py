@@ -183,3 +183,65 @@ def test_page_in_headless_chromium(tmp_path: Path) -> None:
             assert errors == []
         finally:
             ctx.close()
+
+
+BATH_CSV = "time (s),T (degC)\n0,28.85\n10,31.0\n20,32.5\n40,34.0\n80,34.8\n120,34.85\n"
+
+
+@pytest.mark.slow  # a real server, a browser and the full solver's protocol runs (issue 24)
+def test_protocol_editor_in_headless_chromium(tmp_path: Path) -> None:
+    """The protocol editor: the ramp preset, a bad step named at its row, the answer read
+    back against the JSON route (the temperature and the released fraction drawn on one
+    time axis), and a measured trace in degC and seconds uploaded and answered."""
+    sync_playwright = _need_browser()
+    with _serve_gracefully(tmp_path / "cache.sqlite") as url, \
+            tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
+        ctx = pw.chromium.launch_persistent_context(
+            profile, executable_path=CHROMIUM, args=FLAGS, headless=True,
+            viewport={"width": 1400, "height": 1000})
+        try:
+            page = ctx.new_page()
+            errors: list[str] = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(url + "/")
+            page.wait_for_selector("body[data-state=ready]", timeout=60_000)
+            _fill(page, t_start="302", t_end="308", doses="30", dry_radius_um="50")
+            page.click("#preset-ramp")
+            steps = page.locator("#protocol-steps .step-text")
+            assert steps.count() == 1 and steps.nth(0).input_value() == "Heat to 308 K at 5 K/min"
+
+            page.click("#add-step")
+            steps.nth(1).fill("Hold at 308 K for 2 parsecs")
+            page.click("#plan-protocol")
+            page.wait_for_selector("body[data-protocol=error]", timeout=60_000)
+            assert "for" in page.locator(".step-err").nth(1).inner_text()
+            assert page.locator(".step-err").nth(0).inner_text() == ""
+            page.locator(".remove-step").nth(1).click()
+
+            body = {"gel": "ANB", "t_start": 302.0, "dose_fraction": 0.3, "dry_radius_um": 50.0,
+                    "protocol": ["Heat to 308 K at 5 K/min"]}
+            page.click("#plan-protocol")
+            page.wait_for_selector("body[data-protocol=answered]", timeout=900_000)
+            want = httpx.post(f"{url}/v1/dose-time", json=body, timeout=60)
+            assert want.status_code == 200  # cached by the page's request
+            want = want.json()
+            assert float(page.get_attribute("#protocol-seconds", "data-value")) == want["seconds"]
+            assert page.inner_text("#protocol-seconds") == f"{want['seconds']:.4g} s"
+            assert page.locator("#protocol-temperature").count() == 1
+            assert page.locator("#protocol-release").count() == 1
+            assert page.locator(".protocol-dose-mark").count() == 1
+            page.screenshot(path=str(_artifacts() / "page-protocol.png"), full_page=True)
+
+            trace = tmp_path / "bath.csv"
+            trace.write_text(BATH_CSV)
+            page.set_input_files("#trace-file", str(trace))
+            assert steps.count() == 1 and steps.nth(0).input_value() == "Trace from bath.csv"
+            page.click("#plan-protocol")
+            page.wait_for_selector("body[data-protocol=answered]", timeout=900_000)
+            structured = {**body, "protocol": [{"step": "trace", "name": "bath.csv",
+                                                "csv": BATH_CSV}]}
+            want = httpx.post(f"{url}/v1/dose-time", json=structured, timeout=60).json()
+            assert float(page.get_attribute("#protocol-seconds", "data-value")) == want["seconds"]
+            assert errors == []
+        finally:
+            ctx.close()

@@ -100,6 +100,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add the sub-command."""
     p = sub.add_parser("dose", help="actuation time to release a dose")
     add_planning_options(p)
+    for action in p._actions:  # --protocol stands in for --t-end (checked in run)
+        if action.dest == "t_end":
+            action.required = False
+            action.help = "heating temperature in K (or give --protocol)"
+    p.add_argument("--protocol", action="append", default=None, metavar="STEP",
+                   help="a heating step in place of --t-end, repeatable, or several joined "
+                        "by ';' ('Heat to 308 K at 5 K/min', 'Hold at 308 K until 30 %% "
+                        "released', 'Rest at 302 K for 10 min', 'Bath at 308 K with a time "
+                        "constant of 30 s', 'Trace from run.csv'; docs/heating.md): the "
+                        "answer is the time from the protocol's start (full solver)")
     d = p.add_mutually_exclusive_group(required=True)
     d.add_argument("--fraction", type=float, help="dose as a fraction of the stored fluid "
                    "(with a drug option: of the loaded drug)")
@@ -181,12 +191,16 @@ def run(args: argparse.Namespace) -> int:
     from api.schemas import DoseTimeRequest
     from dosing import DoseRequest, plan_dose
 
+    steps = protocol_steps(args)
     check_bounds(DoseTimeRequest, {
-        **planning_values(args), "dose_fraction": args.fraction,
+        **planning_values(args), "protocol": steps, "dose_fraction": args.fraction,
         "dose_volume_ul": args.volume_ul, "drug_mass_ug": args.drug_mass_ug,
         "concentration_ug_per_ul": args.concentration_ug_per_ul})
     checked_cache(args.cache)
     drug = drug_from_args(args)
+    if drug is not None and steps is not None:
+        raise ParameterError("protocol", steps, "absent with a drug option (a drug dose under "
+                             "a protocol is not planned yet)")
     if drug is not None:
         if args.size_cv is not None or args.sizes is not None:
             raise ParameterError("--size-cv" if args.sizes is None else "--sizes",
@@ -197,8 +211,14 @@ def run(args: argparse.Namespace) -> int:
     req = DoseRequest(dose_fraction=args.fraction, dose_volume_ul=args.volume_ul,
                       drug_mass_ug=args.drug_mass_ug,
                       concentration_ug_per_ul=args.concentration_ug_per_ul,
-                      **planning_kwargs(args),
+                      **{**planning_kwargs(args), "protocol": steps},
                       **({} if dist is None else {"size_distribution": dist}))
+    if steps is not None:
+        if dist is not None:
+            raise ParameterError("--size-cv" if args.sizes is None else "--sizes",
+                                 args.size_cv or args.sizes, "not with --protocol (a batch "
+                                 "under a heating protocol is not planned yet)")
+        return run_protocol_dose(args, req)
     if args.plot and not args.validate:
         raise ParameterError("plot", args.plot, "used with --validate")
     if args.validate:
@@ -248,4 +268,46 @@ def run(args: argparse.Namespace) -> int:
         print(wrap(f"full solver: {runs}"))
     if batch is not None:
         print_batch(batch)
+    return 0
+
+
+def protocol_steps(args: argparse.Namespace) -> list[str] | None:
+    """The --protocol steps (each option one step, or several joined by ';'), or None;
+    --t-end is required without them and refused with them."""
+    if not getattr(args, "protocol", None):
+        if args.t_end is None:
+            raise ParameterError("--t-end", None, "a temperature in K (or give --protocol)")
+        return None
+    if args.t_end is not None:
+        raise ParameterError("--t-end", args.t_end, "absent with --protocol (the protocol's "
+                             "steps set the heating)")
+    return [s.strip() for arg in args.protocol for s in arg.split(";") if s.strip()]
+
+
+def run_protocol_dose(args: argparse.Namespace, req: Any) -> int:
+    """Print the dose under a heating protocol (dosing.protocol_dose)."""
+    from dosing import plan_dose
+
+    print(f"running the protocol on the full solver ({req.settings.grid} grid, "
+          f"{req.settings.n} cells and {req.settings.n // 2}): seconds to minutes the first "
+          "time, then cached", file=sys.stderr, flush=True)
+    ans = plan_dose(req, validate=args.validate, cache_path=args.cache)
+    if args.json:
+        print_json(ans.to_dict())
+        return 0
+    print(f"{req.gel.name} from {req.t_start:g} K: " + "; ".join(ans.protocol))
+    secs = "" if ans.seconds is None else f" = {ans.seconds:.4g} s"
+    print(f"  release {ans.dose_fraction:.1%} of the stored fluid at t = {ans.time:.4g} tau"
+          f"{secs} from the protocol's start (at {ans.temperature_at_dose:.4g} K)")
+    for u in ans.until_steps:
+        end = "" if u.end_seconds is None else f" = {u.end_seconds:.4g} s"
+        print(f"  step {u.step} '{u.text}' ends at t = {u.end:.4g} tau{end}")
+    print(wrap(ans.reference))
+    if ans.timescale_formula:
+        print(wrap(ans.timescale_formula))
+    print(wrap(f"truth: {ans.truth}"))
+    print(wrap(f"program: {ans.program}"))
+    print(wrap(ans.error_explanation))
+    if ans.uncertainty and ans.uncertainty["interfacial_length_range"]["relative"] is not None:
+        print(wrap(ans.uncertainty["interfacial_length_range"]["text"]))
     return 0

@@ -26,7 +26,8 @@ def answer_or_pending(out: dict[str, Any] | Accepted) -> Any:
                         headers={"Location": out.validation_url})
 
 
-@router.post("/dose-time", response_model=s.DoseTimeResponse | DrugDoseResponse, responses={
+@router.post("/dose-time", response_model=s.DoseTimeResponse | DrugDoseResponse
+             | s.ProtocolDoseResponse, responses={
     202: {"model": s.PendingResponse, "description": "needs the full solver: poll "
                                                      "validation_url, then ask again"},
     429: _FULL})

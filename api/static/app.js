@@ -699,4 +699,202 @@ async function init() {
   document.body.dataset.requests = "0";
 }
 
+// ----------------------------------------------------------------------------- protocols
+
+const PROTOCOL_PRESETS = {
+  jump: (t1) => [`Hold at ${t1} K`],
+  ramp: (t1) => [`Heat to ${t1} K at 5 K/min`],
+  bath: (t1) => [`Bath at ${t1} K with a time constant of 30 s`],
+};
+let protocolTrace = null; // the uploaded trace: {name, csv}
+
+function protocolRows() { return Array.from($("protocol-steps").querySelectorAll("tbody tr")); }
+
+function addStep(text, trace) {
+  const body = $("protocol-steps").querySelector("tbody");
+  const tr = document.createElement("tr");
+  const num = document.createElement("td");
+  const cell = document.createElement("td");
+  const inp = document.createElement("input");
+  inp.type = "text";
+  inp.className = "step-text";
+  inp.value = text;
+  if (trace) { inp.dataset.trace = JSON.stringify(trace); inp.readOnly = true; }
+  cell.appendChild(inp);
+  const err = document.createElement("span");
+  err.className = "err step-err";
+  err.setAttribute("role", "alert");
+  cell.appendChild(err);
+  const rm = document.createElement("td");
+  const btn = document.createElement("button");
+  btn.type = "button";
+  btn.className = "secondary remove-step";
+  btn.textContent = "Remove";
+  btn.addEventListener("click", () => { tr.remove(); numberSteps(); });
+  rm.appendChild(btn);
+  tr.append(num, cell, rm);
+  body.appendChild(tr);
+  numberSteps();
+}
+
+function numberSteps() { protocolRows().forEach((tr, i) => { tr.firstChild.textContent = String(i); }); }
+
+function setPreset(name) {
+  for (const tr of protocolRows()) tr.remove();
+  const t1 = $("t_end").value.trim() || "308";
+  for (const step of PROTOCOL_PRESETS[name](t1)) addStep(step);
+  document.body.dataset.protocolPreset = name;
+}
+
+function readSteps() {
+  // the steps as the route takes them: text, or a structured trace
+  return protocolRows().map((tr) => {
+    const inp = tr.querySelector(".step-text");
+    return inp.dataset.trace ? { step: "trace", ...JSON.parse(inp.dataset.trace) } : inp.value.trim();
+  });
+}
+
+async function uploadTrace(ev) {
+  const file = ev.target.files && ev.target.files[0];
+  if (!file) return;
+  const csv = await file.text();
+  for (const tr of protocolRows()) tr.remove();
+  protocolTrace = { name: file.name, csv };
+  addStep(`Trace from ${file.name}`, protocolTrace);
+  document.body.dataset.protocolPreset = "trace";
+  ev.target.value = "";
+}
+
+function stepOf(loc) {
+  // ['body', 'protocol'] or a ParameterError's field 'protocol[2].rate' -> step 2
+  const text = (loc || []).join(".");
+  const m = /protocol(?:\[|\.)(\d+)/.exec(text);
+  return m ? Number(m[1]) : null;
+}
+
+function showProtocolError(res) {
+  for (const e of document.querySelectorAll(".step-err")) e.textContent = "";
+  const detail = res.data && res.data.detail;
+  const items = Array.isArray(detail) ? detail : [{ loc: [], msg: String(detail || `HTTP ${res.status}`) }];
+  const lines = [];
+  for (const item of items) {
+    const where = (item.loc || []).filter((p) => p !== "body").join(".");
+    const msg = `${where ? where + ": " : ""}${item.msg}`;
+    const k = stepOf([where, item.msg]);
+    const row = k !== null ? protocolRows()[k] : null;
+    if (row) row.querySelector(".step-err").textContent = msg;
+    lines.push(msg);
+  }
+  $("protocol-error").textContent = lines.join("; ");
+  document.body.dataset.protocol = "error";
+}
+
+function drawProtocol(a) {
+  // temperature (left axis) and released fraction (right axis) on one time axis
+  const svg = $("protocol-plot");
+  clear(svg);
+  const c = a.curve;
+  const secs = c.seconds && c.seconds.length === c.time.length;
+  const t = secs ? c.seconds : c.time;
+  const tMax = Math.max(...t) || 1;
+  const temps = c.temperature_k;
+  const lo = Math.min(...temps) - 0.5;
+  const hi = Math.max(...temps) + 0.5;
+  const box = { x: 55, y: 12, w: 410, h: 235 };
+  const s = panel(svg, box, [0, tMax], [lo, hi], secs ? "time (s)" : "time (units of τ)", "temperature (K)");
+  polyline(svg, s, t, temps, { stroke: "#b3261e", id: "protocol-temperature" });
+  const sf = { sx: s.sx, sy: (y) => box.y + box.h - y * box.h };
+  polyline(svg, sf, t, c.released_fraction, { stroke: "#1f6fb2", id: "protocol-release" });
+  const g = el("g", { class: "axis" }, svg);
+  for (const v of [0, 0.25, 0.5, 0.75, 1]) {
+    el("text", { x: box.x + box.w + 4, y: sf.sy(v) + 4 }, g, `${100 * v} %`);
+  }
+  const x = s.sx(secs ? a.seconds : a.time);
+  el("line", { x1: x, x2: x, y1: box.y, y2: box.y + box.h, stroke: "#333", "stroke-dasharray": "3 3",
+    class: "protocol-dose-mark" }, svg);
+  legend(svg, 250, 190, [{ color: "#b3261e", label: "temperature T(t)" },
+    { color: "#1f6fb2", label: "released fraction" }]);
+}
+
+function showProtocolAnswer(a) {
+  $("protocol-answer").hidden = false;
+  const s = $("protocol-seconds");
+  s.textContent = a.seconds !== null && a.seconds !== undefined ? `${fmt(a.seconds)} s` : `${fmt(a.time)} τ`;
+  s.dataset.value = a.seconds === null || a.seconds === undefined ? "" : String(a.seconds);
+  $("protocol-time").textContent = `(t = ${fmt(a.time)} in units of τ at ${fmt(a.reference_temperature, 5)} K; ${pct(a.dose_fraction)} of the stored fluid)`;
+  $("protocol-time").dataset.value = String(a.time);
+  $("protocol-text").textContent = a.protocol.join("; ");
+  $("protocol-untils").textContent = a.until_steps.length ? a.until_steps.map((u) =>
+    `step ${u.step} ends at ${u.end_seconds !== null ? fmt(u.end_seconds) + " s" : fmt(u.end) + " τ"}`).join("; ") : "none";
+  $("protocol-program").textContent = `${a.program}. ${a.reference}.`;
+  $("protocol-error-text").textContent = a.error_explanation;
+  drawProtocol(a);
+}
+
+async function planProtocol() {
+  clearErrors();
+  $("protocol-error").textContent = "";
+  for (const e of document.querySelectorAll(".step-err")) e.textContent = "";
+  const f = { gel: gelSpec() };
+  const t0 = checkValue("t_start", $("t_start").value, bounds.t_start, 1, "K");
+  const doses = checkList("doses", $("doses").value, { ...bounds.dose_fraction, maxItems: 1000 }, 100, "%");
+  if (t0.error) { showError("t_start", t0.error); document.body.dataset.protocol = "invalid"; return; }
+  if (doses.error || !doses.value.length) {
+    showError("doses", doses.error || "dose: give one"); document.body.dataset.protocol = "invalid"; return;
+  }
+  const steps = readSteps();
+  if (!steps.length || steps.some((x) => x === "")) {
+    $("protocol-error").textContent = "protocol: give at least one step, none empty";
+    document.body.dataset.protocol = "invalid";
+    return;
+  }
+  const body = { gel: f.gel, t_start: t0.value, dose_fraction: doses.value[0], protocol: steps };
+  if ($("dry_radius_um").value.trim() !== "") body.dry_radius_um = Number($("dry_radius_um").value);
+  if ($("interfacial_length").value.trim() !== "") body.interfacial_length = Number($("interfacial_length").value);
+  document.body.dataset.protocol = "busy";
+  $("plan-protocol").disabled = true;
+  try {
+    for (let round = 0; round < 20; round++) {
+      $("protocol-status").textContent = round ? `full-solver runs, round ${round + 1}…` : "planning…";
+      const res = await api("POST", "/v1/dose-time", body);
+      if (res.status === 200) {
+        showProtocolAnswer(res.data);
+        $("protocol-status").textContent = "";
+        document.body.dataset.protocol = "answered";
+        return;
+      }
+      if (res.status !== 202) { showProtocolError(res); $("protocol-status").textContent = ""; return; }
+      const vid = res.data.validation_id;
+      for (;;) {
+        await new Promise((r) => setTimeout(r, 1000));
+        const v = await api("GET", `/v1/validations/${encodeURIComponent(vid)}`);
+        if (v.status !== 200) { showProtocolError(v); return; }
+        if (v.data.status === "failed") {
+          $("protocol-error").textContent = `the full-solver run failed: ${v.data.error}`;
+          document.body.dataset.protocol = "error";
+          return;
+        }
+        if (v.data.status === "done") break;
+      }
+    }
+    $("protocol-error").textContent = "the protocol needed more rounds of runs than expected";
+    document.body.dataset.protocol = "error";
+  } catch (e) {
+    $("protocol-error").textContent = `The page could not reach the service: ${e}`;
+    document.body.dataset.protocol = "error";
+  } finally {
+    $("plan-protocol").disabled = false;
+  }
+}
+
+function initProtocol() {
+  for (const name of Object.keys(PROTOCOL_PRESETS)) $(`preset-${name}`).addEventListener("click", () => setPreset(name));
+  $("add-step").addEventListener("click", () => addStep(""));
+  $("trace-file").addEventListener("change", uploadTrace);
+  $("plan-protocol").addEventListener("click", planProtocol);
+  setPreset("ramp");
+}
+
+initProtocol();
+
 init().catch((e) => { $("form-error").textContent = `The page could not load the service's bounds: ${e}`; });
