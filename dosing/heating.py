@@ -39,7 +39,7 @@ import numpy as np
 from solver.errors import ParameterError
 from solver.gel import T_MAX, T_MIN
 
-from .quantity import kelvin, parse, to_unit
+from .quantity import kelvin, kelvin_offset, parse, to_unit
 
 RATE_RANGE_K_PER_MIN = (1e-3, 1e6)  # 0.001 K/min (a day per 1.4 K) to 10^6 K/min (~a jump)
 DURATION_MAX_S = 1.0e7  # about 116 days
@@ -435,7 +435,7 @@ def trace_from_csv(text: str, time_unit: str | None = None,
         kunit = _temperature_unit(ku, "trace.temperature_unit")
     except ParameterError as exc:
         raise where.error(exc.field, exc.value, exc.valid) from None
-    offset = 273.15 if kunit == "degC" else 0.0
+    offset = kelvin_offset(kunit)
     times = np.empty(len(rows))
     temps = np.empty(len(rows))
     for j, (line, r) in enumerate(rows):
@@ -468,7 +468,7 @@ def _trace_checked(times: np.ndarray, temps: np.ndarray, name: str, where: _Wher
                                   f"({'time' if col == 1 else 'temperature'}): {x}",
                                   "a finite number")
         if not lo <= temps[j] <= hi:
-            shown = temps[j] - (273.15 if kunit == "degC" else 0.0)
+            shown = temps[j] - kelvin_offset(kunit)
             raise where.error("trace", f"line {lines[j]}, column 2 (temperature): {shown:g} "
                               f"{kunit}", f"{lo}-{hi} K (0-100 degC; name the unit in the "
                               "header, e.g. 'T (degC)', or give temperature_unit)")
@@ -493,8 +493,7 @@ def _trace_step(d: dict[str, Any], where: _Where) -> Trace:
         times = np.asarray(d["time"], dtype=float) * _time_scale(d.get("time_unit"),
                                                                  "trace.time_unit")
         kunit = _temperature_unit(d.get("temperature_unit"), "trace.temperature_unit")
-        temps = np.asarray(d["temperature"], dtype=float) + (273.15 if kunit == "degC"
-                                                             else 0.0)
+        temps = np.asarray(d["temperature"], dtype=float) + kelvin_offset(kunit)
     except ParameterError as exc:
         raise where.error(exc.field, exc.value, exc.valid) from None
     except (TypeError, ValueError):

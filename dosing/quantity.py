@@ -142,3 +142,9 @@ def seconds(value: Any, field: str = "time") -> float:
 def micrometres(value: Any, field: str = "length") -> float:
     """A length in um from um, mm, nm ("50 um") or a Quantity."""
     return to_unit(value, "length", field)
+
+
+def kelvin_offset(unit: str) -> float:
+    """What to add to a temperature in ``unit`` ('K' or 'degC') to get kelvin (affine
+    temperature units: the one place this offset is known)."""
+    return to_unit(f"0 {unit}", "temperature", "temperature_unit")
