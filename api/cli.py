@@ -13,7 +13,7 @@ import sys
 from solver.errors import NotApplicableError, ParameterError, SolverError
 
 COMMANDS = ["equilibrium", "classify", "phase_map", "serve", "front", "dose", "schedule",
-            "simulate", "plot", "bench", "sweep", "fit", "release"]
+            "simulate", "plot", "bench", "sweep", "fit", "release", "sensitivity"]
 
 
 def build_parser() -> argparse.ArgumentParser:
