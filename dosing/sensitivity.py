@@ -43,6 +43,7 @@ UNITS = {"dry_radius_um": "um", "t_start": "K", "t_end": "K", "dose_fraction": "
 METHODS = ("sobol", "morris")
 MAX_EVALUATIONS = 200_000  # model evaluations of one analysis
 CONFIDENCE = 0.95
+MORRIS_LEVELS = 4  # grid levels of Morris's trajectories
 
 
 @dataclass(frozen=True)
@@ -225,7 +226,7 @@ def sensitivity(gel: Gel | str | dict[str, Any], t_start: Any, t_end: Any,
                 dry_radius_um: Any = 50.0,
                 constants: PhysicalConstants | dict[str, Any] | None = None,
                 branch: str | None = None, method: str = "sobol", samples: int = 1000,
-                levels: int = 4, seed: int = 0,
+                seed: int = 0,
                 max_trajectories: int | None = None) -> SensitivityResult:
     """Sobol (``S1``, ``ST``) or Morris (``mu_star``, ``sigma``) indices of the dose time in
     seconds over the ``vary`` ranges (``Vary``, 'NAME=LO:HI[:log]' or dicts), the other
@@ -272,7 +273,7 @@ def sensitivity(gel: Gel | str | dict[str, Any], t_start: Any, t_end: Any,
         from SALib.analyze import morris as analyze
         from SALib.sample import morris as sample
 
-        u = sample.sample(problem, samples, num_levels=levels, seed=seed)
+        u = sample.sample(problem, samples, num_levels=MORRIS_LEVELS, seed=seed)
     x = np.column_stack([v.values(u[:, j]) for j, v in enumerate(vs)])
     y = model(x)
     bad = int(np.count_nonzero(~np.isfinite(y)))
@@ -286,7 +287,7 @@ def sensitivity(gel: Gel | str | dict[str, Any], t_start: Any, t_end: Any,
                              seed=seed)
         keys = ("S1", "S1_conf", "ST", "ST_conf")
     else:
-        si = analyze.analyze(problem, u, y, num_levels=levels, conf_level=CONFIDENCE,
+        si = analyze.analyze(problem, u, y, num_levels=MORRIS_LEVELS, conf_level=CONFIDENCE,
                              seed=seed)
         keys = ("mu", "mu_star", "mu_star_conf", "sigma")
     indices = {n: {k: float(si[k][j]) for k in keys} for j, n in enumerate(names)}
