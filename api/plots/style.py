@@ -14,7 +14,8 @@ RC = {
     "axes.titlesize": 10, "legend.fontsize": 8.5, "xtick.labelsize": 9, "ytick.labelsize": 9,
     "lines.linewidth": 1.5, "axes.spines.top": False, "axes.spines.right": False,
     "savefig.bbox": "tight", "figure.dpi": 100, "axes.grid": False,
-    "legend.frameon": False, "mathtext.default": "regular",
+    "legend.frameon": True, "legend.framealpha": 0.85, "legend.edgecolor": "0.85",
+    "mathtext.default": "regular",
 }
 
 
