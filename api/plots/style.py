@@ -15,7 +15,7 @@ RC = {
     "lines.linewidth": 1.5, "axes.spines.top": False, "axes.spines.right": False,
     "savefig.bbox": "tight", "figure.dpi": 100, "axes.grid": False,
     "legend.frameon": True, "legend.framealpha": 0.85, "legend.edgecolor": "0.85",
-    "mathtext.default": "regular",
+    "mathtext.default": "regular", "svg.fonttype": "none", "pdf.fonttype": 42,
 }
 
 
