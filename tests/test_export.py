@@ -80,6 +80,11 @@ def test_simulate_out_nc_is_read_back_with_units_and_version(tmp_path: Path,
     assert "paper's model" in ds.attrs["truth"]
     assert ds.sizes["time"] == 6 and ds["phi"].dims == ("time", "cell")
     ds.close()
+    # the porosity maps of the saved run, in um and s for a 50 um bead
+    assert main(["plot", str(out), "--dry-radius-um", "50 um", "--format", "svg",
+                 "--out", str(tmp_path / "fig")]) == 0
+    svg = (tmp_path / "fig" / "porosity_map.svg").read_text()
+    assert "radius r (um)" in svg and "time (s)" in svg
 
 
 def test_run_round_trip(run: FullResult, tmp_path: Path) -> None:

@@ -15,6 +15,7 @@ from typing import Any
 from solver.errors import ParameterError
 
 from .common import print_json
+from .outfile import add_format_option, figure_path
 
 
 def _fix(text: str) -> tuple[str, float]:
@@ -81,6 +82,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", default=None, metavar="PNG", help="draw the fit to this file")
+    add_format_option(p)
     p.add_argument("--save", default=None, metavar="NAME",
                    help="store the fitted gel under NAME (usable as --gel NAME)")
     p.add_argument("--gels-dir", default=None,
@@ -112,7 +114,7 @@ def run_swelling(args: argparse.Namespace) -> int:
     if args.plot:
         from api.plots.fit import draw_swelling_fit
 
-        paths = draw_swelling_fit(report, dd, args.plot)
+        paths = draw_swelling_fit(report, dd, figure_path(args.plot, args.format))
         report["plots"] = [str(p) for p in paths]
     if args.json:
         print_json(report)
@@ -186,7 +188,8 @@ def run_kinetics(args: argparse.Namespace) -> int:
     if args.plot:
         from api.plots.fit import draw_kinetics_fit
 
-        report["plots"] = [str(draw_kinetics_fit(report, dd, args.plot))]
+        report["plots"] = [str(draw_kinetics_fit(report, dd,
+                                                 figure_path(args.plot, args.format)))]
     if args.json:
         print_json(report)
         return 0

@@ -29,3 +29,17 @@ def save(path: str, save_npz: Callable[[str], Path], dataset: Callable[[], Any])
 
         return export.save(dataset(), path)
     return save_npz(path)
+
+
+FORMATS = ("png", "svg", "pdf")
+
+
+def add_format_option(p: argparse.ArgumentParser) -> None:
+    """``--format svg|png|pdf`` for a command that draws (default: the file's suffix)."""
+    p.add_argument("--format", choices=FORMATS, default=None,
+                   help="figure format: svg, png or pdf (default: the file's suffix, else png)")
+
+
+def figure_path(path: str, fmt: str | None) -> str:
+    """``path`` with the suffix of ``fmt`` (unchanged when ``fmt`` is None)."""
+    return path if fmt is None else str(Path(path).with_suffix("." + fmt))

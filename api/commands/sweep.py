@@ -19,6 +19,7 @@ from typing import Any
 from solver.errors import ParameterError
 
 from .common import print_json
+from .outfile import add_format_option, figure_path
 
 
 def parse_axis(name: str, text: str) -> list[float]:
@@ -105,6 +106,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                                                "('-': stdout)")
     p.add_argument("--plot", default=None, metavar="FILE",
                    help="heat maps of time and error (PNG, PDF or SVG)")
+    add_format_option(p)
     p.add_argument("--plot-gel", type=int, default=0, metavar="I",
                    help="which gel of the grid to plot (default 0, the first)")
     p.add_argument("--cache", default=None, help="validation cache file")
@@ -201,7 +203,8 @@ def run(args: argparse.Namespace) -> int:
 
         if not 0 <= args.plot_gel < grid.shape[0]:
             raise ParameterError("--plot-gel", args.plot_gel, f"0-{grid.shape[0] - 1}")
-        print(f"wrote {draw_sweep(table, args.plot, args.plot_gel)}", file=sys.stderr)
+        print(f"wrote {draw_sweep(table, figure_path(args.plot, args.format), args.plot_gel)}",
+              file=sys.stderr)
     counts = ", ".join(f"{v} {k}" for k, v in result.counts.items())
     print(f"{grid.size} points ({' x '.join(map(str, grid.shape))} gels x T_end x radius x "
           f"dose) in {result.seconds:.3f} s: {counts}", file=sys.stderr)
