@@ -23,6 +23,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     for name in COMMANDS:
         importlib.import_module(f"api.commands.{name}").register(sub)
+    importlib.import_module("api.commands.units").accept_units(sub)  # "50 um", "29 degC"
     return parser
 
 
