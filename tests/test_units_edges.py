@@ -90,3 +90,25 @@ def test_cli_takes_unit_strings_and_refuses_a_wrong_unit(capsys) -> None:
     with pytest.raises(SystemExit) as e:
         main(bad)
     assert e.value.code == 2 and "--dry-radius-um" in capsys.readouterr().err
+
+
+def test_python_requests_take_strings_and_pint_quantities() -> None:
+    from dosing import DoseRequest, ScheduleRequest
+    from dosing.quantity import registry
+
+    q = registry().Quantity
+    plain = DoseRequest("ANB", 302.15, 308.0, dose_fraction=0.8, dry_radius_um=50.0)
+    req = DoseRequest("ANB", "29 degC", q(308.0, "K"), dose_fraction=0.8,
+                      dry_radius_um=q(0.05, "mm"))
+    assert req.t_start == pytest.approx(plain.t_start, abs=1e-9)
+    assert req.bead_dry_radius_um == pytest.approx(50.0, rel=1e-12)
+    sch = ScheduleRequest("ANB", 302.0, 308.0, doses=[0.3, 0.3], rests_seconds=["1 min"],
+                          dry_radius_um="50 um")
+    ref = ScheduleRequest("ANB", 302.0, 308.0, doses=[0.3, 0.3], rests_seconds=[60.0],
+                          dry_radius_um=50.0)
+    assert sch.rests == pytest.approx(ref.rests, rel=1e-12)
+    from solver.errors import ParameterError
+
+    with pytest.raises(ParameterError) as e:
+        DoseRequest("ANB", 302.0, 308.0, dose_fraction=0.8, dry_radius_um="50 K")
+    assert e.value.field == "dry_radius_um"
