@@ -112,3 +112,41 @@ def test_python_requests_take_strings_and_pint_quantities() -> None:
     with pytest.raises(ParameterError) as e:
         DoseRequest("ANB", 302.0, 308.0, dose_fraction=0.8, dry_radius_um="50 K")
     assert e.value.field == "dry_radius_um"
+
+
+def _cli_physical_actions() -> list[tuple[str, object]]:
+    import argparse
+
+    from api.cli import build_parser
+
+    out = []
+
+    def walk(parser: argparse.ArgumentParser, path: str) -> None:
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, child in action.choices.items():
+                    walk(child, f"{path} {name}".strip())
+            elif (action.option_strings and field_kind(action.dest) is not None
+                  and action.nargs != 0 and callable(action.type)):
+                out.append((f"{path} {action.option_strings[0]}", action))
+
+    walk(build_parser(), "")
+    return out
+
+
+def test_every_float_cli_option_named_by_its_unit_takes_units() -> None:
+    import argparse
+
+    actions = _cli_physical_actions()
+    names = {n for n, _ in actions}
+    assert {"dose --dry-radius-um", "simulate --t-start", "release --k0-m2",
+            "schedule --rests-seconds"} <= names, names
+    for name, action in actions:
+        if getattr(action.type, "__qualname__", "").startswith("_converter"):
+            unit = UNITS[field_kind(action.dest)]
+            assert action.type(f"1 {unit}") == pytest.approx(1.0), name
+            assert action.type("2.5") == 2.5, name  # plain numbers as before
+            with pytest.raises(argparse.ArgumentTypeError, match="dimension"):
+                action.type("3 kg*m/s^3/A")
+        else:  # options read as text are converted by their command (sweep axes, plot)
+            assert action.type is not float, name
