@@ -216,3 +216,23 @@ def test_release_export(tmp_path: Path) -> None:
     np.testing.assert_array_equal(ds["released_fraction"].values, rel.released_fraction)
     np.testing.assert_array_equal(ds["seconds"].values, rel.t * 3.0)
     assert ds["radius_um"].attrs["units"] == "um"
+
+
+def test_sweep_and_fit_commands_write_netcdf(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "map.nc"
+    assert main(["sweep", "--t-end", "308,310", "--dry-radius-um", "20,50",
+                 "--dose", "0.3,0.8", "--no-progress", "--out", str(out)]) == 0
+    ds = export.open_netcdf(out)
+    assert dict(ds.sizes) == {"gel": 1, "t_end": 2, "dry_radius_um": 2, "dose_fraction": 2}
+    assert ds["seconds"].attrs["units"] == "s" and json.loads(ds.attrs["request"])["out"]
+    csv = tmp_path / "hht.csv"
+    data = synthetic_swelling(HHT, scale=0.4127, seed=3)
+    csv.write_text("temperature_K,radius\n" + "\n".join(
+        f"{float(t)!r},{float(s)!r}" for t, s in zip(data.temperature, data.size, strict=True)))
+    fit_out = tmp_path / "fit.nc"
+    assert main(["fit", "swelling", str(csv), "--json", "--out", str(fit_out)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    fds = export.open_netcdf(fit_out)
+    assert report["file"] == str(fit_out)
+    np.testing.assert_array_equal(fds["estimate"].values,
+                                  [report["parameters"][n] for n in report["names"]])

@@ -15,7 +15,7 @@ from typing import Any
 from solver.errors import ParameterError
 
 from .common import print_json
-from .outfile import add_format_option, figure_path
+from .outfile import add_format_option, figure_path, request_of
 
 
 def _fix(text: str) -> tuple[str, float]:
@@ -83,6 +83,9 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", default=None, metavar="PNG", help="draw the fit to this file")
     add_format_option(p)
+    p.add_argument("--out", default=None, metavar="FILE.nc",
+                   help="write the fit as netCDF (.nc: estimates, intervals, covariance, "
+                        "units and provenance) or tidy CSV (.csv)")
     p.add_argument("--save", default=None, metavar="NAME",
                    help="store the fitted gel under NAME (usable as --gel NAME)")
     p.add_argument("--gels-dir", default=None,
@@ -105,6 +108,10 @@ def run_swelling(args: argparse.Namespace) -> int:
                        fixed=dict(args.fix), n_starts=args.starts)
     report = res.to_dict()
     dd = data_dict(data)
+    if args.out:
+        from dosing import export
+
+        report["file"] = str(export.save(res.to_xarray(request=request_of(args)), args.out))
     if args.save:
         from solver.fit import fit_gel
 
@@ -171,6 +178,10 @@ def run_kinetics(args: argparse.Namespace) -> int:
         planner.jobs.executor.shutdown(wait=True)
     report = res.to_dict()
     dd = data_dict(data)
+    if args.out:
+        from dosing import export
+
+        report["file"] = str(export.save(res.to_xarray(request=request_of(args)), args.out))
     if args.save:
         from solver.gel import Gel
 

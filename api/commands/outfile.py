@@ -15,7 +15,9 @@ OUT_HELP = ("save to this file: .npz, .nc (netCDF: units, long names, the code v
 
 def request_of(args: argparse.Namespace) -> dict[str, Any]:
     """The command's arguments as the export's request (what made the result)."""
-    out = {k: v for k, v in vars(args).items() if k not in ("func",) and not callable(v)}
+    plain = (str, int, float, bool, type(None), list, tuple, dict)
+    out = {k: (v if isinstance(v, plain) else str(v)) for k, v in vars(args).items()
+           if k not in ("func",) and not callable(v)}
     out["command"] = getattr(args, "command", None)
     return out
 
