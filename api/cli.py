@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 from solver.errors import NotApplicableError, ParameterError, SolverError
@@ -39,6 +40,11 @@ def main(argv: list[str] | None = None) -> int:
     except SolverError as exc:
         print(f"thermogel: solver failed: {exc}", file=sys.stderr)
         return 3
+    except BrokenPipeError:
+        # the reader went away (``thermogel ... | head``): stop quietly, as a shell tool does
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141  # 128 + SIGPIPE
 
 
 if __name__ == "__main__":

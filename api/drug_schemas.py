@@ -12,6 +12,9 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
+from dosing.drug import REFERENCE_TEMPERATURE_K
+from solver.limits import T_MAX, T_MIN
+
 from .outputs import Out as _Out
 from .outputs import UncertaintyOut
 
@@ -46,13 +49,28 @@ class DrugIn(_StrictIn):
     solute_radius_nm: float | None = Field(
         None, gt=0.0, le=1e4, description="Stokes-Einstein radius in nm, 0 < r <= 1e4 (gives "
                                           "D0 when diffusivity_cm2_s is not set)")
-    hindrance: Literal["free-volume", "ogston", "none"] = Field(
-        "free-volume", description="hindrance law D = D0 f(phi): 'free-volume' (Lustig & "
+    hindrance: Literal["free-volume", "ogston", "amsden", "none"] = Field(
+        "free-volume", description="hindrance law D = D0 f: 'free-volume' (Lustig & "
         "Peppas 1988: (1 - r_s/xi) exp(-Y v/(1-v)), v the polymer fraction), 'ogston' "
-        "(exp(-sqrt(v) r_s/r_f)) or 'none'")
+        "(Ogston, Preston & Wells 1973: exp(-sqrt(v) (1 + r_s/r_f))), 'amsden' (1998: "
+        "exp(-pi ((r_s + r_f)/(xi + 2 r_f))^2)) or 'none' (no hindrance, no sieving)")
     mesh_size_nm: float | None = Field(
-        None, gt=0.0, le=1e4, description="mesh size xi of the swollen gel at t_start in nm "
-        "(free-volume sieving; xi scales as J^(1/3)); unset: no sieving")
+        None, gt=0.0, le=1e4, description="mesh size xi of the swollen gel at t_start in nm, "
+        "overriding for the drug the gel's dry mesh (constants.mesh_length_nm, the "
+        "interfacial length's); unset: the gel's mesh, affine in the local stretch")
+    reference_temperature_k: float = Field(
+        REFERENCE_TEMPERATURE_K, ge=T_MIN, le=T_MAX,
+        description="temperature at which diffusivity_cm2_s is "
+        "given, K (default 25 degC); carried to t_end by Stokes-Einstein with water's "
+        "viscosity")
+    sieving: bool = Field(True, description="convective sieving of the expelled fluid's "
+                                            "solute by the local mesh (Dechadilok & Deen 2006)")
+    partition_law: Literal["constant", "ogston"] | None = Field(
+        None, description="steric partition K_s(phi) multiplying partition: Ogston 1958 "
+        "exp(-v (1 + r_s/r_f)^2) or constant; unset: Ogston's with a fibre radius")
+    mesh_stretch: Literal["smallest", "volume"] = Field(
+        "smallest", description="which stretch sets the local mesh: the smallest principal "
+        "stretch (default) or J^(1/3)")
     fiber_radius_nm: float | None = Field(
         None, gt=0.0, le=1e3, description="polymer fibre radius r_f in nm (Ogston's law)")
     free_volume_y: float = Field(1.0, gt=0.0, le=100.0,
@@ -138,6 +156,13 @@ class DrugDoseResponse(_StatedTruthOut):
                           "error estimate)")
     scenario_key: str | None = Field(None, description="key of the drug run")
     note: str = Field(description="caveats, in words")
+    peclet: float | None = Field(None, description="the heating's Peclet number: mean "
+                                 "shrinking speed x swollen radius / D0 f(phi0)")
+    split: str = Field("", description="how squeezed and diffused are defined (squeezed: the "
+                                       "release of the same mechanics with D0 = 0)")
+    mesh: str = Field("", description="the mesh, solute radius, sieving and partition assumed")
+    permeability_law: str = Field("none", description="the permeability's temperature law "
+                                                      "(none: k0 as given)")
     uncertainty: UncertaintyOut | None = Field(
         None, description="the drug dose time's uncertainty in three parts: numerical (the "
                           "drug run at n / 2 cells), and the mechanics' interfacial-length "

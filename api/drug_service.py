@@ -68,7 +68,9 @@ def dose_answer(planner: Any, body: s.DoseTimeRequest, to_gel: Any) -> dict[str,
 def schedule_is_quick(body: s.ScheduleRequest, to_gel: Any) -> bool:
     """True for the hold reading of a drug carried by the fluid alone (answered at once)."""
     req = to_drug_schedule_request(body, to_gel)
-    return not (req.check_protocol or req.correct) and req.solute.diffusivity == 0.0
+    from dosing.drug import carried_by_fluid
+
+    return not (req.check_protocol or req.correct) and carried_by_fluid(req.solute)
 
 
 def schedule_result(planner: Any, body: s.ScheduleRequest, to_gel: Any) -> dict[str, Any]:

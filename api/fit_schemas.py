@@ -73,6 +73,15 @@ class SwellingFitRequest(_In):
         None, description="parameters kept fixed (omega, scale, b0, b1; a0 with b0, a1 with b1)"
     )
     n_starts: int = Field(6, ge=1, le=50, description="polished starts of the global search")
+    objective: Literal["orthogonal", "temperature"] = Field(
+        "orthogonal", description="'orthogonal' (errors in both variables, judged by "
+        "chi-square under the stated noise) or 'temperature' (the paper's residual)")
+    dry_size: float | None = Field(
+        None, gt=0, description="a measured dry size in the data's unit: fixes the scale")
+    dose_jump: list[float] | None = Field(
+        None, min_length=2, max_length=2, description="[T_start, T_end] in K: also state the "
+        "dose time of this jump under both objectives, flagged when they disagree")
+    dose_fraction: float = Field(0.8, gt=0, lt=1, description="the dose of dose_jump")
 
 
 class KineticsFitRequest(_In):
@@ -127,6 +136,7 @@ class FitJobResponse(BaseModel):
     status_url: str = Field(description="where to poll")
     result: dict[str, Any] | None = Field(
         None,
-        description="the fit report: parameters, intervals (95%), rms_residual_K, warnings, ...",
+        description="the fit report: parameters, intervals (95%), chi2, aic, bic, "
+        "rms_orthogonal_K, rms_temperature_residual_K, not_pinned, warnings, ...",
     )
     error: str | None = Field(None, description="why a failed fit failed")

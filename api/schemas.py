@@ -9,6 +9,7 @@ radius, time by tau of eq. timescale).  Fields ending in ``_um``, ``_ul``, ``_ug
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Annotated, Any, Literal
 
 from pydantic import (
@@ -24,18 +25,19 @@ from pydantic import (
 )
 
 from dosing.quantity import from_edge
+from dosing.request import ScheduleRequest as PlannerSchedule
+from dosing.scenario import DEFAULT_INTERFACIAL_LENGTH
+from solver.limits import T_MAX, T_MIN, TRUTH_DIRECT_ELL_RANGE, TRUTH_LADDER_START_RANGE
 
 from .drug_schemas import DrugIn  # the optional drug of the dose and schedule requests
 from .outputs import Out as _Out
 from .outputs import UncertaintyOut
 
-T_MIN = 273.15  # K, same bounds as solver.gel.check_temperature
-T_MAX = 373.15
-# interfacial length of the ladder truth (dosing.scenario: DEFAULT_INTERFACIAL_LENGTH,
-# and the coarsest ladder rung's range) and of a direct run (DIRECT_ELL_RANGE)
-ELL_DEFAULT = 0.005
-ELL_RANGE = (0.0025, 0.01)
-DIRECT_ELL_RANGE = (2e-5, 0.02)
+# the ranges are solver.limits' (one definition): temperatures, the ladder's coarsest ell
+# (its rungs go down to ell / 4) and a direct run's ell
+ELL_DEFAULT = DEFAULT_INTERFACIAL_LENGTH
+ELL_RANGE = TRUTH_LADDER_START_RANGE
+DIRECT_ELL_RANGE = TRUTH_DIRECT_ELL_RANGE
 Method = Literal["direct", "ladder"]
 
 # a preset ('ANB', 'HHT') or a stored fitted gel (dosing.gel_store; an unknown name is a 422)
@@ -204,6 +206,10 @@ class GelsResponse(_Out):
     """Every preset gel."""
 
     gels: list[GelPreset] = Field(description="the presets (ANB, HHT)")
+    fitted: list[dict[str, Any]] = Field(
+        default_factory=list, description="the stored fitted gels (thermogel fit ... --save "
+        "NAME): name, gel parameters, folds, every fitted parameter with its 95% interval, "
+        "and the timescale a kinetics fit pinned (null: uncalibrated)")
 
 
 # ----------------------------------------------------------------------------- physics
@@ -302,6 +308,78 @@ class ConstantsIn(RequestModel):
         return v
 
 
+class SizeDistributionIn(RequestModel):
+    """A batch of beads (dosing.size_distribution; docs/batch.md): a lognormal by mean_um
+    and cv (or median_um and gsd), a normal by mean_um and cv (or sd_um; truncated to > 1 %
+    of the mean), or a measured table of sizes_um (with counts or not); number- or
+    volume-weighted; dry or swollen (at T_start) sizes; radii or diameters.  Without a
+    size, the request's dry_radius_um (swollen_radius_um) is the number-weighted mean."""
+
+    kind: Literal["lognormal", "normal", "table"] = Field(
+        "lognormal", description="the law: 'lognormal' (default), 'normal' or 'table'")
+    mean_um: float | None = Field(None, gt=0.0, le=1.0e6, examples=[50.0],
+                                  description="mean size in um (lognormal, normal)")
+    cv: float | None = Field(None, ge=0.0, le=2.0, examples=[0.2],
+                             description="coefficient of variation, 0 <= CV <= 2")
+    median_um: float | None = Field(None, gt=0.0, le=1.0e6,
+                                    description="median size in um (lognormal, with gsd)")
+    gsd: float | None = Field(None, ge=1.0, le=10.0,
+                              description="geometric standard deviation >= 1 (lognormal)")
+    sd_um: float | None = Field(None, ge=0.0, le=1.0e6,
+                                description="standard deviation in um (normal)")
+    sizes_um: list[float] | None = Field(
+        None, min_length=1, max_length=100_000,
+        description="measured sizes in um, > 0 each, 1-100000 rows (table)")
+    counts: list[float] | None = Field(
+        None, min_length=1, max_length=100_000,
+        description="beads (or, volume-weighted, volume fractions) per size, >= 0 (table; "
+                    "default one per row)")
+    weighting: Literal["number", "volume"] = Field(
+        "number", description="'number' (default) or 'volume'-weighted sizes")
+    state: Literal["dry", "swollen"] = Field(
+        "dry", description="'dry' (default) sizes or 'swollen' at T_start")
+    measure: Literal["radius", "diameter"] = Field(
+        "radius", description="'radius' (default) or 'diameter'")
+
+
+class QuadratureOut(_Out):
+    """The quadrature over sizes of a batch's answer."""
+
+    rule: str = Field(description="the rule, in words")
+    nodes: int = Field(description="the nodes needed (in all)")
+    error: float = Field(description="relative change of the dose time from the previous "
+                                     "rung (0: an exact sum)")
+    converged: bool = Field(description="whether the change fell below the tolerance")
+    table: list[tuple[int, float]] = Field(description="(nodes, dose time) per rung")
+
+
+class BatchOut(_Out):
+    """A batch's dose (dosing.batch.BatchAnswer): times in the reference (number-weighted
+    mean) bead's tau and in seconds."""
+
+    distribution: dict[str, Any] = Field(description="the size distribution as resolved")
+    description: str = Field(description="the distribution in words")
+    model: str = Field(description="the model of the one dimensionless trajectory")
+    dose_fraction: float = Field(description="dose / the batch's stored fluid")
+    reference_dry_radius_um: float = Field(
+        description="the number-weighted mean dry radius (the reference bead), um")
+    time: float = Field(description="the batch's dose time, dimensionless (reference tau)")
+    seconds: float | None = Field(None, description="the batch's dose time in s")
+    timescale_seconds: float | None = Field(None, description="the reference bead's tau, s")
+    mean_bead_time: float = Field(description="the reference bead's own dose time")
+    mean_bead_seconds: float | None = Field(None, description="... in s")
+    delay: float = Field(description="batch time / reference bead's time - 1")
+    fraction_delivered: float = Field(
+        description="fraction of the beads (by number) that have delivered their own dose "
+                    "by the batch's dose time")
+    percentile_radii_um: list[float] = Field(description="10th, 50th, 90th percentile dry "
+                                                         "radius (by number), um")
+    percentile_times: list[float] = Field(description="their own dose times, dimensionless")
+    percentile_seconds: list[float] | None = Field(None, description="... in s")
+    quadrature: QuadratureOut = Field(description="the quadrature over sizes")
+    note: str = Field(description="the batch's answer in words")
+
+
 class DoseTimeRequest(RequestModel):
     """How long to hold a bead at T_end to release a dose.
 
@@ -341,6 +419,10 @@ class DoseTimeRequest(RequestModel):
     validation_method: Method = method_field()
     interfacial_length: float | None = interfacial_length_field()
     drug: DrugIn | None = Field(None, description="a drug in the pore fluid: doses are drug")
+    size_distribution: SizeDistributionIn | None = Field(
+        None, description="a batch of beads: the answer adds 'batch' (its dose time, the "
+                          "fraction of beads delivered, the 10th-90th percentile bead; "
+                          "docs/batch.md); dose_fraction only")
     validate_full: bool = Field(
         False, alias="validate",
         description="also queue a full-solver validation of this dose (poll "
@@ -431,6 +513,9 @@ class PendingResponse(_Out):
     validation_id: str = Field(description="id to poll at /v1/validations/{id}")
     validation_url: str = Field(description="path of the validation to poll")
     note: str = Field(description="what is queued and what to do next, in words")
+    hold: list[dict[str, Any]] | None = Field(
+        None, description="a schedule's hold reading while its protocol check runs: a rough "
+                          "reading (one continuous heating, doses read off cumulatively)")
 
 
 class DoseTimeResponse(_Out):
@@ -460,6 +545,12 @@ class DoseTimeResponse(_Out):
     seconds: float | None = Field(None, description="actuation time in s (with a bead size)")
     timescale_seconds: float | None = Field(None, description="tau in s (eq. timescale)")
     timescale_formula: str = Field(description="how tau was computed")
+    timescale_uncertainty: dict[str, Any] | None = Field(
+        None, description="the seconds' uncertainty: uncalibrated, the range over the "
+                          "timescale constants (one to two orders of magnitude) and how to "
+                          "pin it (a kinetics fit); calibrated, the kinetics fit's interval")
+    parameter_interval: dict[str, Any] | None = Field(
+        None, description="a stored fitted gel's 95% interval of the time from its fit")
     start_radius: float = Field(description="radius at T_start, dry radii")
     final_radius: float = Field(description="radius after the dose, dry radii")
     final_radius_um: float | None = Field(None, description="radius after the dose in um")
@@ -481,6 +572,9 @@ class DoseTimeResponse(_Out):
         None, description="with validate: id of the queued validation, poll "
                           "/v1/validations/{id}")
     validation_url: str | None = Field(None, description="with validate: path to poll")
+    batch: BatchOut | None = Field(
+        None, description="with a size_distribution: the batch's dose (the fields above are "
+                          "its number-weighted mean bead's)")
 
 
 class ValidationResponse(_Out):
@@ -499,6 +593,10 @@ class ValidationResponse(_Out):
 Fraction = Annotated[float, Field(gt=0.0, le=1.0)]
 Rest = Annotated[float, Field(ge=0.0, le=1.0e3)]
 RestSeconds = Annotated[float, Field(ge=0.0, le=1.0e7)]
+
+
+# the planner's defaults, written once (dosing.request.ScheduleRequest): every way in agrees
+_SCHEDULE_DEFAULTS = {f.name: f.default for f in dataclasses.fields(PlannerSchedule)}
 
 
 class ScheduleRequest(RequestModel):
@@ -533,9 +631,13 @@ class ScheduleRequest(RequestModel):
     branch: Branch | None = Field(None, description="start branch at T_start (default swollen)")
     constants: ConstantsIn | None = Field(None, description="timescale constants")
     check_protocol: bool = Field(
-        False, description="simulate the heat/rest protocol with the full solver (a job)")
+        _SCHEDULE_DEFAULTS["check_protocol"],
+        description="simulate the heat/rest protocol with the full solver (a job; on by "
+                    "default everywhere: the hold reading alone is rough)")
     correct: bool = Field(
-        False, description="shoot on the full solver for times meeting every dose (a job)")
+        _SCHEDULE_DEFAULTS["correct"],
+        description="shoot on the full solver for times meeting every dose (a job; on by "
+                    "default everywhere)")
     tolerance: float = Field(0.01, gt=0.0, le=0.2,
                              description="relative tolerance of the corrected doses, 0-0.2")
     validation_method: Method = method_field()

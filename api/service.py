@@ -106,16 +106,20 @@ class Accepted:
 
     validation_id: str
     note: str
+    hold: list[dict[str, Any]] | None = None  # a schedule's rough hold reading, if at hand
 
     @property
     def validation_url(self) -> str:
         """Path to poll."""
         return validation_url(self.validation_id)
 
-    def to_dict(self) -> dict[str, str]:
+    def to_dict(self) -> dict[str, Any]:
         """The 202 body (schemas.PendingResponse)."""
-        return {"status": "pending", "validation_id": self.validation_id,
-                "validation_url": self.validation_url, "note": self.note}
+        out: dict[str, Any] = {"status": "pending", "validation_id": self.validation_id,
+                               "validation_url": self.validation_url, "note": self.note}
+        if self.hold is not None:
+            out["hold"] = self.hold
+        return out
 
 
 @dataclass
@@ -187,7 +191,9 @@ def to_dose_request(body: s.DoseTimeRequest) -> DoseRequest:
         dry_radius_um=body.dry_radius_um, swollen_radius_um=body.swollen_radius_um,
         constants=_constants(body.constants), branch=body.branch,
         settings=SolverSettings(interfacial_length=body.interfacial_length,
-                                method=body.validation_method))
+                                method=body.validation_method),
+        size_distribution=None if body.size_distribution is None
+        else body.size_distribution.model_dump(exclude_none=True))
 
 
 def to_schedule_request(body: s.ScheduleRequest) -> ScheduleRequest:
@@ -208,7 +214,11 @@ DOSE_PENDING_NOTE = (
     "This scenario needs the full solver (no front model applies and no run is cached yet). "
     "Poll validation_url; once it is done, send the same request again: it is then answered "
     "at once from the cache.")
-SCHEDULE_PENDING_NOTE = "The schedule needs the full solver; poll validation_url for the result."
+SCHEDULE_PENDING_NOTE = (
+    "The schedule's protocol check and correction need the full solver; poll validation_url "
+    "for the result.  `hold`, when present, is the hold reading (the paper's assumption: one "
+    "continuous heating, doses read off cumulatively): a rough reading only, since the gel "
+    "takes up fluid while it rests and later doses then come out larger.")
 
 
 def dose_time(planner: Planner, body: s.DoseTimeRequest) -> dict[str, Any] | Accepted:
@@ -216,11 +226,19 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest) -> dict[str, Any] | Acc
     one planner call (:meth:`dosing.Planner.answer`).  A dose with a drug is answered by
     :mod:`api.drug_service`."""
     if body.drug is not None:
+        if body.size_distribution is not None:
+            raise ParameterError("size_distribution", "a batch", "null with a drug (a "
+                                 "batch's drug dose is not built yet)")
         return drug_service.dose_answer(planner, body, to_gel)
-    out = planner.answer(to_dose_request(body), validate=body.validate_full)
+    req = to_dose_request(body)
+    out = planner.answer(req, validate=body.validate_full)
     if isinstance(out, Pending):
         return Accepted(out.validation_id, DOSE_PENDING_NOTE)
     answer = {"status": "answered", **out.answer.to_dict()}
+    if req.size_distribution is not None:  # a batch (issue 26)
+        from dosing.batch import batch_answer
+
+        answer["batch"] = batch_answer(req).to_dict()
     if out.validation_id is not None:
         answer.update(validation_id=out.validation_id,
                       validation_url=validation_url(out.validation_id))
@@ -251,7 +269,13 @@ def schedule(state: ServiceState, body: s.ScheduleRequest) -> dict[str, Any] | A
     now = _schedule_now(state.planner, body)
     if now is not None:
         return {"status": "answered", **now}
-    return Accepted(stored_jobs.submit(state, "schedule", body), SCHEDULE_PENDING_NOTE)
+    job = stored_jobs.submit(state, "schedule", body)
+    rough = None
+    if body.drug is None and (body.check_protocol or body.correct):
+        hold = _schedule_now(state.planner, body.model_copy(
+            update={"check_protocol": False, "correct": False}))
+        rough = None if hold is None else hold["hold"]
+    return Accepted(job, SCHEDULE_PENDING_NOTE, hold=rough)
 
 
 stored_jobs.register(stored_jobs.JobKind("schedule", s.ScheduleRequest, _schedule_result))

@@ -113,6 +113,9 @@ class DoseAnswer:
     method: str = "direct"  # the truth: 'direct', 'ladder' or 'paper'
     bead_dry_radius_um: float | None = None  # the bead size the truth's ell assumes
     uncertainty: Uncertainty | None = None  # the direct truth's three parts (validated)
+    # the seconds' uncertainty from the timescale constants, or a kinetics fit's interval
+    # (dosing.units.timescale_uncertainty)
+    timescale_uncertainty: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""

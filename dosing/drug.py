@@ -1,11 +1,25 @@
 """The drug: physical parameters, their dimensionless solute, and full-solver drug runs.
 
 A drug is a passive solute in the pore fluid (solver/solute).  Its diffusivity in water D0
-(cm^2/s, or from a Stokes-Einstein radius) is scaled by the gel's own D = R^2 / tau =
-k0 k_B T_end / (eta Omega_p) (eq. timescale), so one dimensionless run serves every bead
-size; the hindrance D0 f(phi) is Lustig & Peppas' free-volume law with the sieving of a
-mesh of size xi (given at the swollen start state, affine: xi ~ J^(1/3)), or Ogston's, or
-none.  A drug run is the full solver (Lagrangian grid, outputs at every protocol boundary
+is given at a stated reference temperature (``reference_temperature_k``, default 25 degC)
+and carried to T_end by Stokes-Einstein with water's viscosity,
+D0(T) = D0(T_ref) (T / T_ref) eta_w(T_ref) / eta_w(T); its Stokes-Einstein radius is
+k_B T_ref / (6 pi eta_w(T_ref) D0(T_ref)) (or given, then D0(T) = k_B T / (6 pi eta_w(T)
+r_s)).  D0(T_end) is scaled by the gel's own D = R^2 / tau = k0 k_B T_end / (eta Omega_p)
+(eq. timescale), so one dimensionless run serves every bead size.  The hindrance (module
+``solver.solute.hindrance``): diffusion by Lustig & Peppas' free-volume law (default),
+Ogston-Preston-Wells, Amsden or none; convective sieving of the expelled fluid's solute;
+the partition K0 K_s(phi).  The gel's mesh is one length per gel: its dry mesh xi_dry =
+``PhysicalConstants.mesh_length_nm`` (the same length that sets the interfacial length),
+affine in the local (smallest principal) stretch; ``mesh_size_nm`` (the swollen mesh at
+T_start, xi_dry = mesh_size_nm / a0) overrides it for the drug alone, and the answer says
+so.  The retained solute's osmotic pressure is neglected: Staverman-van 't Hoff,
+Pi = sigma c R T with sigma = 1 - W <= 1, over the stress scale k_B T / Omega_p is at most
+c N_A Omega_p (the default Omega_p = 3e-25 m^3: 1.8e-4 per uM), times the enrichment of a
+retaining shell (at most the fluid's volume ratio a0^3 / a^3 ~ 10): below 2 % of the stress
+scale for retained loads under ~10 uM (0.7 mg/mL of a 66 kDa protein); small drugs pass the
+mesh (sigma ~ 0) and exert none.  Above that the answer overstates the collapse.
+A drug run is the full solver (Lagrangian grid, outputs at every protocol boundary
 and densely between them) followed by the solute on its cells; runs are cached per
 dimensionless drug scenario in the planner's SQLite file (own table, so nothing of the
 validation cache is touched).
@@ -30,21 +44,24 @@ import numpy as np
 
 from solver.errors import ParameterError, SolverError
 from solver.gel import Gel
+from solver.limits import T_MAX, T_MIN
 from solver.solute import Hindrance, ReleaseResult, Solute, crank_sphere
 
 from .cache import ValidationCache
 from .scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
-from .units import BOLTZMANN, UM3_PER_UL, PhysicalConstants
+from .units import BOLTZMANN, UM3_PER_UL, PhysicalConstants, water_viscosity
 
 # mechanics samples per unit time (at least MIN_SAMPLES per step): benchmarks/drug.py measures
 # the released fraction within 3e-3 of the load (1e-3 with sieving) at a cost <= 1.5 x
 SAMPLES_PER_TAU = 2000
 MIN_SAMPLES = 200
 D_RANGE_CM2_S = (0.0, 1e-3)
-HINDRANCE_LAWS = ("free-volume", "ogston", "none")
+HINDRANCE_LAWS = ("free-volume", "ogston", "amsden", "none")
+T_REF_RANGE = (T_MIN, T_MAX)  # solver.limits
+REFERENCE_TEMPERATURE_K = 298.15  # 25 degC: where D0 is given unless stated
 DRUG_ARRAYS = ("t", "radius", "released_fraction", "advected_fraction", "expelled_fraction",
                "in_gel_fraction", "medium_concentration", "temperature", "profile_t",
-               "profiles", "profile_radii")
+               "profiles", "profile_radii", "squeezed_fraction")
 
 
 def _opt_positive(name: str, value: Any) -> float | None:
@@ -63,11 +80,14 @@ def _opt_positive(name: str, value: Any) -> float | None:
 class DrugModel:
     """A drug dissolved in the pore fluid, in physical units (validated on construction).
 
-    ``diffusivity_cm2_s`` D0 in water (0: carried by the fluid alone), or
-    ``solute_radius_nm`` (D0 from Stokes-Einstein, kT / (6 pi eta r_s), at T_end with the
-    constants' viscosity); ``hindrance`` law; ``mesh_size_nm`` of the swollen gel at T_start
-    (free-volume sieving 1 - r_s / xi; needs a solute radius, given or from D0),
-    ``fiber_radius_nm`` (Ogston), ``free_volume_y`` Y; ``partition`` K = c_pore / c_medium;
+    ``diffusivity_cm2_s`` D0 in water at ``reference_temperature_k`` (0: carried by the
+    fluid alone), or ``solute_radius_nm`` (D0 from Stokes-Einstein with water's viscosity);
+    ``hindrance`` law; ``mesh_size_nm`` of the swollen gel at T_start (default None: the
+    gel's own dry mesh, ``PhysicalConstants.mesh_length_nm``, affine in the stretch),
+    ``fiber_radius_nm`` (Ogston, Amsden; with it the partition's steric part is Ogston's
+    K_s(phi) unless ``partition_law`` says "constant"), ``free_volume_y`` Y; ``sieving``
+    (the convective sieving of the fluid's solute, on by default; hindrance "none" turns
+    every hindrance off); ``partition`` K0 = c_pore / c_medium (the affinity);
     ``release_volume_ul`` of a well-mixed medium (None: a perfect sink); ``load_ug`` drug per
     bead, or ``loading_concentration_ug_per_ul`` of the loading solution (the pore fluid
     holds K times it).
@@ -83,6 +103,10 @@ class DrugModel:
     release_volume_ul: float | None = None
     load_ug: float | None = None
     loading_concentration_ug_per_ul: float | None = None
+    reference_temperature_k: float = REFERENCE_TEMPERATURE_K
+    sieving: bool = True
+    partition_law: str | None = None
+    mesh_stretch: str = "smallest"
 
     def __post_init__(self) -> None:
         d = self.diffusivity_cm2_s
@@ -115,54 +139,127 @@ class DrugModel:
             raise ParameterError("drug.loading_concentration_ug_per_ul",
                                  self.loading_concentration_ug_per_ul,
                                  "None when drug.load_ug is given (give one of them)")
-        if self.hindrance == "ogston" and self.fiber_radius_nm is None:
+        if self.hindrance in ("ogston", "amsden") and self.fiber_radius_nm is None:
             raise ParameterError("drug.fiber_radius_nm", None,
-                                 "a finite number > 0 (nm) for Ogston's law")
+                                 f"a finite number > 0 (nm) for the {self.hindrance} law")
+        tr = self.reference_temperature_k
+        try:
+            x = float(tr)
+        except (TypeError, ValueError):
+            x = math.nan
+        if isinstance(tr, bool) or not (math.isfinite(x) and T_REF_RANGE[0] <= x
+                                        <= T_REF_RANGE[1]):
+            raise ParameterError("drug.reference_temperature_k", tr,
+                                 f"{T_REF_RANGE[0]:g}-{T_REF_RANGE[1]:g} K (liquid water)")
+        object.__setattr__(self, "reference_temperature_k", x)
+        if not isinstance(self.sieving, bool):
+            raise ParameterError("drug.sieving", self.sieving, "true or false")
+        if self.partition_law not in (None, "constant", "ogston"):
+            raise ParameterError("drug.partition_law", self.partition_law,
+                                 "None (Ogston's with a fibre radius, else constant), "
+                                 "'constant' or 'ogston'")
+        if self.partition_law == "ogston" and self.fiber_radius_nm is None:
+            raise ParameterError("drug.fiber_radius_nm", None,
+                                 "a finite number > 0 (nm) for Ogston's partition")
+        if self.mesh_stretch not in ("smallest", "volume"):
+            raise ParameterError("drug.mesh_stretch", self.mesh_stretch,
+                                 "'smallest' (default) or 'volume'")
 
     # ------------------------------------------------------------------ physical values
-    def d0_cm2_s(self, t_end: float, constants: PhysicalConstants) -> float:
-        """D0 in water: given, or Stokes-Einstein from the solute radius, or 0."""
+    def d0_cm2_s(self, t_end: float, constants: PhysicalConstants | None = None) -> float:
+        """D0 in water at ``t_end``: the given D0(T_ref) carried by Stokes-Einstein with
+        water's viscosity, or Stokes-Einstein from the solute radius, or 0 (``constants``
+        is not used: the drug diffuses in water whatever the gel's timescale assumes)."""
         if self.diffusivity_cm2_s is not None:
-            return float(self.diffusivity_cm2_s)
+            t_ref = self.reference_temperature_k
+            return float(self.diffusivity_cm2_s) * (t_end / t_ref) * (
+                water_viscosity(t_ref) / water_viscosity(t_end))
         if self.solute_radius_nm is not None:
-            eta = constants.viscosity(t_end)
-            return BOLTZMANN * t_end / (6.0 * math.pi * eta * self.solute_radius_nm * 1e-9) * 1e4
+            return (BOLTZMANN * t_end / (6.0 * math.pi * water_viscosity(t_end)
+                                         * self.solute_radius_nm * 1e-9) * 1e4)
         return 0.0
 
-    def solute_radius(self, t_end: float, constants: PhysicalConstants) -> float | None:
-        """r_s in nm: given, or Stokes-Einstein from D0 (None without either)."""
+    def solute_radius(self, t_end: float | None = None,
+                      constants: PhysicalConstants | None = None) -> float | None:
+        """r_s in nm: given, or Stokes-Einstein from D0 at the reference temperature with
+        water's viscosity there (None without either)."""
         if self.solute_radius_nm is not None:
             return self.solute_radius_nm
-        d = self.d0_cm2_s(t_end, constants)
-        if d <= 0.0:
+        d = self.diffusivity_cm2_s
+        if d is None or d <= 0.0:
             return None
-        return BOLTZMANN * t_end / (6.0 * math.pi * constants.viscosity(t_end) * d * 1e-4) * 1e9
+        t_ref = self.reference_temperature_k
+        return BOLTZMANN * t_ref / (6.0 * math.pi * water_viscosity(t_ref) * d * 1e-4) * 1e9
+
+    def dry_mesh_nm(self, start_radius: float, constants: PhysicalConstants) -> float:
+        """The dry mesh length xi_dry for the sieving: the gel's (the constants' mesh
+        length, the interfacial length's) unless ``mesh_size_nm`` overrides it."""
+        if self.mesh_size_nm is not None:
+            return self.mesh_size_nm / start_radius
+        return float(constants.mesh_length_nm)
+
+    def mesh_note(self, start_radius: float, constants: PhysicalConstants) -> str:
+        """The mesh the answer assumes, in words."""
+        xi = self.dry_mesh_nm(start_radius, constants)
+        rs = self.solute_radius()
+        src = (f"drug.mesh_size_nm = {self.mesh_size_nm:g} nm at T_start (overrides, for the "
+               f"drug only, the gel's mesh_length_nm = {constants.mesh_length_nm:g} nm of the "
+               "interfacial length)" if self.mesh_size_nm is not None
+               else "the gel's mesh_length_nm (the interfacial length's)")
+        size = "no solute radius" if rs is None else f"r_s = {rs:.3g} nm (Stokes-Einstein at " \
+            f"{self.reference_temperature_k:g} K)" if self.solute_radius_nm is None \
+            else f"r_s = {rs:.3g} nm"
+        return (f"Dry mesh xi_dry = {xi:.3g} nm from {src}, affine in the {self.mesh_stretch} "
+                f"principal stretch (swollen start {xi * start_radius:.3g} nm); {size}; "
+                + ("convective sieving W(r_s/xi) on" if self.sieving and
+                   self.hindrance != "none" else "no convective sieving")
+                + f"; partition {self.partition_law_used()}.")
+
+    def partition_law_used(self) -> str:
+        """'ogston' or 'constant' (the default: Ogston's with a fibre radius)."""
+        if self.hindrance == "none":
+            return "constant"
+        if self.partition_law is not None:
+            return self.partition_law
+        return "ogston" if self.fiber_radius_nm is not None else "constant"
 
     def hindrance_law(self, start_radius: float, t_end: float,
                       constants: PhysicalConstants) -> Hindrance:
-        """The dimensionless law: free-volume sieve r_s / xi_dry = a0 r_s / xi_start."""
+        """The dimensionless law: mesh r_s / xi_dry, fibre r_s / r_f (module
+        ``solver.solute.hindrance``)."""
         if self.hindrance == "none":
-            return Hindrance("none")
+            return Hindrance("none", convective=False)
         rs = self.solute_radius(t_end, constants)
-        if self.hindrance == "ogston":
-            if rs is None:
-                raise ParameterError("drug.solute_radius_nm", None,
-                                     "a finite number > 0 (nm; or D0 > 0) for Ogston's law")
-            return Hindrance("ogston", sieve=min(rs / self.fiber_radius_nm, 100.0))
-        sieve = 0.0
-        if self.mesh_size_nm is not None:
-            if rs is None:
-                raise ParameterError("drug.solute_radius_nm", None, "a finite number > 0 "
-                                     "(nm; or D0 > 0) for the sieving by drug.mesh_size_nm")
-            sieve = min(start_radius * rs / self.mesh_size_nm, 100.0)
-        return Hindrance("free-volume", sieve=sieve, y=self.free_volume_y)
+        if rs is None and self.hindrance in ("ogston", "amsden"):
+            raise ParameterError("drug.solute_radius_nm", None,
+                                 f"a finite number > 0 (nm; or D0 > 0) for the "
+                                 f"{self.hindrance} law")
+        if rs is None and self.mesh_size_nm is not None:
+            raise ParameterError("drug.solute_radius_nm", None, "a finite number > 0 "
+                                 "(nm; or D0 > 0) for the sieving by drug.mesh_size_nm")
+        mesh = 0.0 if rs is None else min(rs / self.dry_mesh_nm(start_radius, constants),
+                                          100.0)
+        fiber = 0.0 if rs is None or self.fiber_radius_nm is None else min(
+            rs / self.fiber_radius_nm, 100.0)
+        return Hindrance(self.hindrance, sieve=fiber if self.hindrance == "ogston" else mesh,
+                         y=self.free_volume_y, mesh=mesh, fiber=fiber,
+                         partition_law=self.partition_law_used(), convective=self.sieving,
+                         mesh_stretch=self.mesh_stretch)
 
-    def load(self, stored_fluid_ul: float | None) -> float | None:
-        """The drug per bead in ug (given, or K c_loading x the stored fluid), or None."""
+    def load(self, stored_fluid_ul: float | None, start_radius: float | None = None,
+             constants: PhysicalConstants | None = None) -> float | None:
+        """The drug per bead in ug: given, or K c_loading x the stored fluid with
+        K = K0 K_s(phi0) (the steric part at the start state when ``start_radius`` and
+        ``constants`` are given and the partition law is Ogston's; else K0), or None."""
         if self.load_ug is not None:
             return self.load_ug
         if self.loading_concentration_ug_per_ul is not None and stored_fluid_ul is not None:
-            return self.partition * self.loading_concentration_ug_per_ul * stored_fluid_ul
+            steric = 1.0
+            if start_radius is not None and constants is not None:
+                law = self.hindrance_law(start_radius, 298.15, constants)
+                steric = float(law.steric_partition(1.0 - 1.0 / start_radius**3))
+            return (self.partition * steric * self.loading_concentration_ug_per_ul
+                    * stored_fluid_ul)
         return None
 
     def solute(self, start_radius: float, t_end: float, constants: PhysicalConstants,
@@ -201,6 +298,13 @@ class DrugModel:
                 raise ParameterError("drug", value, f"a dict of {', '.join(asdict(cls()))}"
                                      ) from exc
         raise ParameterError("drug", value, "a DrugModel or a dict of its fields")
+
+
+def carried_by_fluid(solute: Solute) -> bool:
+    """True if the drug leaves exactly with the fluid on one heating: no diffusion and no
+    convective sieving (a D0 = 0 solute that the mesh sieves is retained, not carried)."""
+    h = solute.hindrance
+    return solute.diffusivity == 0.0 and not (h.convective and h.mesh_ratio > 0.0)
 
 
 def leak_time(solute: Solute, start_radius: float, fraction: float = 0.1) -> float:
@@ -359,7 +463,7 @@ def to_npz(rel: ReleaseResult) -> bytes:
 def from_npz(blob: bytes, meta: dict[str, Any]) -> ReleaseResult:
     """Inverse of :func:`to_npz` (scalars from the metadata)."""
     with np.load(io.BytesIO(blob)) as z:
-        arrays = {k: np.array(z[k]) for k in DRUG_ARRAYS}
+        arrays = {k: np.array(z[k]) for k in DRUG_ARRAYS if k in z}
     return ReleaseResult(**arrays, mass_balance_error=float(meta.get("mass_balance_error", 0.0)),
                          effective_diffusivity=float(meta.get("effective_diffusivity", 0.0)),
                          diagnostics=dict(meta))

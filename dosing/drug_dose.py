@@ -26,6 +26,7 @@ from .drug import (
     DrugRuns,
     DrugScenario,
     StatedTruth,
+    carried_by_fluid,
     drug_settings,
     leak_time,
     runs_for,
@@ -34,7 +35,9 @@ from .request import DoseRequest, Jump, _resolve_scenario
 from .truth import Part, Uncertainty, truth_text
 from .units import PhysicalConstants, timescale, volume_to_ul
 
-MAX_HORIZON = 64.0
+MAX_HORIZON = 32.0  # tau: one simulate step holds at most 100000 samples (2000 per tau)
+SPLIT = ("Squeezed out: the release of the same mechanics with D0 = 0 (the fluid's motion "
+         "alone, sieved by the mesh); diffused: the rest (the extra release diffusion makes).")
 DEFAULT_HORIZON = 0.5
 
 
@@ -90,7 +93,7 @@ class DrugDoseRequest(DrugRequest):
         drug = DrugModel.from_any(self.drug)
         object.__setattr__(self, "drug", drug)
         stored_ul = None if dry is None else volume_to_ul(jump.stored_volume, dry)
-        load = drug.load(stored_ul)
+        load = drug.load(stored_ul, jump.start_radius, self.constants)
         object.__setattr__(self, "load_ug", load)
         object.__setattr__(self, "fraction", resolve_drug_amount(
             "dose_fraction", self.dose_fraction, "drug_mass_ug", self.drug_mass_ug, load))
@@ -155,13 +158,21 @@ class DrugDoseAnswer(StatedTruth):
     scenario_key: str | None
     note: str
     uncertainty: Uncertainty | None = None
+    peclet: float | None = None
+    split: str = ""
+    mesh: str = ""
+    permeability_law: str = "none: k0 independent of temperature at fixed porosity"
 
 
 def mechanism(squeezed: float, diffused: float) -> str:
-    """'squeezed out' or 'diffused' (the larger share), with the split in words."""
+    """'squeezed out' or 'diffused' (the larger share), with the split in words; squeezed is
+    the D0 = 0 twin's release, so ``diffused`` < 0 when diffusion holds drug back."""
     total = squeezed + diffused
     if total <= 0.0:
         return "none"
+    if diffused < 0.0:
+        return (f"squeezed out (the fluid's motion alone would release {squeezed / total:.0%} "
+                f"of it; back-diffusion into the core holds {-diffused / total:.0%} back)")
     share = squeezed / total
     return (f"squeezed out ({share:.0%} with the expelled fluid)" if share >= 0.5
             else f"diffused ({1 - share:.0%} by diffusion through the edge)")
@@ -192,7 +203,8 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
                   timescale_seconds=tau,
                   interfacial_length=settings.interfacial_length,
                   bead_dry_radius_um=dry, truth=truth_text(req))
-    if solute.diffusivity == 0.0:
+    common.update(mesh=req.drug.mesh_note(req.start_radius, c))
+    if carried_by_fluid(solute):
         fluid = planner.dose(req.fluid_request(req.fraction))
         return DrugDoseAnswer(
             model=fluid.model, time=fluid.time, seconds=fluid.seconds,
@@ -201,7 +213,8 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
             mechanism=mechanism(1.0, 0.0), fluid_fraction=req.fraction,
             medium_concentration_ug_per_ul=_conc(req, req.fraction, fluid.final_radius),
             mass_balance_error=0.0, fluid_answer=fluid.to_dict(), scenario_key=None,
-            uncertainty=fluid.uncertainty,
+            uncertainty=fluid.uncertainty, peclet=0.0,
+            split=SPLIT + " Without diffusion and sieving all of it is squeezed out.",
             note=("No diffusion (D0 = 0): a uniformly loaded bead releases drug in proportion "
                   "to fluid on one heating, exactly, so this is the fluid answer "
                   f"({fluid.model}) for the same fraction; nothing leaks while it waits at "
@@ -217,18 +230,26 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
             t_hit = rel.time_to_release(req.fraction, after=req.lead)
             break
         except ValueError:
-            if horizon >= MAX_HORIZON:
-                most = rel.released_fraction[-1] - rel.released_at(req.lead)
+            most = rel.released_fraction[-1] - rel.released_at(req.lead)
+            late = rel.released_fraction[-1] - rel.released_at(req.lead + horizon / 2.0)
+            # a retained drug (sieved by the collapsed shell) releases ever more slowly: if
+            # even the last half-horizon's rate kept up to MAX_HORIZON falls short, stop
+            hopeless = most + max(late, 0.0) * (MAX_HORIZON - horizon) / (horizon / 2.0) \
+                < req.fraction
+            if horizon >= MAX_HORIZON or hopeless:
                 name = "dose_fraction" if req.drug_mass_ug is None else "drug_mass_ug"
                 raise ParameterError(
                     name, getattr(req, name), f"below {most:.4f} of the load"
                     + (f" ({most * load:.4g} ug)" if load else ""),
                     f"after waiting {req.lead:.4g} tau, heating for {horizon:g} tau releases "
-                    "at most that") from None
+                    "at most that" + ("" if horizon >= MAX_HORIZON else
+                                      f" (and at its late rate not more by {MAX_HORIZON:g} "
+                                      "tau: the collapsed shell holds the rest)")) from None
             horizon *= 4.0
     unc = drug_uncertainty(planner, req, runs, sc, t_hit, _fluid_fraction(req, rel, t_hit))
     before = rel.released_at(req.lead)
-    squeezed = rel.advected_at(t_hit) - rel.advected_at(req.lead)
+    squeezed = rel.squeezed_at(t_hit) - rel.squeezed_at(req.lead)
+    pe = rel.peclet(req.lead, t_hit)
     fluid = _fluid_fraction(req, rel, t_hit)
     time = t_hit - req.lead
     conc = _conc(req, rel.released_at(t_hit), _a3_at(rel, t_hit) ** (1.0 / 3.0))
@@ -239,15 +260,25 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
         squeezed_fraction=squeezed, diffused_fraction=req.fraction - squeezed,
         mechanism=mechanism(squeezed, req.fraction - squeezed), fluid_fraction=fluid,
         medium_concentration_ug_per_ul=conc, mass_balance_error=rel.mass_balance_error,
-        fluid_answer=None, scenario_key=sc.key(), uncertainty=unc,
+        fluid_answer=None, scenario_key=sc.key(), uncertainty=unc, peclet=pe,
+        split=SPLIT + (f" Peclet number of the heating {pe:.3g} (mean shrinking speed x "
+                       "swollen radius / D0 f(phi0)): "
+                       + ("the fluid's motion outruns diffusion." if pe is not None and pe > 1
+                          else "diffusion keeps up with the fluid's motion.")
+                       if pe is not None else ""),
         note=(f"Full solver ({s.grid} grid, N = {s.n}, interfacial length "
               f"{s.interfacial_length:g}) with the drug on its cells: D0 = {d0:.3g} cm^2/s "
               f"({solute.diffusivity:.3g} x the gel's {d_gel:.3g}), hindered by "
-              f"{solute.hindrance.law} (sieve {solute.hindrance.sieve:.3g}, Y "
-              f"{solute.hindrance.y:g}) to {d_eff:.3g} cm^2/s in the start state; partition "
+              f"{solute.hindrance.law} (r_s / xi_dry {solute.hindrance.mesh_ratio:.3g}, "
+              f"r_s / r_f {solute.hindrance.fiber_ratio:.3g}, Y {solute.hindrance.y:g}) to "
+              f"{d_eff:.3g} cm^2/s in the start state; partition "
               f"{solute.partition:g}; "
               + ("a perfect sink" if solute.release_volume is None else "a well-mixed medium")
-              + f". At T_start the bead leaks 10% of its load in {t10:.3g} tau."), **common)
+              + f". At T_start the bead leaks 10% of its load in {t10:.3g} tau. D0 is "
+              f"{req.drug.reference_temperature_k:g} K's value carried to T_end by "
+              "Stokes-Einstein with water's viscosity. The permeability does not depend on "
+              "temperature at fixed porosity (k0 as given: a k0 calibrated at one T_end may "
+              "not carry to another, Tokita & Tanaka 1991)."), **common)
 
 
 def _fluid_fraction(req: DrugDoseRequest, rel: Any, t: float) -> float:

@@ -31,11 +31,12 @@ from .drug import (
     DrugRuns,
     DrugScenario,
     StatedTruth,
+    carried_by_fluid,
     drug_settings,
     leak_time,
     runs_for,
 )
-from .drug_dose import resolve_wait
+from .drug_dose import MAX_HORIZON, resolve_wait
 from .protocol import heat_cool_protocol, windows
 from .request import Jump, ScheduleRequest, _resolve_scenario, resolve_rests
 from .scenario import SolverSettings, Step
@@ -81,7 +82,8 @@ class DrugScheduleRequest(DrugRequest):
         jump, dry = _resolve_scenario(self)
         drug = DrugModel.from_any(self.drug)
         object.__setattr__(self, "drug", drug)
-        load = drug.load(None if dry is None else volume_to_ul(jump.stored_volume, dry))
+        load = drug.load(None if dry is None else volume_to_ul(jump.stored_volume, dry),
+                         jump.start_radius, self.constants)
         object.__setattr__(self, "load_ug", load)
         object.__setattr__(self, "fractions", self._resolve_doses(load))
         object.__setattr__(self, "rests", resolve_rests(self.rests, self.rests_seconds,
@@ -181,15 +183,18 @@ def _reading(run: _Runner, rel: Any, durations: Sequence[float]) -> dict[str, An
     """What each heating delivers (drug, its squeezed part, fluid) and each rest leaks."""
     req = run.req
     win = run.windows(durations)
-    a3 = rel.radius**3
     import numpy as np
+
+    a3 = rel.radius**3
 
     def at(arr: Any, t: float) -> float:
         return float(np.interp(t, rel.t, arr))
 
     scale = req.start_radius**3 - 1.0
     drug = [at(rel.released_fraction, e) - at(rel.released_fraction, s) for s, e in win]
-    squeezed = [at(rel.advected_fraction, e) - at(rel.advected_fraction, s) for s, e in win]
+    sq = rel.squeezed_fraction if np.size(rel.squeezed_fraction) == np.size(rel.t) \
+        else rel.advected_fraction  # the D0 = 0 twin's release (grid-independent)
+    squeezed = [at(sq, e) - at(sq, s) for s, e in win]
     fluid = [(at(a3, s) - at(a3, e)) / scale for s, e in win]
     leaks = [at(rel.released_fraction, win[k + 1][0]) - at(rel.released_fraction, win[k][1])
              for k in range(len(win) - 1)]
@@ -200,6 +205,7 @@ def _reading(run: _Runner, rel: Any, durations: Sequence[float]) -> dict[str, An
            "delivered_fractions": drug, "relative_errors": [
                g / f - 1.0 for g, f in zip(drug, req.fractions, strict=False)],
            "squeezed_fractions": squeezed,
+           "peclet_numbers": [rel.peclet(s, e) for s, e in win],
            "diffused_fractions": [d - s for d, s in zip(drug, squeezed, strict=True)],
            "fluid_fractions": fluid,
            "drug_per_fluid": [d / f if f > 0 else None for d, f in zip(drug, fluid,
@@ -271,7 +277,12 @@ def _read_off(run: _Runner, durations: list[float], k: int, guess: float
             return rel.time_to_release(target, after=start) - start, 0.0
         except ValueError:
             most = float(rel.released_fraction[-1] - rel.released_at(start))
-            horizon *= 4.0
+            late = float(rel.released_fraction[-1] - rel.released_at(start + horizon / 2.0))
+            # a drug the collapsed shell holds: even the late rate kept to the cap falls short
+            if horizon >= MAX_HORIZON or most + max(late, 0.0) * (
+                    MAX_HORIZON - horizon) / (horizon / 2.0) < target:
+                break
+            horizon = min(4.0 * horizon, MAX_HORIZON)
     return None, most
 
 
@@ -336,7 +347,7 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
     dry = req.bead_dry_radius_um
     tau = timescale(dry, req.t_end, req.constants).seconds if dry is not None else None
     warnings: list[str] = []
-    if solute.diffusivity == 0.0:
+    if carried_by_fluid(solute):
         model, rows = hold_schedule(planner, req.fluid_schedule())
         hold = [row.to_dict() for row in rows]
         model = f"{model} (D0 = 0: drug = fluid on one heating)"
@@ -351,11 +362,11 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
                         for c in accumulate(req.fractions)]
                 break
             except ValueError:
-                if horizon > 60:
+                if horizon >= MAX_HORIZON:
                     raise ParameterError("doses", list(req.fractions), f"summing to below "
                                          f"{rel.released_fraction[-1]:.4f}", "one continuous "
                                          "heating releases at most that") from None
-                horizon *= 4.0
+                horizon = min(4.0 * horizon, MAX_HORIZON)
         prev = 0.0
         for d, c, e in zip(req.fractions, accumulate(req.fractions), ends, strict=True):
             hold.append({"dose_fraction": d, "cumulative_fraction": c, "start": prev, "end": e,
@@ -387,7 +398,12 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
             f"N = {s.n}, interfacial length {s.interfacial_length:g}, with the drug on its "
             "cells): during each rest the bead leaks drug by diffusion and takes up drug-free "
             "medium, which dilutes the fluid the next heating expels. The corrected times "
-            f"meet each drug dose within {req.tolerance:.0%} on the same solver.")
+            f"meet each drug dose within {req.tolerance:.0%} on the same solver. A heating's "
+            "squeezed part is the release of the same mechanics with D0 = 0, the diffused "
+            "part the rest. " + req.drug.mesh_note(req.start_radius, req.constants)
+            + f" D0 = {d0:.3g} cm^2/s at T_end ({req.drug.reference_temperature_k:g} K "
+            "reference, Stokes-Einstein with water's viscosity). The permeability does not "
+            "depend on temperature at fixed porosity (k0 as given).")
     if "front" in model and s.regularized and not s.direct:
         note += (" With D0 = 0 the hold times are the front model's sharp-interface limit "
                  "(ell -> 0) while the protocol runs use the ladder's coarsest ell, whose front "

@@ -14,8 +14,6 @@ unit), optional ``weight``.  Kinetics CSV: ``time_s`` and one size column, optio
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
@@ -25,12 +23,13 @@ from typing import Any
 
 import numpy as np
 
-from solver.errors import NotApplicableError, ParameterError, SolverError
+from solver.errors import NotApplicableError, ParameterError, SolverError, require_finite_positive
 from solver.fit import FitResult, SwellingData, fit_equilibrium, fit_gel
 from solver.fit.equilibrium import SIZE_POWER
 from solver.fit.kinetics import KineticsData, RadiusModel, fit_kinetics
 from solver.gel import Gel
 
+from .fit_csv import read_table
 from .model_choice import choose_model, front_model_name, front_run
 from .planner import Planner
 from .request import resolve_dry_radius, resolve_gel, resolve_jump
@@ -42,65 +41,26 @@ KINETICS_MODELS = ("auto", "front", "front-sharp", "full")
 
 
 # ---------------------------------------------------------------- CSV
-def _read_table(source: str | Path, what: str, first: str) -> tuple[dict[str, np.ndarray], str]:
-    """Columns of a CSV (file path or the text itself) as float arrays, and the size column."""
-    text = source if isinstance(source, str) and "\n" in source else None
-    if text is None:
-        p = Path(source)
-        if not p.is_file():
-            raise ParameterError("file", str(source), "a readable CSV file")
-        try:
-            text = p.read_text(encoding="utf-8-sig")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ParameterError("file", str(source), "a readable UTF-8 CSV file",
-                                 str(exc)) from None
-    try:
-        rows = [r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r)
-                and not r[0].lstrip().startswith("#")]
-    except csv.Error as exc:
-        raise ParameterError("file", str(source)[:80], "a CSV file", str(exc)) from None
-    if not rows:
-        raise ParameterError("file", "empty", f"a CSV with a header row ({first}, one of "
-                             f"{', '.join(SIZE_COLUMNS)})")
-    header = [h.strip() for h in rows[0]]
-    allowed = {first, "weight", *SIZE_COLUMNS}
-    unknown = [h for h in header if h not in allowed]
-    if unknown:
-        raise ParameterError("columns", unknown, f"{what} columns {first}, one of "
-                             f"{', '.join(SIZE_COLUMNS)}, optional weight",
-                             f"unknown column name(s) {', '.join(map(repr, unknown))}")
-    if len(set(header)) != len(header):
-        raise ParameterError("columns", header, "each column once")
-    if first not in header:
-        raise ParameterError("columns", header, f"a {first} column")
-    sizes = [h for h in header if h in SIZE_COLUMNS]
-    if len(sizes) != 1:
-        raise ParameterError("columns", header, f"exactly one size column among "
-                             f"{', '.join(SIZE_COLUMNS)}")
-    cols: dict[str, list[float]] = {h: [] for h in header}
-    for i, row in enumerate(rows[1:], start=2):
-        if len(row) != len(header):
-            raise ParameterError(f"line {i}", row, f"{len(header)} values ({', '.join(header)})")
-        for h, cell in zip(header, row, strict=False):
-            c = cell.strip()
-            try:
-                v = float(c) if c else math.nan
-            except ValueError:
-                raise ParameterError(f"line {i}, {h}", c, "a number") from None
-            cols[h].append(v)
-    return {h: np.array(v, dtype=float) for h, v in cols.items()}, sizes[0]
+def read_swelling_csv(source: str | Path, info: dict[str, Any] | None = None) -> SwellingData:
+    """Equilibrium swelling data from a lab's CSV (``dosing.fit_csv``: degC or K, radius,
+    diameter or volume ratio in um, mm or arbitrary units, header or not, ``,`` or ``;``);
+    ``info`` receives how it was read.  ParameterError names the line and column."""
+    tab = read_table(source, "temperature", SIZE_COLUMNS)
+    if info is not None:
+        info.update(tab.to_dict())
+    kind = next(k for k in SIZE_COLUMNS if k in tab.columns)
+    return SwellingData(tab.columns["temperature"], tab.columns[kind], kind,
+                        tab.columns.get("weight"))
 
 
-def read_swelling_csv(source: str | Path) -> SwellingData:
-    """Equilibrium swelling data from a CSV (module doc); ParameterError names the problem."""
-    cols, kind = _read_table(source, "swelling", "temperature_K")
-    return SwellingData(cols["temperature_K"], cols[kind], kind, cols.get("weight"))
-
-
-def read_kinetics_csv(source: str | Path) -> KineticsData:
-    """A shrinking curve from a CSV (module doc); ParameterError names the problem."""
-    cols, kind = _read_table(source, "kinetics", "time_s")
-    return KineticsData(cols["time_s"], cols[kind], kind, cols.get("weight"))
+def read_kinetics_csv(source: str | Path, info: dict[str, Any] | None = None) -> KineticsData:
+    """A shrinking curve from a lab's CSV (time in s, min or h; one size column, as
+    :func:`read_swelling_csv`); ParameterError names the line and column."""
+    tab = read_table(source, "time", SIZE_COLUMNS)
+    if info is not None:
+        info.update(tab.to_dict())
+    kind = next(k for k in SIZE_COLUMNS if k in tab.columns)
+    return KineticsData(tab.columns["time"], tab.columns[kind], kind, tab.columns.get("weight"))
 
 
 def swelling_data(temperature_K: Any, size: Any, kind: str = "radius",
@@ -119,19 +79,125 @@ def kinetics_data(time_s: Any, size: Any, kind: str = "radius",
 
 # ---------------------------------------------------------------- equilibrium
 def fit_swelling(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma: float = 0.01,
-                 fixed: Mapping[str, float] | None = None, n_starts: int = 6) -> FitResult:
-    """Fit Omega, A0, B0, A1, B1 and the size scale (``solver.fit.fit_equilibrium``); the
-    result's ``extra`` carries the fitted gel."""
+                 fixed: Mapping[str, float] | None = None, n_starts: int = 6,
+                 objective: str = "orthogonal", dry_size: float | None = None,
+                 below_dry_sigmas: float = 2.0, profile: tuple[str, ...] = ()) -> FitResult:
+    """Fit Omega, A0, B0, A1, B1 and the size scale (``solver.fit.fit_equilibrium``) under
+    ``objective`` ('orthogonal' or the paper's 'temperature'); ``dry_size`` fixes the scale
+    (the dry size in the data's unit); ``profile`` names parameters to give profile-likelihood
+    intervals beside the linearised ones.  The result's ``extra`` carries the fitted gel and
+    ``not_pinned``, what the data do not determine."""
+    fixed = dict(fixed or {})
+    if dry_size is not None:
+        fixed["scale"] = require_finite_positive("dry_size", dry_size)
     try:
         res = fit_equilibrium(data, sigma_t=sigma_t, size_rel_sigma=size_rel_sigma,
-                              fixed=fixed, n_starts=n_starts)
+                              fixed=fixed, n_starts=n_starts, objective=objective,
+                              below_dry_sigmas=below_dry_sigmas)
     except (np.linalg.LinAlgError, ArithmeticError) as exc:
         raise SolverError(f"the swelling fit failed numerically: {exc}") from exc
     try:
         res.extra["gel"] = fit_gel(res).to_dict()
     except ParameterError as exc:  # a fit at a bound can leave an invalid gel
         res.warnings.append(f"the fitted parameters do not make a valid gel: {exc}")
+    if profile:
+        from solver.fit.profile import profile_interval
+
+        rep = res.to_dict()
+        res.extra["profile_intervals"] = {k: profile_interval(data, rep, k) for k in profile}
+    res.extra["not_pinned"] = not_pinned(res)
     return res
+
+
+def not_pinned(res: FitResult) -> list[str]:
+    """What a swelling fit leaves open, in words: unidentifiable or strongly correlated
+    parameters, a dry size at its data bound, and always the timescale."""
+    out = [w for w in res.warnings if "not identifiable" in w or "correlated" in w]
+    bound = res.extra.get("dry_size_bound") or {}
+    if bound.get("at_bound"):
+        out.append("the dry size (scale) sits at its bound from the data ("
+                   f"{bound['rule']}): only the nearly dry collapsed branch pins it, and "
+                   "the dose time moves with it; give a measured dry size (--dry-size)")
+    iv = res.intervals.get("scale")
+    if iv and res.parameters["scale"] > 0:
+        rel = 0.5 * (iv[1] - iv[0]) / res.parameters["scale"]
+        if rel > 0.05:
+            out.append(f"the dry size is known only to +-{rel:.0%} (95%): the dose time "
+                       "depends on it through the start and final stretches")
+    out.append("the timescale tau (seconds): a swelling curve is dimensionless; pin it by a "
+               "kinetics fit (thermogel fit kinetics ... --save NAME)")
+    return out
+
+
+def dose_under_objectives(data: SwellingData, t_start: float, t_end: float, fraction: float,
+                          *, sigma_t: float = 0.05, size_rel_sigma: float = 0.01,
+                          fixed: Mapping[str, float] | None = None,
+                          fits: Mapping[str, FitResult] | None = None,
+                          sharp: bool = True) -> dict[str, Any]:
+    """The dimensionless dose time (front model) of one jump under both objectives, each with
+    its delta-method 95% interval, flagged when the intervals do not overlap (the choice of
+    objective then matters more than the stated noise)."""
+    from .fit_uncertainty import dose_time_interval
+
+    out: dict[str, Any] = {"t_start": t_start, "t_end": t_end, "dose_fraction": fraction,
+                           "model": "front-sharp" if sharp else "front"}
+    fits = dict(fits or {})
+    for obj in ("orthogonal", "temperature"):
+        res = fits.get(obj) or fit_swelling(data, sigma_t=sigma_t,
+                                            size_rel_sigma=size_rel_sigma, fixed=fixed,
+                                            objective=obj)
+        try:
+            gel = fit_gel(res)
+            jump = resolve_jump(gel, t_start, t_end, None)
+            iv = dose_time_interval({"swelling": {"fit": res.to_dict()}}, gel,
+                                    jump.t_start, jump.t_end, jump.branch, fraction, sharp)
+            out[obj] = {"time": iv.get("time_center"), "interval": iv.get("time"),
+                        "parameters": res.parameters, "chi2": res.extra.get("chi2"),
+                        "rms_temperature_residual_K": res.extra.get(
+                            "rms_temperature_residual_K"), "note": iv.get("note")}
+        except (ParameterError, NotApplicableError, SolverError) as exc:
+            out[obj] = {"time": None, "interval": None, "note": str(exc)}
+    a, b = out["orthogonal"].get("interval"), out["temperature"].get("interval")
+    if a and b:
+        out["disagree"] = bool(a[1] < b[0] or b[1] < a[0])
+        out["ratio"] = out["orthogonal"]["time"] / out["temperature"]["time"]
+        out["note"] = ("the two objectives' dose times disagree beyond their 95% intervals: "
+                       "the data do not decide the dose time; the parameter interval is "
+                       "understated; measure the dry size or points across the transition"
+                       if out["disagree"] else "the two objectives agree within their "
+                       "intervals")
+    else:
+        out["disagree"] = None
+        out["note"] = "no interval under one objective: compare the times themselves"
+    return out
+
+
+def compare_chi_models(data: SwellingData, *, sigma_t: float = 0.05,
+                       size_rel_sigma: float = 0.01, objective: str = "orthogonal",
+                       fixed: Mapping[str, float] | None = None) -> dict[str, Any]:
+    """AIC and BIC of nested chi models of eq. FloryParam on the same data: the full model,
+    chi1 constant in T (B1 = 0) and chi independent of the polymer fraction (A1 = B1 = 0),
+    each judged by the orthogonal chi-square under the stated noise (known noise: AIC =
+    chi2 + 2k, BIC = chi2 + k ln n; lowest is preferred, a difference above ~2 matters)."""
+    base = dict(fixed or {})
+    models = {"full": {}, "b1=0": {"b1": 0.0}, "a1=b1=0": {"a1": 0.0, "b1": 0.0}}
+    rows = {}
+    for name, extra in models.items():
+        try:
+            r = fit_swelling(data, sigma_t=sigma_t, size_rel_sigma=size_rel_sigma,
+                             fixed={**base, **extra}, objective=objective)
+            rows[name] = {"k": len(r.names) - len(r.fixed), "chi2": r.extra["chi2"],
+                          "aic": r.extra["aic"], "bic": r.extra["bic"],
+                          "parameters": r.parameters}
+        except (ParameterError, SolverError) as exc:
+            rows[name] = {"error": str(exc)}
+    ok = {k: v for k, v in rows.items() if "aic" in v}
+    best = {c: min(ok, key=lambda k: ok[k][c]) if ok else None for c in ("aic", "bic")}
+    for v in ok.values():
+        v["delta_aic"] = v["aic"] - ok[best["aic"]]["aic"]
+        v["delta_bic"] = v["bic"] - ok[best["bic"]]["bic"]
+    return {"models": rows, "best_aic": best["aic"], "best_bic": best["bic"],
+            "criterion": "chi2 under the stated noise; AIC = chi2 + 2k, BIC = chi2 + k ln n"}
 
 
 def data_dict(data: SwellingData | KineticsData) -> dict[str, Any]:
@@ -266,6 +332,8 @@ def fit_shrinking(data: KineticsData, gel: Gel | str | dict[str, Any], t_start: 
                       "dry_radius_um": dry})
     if dry is not None:
         c = constants or PhysicalConstants()
+        res.extra.update(diffusivity_report(res.parameters["tau"], res.intervals["tau"], dry,
+                                            jump.t_end))
         res.extra["k0_m2"] = k0_from_tau(res.parameters["tau"], dry, jump.t_end, c)
         iv = res.intervals["tau"]
         res.extra["k0_interval_m2"] = None if iv is None else sorted(
@@ -280,3 +348,65 @@ def k0_from_tau(tau_s: float, dry_radius_um: float, t_end: float,
     r = dry_radius_um * 1.0e-6
     return (constants.viscosity(t_end) * constants.polymer_volume_m3 * r * r
             / (tau_s * BOLTZMANN * t_end))
+
+
+def diffusivity_report(tau_s: float, tau_interval_s: list[float] | None, dry_radius_um: float,
+                       t_end: float) -> dict[str, Any]:
+    """What a kinetics fit pins: the effective diffusivity D = R^2 / tau = k0 k_B T_end /
+    (eta Omega_p) (eq. timescale) at T_end, with its 95% interval.  k0 alone needs eta and
+    Omega_p, which the curve does not fix."""
+    r2 = (dry_radius_um * 1e-6) ** 2
+    d = r2 / tau_s
+    iv = None if tau_interval_s is None else sorted(r2 / v * 1e4 for v in tau_interval_s)
+    return {"diffusivity_m2_s": d, "diffusivity_cm2_s": d * 1e4,
+            "diffusivity_interval_cm2_s": iv, "diffusivity_t_k": t_end,
+            "pinned": "the effective diffusivity D = k0 k_B T / (eta Omega_p) (eq. timescale) "
+                      "at t_end; k0_m2 follows only with the eta and Omega_p given"}
+
+
+DELAYED_N = 400  # the ell = 0 Lagrangian lattice of the delayed law (dosing.truth: 200-800)
+
+
+def fit_front_laws(data: KineticsData, gel: Gel | str | dict[str, Any], t_start: float,
+                   t_end: float, *, branch: str | None = None,
+                   dry_radius_um: float | None = None, planner: Any = None,
+                   size_rel_sigma: float = 0.01, delayed_n: int = DELAYED_N) -> dict[str, Any]:
+    """Fit one shrinking curve under both front laws (docs/interfacial.md; ../shared/
+    DESIGN.md): 'maxwell' (local equilibrium at the front, the front-sharp model, the
+    ell -> 0 limit of the regularized model) and 'delayed' (the ell = 0 lattice, whose core
+    stays metastable until near the spinodal: one full-solver run at N = ``delayed_n``,
+    cached).  Both have two parameters (tau, scale), so the Akaike criterion with the noise
+    estimated from the residuals, AIC = n ln(chi2 / n) + 2k, compares them; the report states
+    the preferred law, Delta AIC, and the bias in tau of fitting the other one."""
+    fits: dict[str, Any] = {}
+    fits["maxwell"] = fit_shrinking(data, gel, t_start, t_end, branch=branch,
+                                    dry_radius_um=dry_radius_um, model="front-sharp",
+                                    size_rel_sigma=size_rel_sigma)
+    st = SolverSettings(grid="lagrangian", n=delayed_n, rtol=1e-5, interfacial_length=0.0)
+    fits["delayed"] = fit_shrinking(data, gel, t_start, t_end, branch=branch,
+                                    dry_radius_um=dry_radius_um, model="full", settings=st,
+                                    planner=planner, size_rel_sigma=size_rel_sigma)
+    n = len(data)
+    out: dict[str, Any] = {"laws": {}}
+    for law, res in fits.items():
+        k = len(res.names)
+        chi2 = res.chi2_reduced * max(n - k, 1)
+        out["laws"][law] = {"tau_s": res.parameters["tau"],
+                            "tau_interval_s": res.intervals["tau"], "chi2": chi2, "k": k,
+                            "aic": n * math.log(chi2 / n) + 2 * k,
+                            "diffusivity_cm2_s": res.extra.get("diffusivity_cm2_s"),
+                            "report": res.to_dict()}
+    a, b = out["laws"]["maxwell"], out["laws"]["delayed"]
+    best = "maxwell" if a["aic"] <= b["aic"] else "delayed"
+    other = "delayed" if best == "maxwell" else "maxwell"
+    d_aic = out["laws"][other]["aic"] - out["laws"][best]["aic"]
+    bias = out["laws"][other]["tau_s"] / out["laws"][best]["tau_s"] - 1.0
+    out.update({"preferred": best, "delta_aic": d_aic,
+                "tau_bias_of_other_law": bias,
+                "criterion": "AIC = n ln(chi2 / n) + 2k (Gaussian, noise from the residuals)",
+                "note": (f"the {best} law fits better (Delta AIC {d_aic:.3g}); fitted with the "
+                         f"{other} law, tau would be {bias:+.0%} off"
+                         if d_aic > 2.0 else f"the curve does not decide the law (Delta AIC "
+                         f"{d_aic:.2g} < 2); the two laws' tau differ by {bias:+.0%}: "
+                         "measure the curve's early part (the delayed law's plateau)")})
+    return out

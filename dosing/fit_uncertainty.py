@@ -22,9 +22,9 @@ from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.fit.equilibrium import gel_from_internal
 from solver.gel import Gel
 
-from .gel_store import record_for
+from .gel_store import diffusivity_interval, record_for
 from .model_choice import front_run
-from .units import radius_after_dose
+from .units import PhysicalConstants, radius_after_dose, timescale_uncertainty
 
 Z95 = 1.959963984540054
 
@@ -99,8 +99,14 @@ def sample_dose_times(record: dict[str, Any], gel: Gel, t_start: float, t_end: f
 
 
 def attach_parameter_interval(req: Any, answer: Any) -> Any:
-    """Set ``answer.parameter_interval`` for a dose of a stored fitted gel (front model
-    answers only; the full solver is too slow to differentiate per request)."""
+    """Set ``answer.timescale_uncertainty`` (every answer: the seconds' range from the
+    timescale constants, or the kinetics fit's interval of D) and, for a dose of a stored
+    fitted gel, ``answer.parameter_interval`` (front model answers only; the full solver
+    is too slow to differentiate per request)."""
+    d_iv = diffusivity_interval(req.gel) if req.constants.calibrated else None
+    answer.timescale_uncertainty = timescale_uncertainty(
+        req.gel.omega, req.t_end, req.constants, answer.seconds,
+        None if d_iv is None else _scaled_interval(d_iv, req.t_end, req.constants))
     rec = record_for(req.gel)
     if rec is None or not (rec.get("swelling") or {}).get("fit"):
         return answer
@@ -113,17 +119,82 @@ def attach_parameter_interval(req: Any, answer: Any) -> Any:
                             req.settings.regularized)
     if iv.get("time") is not None and answer.seconds is not None:
         rel = iv["relative_half_width"]
-        kin = (rec.get("kinetics") or {}).get("fit") or {}
-        k0, k0_iv = kin.get("k0_m2"), kin.get("k0_interval_m2")
-        if k0 and k0_iv and abs(req.constants.permeability_m2 / k0 - 1.0) < 1e-6:
-            rel_k = 0.5 * math.log(k0_iv[1] / k0_iv[0])
+        joint = joint_relative_half_width(rec, req) if d_iv is not None else None
+        if joint is not None:
+            rel = joint
+            iv["note"] += ("; seconds: swelling and kinetics jointly (tau refitted as the "
+                           "swelling parameters move: their correlation kept)")
+            iv["method"] = "delta, joint"
+        elif d_iv is not None:
+            rel_k = 0.5 * math.log(d_iv[1] / d_iv[0])
             rel = math.hypot(rel, rel_k)
-            iv["note"] += "; seconds include the kinetics fit's k0 uncertainty"
-        elif k0:
-            iv["note"] += (f"; the kinetics fit's k0 = {k0:.4g} m^2 is not the one used "
-                           f"(constants.permeability_m2 = {req.constants.permeability_m2:.4g})")
+            iv["note"] += ("; seconds include the kinetics fit's uncertainty in D (added in "
+                           "quadrature: the kinetics fit was not made on this gel's swelling "
+                           "fit with the front model)")
+        else:
+            iv["note"] += ("; the seconds also carry the timescale constants' uncertainty "
+                           "(timescale_uncertainty), not included here")
         s = answer.seconds
         iv["seconds"] = [s * math.exp(-rel), s * math.exp(rel)]
         iv["seconds_relative_half_width"] = rel
     answer.parameter_interval = iv
     return answer
+
+
+def _scaled_interval(d_iv: tuple[float, float], t_end: float,
+                     constants: PhysicalConstants) -> tuple[float, float]:
+    """A kinetics fit's interval of D (at its temperature) carried to T_end as D itself."""
+    f = constants.diffusivity(t_end) / constants.diffusivity_m2_s / 1.0
+    return d_iv[0] * f, d_iv[1] * f
+
+
+def _half_time(gel: Gel, t_start: float, t_end: float, branch: str, sharp: bool) -> float:
+    """The front model's dimensionless time to half the radius change of a jump: what a
+    kinetics fit matches (tau = t_data / t_model), so tau moves as 1 / this."""
+    fr = front_run(gel, t_start, t_end, branch, sharp)
+    lo, hi = fr.radius_range
+    return float(fr.time_to_radius(0.5 * (lo + hi)))
+
+
+def joint_relative_half_width(record: dict[str, Any], req: Any) -> float | None:
+    """The 95% half-width of log(seconds) from the swelling and kinetics fits together.
+
+    seconds = t_dose(theta) tau(theta), and a kinetics fit made on this gel matched its data
+    with the model's own times, so tau(theta) = tau_fit h(theta_fit) / h(theta) (h: the
+    model's time to half the kinetics jump's change).  The delta method on
+    log t_dose - log h over the swelling covariance keeps their correlation (both move
+    with the dry size and chi); the kinetics fit's own tau uncertainty (given theta) adds in
+    quadrature.  None when the kinetics fit used the full solver or a front model fails."""
+    kin = (record.get("kinetics") or {}).get("fit") or {}
+    if kin.get("model") not in ("front", "front-sharp") or kin.get("t_start") is None:
+        return None
+    d_iv = kin.get("diffusivity_interval_cm2_s")
+    if not d_iv:
+        return None
+    q, cov, t_ref = _internal(record)
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    if np.any(sd > 1e3):
+        return None
+    sharp_k = kin["model"] == "front-sharp"
+    dose_args = (req.t_start, req.t_end, req.branch, req.fraction, req.settings.regularized)
+    kin_args = (float(kin["t_start"]), float(kin["t_end"]), kin.get("branch") or "swollen",
+                sharp_k)
+
+    def log_ratio(qq: np.ndarray) -> float:
+        g = gel_from_internal(qq, t_ref, name=req.gel.name).with_permeability(
+            req.gel.permeability.law, req.gel.permeability.beta)
+        return math.log(dose_time(g, *dose_args)) - math.log(_half_time(g, *kin_args))
+
+    grad = np.zeros(q.size)
+    try:
+        for j in np.nonzero(sd > 0.0)[0]:
+            h = 0.1 * sd[j]
+            qp, qm = q.copy(), q.copy()
+            qp[j] += h
+            qm[j] -= h
+            grad[j] = (log_ratio(qp) - log_ratio(qm)) / (2 * h)
+    except (ParameterError, NotApplicableError, SolverError, ValueError):
+        return None
+    rel_s = Z95 * math.sqrt(max(float(grad @ cov @ grad), 0.0))
+    rel_k = 0.5 * math.log(d_iv[1] / d_iv[0])
+    return math.hypot(rel_s, rel_k)

@@ -74,6 +74,8 @@ class GelStore:
                   "swelling": swelling if swelling is not None else old.get("swelling"),
                   "kinetics": kinetics if kinetics is not None else old.get("kinetics"),
                   "code_version": _code_version(), "created": time.time()}
+        record["timescale"] = timescale_of(record)
+        record["parameters"] = fitted_parameters(record)
         self.dir.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=self.dir, suffix=".tmp")
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
@@ -103,6 +105,24 @@ class GelStore:
         if not self.dir.is_dir():
             return []
         return sorted(p.stem for p in self.dir.glob("*.json") if NAME_RE.match(p.stem))
+
+    def summaries(self) -> list[dict[str, Any]]:
+        """Every stored gel as listed by GET /v1/gels: name, parameters (eq. FloryParam),
+        every fitted parameter with its interval, and the timescale a kinetics fit pinned
+        (None: uncalibrated).  Unreadable files are skipped."""
+        out = []
+        for name in self.names():
+            try:
+                rec = self.load_record(name)
+                gel = Gel.from_dict(rec["gel"])
+            except (ParameterError, KeyError, TypeError):
+                continue
+            out.append({"name": name, "gel": gel.to_dict(),
+                        "fitted": {k: bool(rec.get(k)) for k in ("swelling", "kinetics")},
+                        "parameters": rec.get("parameters") or fitted_parameters(rec),
+                        "timescale": rec.get("timescale") or timescale_of(rec),
+                        "code_version": rec.get("code_version")})
+        return out
 
     def delete(self, name: str) -> bool:
         """Remove one stored gel; False when there was none."""
@@ -140,6 +160,60 @@ def record_for(gel: Gel, store: GelStore | None = None) -> dict[str, Any] | None
     except (ParameterError, KeyError, TypeError):
         return None
     return rec if stored.key() == gel.key() else None
+
+
+def timescale_of(record: dict[str, Any]) -> dict[str, Any] | None:
+    """The effective diffusivity a stored kinetics fit pinned (``dosing.fit.diffusivity_report``
+    fields), or None (no kinetics fit, or one without a bead size)."""
+    fit = (record.get("kinetics") or {}).get("fit") or {}
+    if fit.get("diffusivity_m2_s") is None:
+        return None
+    return {k: fit.get(k) for k in ("diffusivity_m2_s", "diffusivity_cm2_s",
+                                    "diffusivity_interval_cm2_s", "diffusivity_t_k",
+                                    "tau_s", "tau_interval_s", "dry_radius_um", "model")}
+
+
+def fitted_parameters(record: dict[str, Any]) -> dict[str, Any]:
+    """Every fitted parameter of a stored gel, with its 95% interval: the swelling fit's
+    (Omega, A0, B0, A1, B1, scale), the kinetics fit's (tau, its size scale, beta) and the
+    effective diffusivity the kinetics fit pins."""
+    out: dict[str, Any] = {}
+    for part in ("swelling", "kinetics"):
+        fit = (record.get(part) or {}).get("fit") or {}
+        for k, v in (fit.get("parameters") or {}).items():
+            out[f"{part}.{k}"] = {"value": v, "interval": (fit.get("intervals") or {}).get(k)}
+    ts = record.get("timescale") or timescale_of(record)
+    if ts:
+        out["diffusivity_cm2_s"] = {"value": ts["diffusivity_cm2_s"],
+                                    "interval": ts["diffusivity_interval_cm2_s"],
+                                    "t_k": ts["diffusivity_t_k"]}
+    return out
+
+
+def calibrated_constants(gel: Gel, constants: Any, store: GelStore | None = None) -> Any:
+    """The request's constants with D pinned by the gel's stored kinetics fit (when it has
+    one and the request does not give D itself): tau then follows the fit, whatever k0,
+    eta and Omega_p say (eq. timescale)."""
+    if getattr(constants, "calibrated", True):
+        return constants
+    rec = record_for(gel, store)
+    ts = timescale_of(rec) if rec else None
+    if not ts:
+        return constants
+    from dataclasses import replace
+
+    return replace(constants, diffusivity_m2_s=float(ts["diffusivity_m2_s"]),
+                   diffusivity_t_k=float(ts["diffusivity_t_k"]),
+                   diffusivity_source=f"kinetics fit of stored gel '{gel.name}'")
+
+
+def diffusivity_interval(gel: Gel, store: GelStore | None = None
+                         ) -> tuple[float, float] | None:
+    """The stored kinetics fit's 95% interval of D in cm^2/s (at its own temperature)."""
+    rec = record_for(gel, store)
+    ts = timescale_of(rec) if rec else None
+    iv = ts.get("diffusivity_interval_cm2_s") if ts else None
+    return None if not iv else (float(iv[0]), float(iv[1]))
 
 
 def _strict(obj: Any) -> Any:

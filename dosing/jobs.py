@@ -19,13 +19,15 @@ renews the lease while it runs; every other process waits for the result to appe
 from __future__ import annotations
 
 import multiprocessing
+import multiprocessing.spawn as mp_spawn
 import os
 import socket
 import threading
 import time
 import uuid
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -77,12 +79,52 @@ def exit_with_parent(parent_pid: int, interval: float = 1.0) -> None:
     threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
 
 
+_SPAWN_LOCK = threading.Lock()
+
+
+@contextmanager
+def _main_not_reimported() -> Iterator[None]:
+    """While processes start here, a spawned child is not told to re-run ``__main__``.
+
+    multiprocessing's spawn makes each child import the parent's main script again (as
+    ``__mp_main__``), so a script without an ``if __name__ == "__main__"`` guard would run
+    again in every worker, start pools of its own and never finish.  The pool's work is
+    importable by name (``dosing.scenario.run_scenario``, ``solver.full.simulate``), so its
+    workers need nothing from the script: the README's code runs as pasted.
+    """
+    with _SPAWN_LOCK:
+        original = mp_spawn.get_preparation_data
+
+        def without_main(name: str) -> dict[str, Any]:
+            data = original(name)
+            data.pop("init_main_from_path", None)
+            data.pop("init_main_from_name", None)
+            return data
+
+        mp_spawn.get_preparation_data = without_main
+        try:
+            yield
+        finally:
+            mp_spawn.get_preparation_data = original
+
+
+class ScriptSafeProcessPool(ProcessPoolExecutor):
+    """A spawned process pool whose workers do not re-run the parent's main script
+    (:func:`_main_not_reimported`); workers start inside ``submit`` (Python >= 3.9 spawns
+    them on demand there), which is where the guard is held.  A callable submitted to it
+    must be importable by name (defined in a module, not in the script)."""
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future:
+        with _main_not_reimported():
+            return super().submit(fn, *args, **kwargs)
+
+
 def default_executor(max_workers: int | None = None) -> ProcessPoolExecutor:
-    """A process pool of spawned workers (half the cores, at least one); each worker ends
-    itself if this process dies."""
+    """A process pool of spawned workers (half the cores, at least one) that do not re-run
+    the caller's script; each worker ends itself if this process dies."""
     n = max_workers or max(1, (os.cpu_count() or 2) // 2)
-    return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=exit_with_parent, initargs=(os.getpid(),))
+    return ScriptSafeProcessPool(max_workers=n, mp_context=multiprocessing.get_context("spawn"),
+                                 initializer=exit_with_parent, initargs=(os.getpid(),))
 
 
 def stop_executor(executor: Executor) -> None:

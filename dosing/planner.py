@@ -41,7 +41,6 @@ from .model_choice import (
 from .request import DoseRequest, ScheduleRequest
 from .scenario import Scenario, Solver, SolverSettings, Trajectory, run_scenario
 from .schedule import ScheduleAnswer, hold_now, plan_schedule_with
-from .sweep import run_sweep
 from .truth import delayed_settings, is_model_form_run, range_settings
 from .validation import error_estimate, failure, validation_report
 
@@ -245,13 +244,6 @@ class Planner:
                                       req.settings.method)
         ans = build_answer(req, choice, time, est, explain, rep, scs[0].key())
         return attach_parameter_interval(req, ans)
-
-    def sweep(self, grid: Any, validate: Any = (), progress: Any = None) -> Any:
-        """A design map over ``grid`` (a ``dosing.sweep.SweepGrid``) on this planner's
-        executor, queueing full-solver validations for the points ``validate`` selects
-        (:func:`dosing.sweep.run_sweep`)."""
-        return run_sweep(grid, executor=self.jobs.executor, planner=self, validate=validate,
-                         progress=progress)
 
     # ------------------------------------------------------------------ validations
     def submit_validation(self, req: DoseRequest) -> str:

@@ -17,7 +17,7 @@ from solver.equilibrium import equilibrium, nearest_stable
 from solver.errors import ParameterError, require_finite_positive
 from solver.gel import Gel, Permeability, check_temperature
 
-from .gel_store import lookup
+from .gel_store import calibrated_constants, lookup
 from .scenario import DIRECT_ELL_RANGE, TRUTH, SolverSettings
 from .units import PhysicalConstants, stored_volume, timescale, ul_to_volume, volume_to_ul
 
@@ -150,7 +150,7 @@ def _resolve_scenario(req: Any) -> tuple[Jump, float | None]:
             object.__setattr__(req, f.name, from_edge(f.name, getattr(req, f.name)))
     gel = resolve_gel(req.gel)
     object.__setattr__(req, "gel", gel)
-    object.__setattr__(req, "constants", _constants(req.constants))
+    object.__setattr__(req, "constants", calibrated_constants(gel, _constants(req.constants)))
     object.__setattr__(req, "settings", _settings(req.settings))
     jump = resolve_jump(gel, req.t_start, req.t_end, req.branch)
     object.__setattr__(req, "jump", jump)
@@ -250,6 +250,7 @@ class DoseRequest:
     constants: PhysicalConstants | dict[str, Any] | None = None
     branch: str | None = None
     settings: SolverSettings | dict[str, Any] | None = None
+    size_distribution: Any = None  # a batch (dosing.size_distribution; dosing.batch answers)
     jump: Jump = field(init=False, repr=False, compare=False)
     bead_dry_radius_um: float | None = field(init=False, repr=False, compare=False)
     interfacial_range: tuple[float, float] | None = field(init=False, repr=False,
@@ -257,6 +258,9 @@ class DoseRequest:
     fraction: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        from .size_distribution import request_sizes
+
+        request_sizes(self)  # a batch: its number-weighted mean is the bead size
         jump, dry = _resolve_scenario(self)
         object.__setattr__(self, "fraction", self._resolve_fraction(jump, dry))
 
@@ -310,7 +314,9 @@ class DoseRequest:
         return {"gel": self.gel.to_dict(), "t_start": self.t_start, "t_end": self.t_end,
                 "branch": self.branch, "dose_fraction": self.fraction,
                 "dry_radius_um": self.bead_dry_radius_um,
-                "constants": self.constants.to_dict(), "settings": self.settings.to_dict()}
+                "constants": self.constants.to_dict(), "settings": self.settings.to_dict(),
+                **({} if self.size_distribution is None
+                   else {"size_distribution": self.size_distribution.to_dict()})}
 
 
 def resolve_rests(rests: Sequence[float] | None, rests_seconds: Sequence[float] | None,

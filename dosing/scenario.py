@@ -29,19 +29,22 @@ from solver.full import GRIDS as _GRID_REGISTRY
 from solver.full import FullResult, simulate
 from solver.gel import Gel, check_temperature
 from solver.json_safe import json_safe
+from solver.limits import (
+    LADDER_RUNGS,
+    TRUTH_DIRECT_ELL_RANGE,
+    TRUTH_LADDER_ELL_RANGE,
+    TRUTH_LADDER_START_RANGE,
+    TRUTH_N_RANGE,
+)
 
 SCHEMA = 1
 GRIDS = tuple(_GRID_REGISTRY)  # the solver's grid registry (solver.full.grids)
 INTEGRATORS = ("implicit", "explicit")
 METHODS = ("direct", "ladder")
-N_RANGE = (20, 6400)
-# ell of one run: a ladder's finest rung at N_RANGE's top (uniform grids), or down to a 10 um
-# dry bead's xi_lo / a_d on the moving grid (direct runs)
-ELL_RANGE = (0.000625, 0.02)
-DIRECT_ELL_RANGE = (2e-5, 0.02)
-# a ladder's coarsest ell: above 0.01 the nucleation delay is a third of an 80 % dose and
-# the three rungs can look asymptotic while they are not (ANB from 0.02: limit 1 % off)
-LADDER_TOP = 0.01
+N_RANGE = TRUTH_N_RANGE  # the ranges are solver.limits' (one definition)
+ELL_RANGE = TRUTH_LADDER_ELL_RANGE
+DIRECT_ELL_RANGE = TRUTH_DIRECT_ELL_RANGE
+LADDER_TOP = TRUTH_LADDER_START_RANGE[1]  # a ladder's coarsest ell (solver.limits)
 
 
 DEFAULT_INTERFACIAL_LENGTH = 0.005  # coarsest rung of the validation ladder (dry radii)
@@ -51,7 +54,7 @@ DEFAULT_INTERFACIAL_LENGTH = 0.005  # coarsest rung of the validation ladder (dr
 LIMIT_INTERFACIAL_LENGTH = 1e-4
 DIRECT_N = 400  # moving-grid cells of a direct run (its check run has DIRECT_N / 2)
 CELLS_PER_LENGTH = 4  # Lagrangian cells per ell: t80 converged to 1e-4 (docs/interfacial.md)
-RUNGS = 3  # ladder ell, ell/2, ell/4: three values give the observed order and the limit
+RUNGS = LADDER_RUNGS  # ladder ell, ell/2, ell/4: the observed order and the limit
 
 
 @dataclass(frozen=True)

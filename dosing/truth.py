@@ -114,6 +114,23 @@ class Uncertainty:
         return cls(**parts, **{k: v for k, v in d.items() if k not in parts})
 
 
+# Without a bead size the truth runs at ell = 1e-4 (scenario.LIMIT_INTERFACIAL_LENGTH) for the
+# sharp limit ell -> 0.  The ladder ell = 1e-4 / 5e-5 / 2.5e-5 (benchmarks/sharp_limit.py,
+# moving grid, 400 cells; the limit by Richardson extrapolation, the changes going down ~4x
+# per halving) pins it for ANB (10 %: 0.0006175 / 0.0006142 / 0.0006133, +0.7 % at 1e-4;
+# 30 %: +0.06 %) and for HHT doses of 50 % or more, not for HHT's small doses (10 %:
+# 0.000756 / 0.000577 / 0.000530, limit ~0.000515, +47 % at 1e-4; 30 %: 0.0056 / 0.00546 /
+# 0.005446, +2.9 %); 80 %: ANB +0.18 %, HHT -0.34 % (scenario.py).
+SHARP_LIMIT_NOTE = (
+    "ell = 1e-4 is within 1 % of the sharp limit for ANB (10-90 % doses) and within 0.4 % for "
+    "HHT doses of 50 % or more; it is NOT the limit for HHT's small doses: its 10 % dose is "
+    "0.000756 / 0.000577 / 0.000530 at ell = 1e-4 / 5e-5 / 2.5e-5 (extrapolated limit "
+    "~0.000515: the ell = 1e-4 time is ~47 % above it) and its 30 % dose 2.9 % above "
+    "(a small dose's time is mostly the front's nucleation delay at the edge, which shrinks "
+    "with ell; benchmarks/sharp_limit.py); give a bead size for the bead's own "
+    "ell = xi_dry / a_d")
+
+
 def _pct(x: float) -> str:
     return f"{100 * x:.2g}%" if abs(x) < 0.1 else f"{100 * x:.0f}%"
 
@@ -152,7 +169,7 @@ def uncertainty(truth: SolverSettings, runs: list[dict[str, Any]], time: float,
             f"interfacial length: not applicable without a bead size: ell = {ell:.3g} stands "
             "for the sharp-interface limit ell -> 0 (HHT t80 at ell = 1e-4 is 0.34% from the "
             "limit, ANB's 0.18%); give a bead size for the bead's own ell = xi_dry / a_d and "
-            "its range"))
+            "its range. " + SHARP_LIMIT_NOTE))
     mf = [(e["n"], e["time"]) for e in sorted(by["model_form"], key=lambda e: e["n"])
           if e.get("time") is not None]
     extra: dict[str, Any] = {}
@@ -197,7 +214,7 @@ def truth_text(req: Any) -> str:
     if dry is None:
         return (f"the regularized model (interfacial energy) at ell = {s.interfacial_length:.3g}"
                 f" dry radii, {run}: without a bead size this stands for the sharp-interface "
-                "limit ell -> 0")
+                "limit ell -> 0. " + SHARP_LIMIT_NOTE)
     xi = req.constants.mesh_length_nm
     lo, hi = req.interfacial_range or (s.interfacial_length, s.interfacial_length)
     own = req.constants.interfacial_lengths(dry)[0]

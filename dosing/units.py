@@ -47,6 +47,9 @@ class PhysicalConstants:
     permeability_m2: float = 8.0e-20
     mesh_length_nm: float = 4.0
     mesh_length_range_nm: tuple[float, float] | None = None  # default (xi / 2, 2 xi)
+    diffusivity_m2_s: float | None = None  # a kinetics fit's D at diffusivity_t_k (pins tau)
+    diffusivity_t_k: float | None = None
+    diffusivity_source: str | None = None  # e.g. "kinetics fit of stored gel 'mygel'"
 
     def __post_init__(self) -> None:
         v = self.viscosity_pa_s
@@ -72,6 +75,20 @@ class PhysicalConstants:
             raise ParameterError("constants.mesh_length_range_nm", self.mesh_length_range_nm,
                                  "two finite numbers 0 < lo <= mesh_length_nm <= hi (nm)")
         object.__setattr__(self, "mesh_length_range_nm", (lo, hi))
+        if (self.diffusivity_m2_s is None) != (self.diffusivity_t_k is None):
+            raise ParameterError("constants.diffusivity_t_k", self.diffusivity_t_k,
+                                 "given together with constants.diffusivity_m2_s (the "
+                                 "temperature at which a kinetics fit measured D)")
+        if self.diffusivity_m2_s is not None:
+            object.__setattr__(self, "diffusivity_m2_s", require_finite_positive(
+                "constants.diffusivity_m2_s", self.diffusivity_m2_s))
+            object.__setattr__(self, "diffusivity_t_k", check_temperature(
+                self.diffusivity_t_k, "constants.diffusivity_t_k"))
+
+    @property
+    def calibrated(self) -> bool:
+        """True when D (hence tau) comes from a kinetics fit, not from k0, eta and Omega_p."""
+        return self.diffusivity_m2_s is not None
 
     def interfacial_lengths(self, dry_radius_um: float) -> tuple[float, float, float]:
         """(ell, ell_lo, ell_hi) = xi_dry / a_d over the mesh length and its range."""
@@ -86,7 +103,16 @@ class PhysicalConstants:
         return float(self.viscosity_pa_s)
 
     def diffusivity(self, t_end: float) -> float:
-        """Effective diffusivity D = k0 k_B T_end / (eta Omega_p) in m^2/s (after eq. timescale)."""
+        """Effective diffusivity D = k0 k_B T_end / (eta Omega_p) in m^2/s (after eq. timescale).
+
+        Calibrated (``diffusivity_m2_s`` measured at ``diffusivity_t_k`` by a kinetics fit,
+        which pins only this combination, not k0 or Omega_p alone), D at another T_end
+        follows the formula's own temperature dependence: D_ref (T/T_ref) eta(T_ref)/eta(T).
+        """
+        if self.diffusivity_m2_s is not None:
+            t_ref = float(self.diffusivity_t_k)
+            return (self.diffusivity_m2_s * (t_end / t_ref)
+                    * self.viscosity(t_ref) / self.viscosity(t_end))
         return (self.permeability_m2 * BOLTZMANN * t_end
                 / (self.viscosity(t_end) * self.polymer_volume_m3))
 
@@ -116,10 +142,16 @@ class Timescale:
     polymer_volume_m3: float
     permeability_m2: float
     diffusivity_cm2_s: float
+    calibrated_by: str | None = None  # a kinetics fit pinned D (then k0, Omega_p are moot)
 
     @property
     def formula(self) -> str:
         """The formula with the numbers substituted."""
+        if self.calibrated_by:
+            return (f"tau = R^2 / D(T_end) = ({self.dry_radius_um:.4g} um)^2 / "
+                    f"({self.diffusivity_cm2_s:.4g} cm^2/s) = {self.seconds:.4g} s  [R = dry "
+                    f"radius; D = k0 k_B T_end / (eta Omega_p) pinned by the "
+                    f"{self.calibrated_by} (eq. timescale), not by the default constants]")
         return (f"tau = eta Omega_p R^2 / (k0 k_B T_end) = ({self.viscosity_pa_s:.4g} Pa s)"
                 f"({self.polymer_volume_m3:.4g} m^3)({self.dry_radius_um:.4g} um)^2 / "
                 f"(({self.permeability_m2:.4g} m^2)({BOLTZMANN:.6g} J/K)({self.t_end:.5g} K)) "
@@ -145,7 +177,9 @@ def timescale(dry_radius_um: float, t_end: float,
     r_m = r_um * 1.0e-6
     return Timescale(seconds=r_m * r_m / d, dry_radius_um=r_um, t_end=t1,
                      viscosity_pa_s=c.viscosity(t1), polymer_volume_m3=c.polymer_volume_m3,
-                     permeability_m2=c.permeability_m2, diffusivity_cm2_s=d * 1.0e4)
+                     permeability_m2=c.permeability_m2, diffusivity_cm2_s=d * 1.0e4,
+                     calibrated_by=(c.diffusivity_source or "kinetics fit")
+                     if c.calibrated else None)
 
 
 def stored_volume(start_radius: float) -> float:
@@ -175,3 +209,55 @@ def volume_to_ul(volume: float, dry_radius_um: float) -> float:
 def ul_to_volume(volume_ul: float, dry_radius_um: float) -> float:
     """Microlitres to a dimensionless volume (in dry-radius^3 units)."""
     return volume_ul * UM3_PER_UL / dry_radius_um**3
+
+
+# ---------------------------------------------------------------- the constants' range
+WATER_MOLECULAR_VOLUME_M3 = 3.0e-29  # Omega_f: 18 cm^3/mol / N_A = 2.99e-29 m^3
+TANAKA_FILLMORE_D_CM2_S = 3.0e-7  # the gel diffusivity the paper quotes (Tanaka 1979)
+HOW_TO_PIN = ("pin it by a kinetics fit to a measured shrinking curve: thermogel fit kinetics "
+              "FILE.csv --gel G --t-start T0 --t-end T1 --dry-radius-um R --save NAME, then "
+              "--gel NAME (docs/fitting.md)")
+
+
+def timescale_uncertainty(omega: float, t_end: float, constants: PhysicalConstants,
+                          seconds: float | None = None,
+                          calibrated_interval: tuple[float, float] | None = None
+                          ) -> dict[str, Any]:
+    """How far the seconds can be trusted: the effective diffusivity over the constants' range.
+
+    eq. timescale needs k0 / Omega_p, which nothing in a swelling curve fixes.  Uncalibrated,
+    D is taken at three defensible values: the constants used (the paper's, D ~ 1e-8 cm^2/s
+    at 308 K), Omega_p = Omega Omega_f consistent with the gel's own Omega of eq. EqlEqn
+    (water's Omega_f = 3.0e-29 m^3: D larger by 3e-25 / (Omega Omega_f), 100x for ANB,
+    14x for HHT) and the 3e-7 cm^2/s the paper quotes from Tanaka & Fillmore; the seconds'
+    range is tau over them.  Calibrated (a kinetics fit), the range is the fit's interval.
+    """
+    d_used = constants.diffusivity(t_end) * 1e4  # cm^2/s
+    if constants.calibrated:
+        lo, hi = calibrated_interval or (d_used, d_used)
+        out: dict[str, Any] = {
+            "calibrated": True, "source": constants.diffusivity_source or "kinetics fit",
+            "diffusivity_cm2_s": d_used, "diffusivity_range_cm2_s": [lo, hi],
+            "factor": hi / lo,
+            "note": "tau from the effective diffusivity a kinetics fit measured (eq. "
+                    "timescale: the fit pins D = k0 k_B T / (eta Omega_p), not k0 alone); the "
+                    "range is its 95% interval"}
+    else:
+        d_consistent = d_used * constants.polymer_volume_m3 / (omega * WATER_MOLECULAR_VOLUME_M3)
+        ds = {"constants used": d_used,
+              f"Omega_p = Omega Omega_f = {omega * WATER_MOLECULAR_VOLUME_M3:.3g} m^3 "
+              f"(the gel's Omega {omega:.4g})": d_consistent,
+              "Tanaka & Fillmore's measured gel diffusivity": TANAKA_FILLMORE_D_CM2_S}
+        lo, hi = min(ds.values()), max(ds.values())
+        out = {"calibrated": False, "source": "default constants (the paper's: eta = 1e-3 Pa s, "
+               "Omega_p = 3e-25 m^3, k0 = 8e-20 m^2)" if constants == PhysicalConstants()
+               else "constants given", "diffusivity_cm2_s": d_used,
+               "diffusivity_range_cm2_s": [lo, hi], "candidates_cm2_s": ds,
+               "factor": hi / lo,
+               "note": f"UNCALIBRATED: the seconds are uncertain by a factor {hi / lo:.3g} "
+                       f"(the timescale constants' range, D {lo:.2g}-{hi:.2g} cm^2/s); "
+                       + HOW_TO_PIN}
+    if seconds is not None:
+        out["seconds_range"] = [seconds * d_used / hi, seconds * d_used / lo]
+    out["how_to_pin"] = HOW_TO_PIN
+    return out

@@ -6,12 +6,12 @@ radius, time by tau of eq. timescale, stresses by k_B T / Omega_p); temperatures
 
 from .equilibrium import Equilibrium, Fold, equilibria, equilibrium, equilibrium_curve, folds
 from .errors import NotApplicableError, ParameterError, SolverError
-from .gel import ANB, HHT, PRESETS, Gel, Permeability, check_temperature, preset
+from .gel import ANB, HHT, PRESETS, Gel, Permeability, as_gel, check_temperature, preset
 from .phase import JumpClass, classify_jump, coexistence_curve, spinodal_curve
 
 __all__ = [
     "ANB", "HHT", "PRESETS", "Equilibrium", "Fold", "Gel", "JumpClass", "NotApplicableError",
-    "ParameterError", "Permeability", "SolverError", "check_temperature", "classify_jump",
+    "ParameterError", "Permeability", "SolverError", "as_gel", "check_temperature", "classify_jump",
     "coexistence_curve", "equilibria", "equilibrium", "equilibrium_curve", "folds", "preset",
     "spinodal_curve",
 ]

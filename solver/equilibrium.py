@@ -17,7 +17,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .errors import ParameterError
-from .gel import T_MAX, T_MIN, Gel, check_temperature
+from .gel import T_MAX, T_MIN, Gel, as_gel, check_temperature
 from .thermo import osmotic_p
 
 LAMBDA_MIN = 1.0 + 1e-10
@@ -117,6 +117,7 @@ def equilibria(gel: Gel, temperature: float) -> list[Equilibrium]:
     monotone), then found with brentq; no Newton iteration from a guess.  Results are
     memoised per (gel, T): the gel is immutable and the planner asks the same often.
     """
+    gel = as_gel(gel)
     return list(_equilibria(gel, check_temperature(temperature)))
 
 
@@ -139,6 +140,7 @@ def _equilibria(gel: Gel, t: float) -> tuple[Equilibrium, ...]:
 
 def equilibrium(gel: Gel, temperature: float, branch: Branch = "swollen") -> Equilibrium:
     """The stable equilibrium on the named branch: the most swollen or the most shrunken."""
+    gel = as_gel(gel)
     if branch not in ("swollen", "shrunken"):
         raise ParameterError("branch", branch, "'swollen' or 'shrunken'")
     stable = _stable(gel, temperature)
@@ -162,6 +164,7 @@ def nearest_stable(gel: Gel, temperature: float, stretch: float) -> Equilibrium:
     dW/dlambda > 0 means the energy falls as the gel shrinks, so it goes to the nearest
     stable root below; otherwise to the nearest stable root above.
     """
+    gel = as_gel(gel)
     eqs = _stable(gel, temperature)
     g = residual(gel, temperature, stretch)
     if g > 0:
@@ -173,6 +176,7 @@ def nearest_stable(gel: Gel, temperature: float, stretch: float) -> Equilibrium:
 
 def folds(gel: Gel, t_min: float = T_MIN, t_max: float = T_MAX) -> list[Fold]:
     """Fold temperatures of the equilibrium curve in [t_min, t_max], ascending in T."""
+    gel = as_gel(gel)
     c, d, dc, dd = _parts(gel, _GRID)
     h = dc * d - c * dd
 
@@ -208,6 +212,7 @@ class EquilibriumCurve:
 def equilibrium_curve(gel: Gel, t_min: float = T_MIN, t_max: float = T_MAX,
                       n: int = 4000, lambda_max: float = 10.0) -> EquilibriumCurve:
     """Every equilibrium (all branches) with T in [t_min, t_max], ordered by stretch."""
+    gel = as_gel(gel)
     lam = np.exp(np.linspace(np.log(LAMBDA_MIN - 1.0), np.log(lambda_max - 1.0), n)) + 1.0
     c, d, dc, dd = _parts(gel, lam)
     with np.errstate(divide="ignore", invalid="ignore"):

@@ -13,9 +13,8 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Any, Literal
 
 from .errors import ParameterError, require_finite, require_finite_positive
+from .limits import T_MAX, T_MIN
 
-T_MIN = 273.15
-T_MAX = 373.15
 BETA_RANGE = (0.0, 10.0)
 
 PermeabilityLaw = Literal["constant", "power"]
@@ -120,6 +119,15 @@ class Gel:
 ANB = Gel(omega=100.0, a0=-12.947, b0=0.04496, a1=17.92, b1=-0.0569, name="ANB")
 HHT = Gel(omega=720.0, a0=-62.22, b0=0.20470, a1=-58.28, b1=0.19044, name="HHT")
 PRESETS: dict[str, Gel] = {"ANB": ANB, "HHT": HHT}
+
+
+def as_gel(gel: Gel | str) -> Gel:
+    """A Gel, or the preset of that name: every public physics function accepts both."""
+    if isinstance(gel, Gel):
+        return gel
+    if isinstance(gel, str):
+        return preset(gel)
+    raise ParameterError("gel", gel, "a Gel or a preset name (" + ", ".join(sorted(PRESETS)) + ")")
 
 
 def preset(name: str) -> Gel:

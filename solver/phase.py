@@ -19,7 +19,7 @@ from scipy.optimize import brentq, minimize_scalar
 
 from .equilibrium import Branch, equilibrium, nearest_stable
 from .errors import ParameterError
-from .gel import T_MAX, T_MIN, Gel, check_temperature
+from .gel import T_MAX, T_MIN, Gel, as_gel, check_temperature
 from .thermo import normal_energy, normal_stiffness, normal_stress, osmotic_dp, osmotic_p
 
 Behaviour = Literal["smooth", "front", "delayed_front", "spinodal"]
@@ -41,6 +41,7 @@ def spinodal_stiffness(gel: Gel, temperature: float, stretch: np.ndarray | float
 def spinodal_curve(gel: Gel, t_min: float = T_MIN, t_max: float = T_MAX,
                    n: int = 3000, lambda_max: float = 10.0) -> tuple[np.ndarray, np.ndarray]:
     """(stretch, T) along the spinodal, eq. Spinodal, solved explicitly for T."""
+    gel = as_gel(gel)
     lam = np.exp(np.linspace(np.log(1e-6), np.log(lambda_max - 1.0), n)) + 1.0
     s0, s1 = _affine(spinodal_stiffness, gel, lam)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -106,6 +107,7 @@ def in_spinodal(gel: Gel, temperature: float, stretch: float) -> bool:
 
 def coexistence_points(gel: Gel, stretch: float) -> list[tuple[float, float]]:
     """All (T, lambda_new) solving eq. Coexistence at isotropic stretch lambda, T in range."""
+    gel = as_gel(gel)
     lam = float(stretch)
 
     def temp_for(ln: np.ndarray | float) -> np.ndarray:
@@ -146,6 +148,7 @@ def coexistence_points(gel: Gel, stretch: float) -> list[tuple[float, float]]:
 def coexistence_curve(gel: Gel, t_min: float = T_MIN, t_max: float = T_MAX, n: int = 300,
                       lambda_max: float = 4.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(stretch, T, lambda_new) along the coexistence curve (eq. Coexistence)."""
+    gel = as_gel(gel)
     lams, temps, news = [], [], []
     for lam in np.linspace(1.0 + 1e-3, lambda_max, n):
         for t, ln in coexistence_points(gel, lam):
@@ -184,6 +187,7 @@ def classify_jump(gel: Gel, t_start: float, t_end: float, branch: Branch | None 
     ``delayed_front`` if the isotropic path from the start stretch to the final
     equilibrium crosses the coexistence region, else ``smooth``.
     """
+    gel = as_gel(gel)
     t0 = check_temperature(t_start, "t_start")
     t1 = check_temperature(t_end, "t_end")
     if branch is None:
@@ -227,6 +231,7 @@ def spinodal_p_prime(gel: Gel, temperature: float, phi: float) -> float:
 
 def shrunken_level(gel: Gel, temperature: float) -> float:
     """The shrunken root phi_+ of P(phi) = 0 at T (sec. FrontSoln): the fully relaxed shell."""
+    gel = as_gel(gel)
     chi0, chi1 = gel.chi0(temperature), gel.chi1(temperature)
     phi = np.linspace(1e-9, 1 - 1e-12, 20001)
     p = osmotic_p(phi, chi0, chi1)
@@ -240,6 +245,7 @@ def shrunken_level(gel: Gel, temperature: float) -> float:
 def nucleation_level(gel: Gel, t_start: float, t_end: float, branch: Branch = "swollen") -> float:
     """Edge porosity at which a front has nucleated after T_start -> T_end: midway between
     the start equilibrium's porosity and the final (nearest stable) equilibrium's."""
+    gel = as_gel(gel)
     start = equilibrium(gel, t_start, branch)
     final = nearest_stable(gel, t_end, start.stretch)
     return 0.5 * (start.porosity + final.porosity)

@@ -192,13 +192,17 @@ async def test_schedule_hold_then_checked_job(clients) -> None:
     api, raw = clients
     body = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "doses": [0.3, 0.3, 0.3],
             "rests": [0.5, 0.5], "dry_radius_um": 50.0}
-    out = await api.schedule(body)
+    out = await api.schedule({**body, "check_protocol": False, "correct": False})
     assert out.status == "answered" and len(out.hold) == 3
     cum = [await api.dose_time(gel="ANB", t_start=302.0, t_end=308.0, dose_fraction=f)
            for f in (0.3, 0.6, 0.9)]
     assert [row["end"] for row in out.hold] == pytest.approx([a.time for a in cum], rel=1e-12)
-    r = await raw.post("/v1/schedule", json={**body, "check_protocol": True, "correct": True})
+    # the protocol check and the correction are the default, as in Python and the CLI; the
+    # 202 carries the hold reading as the rough reading it is
+    r = await raw.post("/v1/schedule", json=body)
     assert r.status_code == 202
+    assert [row["end"] for row in r.json()["hold"]] == [row["end"] for row in out.hold]
+    assert "rough" in r.json()["note"]
     v = await _wait_done(api, r.json()["validation_id"])
     assert v.status == "done" and v.kind == "schedule", v.error
     got = v.result["corrected"]
@@ -244,5 +248,6 @@ async def test_the_service_calls_the_planner_once_per_request(planner) -> None:
         assert (r.status_code, r.json()["model"], spy.calls) == (200, "full", ["answer"])
         spy.calls.clear()
         r = await raw.post("/v1/schedule", json={"gel": "ANB", "t_start": 302.0,
-                                                 "t_end": 308.0, "doses": [0.3, 0.3]})
+                                                 "t_end": 308.0, "doses": [0.3, 0.3],
+                                                 "check_protocol": False, "correct": False})
         assert (r.status_code, spy.calls) == (200, ["schedule_now"])

@@ -218,3 +218,22 @@ def test_stop_executor_ends_the_pool_workers() -> None:
     assert fut.exception(10) is not None
     assert not any(psutil.pid_exists(p) and psutil.Process(p).status() != "zombie"
                    for p in pids)
+
+
+def test_default_executor_does_not_rerun_an_unguarded_script(tmp_path: Path) -> None:
+    """A script with no ``if __name__ == "__main__"`` guard (as the README's code is pasted)
+    runs once: the pool's spawned workers do not import it again, and it finishes."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "pasted.py"
+    script.write_text("from dosing.jobs import default_executor, stop_executor\n"
+                      "print('script body ran', flush=True)\n"
+                      "ex = default_executor(1)\n"
+                      "print('result', ex.submit(abs, -3).result(timeout=60), flush=True)\n"
+                      "stop_executor(ex)\n")
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=120, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.count("script body ran") == 1
+    assert "result 3" in done.stdout

@@ -119,7 +119,7 @@ def test_dask_local_cluster_returns_the_identical_table(tmp_path: Path) -> None:
             distributed.Client(cluster) as client:
         planner = Planner(executor=client.get_executor(), cache_path=tmp_path / "c.sqlite")
         try:
-            on_dask = planner.sweep(grid)
+            on_dask = run_sweep(grid, executor=planner.jobs.executor, planner=planner)
         finally:
             planner.close()
         ran = client.run(lambda: "dosing.sweep" in sys.modules)  # in the worker process
@@ -133,8 +133,9 @@ def test_validations_are_queued_for_the_chosen_points(tmp_path: Path) -> None:
     are the planner's, so /v1/validations/{id} polls them."""
     pool = ThreadPoolExecutor(1)
     with Planner(cache_path=tmp_path / "c.sqlite", executor=pool, solver=FakeSolver()) as p:
-        res = p.sweep(SweepGrid(t_ends=[305.0, 308.0], dry_radii_um=[50.0], doses=[0.2, 0.4]),
-                      validate="needs-full")
+        res = run_sweep(SweepGrid(t_ends=[305.0, 308.0], dry_radii_um=[50.0], doses=[0.2, 0.4]),
+                        executor=p.jobs.executor, planner=p,
+                        validate="needs-full")
         ids = [r["validation_id"] for r in res.rows]
         assert ids[:2] != [None, None] and ids[2:] == [None, None]
         for vid in ids[:2]:
@@ -146,7 +147,8 @@ def test_validations_are_queued_for_the_chosen_points(tmp_path: Path) -> None:
         assert (row["validation_status"], row["time"], row["seconds"], row["error_estimate"]) \
             == ("done", ans.time, ans.seconds, ans.error_estimate)
         with pytest.raises(ParameterError):
-            p.sweep(SweepGrid(t_ends=[308.0], dry_radii_um=[50.0], doses=[0.3]), validate=[5])
+            run_sweep(SweepGrid(t_ends=[308.0], dry_radii_um=[50.0], doses=[0.3]), planner=p,
+                      validate=[5])
     pool.shutdown()
     with pytest.raises(ParameterError) as err:
         run_sweep(SweepGrid(t_ends=[308.0], dry_radii_um=[50.0], doses=[0.3]), validate="all")

@@ -14,16 +14,20 @@ from dosing.drug import DrugModel, DrugRuns, DrugScenario, drug_settings
 from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
 from dosing.drug_schedule import DrugScheduleRequest, plan_drug_schedule
 from solver.errors import ParameterError
-from solver.solute import crank_sphere
+from solver.solute import crank_sphere_finite
 
 # ell = 0.01 (N = 400 Lagrangian cells): the coarsest ladder rung of the benchmarks; drug
 # runs at the planner's default ell = 0.005 (N = 800) behave alike, twice as slowly
 SETTINGS = SolverSettings(interfacial_length=0.01)
 BALANCE = 1e-10
-# a protein-like drug: D0 = 1e-7 cm^2/s in water (Stokes-Einstein radius 22.6 nm at 308 K,
-# eta = 1e-3 Pa s) in a swollen mesh of 23 nm: free-volume law (Lustig & Peppas, Y = 1)
-# with sieving 1 - r_s/xi, xi ~ J^(1/3), so excluded from the shrunken shell
-PROTEIN = DrugModel(diffusivity_cm2_s=1e-7, mesh_size_nm=23.0, load_ug=1.0)
+# a protein-like drug: D0 = 1e-7 cm^2/s in water at 25 degC (Stokes-Einstein radius 24.5 nm
+# with water's viscosity) in a swollen mesh of 60 nm (xi_dry = 26 nm): free-volume law
+# (Lustig & Peppas, Y = 1) with sieving; it passes the swollen gel (r_s / xi = 0.41) and is
+# held by the shrunken shell (issue 28).  In a 23 nm mesh (the README's first protein) it
+# is larger than the swollen mesh and never leaves (test below).
+PROTEIN = DrugModel(diffusivity_cm2_s=1e-7, mesh_size_nm=60.0, load_ug=1.0)
+# a small drug: D0 = 1e-6 cm^2/s (r_s = 2.45 nm) in the gel's own 4 nm dry mesh
+SMALL = DrugModel(diffusivity_cm2_s=1e-6, load_ug=1.0)
 
 
 
@@ -41,17 +45,21 @@ def test_no_diffusion_dose_is_the_fluid_answer(planner) -> None:
 def test_protein_dose_leaks_while_it_waits_as_crank_says(planner) -> None:
     # At T_start nothing flows and the bead is uniform: the leak before heating is Crank's
     # series with the hindered diffusivity (the solute's own test bounds it by 1e-3).
-    drug = DrugModel(diffusivity_cm2_s=1e-7, mesh_size_nm=30.0, load_ug=1.0,
-                     release_volume_ul=0.1)
+    drug = DrugModel(diffusivity_cm2_s=1e-6, load_ug=1.0, release_volume_ul=0.1)
     req = DrugDoseRequest("ANB", 302, 308, drug, dose_fraction=0.2, wait=0.002,
                           dry_radius_um=50, settings=SETTINGS)
     ans = plan_drug_dose(planner, req)
     sol = req.solute
     d_eff = sol.diffusivity * sol.hindrance.factor(1 - 1 / req.start_radius**3)
-    want = crank_sphere(np.array([0.002]), d_eff, req.start_radius)[0]
+    # the 0.1 uL medium holds 16 bead volumes: Crank's well-stirred sphere, alpha = V / W0
+    alpha = sol.release_volume / (req.start_radius**3 - 1.0)
+    want = crank_sphere_finite(np.array([0.002]), d_eff, req.start_radius, alpha)[0]
     assert ans.leaked_before_heating == pytest.approx(want, abs=2e-3)
     assert ans.model == "full" and ans.mass_balance_error < BALANCE
     assert ans.squeezed_fraction + ans.diffused_fraction == pytest.approx(0.2)
+    assert ans.peclet is not None and ans.peclet > 0.0 and "D0 = 0" in ans.split
+    assert "xi_dry = 4 nm" in ans.mesh and "none" in ans.permeability_law
+    assert ans.drug_diffusivity_cm2_s == pytest.approx(drug.d0_cm2_s(308.0), rel=1e-12)
     d_gel = PhysicalConstants().diffusivity(308.0) * 1e4  # the gel's R^2 / tau in cm^2/s
     assert ans.effective_diffusivity_cm2_s == pytest.approx(d_eff * d_gel, rel=1e-12)
     released = ans.leaked_before_heating + 0.2
@@ -80,6 +88,17 @@ def test_bad_drug_dose_names_the_field(kwargs: dict, field: str) -> None:
                         and "diffusivity_cm2_s" not in kwargs else kwargs,
                         dose_fraction=fraction, drug_mass_ug=mass, dry_radius_um=50)
     assert exc.value.field == field
+
+
+def test_a_solute_larger_than_the_swollen_mesh_cannot_be_dosed(planner) -> None:
+    # D0 = 1e-7 cm^2/s (r_s = 24.5 nm) in a 23 nm swollen mesh: excluded everywhere, so the
+    # dose is refused at once (the first horizon releases nothing), naming the field
+    drug = DrugModel(diffusivity_cm2_s=1e-7, mesh_size_nm=23.0, load_ug=1.0)
+    req = DrugDoseRequest("ANB", 302, 308, drug, dose_fraction=0.2, dry_radius_um=50,
+                          settings=SETTINGS)
+    with pytest.raises(ParameterError) as exc:
+        plan_drug_dose(planner, req)
+    assert exc.value.field == "dose_fraction" and "shell holds" in str(exc.value)
 
 
 def test_schedule_doses_above_the_load_are_refused() -> None:
@@ -118,27 +137,30 @@ def test_anb_drug_schedule_without_diffusion_dilutes(planner) -> None:
 
 @pytest.mark.slow
 def test_anb_drug_schedule_of_a_protein(planner) -> None:
+    # Issue 28: the protein passes the swollen gel (r_s / xi = 0.41) and is held by the
+    # collapsed shell, so a rest at T_start, not a heating, lets most of it out: measured on
+    # 200 cells, a 0.02 heating releases 0.35 and the 0.5 rest after it 0.65 of the load.
     req = DrugScheduleRequest("ANB", 302, 308, PROTEIN, doses=[0.3] * 3, rests=[0.5, 0.5],
                               dry_radius_um=50, settings=SETTINGS)
     ans = plan_drug_schedule(planner, req)
-    cor = _check(ans, [0.3] * 3)
+    assert not ans.corrected["met"]
+    assert any("rest 1 leaks" in w for w in ans.warnings)
+    check = ans.protocol_check
+    assert check["rest_leak_fractions"][0] > 0.3  # more than a dose leaks in the first rest
+    assert sum(check["delivered_fractions"]) + sum(check["rest_leak_fractions"]) + \
+        check["in_gel_after"] == pytest.approx(1.0, abs=1e-9)
     # the same schedule into 1 uL of medium (1000 bead volumes: nearly a sink)
     finite = DrugScheduleRequest("ANB", 302, 308, DrugModel(**{**PROTEIN.to_dict(),
                                                                 "release_volume_ul": 1.0}),
                                  doses=[0.3] * 3, rests=[0.5, 0.5], dry_radius_um=50,
                                  settings=SETTINGS, correct=False)
     conc = plan_drug_schedule(planner, finite).protocol_check["medium_concentration_ug_per_ul"]
-    assert len(conc) == 3 and 0.3 / 1.01 < conc[0] < 0.3 and np.all(np.diff(conc) > 0)
-    leaks = cor["rest_leak_fractions"]
-    assert leaks[0] > 0.03  # the re-swelling edge lets it out during the first rest
-    assert any("rest 1 leaks" in w for w in ans.warnings)  # more than a tenth of the dose
-    assert sum(cor["delivered_fractions"]) + sum(leaks) + cor["in_gel_after"] == \
-        pytest.approx(1.0, abs=1e-9)
+    assert len(conc) == 3 and 0.3 / 1.01 < conc[0] < 0.3 * 1.01 and np.all(np.diff(conc) >= 0)
 
 
 @pytest.mark.slow
 def test_a_leaky_drug_cannot_meet_its_later_doses(planner) -> None:
-    drug = DrugModel(diffusivity_cm2_s=1e-7, load_ug=1.0)  # no sieving: it leaks freely
+    drug = DrugModel(diffusivity_cm2_s=1e-6, load_ug=1.0)  # a small drug: it leaks freely
     req = DrugScheduleRequest("ANB", 302, 308, drug, doses=[0.3] * 3, rests=[0.5, 0.5],
                               settings=SETTINGS, check_protocol=False)
     ans = plan_drug_schedule(planner, req)
@@ -218,8 +240,7 @@ def test_drug_answer_states_its_uncertainty_in_three_parts(planner) -> None:
     numerical part; the mechanics' interfacial-length and model-form parts come from the
     fluid validation at the fluid fraction expelled by then, once it is cached (before, they
     are not measured and the text says how to measure them)."""
-    drug = DrugModel(diffusivity_cm2_s=1e-7, mesh_size_nm=23.0, load_ug=1.0)
-    req = DrugDoseRequest("ANB", 302, 308, drug, dose_fraction=0.5, dry_radius_um=50,
+    req = DrugDoseRequest("ANB", 302, 308, SMALL, dose_fraction=0.5, dry_radius_um=50,
                           settings=SETTINGS)
     ans = plan_drug_dose(planner, req)
     u = ans.uncertainty

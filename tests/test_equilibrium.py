@@ -97,3 +97,14 @@ def test_branch_count_changes_only_at_folds(gel: Gel, u: float, v: float) -> Non
         pad = 1e-6 * (hi - lo)
         t1, t2 = lo + pad + u * (hi - lo - 2 * pad), lo + pad + v * (hi - lo - 2 * pad)
         assert len(equilibria(gel, t1)) == len(equilibria(gel, t2))
+
+
+def test_public_functions_take_a_preset_name() -> None:
+    """``solver.equilibrium('ANB', 305.0)`` works as ``simulate`` does; a non-gel names it."""
+    import solver
+
+    assert solver.equilibrium("ANB", 305.0) == solver.equilibrium(solver.ANB, 305.0)
+    assert solver.classify_jump("hht", 304, 308).behaviour == "front"
+    assert solver.folds("ANB") == solver.folds(solver.ANB)
+    with pytest.raises(solver.ParameterError, match="gel"):
+        solver.equilibrium(3, 305.0)  # type: ignore[arg-type]

@@ -115,13 +115,14 @@ def _rows(data: SwellingData, col: str = "radius") -> str:
 
 
 @pytest.mark.parametrize(("mutate", "field", "words"), [
-    (lambda t: t.replace("radius", "radios"), "columns", "unknown column name(s) 'radios'"),
+    (lambda t: t.replace("radius", "radios"), "line 1, column 2",
+     "unknown column name(s) 'radios'"),
     (lambda t: t.replace("temperature_K,radius", "temperature_K,radius,diameter")
-     .replace("\n", ",1\n").replace("diameter,1", "diameter"), "columns", "exactly one size"),
-    (lambda t: t.replace("temperature_K,", "T,"), "columns", "unknown column"),
+     .replace("\n", ",1\n").replace("diameter,1", "diameter"), "line 1", "exactly one size"),
+    (lambda t: t.replace("temperature_K,", "heat,"), "line 1, column 1", "unknown column"),
     (lambda t: t.replace(t.splitlines()[3].split(",")[1], "nan", 1), "radius", "NaN"),
     (lambda t: t.replace(t.splitlines()[3].split(",")[1], "-1.5", 1), "radius", "sizes > 0"),
-    (lambda t: t.replace(t.splitlines()[3].split(",")[1], "abc", 1), "line 4, radius",
+    (lambda t: t.replace(t.splitlines()[3].split(",")[1], "abc", 1), "line 4, column 2 (radius)",
      "a number"),
 ])
 def test_bad_csv_names_the_problem(tmp_path, mutate, field, words) -> None:

@@ -71,7 +71,7 @@ def test_a_flat_curve_is_refused() -> None:
 
 
 @pytest.mark.parametrize(("text", "words"), [
-    ("time,radius\n0,1\n", "unknown column name(s) 'time'"),
+    ("clock,radius\n0,1\n", "unknown column name(s) 'clock'"),
     ("time_s,radius\n-1,1\n0,1\n", "times >= 0"),
     ("time_s,radius\n0,nan\n1,1\n", "NaN"),
 ])

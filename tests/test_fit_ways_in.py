@@ -17,7 +17,7 @@ from dosing.units import timescale
 from solver.fit.synthetic import synthetic_swelling
 from solver.gel import HHT
 
-REPORT_KEYS = {"parameters", "intervals", "rms_residual_K", "warnings", "transitions",
+REPORT_KEYS = {"parameters", "intervals", "rms_orthogonal_K", "warnings", "transitions",
                "correlation", "covariance", "success"}
 
 
@@ -73,9 +73,10 @@ def test_cli_fit_save_and_dose_by_name(env, capsys) -> None:
 
 def test_cli_bad_csv_is_exit_2_naming_the_column(env, capsys) -> None:
     bad = env / "b.csv"
-    bad.write_text("temp,radius\n300,1\n")
+    bad.write_text("heat,radius\n300,1\n")
     assert main(["fit", "swelling", str(bad)]) == 2
-    assert "unknown column name(s) 'temp'" in capsys.readouterr().err
+    assert "line 1, column 1" in (err := capsys.readouterr().err)
+    assert "unknown column name(s) 'heat'" in err
     assert main(["dose", "--gel", "nosuch", "--t-start", "300", "--t-end", "310",
                  "--fraction", "0.5"]) == 2
     assert "stored fitted gel" in capsys.readouterr().err

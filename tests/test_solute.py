@@ -101,7 +101,9 @@ def test_hindrance_laws() -> None:
     assert sv.factor(0.3) == 0.0  # v = 0.7: r_s / xi = 1.2 * 0.7^(1/3) = 1.07
     assert sv.factor(0.95) == pytest.approx((1 - 1.2 * 0.05 ** (1 / 3)) * math.exp(-0.05 / 0.95))
     og = Hindrance("ogston", sieve=3.0)
-    assert og.factor(0.91) == pytest.approx(math.exp(-3.0 * math.sqrt(0.09)))
+    # Ogston, Preston & Wells 1973 (as in Amsden 1998, eq. 2): exp(-sqrt(v) (1 + r_s/r_f)),
+    # v the polymer fraction: v = 0.09, r_s/r_f = 3 -> exp(-0.3 * 4) = exp(-1.2)
+    assert og.factor(0.91) == pytest.approx(math.exp(-1.2), rel=1e-12)
     phis = np.linspace(0.05, 0.99, 50)
     for h in (fv, sv, og):
         f = h.factor(phis)

@@ -117,3 +117,8 @@ def print_uncertainty(u: Any, what: str = "the truth") -> None:
     print(f"  uncertainty of {what}, in three parts:")
     for part in (u.numerical, u.interfacial_length_range, u.model_form):
         print(wrap(f"- {part.text}"))
+
+
+def table_row(label: str, values: list[float], fmt: str = "{:.4g}") -> str:
+    """One labelled row of numbers, as the schedule commands print them."""
+    return f"  {label:<34}" + "  ".join(fmt.format(v) for v in values)

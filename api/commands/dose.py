@@ -116,9 +116,66 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "its bounds, the model-form bound and the answer) to this file "
                         "(needs matplotlib)")
     add_format_option(p)
+    add_batch_options(p)
     add_drug_options(p)
     add_wait_options(p)
     p.set_defaults(func=run)
+
+
+def add_batch_options(p: argparse.ArgumentParser) -> None:
+    """A batch of beads (issue 26, docs/batch.md): a size spread or a measured table."""
+    b = p.add_argument_group("a batch of beads (docs/batch.md)")
+    sz = b.add_mutually_exclusive_group()
+    sz.add_argument("--size-cv", type=float, default=None, metavar="CV",
+                    help="the batch's coefficient of variation of size, 0-2; --dry-radius-um "
+                         "(--swollen-radius-um) is its number-weighted mean")
+    sz.add_argument("--sizes", default=None, metavar="FILE.csv",
+                    help="a measured table: a column of radii or diameters (the header says "
+                         "which and its unit, e.g. 'diameter (um)'; none: radii in um), "
+                         "optionally a column of counts")
+    b.add_argument("--size-kind", choices=["lognormal", "normal"], default="lognormal",
+                   help="the law with --size-cv (default lognormal)")
+    b.add_argument("--size-weighting", choices=["number", "volume"], default="number",
+                   help="the sizes are number- (default) or volume-weighted (--sizes; with "
+                        "--size-cv the mean is always by number)")
+
+
+def batch_distribution(args: argparse.Namespace) -> Any:
+    """The size distribution the batch options give (None: a single bead)."""
+    from dosing.size_distribution import SizeDistribution, read_sizes_csv
+
+    state = "swollen" if args.swollen_radius_um is not None else "dry"
+    if args.sizes is not None:
+        try:
+            return read_sizes_csv(args.sizes, "--sizes", weighting=args.size_weighting,
+                                  state=state)
+        except ParameterError as exc:
+            if exc.field.startswith("--sizes"):
+                raise
+            raise ParameterError(f"--sizes ({exc.field})", exc.value, exc.valid) from None
+    if args.size_cv is None:
+        return None
+    try:
+        return SizeDistribution(kind=args.size_kind, cv=args.size_cv, state=state)
+    except ParameterError as exc:
+        raise ParameterError("--size-cv", args.size_cv, exc.valid) from None
+
+
+def print_batch(b: Any) -> None:
+    """The batch's answer in words."""
+    secs = "" if b.seconds is None else f" = {b.seconds:.4g} s"
+    print(f"  batch ({b.description}): heat for t = {b.time:.4g}{secs} "
+          f"({b.delay:+.1%} against the number-weighted mean bead, "
+          f"{b.reference_dry_radius_um:.4g} um dry)")
+    p10, _, p90 = b.percentile_seconds or b.percentile_times
+    unit = " s" if b.percentile_seconds else ""
+    print(f"  {b.fraction_delivered:.0%} of the beads have delivered their own dose by then; "
+          f"the 10th-90th percentile bead's own time {p10:.4g}-{p90:.4g}{unit}")
+    q = b.quadrature
+    print(f"  quadrature: {q.rule}; {q.nodes} nodes, error {q.error:.1e}")
+    for part in (b.uncertainty or {}).values():
+        if isinstance(part, dict) and "text" in part:
+            print(wrap(part["text"]))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -133,11 +190,17 @@ def run(args: argparse.Namespace) -> int:
     checked_cache(args.cache)
     drug = drug_from_args(args)
     if drug is not None:
+        if args.size_cv is not None or args.sizes is not None:
+            raise ParameterError("--size-cv" if args.sizes is None else "--sizes",
+                                 args.size_cv or args.sizes, "not with a drug option (a "
+                                 "batch's drug dose is not built yet)")
         return run_drug_dose(args, drug, planning_kwargs(args))
+    dist = batch_distribution(args)
     req = DoseRequest(dose_fraction=args.fraction, dose_volume_ul=args.volume_ul,
                       drug_mass_ug=args.drug_mass_ug,
                       concentration_ug_per_ul=args.concentration_ug_per_ul,
-                      **planning_kwargs(args))
+                      **planning_kwargs(args),
+                      **({} if dist is None else {"size_distribution": dist}))
     if args.plot and not args.validate:
         raise ParameterError("plot", args.plot, "used with --validate")
     if args.validate:
@@ -151,8 +214,14 @@ def run(args: argparse.Namespace) -> int:
 
         print(f"wrote {draw_validation(ans.to_dict(), figure_path(args.plot, args.format))}",
               file=sys.stderr)
+    batch = None
+    if dist is not None:
+        from dosing.batch_truth import plan_batch
+
+        batch = plan_batch(req, validate=args.validate, cache_path=args.cache)
     if args.json:
-        print_json(ans.to_dict())
+        print_json(ans.to_dict() if batch is None else {**ans.to_dict(),
+                                                        "batch": batch.to_dict()})
         return 0
     print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K: release "
           f"{ans.dose_fraction:.1%} of the stored fluid (radius {ans.start_radius:.4g} -> "
@@ -164,6 +233,14 @@ def run(args: argparse.Namespace) -> int:
         print(f"  expels {ans.expelled_volume_ul:.4g} uL of {ans.stored_volume_ul:.4g} uL "
               f"stored; final radius {ans.final_radius_um:.4g} um")
     print(wrap(ans.timescale_formula))
+    if ans.timescale_uncertainty and ans.seconds is not None:
+        tu = ans.timescale_uncertainty
+        lo, hi = tu["seconds_range"]
+        print(wrap(("calibrated" if tu["calibrated"] else "UNCALIBRATED")
+                   + f" seconds: {lo:.3g}-{hi:.3g} s over "
+                   + ("the kinetics fit's 95% interval of D" if tu["calibrated"] else
+                      f"the timescale constants' range (a factor {tu['factor']:.3g}); "
+                      + tu["how_to_pin"])))
     print(f"  error estimate {ans.error_estimate:.1%}:")
     print(wrap(ans.error_explanation))
     print_uncertainty(ans.uncertainty)
@@ -172,4 +249,6 @@ def run(args: argparse.Namespace) -> int:
                          + (f"{e['time']:.5g}" if "time" in e else "failed")
                          for e in ans.validation.runs)
         print(wrap(f"full solver: {runs}"))
+    if batch is not None:
+        print_batch(batch)
     return 0

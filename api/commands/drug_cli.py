@@ -7,7 +7,7 @@ from typing import Any
 
 from solver.errors import ParameterError
 
-from .common import print_json, print_uncertainty, wrap
+from .common import print_json, print_uncertainty, table_row, wrap
 
 
 def add_wait_options(p: argparse.ArgumentParser) -> None:
@@ -60,6 +60,10 @@ def run_drug_dose(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any]) -
              else f" ({ans.leak_time_10pct_seconds:.4g} s)"))
     print(f"  mechanism: {ans.mechanism}; fluid expelled meanwhile {ans.fluid_fraction:.4g} of "
           f"the stored fluid; D_eff = {ans.effective_diffusivity_cm2_s:.3g} cm^2/s")
+    if ans.split:
+        print(wrap(f"  {ans.split}"))
+    if ans.mesh:
+        print(wrap(f"  {ans.mesh}"))
     if ans.medium_concentration_ug_per_ul is not None:
         print(f"  release medium concentration {ans.medium_concentration_ug_per_ul:.4g} ug/uL")
     print(wrap(f"truth of the drug runs: {ans.truth}"))
@@ -90,22 +94,20 @@ def run_drug_schedule(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any
     if args.json:
         print_json(ans.to_dict())
         return 0
-    from .schedule import _row
-
     print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K, drug doses "
           f"{', '.join(f'{d:.3g}' for d in ans.doses)} of the load, rests "
           f"{', '.join(f'{r:.4g}' for r in ans.rests) or '-'} (dimensionless)")
-    print(_row(f"hold ({ans.model}):", [h["actuation_time"] for h in ans.hold]))
+    print(table_row(f"hold ({ans.model}):", [h["actuation_time"] for h in ans.hold]))
     for name, res in (("protocol check", ans.protocol_check), ("corrected", ans.corrected)):
         if not res or not res.get("actuation_times"):
             continue
-        print(_row(f"{name}: actuation times", res["actuation_times"]))
-        print(_row("  drug delivered (of the load)", res["delivered_fractions"]))
-        print(_row("  ... squeezed out", res["squeezed_fractions"]))
-        print(_row("  fluid delivered (of stored)", res["fluid_fractions"]))
-        print(_row("  leaked in each rest", res["rest_leak_fractions"] or [0.0]))
+        print(table_row(f"{name}: actuation times", res["actuation_times"]))
+        print(table_row("  drug delivered (of the load)", res["delivered_fractions"]))
+        print(table_row("  ... squeezed out", res["squeezed_fractions"]))
+        print(table_row("  fluid delivered (of stored)", res["fluid_fractions"]))
+        print(table_row("  leaked in each rest", res["rest_leak_fractions"] or [0.0]))
         if res.get("actuation_seconds"):
-            print(_row("  actuation seconds", res["actuation_seconds"]))
+            print(table_row("  actuation seconds", res["actuation_seconds"]))
     for w in ans.warnings:
         print(f"  WARNING: {w}")
     print(wrap(f"truth of the drug runs: {ans.truth}"))

@@ -7,7 +7,8 @@ from typing import Any
 
 DRUG_FIELDS = ("diffusivity_cm2_s", "solute_radius_nm", "hindrance", "mesh_size_nm",
                "fiber_radius_nm", "free_volume_y", "partition", "release_volume_ul", "load_ug",
-               "loading_concentration_ug_per_ul")
+               "loading_concentration_ug_per_ul", "reference_temperature_k", "partition_law",
+               "mesh_stretch")
 
 
 def add_drug_options(p: argparse.ArgumentParser, required: bool = False) -> None:
@@ -20,12 +21,24 @@ def add_drug_options(p: argparse.ArgumentParser, required: bool = False) -> None
                         + (" (default 0)" if required else ""))
     g.add_argument("--solute-radius-nm", type=float, default=None,
                    help="Stokes-Einstein radius in nm (gives D0 when it is not given)")
-    g.add_argument("--hindrance", choices=["free-volume", "ogston", "none"], default=None,
-                   help="hindrance law D = D0 f(phi): free-volume (Lustig & Peppas, default), "
-                        "ogston, none")
+    g.add_argument("--hindrance", choices=["free-volume", "ogston", "amsden", "none"],
+                   default=None,
+                   help="hindrance law D = D0 f: free-volume (Lustig & Peppas, default), "
+                        "ogston (Ogston, Preston & Wells 1973), amsden (1998), none (no "
+                        "hindrance, no sieving)")
     g.add_argument("--mesh-size-nm", type=float, default=None,
-                   help="mesh size of the swollen gel at T_start in nm (free-volume sieving "
-                        "1 - r_s/xi, xi ~ J^(1/3))")
+                   help="mesh size of the swollen gel at T_start in nm (default: the gel's "
+                        "dry mesh --mesh-length-nm, the interfacial length's, affine in the "
+                        "stretch)")
+    g.add_argument("--reference-temperature-k", type=float, default=None,
+                   help="temperature at which D0 is given, K (default 298.15; carried to "
+                        "T_end by Stokes-Einstein with water's viscosity)")
+    g.add_argument("--partition-law", choices=["constant", "ogston"], default=None,
+                   help="steric partition K_s(phi) (default: Ogston's with a fibre radius)")
+    g.add_argument("--mesh-stretch", choices=["smallest", "volume"], default=None,
+                   help="which stretch sets the local mesh (default: the smallest principal)")
+    g.add_argument("--no-sieving", dest="sieving", action="store_false", default=None,
+                   help="no convective sieving of the expelled fluid's solute")
     g.add_argument("--fiber-radius-nm", type=float, default=None, help="Ogston fibre radius")
     g.add_argument("--free-volume-y", type=float, default=None,
                    help="Y of the free-volume law (default 1)")
@@ -42,7 +55,7 @@ def drug_from_args(args: argparse.Namespace, always: bool = False) -> Any:
     """The DrugModel the options describe, or None when none was given (and not ``always``)."""
     from dosing.drug import DrugModel
 
-    given = {f: getattr(args, f, None) for f in DRUG_FIELDS}
+    given = {f: getattr(args, f, None) for f in (*DRUG_FIELDS, "sieving")}
     given = {k: v for k, v in given.items() if v is not None}
     if not given and not always:
         return None

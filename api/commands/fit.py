@@ -47,6 +47,26 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="keep a parameter fixed (omega, scale, b0, b1; a0 with b0, a1 with "
                         "b1), e.g. --fix omega=100; repeatable")
     s.add_argument("--starts", type=int, default=6, help="polished starts (default 6)")
+    s.add_argument("--objective", choices=["orthogonal", "temperature"], default="orthogonal",
+                   help="'orthogonal' (default): errors in both variables, judged by "
+                        "chi-square under the stated noise; 'temperature': the paper's "
+                        "residual T(lambda_i) - T_i")
+    s.add_argument("--dry-size", type=float, default=None,
+                   help="the measured dry (or preparation) size in the data's unit: fixes "
+                        "the scale instead of fitting it")
+    s.add_argument("--below-dry-sigmas", type=float, default=2.0,
+                   help="no point more than this many size-noise widths below the fitted "
+                        "dry size (default 2)")
+    s.add_argument("--profile", default="", metavar="NAMES",
+                   help="profile-likelihood intervals for these parameters, e.g. scale,omega "
+                        "(a refit per point: seconds each)")
+    s.add_argument("--compare-models", action="store_true",
+                   help="AIC/BIC of nested chi models (full, b1=0, a1=b1=0): three fits")
+    s.add_argument("--jump", default=None, metavar="T0:T1",
+                   help="also state the dose time of this jump under both objectives, "
+                        "flagged when they disagree beyond their intervals")
+    s.add_argument("--dose-fraction", type=float, default=0.8,
+                   help="the dose of --jump (fraction of the stored fluid, default 0.8)")
     _common(s)
     s.set_defaults(func=run_swelling)
     k = fs.add_parser("kinetics", help="fit tau (hence k0) to a shrinking curve after a jump "
@@ -72,11 +92,35 @@ def register(sub: argparse._SubParsersAction) -> None:
     k.add_argument("--beta", type=float, default=None,
                    help="permeability exponent (fixed, or the start with --fit-beta)")
     k.add_argument("--interfacial-length", type=float, default=None, metavar="L",
-                   help="full solver's interfacial length (default 0.005)")
+                   help="full solver's interfacial length (default: the bead's own, "
+                        "xi_dry / a_d, as in `thermogel dose`)")
     k.add_argument("--size-rel-sigma", type=float, default=0.01, help="relative size noise")
+    k.add_argument("--compare-laws", action="store_true",
+                   help="also fit under both front laws (Maxwell: front-sharp; delayed: the "
+                        "ell = 0 lattice, one full-solver run) and compare them by AIC")
     k.add_argument("--cache", default=None, help="validation cache file for full-solver runs")
     _common(k)
     k.set_defaults(func=run_kinetics)
+    r = fs.add_parser("release", help="fit a drug's free diffusivity D0 to a cumulative "
+                      "release curve (CSV: time and released as a fraction, %% or ug)")
+    r.add_argument("file", help="CSV file; time 0 is the start of release")
+    r.add_argument("--gel", default="ANB", help="preset or stored fitted gel (default ANB)")
+    r.add_argument("--t-start", type=float, required=True, help="temperature in K")
+    r.add_argument("--t-end", type=float, default=None,
+                   help="equal to --t-start (isothermal; jumps are not built yet)")
+    r.add_argument("--dry-radius-um", type=float, required=True, help="dry bead radius, um")
+    r.add_argument("--hindrance", choices=["none", "free-volume", "ogston"], default="none",
+                   help="hindrance of the drug by the gel (default none)")
+    r.add_argument("--mesh-size-nm", type=float, default=None,
+                   help="swollen mesh size for the free-volume sieve, nm")
+    r.add_argument("--fiber-radius-nm", type=float, default=None,
+                   help="polymer fibre radius for Ogston's law, nm")
+    r.add_argument("--loaded-ug", type=float, default=None,
+                   help="the load, when the release is given in ug")
+    r.add_argument("--json", action="store_true", help="print one JSON object")
+    r.add_argument("--plot", default=None, metavar="PNG",
+                   help="draw data, fit and its 95%% band (matplotlib)")
+    r.set_defaults(func=run_release)
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -103,10 +147,32 @@ def run_swelling(args: argparse.Namespace) -> int:
 
     if args.save:
         check_name(args.save)
-    data = read_swelling_csv(args.file)
+    read: dict[str, Any] = {}
+    data = read_swelling_csv(args.file, read)
+    prof = tuple(x.strip() for x in args.profile.split(",") if x.strip())
+    bad = [x for x in prof if x not in ("omega", "b0", "b1", "scale")]
+    if bad:
+        raise ParameterError("profile", bad[0], "omega, b0, b1 or scale")
+    jump = _jump(args.jump)
     res = fit_swelling(data, sigma_t=args.sigma_t, size_rel_sigma=args.size_rel_sigma,
-                       fixed=dict(args.fix), n_starts=args.starts)
+                       fixed=dict(args.fix), n_starts=args.starts, objective=args.objective,
+                       dry_size=args.dry_size, below_dry_sigmas=args.below_dry_sigmas,
+                       profile=prof)
     report = res.to_dict()
+    report["read"] = read
+    if args.compare_models:
+        from dosing.fit import compare_chi_models
+
+        report["model_comparison"] = compare_chi_models(
+            data, sigma_t=args.sigma_t, size_rel_sigma=args.size_rel_sigma,
+            objective=args.objective, fixed=dict(args.fix))
+    if jump is not None:
+        from dosing.fit import dose_under_objectives
+
+        report["dose_time_by_objective"] = dose_under_objectives(
+            data, jump[0], jump[1], args.dose_fraction, sigma_t=args.sigma_t,
+            size_rel_sigma=args.size_rel_sigma, fixed=dict(args.fix),
+            fits={args.objective: res})
     dd = data_dict(data)
     if args.out:
         from dosing import export
@@ -126,9 +192,15 @@ def run_swelling(args: argparse.Namespace) -> int:
     if args.json:
         print_json(report)
         return 0
-    print(f"swelling fit of {len(data)} points ({data.kind}): "
-          f"{'converged' if res.success else 'NOT converged'}, rms {res.rms_residual:.3g} K "
-          f"(chi2/dof {res.chi2_reduced:.3g}, {res.nfev} evaluations)")
+    x = res.extra
+    print(f"swelling fit of {len(data)} points ({data.kind}), {x['objective']} objective: "
+          f"{'converged' if res.success else 'NOT converged'}; chi2 {x['chi2']:.4g} on "
+          f"{x['dof']} dof (p = {x['chi2_p_value']:.3g}) under the stated noise, "
+          f"AIC {x['aic']:.4g}, BIC {x['bic']:.4g}")
+    tr = x["rms_temperature_residual_K"]
+    print(f"  temperature residual rms {'-' if tr is None else f'{tr:.3g}'} K over "
+          f"{x['n_temperature_residual']} points above the dry size; "
+          f"{x['points_below_dry']} below it (at most {x['max_below_dry_relative']:.2%})")
     for name in res.names:
         tag = " (fixed)" if name in res.fixed else ""
         print(f"  {name:6s} {res.parameters[name]:12.6g}  95% {_interval(res.intervals[name])}"
@@ -136,8 +208,37 @@ def run_swelling(args: argparse.Namespace) -> int:
     for tr in res.extra.get("transitions", []):
         print(f"  transition ({tr['kind']}) {tr['temperature']:.3f} K  95% "
               f"{_interval(tr.get('interval'))}")
+    for name, pr in (res.extra.get("profile_intervals") or {}).items():
+        iv = pr.get("interval")
+        print(f"  {name:6s} profile-likelihood 95% "
+              + ("-" if iv is None else "[" + ", ".join("open" if v is None else f"{v:.5g}"
+                                                       for v in iv) + "]"))
+    for name, m in (report.get("model_comparison") or {}).get("models", {}).items():
+        print(f"  chi model {name:9s} " + (m["error"] if "error" in m else
+              f"k {m['k']}  chi2 {m['chi2']:.4g}  dAIC {m['delta_aic']:.3g}  "
+              f"dBIC {m['delta_bic']:.3g}"))
+    dj = report.get("dose_time_by_objective")
+    if dj:
+        for obj in ("orthogonal", "temperature"):
+            o = dj[obj]
+            print(f"  dose {dj['dose_fraction']:.0%} {dj['t_start']:g} -> {dj['t_end']:g} K "
+                  f"({obj}): " + (f"none ({o['note']})" if o["time"] is None else
+                                  f"t = {o['time']:.4g}  95% {_interval(o['interval'])}"))
+        print(f"  {'DISAGREE: ' if dj.get('disagree') else ''}{dj['note']}")
+    for w in res.extra.get("not_pinned", []):
+        print(f"  not pinned: {w}")
     _print_notes(res, report)
     return 0
+
+
+def _jump(text: str | None) -> tuple[float, float] | None:
+    if text is None:
+        return None
+    try:
+        a, b = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise ParameterError("jump", text, "T0:T1 in K, e.g. 304:308") from None
+    return a, b
 
 
 def _print_notes(res: Any, report: dict[str, Any]) -> None:
@@ -157,7 +258,8 @@ def run_kinetics(args: argparse.Namespace) -> int:
 
     if args.save:
         check_name(args.save)
-    data = read_kinetics_csv(args.file)
+    read: dict[str, Any] = {}
+    data = read_kinetics_csv(args.file, read)
     store = GelStore(args.gels_dir)
     gel = lookup(args.gel, store)
     settings = SolverSettings() if args.interfacial_length is None else SolverSettings(
@@ -173,10 +275,22 @@ def run_kinetics(args: argparse.Namespace) -> int:
                             fit_beta=args.fit_beta, beta=args.beta, model=args.model,
                             settings=settings, size_rel_sigma=args.size_rel_sigma,
                             planner=planner)
+        laws = None
+        if args.compare_laws:
+            from dosing.fit import fit_front_laws
+
+            laws = fit_front_laws(data, gel, args.t_start, args.t_end, branch=args.branch,
+                                  dry_radius_um=args.dry_radius_um, planner=planner,
+                                  size_rel_sigma=args.size_rel_sigma)
+            for v in laws["laws"].values():
+                v.pop("report")
     finally:
         planner.close()
         planner.jobs.executor.shutdown(wait=True)
     report = res.to_dict()
+    if laws is not None:
+        report["front_laws"] = laws
+    report["read"] = read
     dd = data_dict(data)
     if args.out:
         from dosing import export
@@ -209,8 +323,66 @@ def run_kinetics(args: argparse.Namespace) -> int:
           f"{100 * res.rms_residual:.3g}% (chi2/dof {res.chi2_reduced:.3g})")
     for name in res.names:
         print(f"  {name:6s} {res.parameters[name]:12.6g}  95% {_interval(res.intervals[name])}")
+    if "diffusivity_cm2_s" in res.extra:
+        print(f"  D      {res.extra['diffusivity_cm2_s']:12.6g} cm^2/s at "
+              f"{res.extra['diffusivity_t_k']:g} K  95% "
+              f"{_interval(res.extra['diffusivity_interval_cm2_s'])} (what the curve pins)")
+    if laws is not None:
+        for law, v in laws["laws"].items():
+            print(f"  law {law:8s} tau {v['tau_s']:.5g} s  AIC {v['aic']:.4g}")
+        print(f"  {laws['note']}")
     if "k0_m2" in res.extra:
         print(f"  k0     {res.extra['k0_m2']:12.6g} m^2  95% "
               f"{_interval(res.extra['k0_interval_m2'])}")
     _print_notes(res, report)
     return 0
+
+
+def run_release(args: argparse.Namespace) -> int:
+    """Fit D0 to a release curve, print (or JSON), plot."""
+    from dosing.release_fit import fit_release, read_release_csv
+
+    read: dict[str, Any] = {}
+    t, y = read_release_csv(args.file, args.loaded_ug, read)
+    rep = fit_release(t, y, args.gel, args.t_start, args.t_end, args.dry_radius_um,
+                      hindrance=args.hindrance, mesh_size_nm=args.mesh_size_nm,
+                      fiber_radius_nm=args.fiber_radius_nm)
+    rep["read"] = read
+    if args.plot:
+        rep["plots"] = [_plot_release(rep, args.plot)]
+    if args.json:
+        print_json(rep)
+        return 0
+    d = rep["parameters"]["drug_diffusivity_cm2_s"]
+    print(f"release fit of {rep['n_points']} points: D0 = {d:.4g} cm^2/s  95% "
+          f"{_interval(rep['intervals']['drug_diffusivity_cm2_s'])}; effective "
+          f"{rep['effective_diffusivity_cm2_s']:.4g} cm^2/s (hindrance {rep['hindrance']}, "
+          f"factor {rep['hindrance_factor']:.3g})")
+    print(f"  f2 of the fit against the data {rep['f2']:.1f} (>= 50: similar); rms "
+          f"{rep['rms_residual']:.3g} of the load")
+    for w in rep["warnings"] + [f"not pinned: {x}" for x in rep["not_pinned"]]:
+        print(f"  {w}")
+    return 0
+
+
+def _plot_release(rep: dict[str, Any], path: str) -> str:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    b = rep["band"]
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.fill_between(b["time_s"], b["lower"], b["upper"], color="C1", alpha=0.3,
+                    label="95% band (D0)")
+    ax.plot(b["time_s"], b["released"], "C1-", label="fit")
+    ax.plot(rep["time_s"], rep["released"], "C0o", ms=4, label="data")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("released fraction")
+    ax.set_title(f"D0 = {rep['parameters']['drug_diffusivity_cm2_s']:.3g} cm^2/s, "
+                 f"f2 = {rep['f2']:.1f}", fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return str(path)

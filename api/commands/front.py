@@ -23,12 +23,17 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="start from the full solver's (a, R_f) at dimensionless time T0 "
                         "(default: from the initial equilibrium alone)")
     p.add_argument("--paper-start", action="store_true",
-                   help="with --start-from-full: keep the measured R_f as the paper did "
-                        "(default: R_f from solid conservation)")
-    p.add_argument("--sharp", action="store_true",
-                   help="the front condition of the sharp-interface limit (model front-sharp, "
-                        "docs/interfacial.md sec. 8; the planner's default) instead of the "
-                        "paper's")
+                   help="with --paper and --start-from-full: keep the measured R_f as the paper "
+                        "did (default: R_f from solid conservation)")
+    model = p.add_mutually_exclusive_group()
+    model.add_argument("--sharp", dest="paper", action="store_false",
+                       help="the front condition of the sharp-interface limit of the well-posed "
+                            "model (front-sharp, docs/interfacial.md sec. 8): the default, as "
+                            "in the planner")
+    model.add_argument("--paper", dest="paper", action="store_true",
+                       help="the paper's own front condition (front-leading; its full model "
+                            "without interfacial energy is ill-posed)")
+    p.set_defaults(paper=False)
     p.add_argument("--until", type=float, default=None, help="stop at this dimensionless time")
     p.add_argument("--target-radius", type=float, default=None,
                    help="stop when the radius reaches this value")
@@ -53,12 +58,13 @@ def _full_start(args: argparse.Namespace, gel: object) -> tuple[float, float, fl
 def run(args: argparse.Namespace) -> int:
     """Print the trajectory (JSON: the series t, radius, front, flux and diagnostics)."""
     gel = gel_from_args(args)
-    if args.sharp and args.paper_start:
-        raise ParameterError("paper_start", True, "off with --sharp (conservative starts only)")
+    if not args.paper and args.paper_start:
+        raise ParameterError("paper_start", True,
+                             "only with --paper (the sharp model starts conservatively)")
     start = _full_start(args, gel) if args.start_from_full is not None else None
     common = dict(branch=args.branch, start=start, until=args.until,
                   target_radius=args.target_radius, every=args.every)
-    if args.sharp:
+    if not args.paper:
         res = sharp_front_trajectory(gel, args.t_start, args.t_end, **common)
     else:
         res = front_trajectory(gel, args.t_start, args.t_end, conservative=not args.paper_start,

@@ -77,7 +77,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {draw_release(rel, args.plot, tau and tau.seconds)}")
     out = {"t": rel.t, "seconds": None if tau is None else rel.t * tau.seconds,
            "released_fraction": rel.released_fraction,
-           "squeezed_fraction": rel.advected_fraction,
+           "squeezed_fraction": rel.squeezed_fraction,  # the D0 = 0 twin's release
+           "advected_fraction": rel.advected_fraction,
            "expelled_fraction": rel.expelled_fraction, "radius": rel.radius,
            "in_gel_fraction": rel.in_gel_fraction,
            "effective_diffusivity_cm2_s": d_eff,
@@ -103,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     print("       t   released  squeezed  expelled fluid")
     for k in np.unique(np.linspace(0, rel.t.size - 1, 11).astype(int)):
         print(f"  {rel.t[k]:8.4f}  {rel.released_fraction[k]:8.4f}  "
-              f"{rel.advected_fraction[k]:8.4f}  {rel.expelled_fraction[k]:8.4f}")
+              f"{rel.squeezed_fraction[k]:8.4f}  {rel.expelled_fraction[k]:8.4f}")
     if saved is not None:
         print(f"wrote {saved}")
     return 0

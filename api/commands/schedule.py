@@ -6,7 +6,7 @@ import argparse
 
 from solver.errors import ParameterError
 
-from .common import check_bounds, checked_cache, print_json, wrap
+from .common import check_bounds, checked_cache, print_json, table_row, wrap
 from .dose import add_planning_options, planning_kwargs, planning_values
 from .drug_cli import add_wait_options, run_drug_schedule
 from .drug_options import add_drug_options, drug_from_args
@@ -41,10 +41,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _row(label: str, values: list[float], fmt: str = "{:.4g}") -> str:
-    return f"  {label:<34}" + "  ".join(fmt.format(v) for v in values)
-
-
 def run(args: argparse.Namespace) -> int:
     """Print the schedule."""
     from api.schemas import ScheduleRequest as HttpSchedule
@@ -74,15 +70,15 @@ def run(args: argparse.Namespace) -> int:
     print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K, doses "
           f"{', '.join(f'{d:.0%}' for d in ans.doses)}, rests "
           f"{', '.join(f'{r:.4g}' for r in ans.rests) or '-'} (dimensionless)")
-    print(_row(f"hold assumption ({ans.model}):", [h["actuation_time"] for h in ans.hold]))
+    print(table_row(f"hold assumption ({ans.model}):", [h["actuation_time"] for h in ans.hold]))
     for name, res in (("protocol check", ans.protocol_check), ("corrected", ans.corrected)):
         if res is None:
             continue
-        print(_row(f"{name}: actuation times", res["actuation_times"]))
-        print(_row("  delivered (fraction of stored)", res["delivered_fractions"]))
-        print(_row("  relative error", res["relative_errors"], "{:+.2%}"))
+        print(table_row(f"{name}: actuation times", res["actuation_times"]))
+        print(table_row("  delivered (fraction of stored)", res["delivered_fractions"]))
+        print(table_row("  relative error", res["relative_errors"], "{:+.2%}"))
         if res.get("actuation_seconds"):
-            print(_row("  actuation seconds", res["actuation_seconds"]))
+            print(table_row("  actuation seconds", res["actuation_seconds"]))
     print(wrap(ans.timescale_formula))
     if ans.truth:
         print(wrap(f"truth of the protocol runs: {ans.truth}"))

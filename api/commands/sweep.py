@@ -88,7 +88,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--dose", required=True, help="doses, fractions of the stored fluid")
     p.add_argument("--branch", choices=["swollen", "shrunken"], default=None)
     p.add_argument("--interfacial-length", type=float, default=None, metavar="L",
-                   help="truth's interfacial length (default 0.005; 0 = the paper's model, "
+                   help="truth's interfacial length (default: each point's bead's own, "
+                        "xi_dry / a_d, as in `thermogel dose`; 0 = the paper's model, "
                         "answered by the paper's front model)")
     p.add_argument("--validate", default=None, metavar="WHICH",
                    help="queue full-solver validations: 'needs-full', 'all' or indices "

@@ -79,7 +79,9 @@ def draw_swelling_fit(report: dict[str, Any], data: dict[str, Any], out: str | P
     ax.set_ylabel(size_label(kind, size_unit))
     ax.legend(fontsize=8)
     trs = ", ".join(f"{x['kind']} {x['temperature']:.2f} K" for x in report.get("transitions", []))
-    ax.set_title(f"swelling fit: rms {report['rms_residual_K']:.3g} K; {trs}", fontsize=9)
+    rms = report.get("rms_orthogonal_K", report["rms_residual"])
+    ax.set_title(f"swelling fit ({report.get('objective', 'orthogonal')}): rms {rms:.3g} K; "
+                 f"{trs}", fontsize=9)
     axr.plot(t, report["residuals_K"], "C0o", ms=4, label="temperature part (K)")
     axr.axhline(0.0, color="k", lw=0.6)
     axr.set_xlabel("temperature (K)")

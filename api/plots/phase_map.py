@@ -9,6 +9,7 @@ import numpy as np
 
 from solver.equilibrium import equilibrium_curve, folds
 from solver.gel import Gel
+from solver.limits import T_MAX, T_MIN
 from solver.phase import _normal_grid, spinodal_stiffness, tangent_gap
 
 
@@ -111,8 +112,8 @@ def draw_phase_map(gel: Gel, out: str | Path | BinaryIO, t_min: float | None = N
     plt = pyplot()
     fl = folds(gel)
     centre = np.mean([f.temperature for f in fl]) if fl else 305.0
-    t_min = t_min if t_min is not None else max(273.15, centre - 10.0)
-    t_max = t_max if t_max is not None else min(373.15, centre + 10.0)
+    t_min = t_min if t_min is not None else max(T_MIN, centre - 10.0)
+    t_max = t_max if t_max is not None else min(T_MAX, centre + 10.0)
     curve = equilibrium_curve(gel, t_min, t_max)
     lam_hi = lambda_max if lambda_max is not None else 1.15 * float(curve.stretch.max())
     lams = np.linspace(1.0 + 1e-3, lam_hi, 400)

@@ -42,7 +42,9 @@ def draw_release(rel: ReleaseResult, out: str | Path, tau_seconds: float | None 
     for a, b in _heating_spans(rel):
         ax.axvspan(a * scale, b * scale, color="tab:red", alpha=0.12, lw=0)
     ax.plot(t, rel.released_fraction, "k", label="drug released")
-    ax.plot(t, rel.advected_fraction, "k--", lw=1, label="... squeezed out with the fluid")
+    ax.plot(t, rel.squeezed_fraction if np.size(rel.squeezed_fraction) == np.size(t)
+            else rel.advected_fraction, "k--", lw=1,
+            label="... squeezed out (the same heating with D0 = 0)")
     ax.plot(t, rel.expelled_fraction, "tab:blue", lw=1, label="fluid expelled (of stored)")
     if doses:
         for c in np.cumsum(doses):

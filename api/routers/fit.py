@@ -43,8 +43,16 @@ def _swelling(_: Any, body: SwellingFitRequest) -> dict[str, Any]:
     """The swelling fit's report (a stored job's run; eq. EqlEqn)."""
     data = _swelling_data(body)
     res = fit_swelling(data, sigma_t=body.sigma_t, size_rel_sigma=body.size_rel_sigma,
-                       fixed=body.fixed, n_starts=body.n_starts)
+                       fixed=body.fixed, n_starts=body.n_starts,
+                       objective=body.objective, dry_size=body.dry_size)
     report = json_safe(res.to_dict())
+    if body.dose_jump:
+        from dosing.fit import dose_under_objectives
+
+        report["dose_time_by_objective"] = json_safe(dose_under_objectives(
+            data, body.dose_jump[0], body.dose_jump[1], body.dose_fraction,
+            sigma_t=body.sigma_t, size_rel_sigma=body.size_rel_sigma, fixed=body.fixed,
+            fits={body.objective: res}))
     if body.save:
         GelStore().save(body.save, fit_gel(res, body.save),
                         swelling={"data": data_dict(data), "fit": report})

@@ -15,8 +15,25 @@ router = APIRouter(prefix="/v1", tags=["physics"])
 
 @router.get("/gels", response_model=s.GelsResponse)
 async def gels() -> dict[str, Any]:
-    """The preset gels with their parameters and fold temperatures."""
-    return await compute(presets_answer)
+    """The preset gels with their parameters and fold temperatures, and the stored fitted
+    gels (``thermogel fit ... --save NAME`` or POST /v1/fit/* with ``save``)."""
+    return {**await compute(presets_answer), "fitted": await compute(fitted_gels_answer)}
+
+
+def fitted_gels_answer() -> list[dict[str, Any]]:
+    """The stored fitted gels with their folds (blocking: reads the store)."""
+    from dosing.gel_store import GelStore
+    from solver.equilibrium import folds
+    from solver.gel import Gel
+
+    out = []
+    for g in GelStore().summaries():
+        try:
+            g["folds"] = [f.to_dict() for f in folds(Gel.from_dict(g["gel"]))]
+        except Exception:  # a fitted gel whose fold search fails is listed without folds
+            g["folds"] = []
+        out.append(g)
+    return out
 
 
 @router.post("/equilibrium", response_model=s.EquilibriumResponse)

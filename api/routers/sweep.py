@@ -24,6 +24,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from dosing import JobRunner, SolverSettings, UnknownValidationError
 from dosing.sweep import COLUMNS, SweepGrid, SweepResult, fill_validations, run_sweep
 from solver.json_safe import json_safe
+from solver.limits import T_MAX, T_MIN
 
 from ..schemas import (
     Branch,
@@ -44,7 +45,7 @@ MAX_SERVICE_POINTS = 20_000  # points in one sweep request (the CLI takes up to 
 SWEEP_QUEUE = 4  # sweeps queued or running before 429
 SWEEP_PREFIX = "sweep-"
 SWEEPS_KEPT = 32  # finished sweep tables kept in memory
-Temperature = Annotated[float, Field(ge=273.15, le=373.15)]
+Temperature = Annotated[float, Field(ge=T_MIN, le=T_MAX)]
 Radius = Annotated[float, Field(gt=0.0, le=1.0e5)]
 Fraction = Annotated[float, Field(gt=0.0, le=1.0)]
 

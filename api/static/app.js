@@ -5,7 +5,8 @@
 
 const $ = (id) => document.getElementById(id);
 const SVGNS = "http://www.w3.org/2000/svg";
-const FIELDS = ["t_start", "t_end", "dry_radius_um", "doses", "rests", "interfacial_length"];
+const FIELDS = ["t_start", "t_end", "dry_radius_um", "doses", "rests", "interfacial_length",
+  "size_cv"];
 const LABELS = { t_start: "T_start", t_end: "T_end", dry_radius_um: "dry radius",
   doses: "dose", rests: "rest", interfacial_length: "interfacial length",
   sweep_t_end: "T_end", sweep_radius: "dry radius", sweep_doses: "dose" };
@@ -15,7 +16,9 @@ const GEL_FIELDS = ["gel_name", ...GEL_PARAMS.map((p) => `gel_${p}`)];
 const SAVED_KEY = "thermogel.gels";
 for (const p of GEL_PARAMS) LABELS[`gel_${p}`] = p === "omega" ? "Omega" : p.toUpperCase();
 LABELS.gel_name = "gel name";
+LABELS.size_cv = "size CV";
 let presets = {}; // preset name -> its parameters (from /v1/gels)
+let fittedGels = {}; // stored fitted gel name -> its parameters (from /v1/gels, on the server)
 let bounds = {};
 let requestCount = 0; // requests this page sent to /v1 (shown in the page state)
 let pollTimer = null;
@@ -293,6 +296,13 @@ function readForm() {
   take("t_end", checkValue("t_end", $("t_end").value, b.t_end, 1, "K"));
   if ($("dry_radius_um").value.trim() !== "")
     take("dry_radius_um", checkValue("dry_radius_um", $("dry_radius_um").value, b.dry_radius_um, 1, "µm"));
+  if ($("size_cv").value.trim() !== "") {  // a batch: a lognormal whose mean is the dry radius
+    take("size_cv", checkValue("size_cv", $("size_cv").value, b.size_cv));
+    if (out.dry_radius_um === undefined && $("dry_radius_um").value.trim() === "") {
+      showError("size_cv", "size CV: give the dry radius too (the batch's number-weighted mean)");
+      ok = false;
+    }
+  }
   if ($("interfacial_length").value.trim() !== "")  // empty: the bead's own (xi_dry / a_d)
     take("interfacial_length", checkValue("interfacial_length", $("interfacial_length").value, b.interfacial_length));
   const doses = checkList("doses", $("doses").value, { ...b.dose_fraction, maxItems: b.doses.maxItems }, 100, "%");
@@ -316,8 +326,27 @@ function doseBody(f, fraction, validate) {
   const body = { gel: f.gel, t_start: f.t_start, t_end: f.t_end, dose_fraction: fraction,
     interfacial_length: f.interfacial_length };
   if (f.dry_radius_um !== undefined) body.dry_radius_um = f.dry_radius_um;
+  if (f.size_cv !== undefined) body.size_distribution = { kind: "lognormal", cv: f.size_cv };
   if (validate) body.validate = true;
   return body;
+}
+
+function showBatch(bt) {
+  // a batch's answer (docs/batch.md): its dose time, the beads delivered, the spread
+  const label = $("answer-batch-label");
+  const dd = $("answer-batch");
+  label.hidden = dd.hidden = !bt;
+  if (!bt) { dd.textContent = ""; delete dd.dataset.value; return; }
+  const secs = (x) => (x === null || x === undefined ? "–" : `${fmt(x)} s`);
+  const p = bt.percentile_seconds || [];
+  dd.innerHTML = `heat for <b id="answer-batch-seconds">${secs(bt.seconds)}</b> ` +
+    `(${bt.delay >= 0 ? "+" : ""}${pct(bt.delay)} against the mean bead, t = ${fmt(bt.time)} τ); ` +
+    `${pct(bt.fraction_delivered)} of the beads have delivered their own dose by then; ` +
+    `the 10th–90th percentile bead's own time ${secs(p[0])} – ${secs(p[2])}. ` +
+    `<span class="hint">${bt.description}; quadrature ${bt.quadrature.nodes} nodes, error ` +
+    `${bt.quadrature.error.toExponential(1)}</span>`;
+  dd.dataset.value = String(bt.time);
+  dd.dataset.seconds = bt.seconds === null || bt.seconds === undefined ? "" : String(bt.seconds);
 }
 
 function showAnswer(a, total) {
@@ -337,6 +366,7 @@ function showAnswer(a, total) {
   $("answer-tau").textContent = a.timescale_seconds ? `${fmt(a.timescale_seconds)} s` : "give a bead size";
   $("answer-error-parts").textContent = a.error_explanation || "";
   $("answer-note").textContent = `${a.truth ? "Truth: " + a.truth + ". " : ""}${a.note || ""}`;
+  showBatch(a.batch);
 }
 
 function showValidation(v, started) {
@@ -369,6 +399,27 @@ function poll(vid, onDone) {
     showValidation(res.data, started);
     if (res.data.status === "done" || res.data.status === "failed") { if (onDone) onDone(res.data); return; }
     pollTimer = setTimeout(step, 1000);
+  };
+  step();
+}
+
+function pollSchedule(vid, rows, tau) {
+  // a schedule job: when done, the corrected actuation times replace the rough hold reading
+  const step = async () => {
+    const res = await api("GET", `/v1/validations/${encodeURIComponent(vid)}`);
+    if (res.status !== 200) { showServerError(res); return; }
+    const v = res.data;
+    if (v.status === "failed") { $("schedule-note").textContent = `Protocol check failed: ${v.error || ""}`; return; }
+    if (v.status !== "done") { setTimeout(step, 1000); return; }
+    const c = v.result && v.result.corrected;
+    if (!c) { $("schedule-note").textContent = "Protocol checked (no correction asked)."; return; }
+    const fixed = rows.map((r, k) => ({ ...r, actuation_time: c.actuation_times[k],
+      actuation_seconds: c.actuation_seconds ? c.actuation_seconds[k] : null,
+      error_estimate: Math.abs(c.relative_errors[k]) }));
+    scheduleTable(fixed, tau);
+    $("schedule-note").textContent = "Corrected by the full solver: each heating meets its dose " +
+      `within ${pct(c.max_relative_error)} in the real heat/rest protocol.`;
+    document.body.dataset.schedule = "corrected";
   };
   step();
 }
@@ -417,10 +468,17 @@ async function run(f) {
   if (f.doses.length > 1) {
     const body = { ...doseBody(f, undefined, false), doses: f.doses };
     delete body.dose_fraction;
+    delete body.size_distribution;  // a schedule answers its mean bead
     if (f.rests.length) body.rests = f.rests;
     const sch = await api("POST", "/v1/schedule", body);
     if (sch.status >= 400) { showServerError(sch); document.body.dataset.state = "server-error"; return; }
-    rows = sch.data.status === "answered" ? sch.data.hold : null;
+    // the protocol check and correction are on by default (as in Python and the CLI): a 202
+    // carries the hold reading, shown as the rough reading it is until the job corrects it
+    rows = sch.data.hold || null;
+    $("schedule-note").textContent = sch.status === 202
+      ? "Hold reading (rough: one continuous heating). Checking the real heat/rest protocol with the full solver…"
+      : "";
+    if (sch.status === 202 && rows) pollSchedule(sch.data.validation_id, rows, a.timescale_seconds);
   } else {
     rows = [{ dose_fraction: a.dose_fraction, cumulative_fraction: a.dose_fraction, start: 0, end: a.time,
       actuation_time: a.time, actuation_seconds: a.seconds, error_estimate: a.error_estimate }];
@@ -544,6 +602,7 @@ function gelOptions(selected) {
     sel.appendChild(o);
   };
   for (const [name, p] of Object.entries(presets)) add(name, name, p.folds);
+  for (const [name, p] of Object.entries(fittedGels)) add(name, `${name} (fitted)`, p.folds);
   for (const name of Object.keys(savedGels())) add(`saved:${name}`, `${name} (saved)`);
   if (selected) sel.value = selected;
 }
@@ -604,6 +663,7 @@ async function init() {
   bounds = { t_start: boundOf(dose.t_start), t_end: boundOf(dose.t_end),
     dry_radius_um: boundOf(dose.dry_radius_um), dose_fraction: boundOf(dose.dose_fraction),
     interfacial_length: boundOf(dose.interfacial_length), doses: boundOf(sched.doses),
+    size_cv: boundOf(sc.SizeDistributionIn ? sc.SizeDistributionIn.properties.cv : { minimum: 0, maximum: 2 }),
     rests: boundOf(numberSchema(sched.rests).items || {}) };
   const sw = sc.SweepRequest.properties;
   const items = (p) => ({ ...boundOf(p.items), maxItems: p.maxItems });
@@ -617,6 +677,10 @@ async function init() {
   const gels = await (await fetch("/v1/gels")).json();
   for (const g of gels.gels) {
     presets[g.gel.name] = { gel: g.gel,
+      folds: g.folds.map((x) => `${x.kind} at ${fmt(x.temperature, 5)} K`).join(", ") };
+  }
+  for (const g of gels.fitted || []) {
+    fittedGels[g.name] = { gel: g.gel, timescale: g.timescale,
       folds: g.folds.map((x) => `${x.kind} at ${fmt(x.temperature, 5)} K`).join(", ") };
   }
   gelOptions("ANB");

@@ -51,6 +51,8 @@ INTERNAL = ("log_omega", "chi0_ref", "b0", "chi1_ref", "b1", "log_scale")
 OMEGA_RANGE = (1.0, 1.0e5)
 LAMBDA_CAP = 30.0  # largest stretch a fitted scale may imply
 BAD = 1.0e4  # residual (in sigmas) of a point where the model has no finite temperature
+OBJECTIVES = ("orthogonal", "temperature")
+BELOW_DRY_SIGMAS = 2.0  # no point more than this many size-noise widths below the dry size
 
 
 class _Coeffs(NamedTuple):
@@ -193,11 +195,19 @@ def _linear_start(data: SwellingData, omega: float, scale: float,
                      math.log(scale)])
 
 
-def _scale_bounds(data: SwellingData) -> tuple[float, float]:
-    """(lowest, highest) log scale: the largest point below LAMBDA_CAP, the smallest point
-    at most 25% below the dry size (measurement noise near dryness)."""
+def _scale_bounds(data: SwellingData, objective: str = "orthogonal",
+                  size_rel_sigma: float = 0.01,
+                  below_sigmas: float = BELOW_DRY_SIGMAS) -> tuple[float, float]:
+    """(lowest, highest) log scale: the largest point below LAMBDA_CAP; the dry size bounded
+    by the data: no point more than ``below_sigmas`` noise widths below it (orthogonal
+    objective: y_min >= scale (1 - k sigma_rel)), every point above it (temperature
+    objective, where T(lambda <= 1) does not exist)."""
     y = data.size
-    hi = math.log(float(y.min())) + 0.25
+    if objective == "temperature":
+        hi = math.log(float(y.min())) - 1e-9
+    else:
+        k = below_sigmas * size_rel_sigma
+        hi = math.log(float(y.min())) + (-math.log1p(-k) if k < 0.2 else 0.25)
     lo = math.log(float(y.max())) - data.power * math.log(LAMBDA_CAP)
     if not lo < hi:
         raise ParameterError(data.kind, f"max/min = {y.max() / y.min():.4g}",
@@ -206,9 +216,11 @@ def _scale_bounds(data: SwellingData) -> tuple[float, float]:
 
 
 def global_starts(data: SwellingData, t_ref: float, sigma_t: float, sigma_y: np.ndarray,
-                  n_omega: int = 12, n_scale: int = 20) -> list[tuple[float, np.ndarray]]:
-    """Every grid node's linear start as (orthogonal cost, internal vector), best first."""
-    lo, hi = _scale_bounds(data)
+                  n_omega: int = 12, n_scale: int = 20,
+                  objective: str = "orthogonal") -> list[tuple[float, np.ndarray]]:
+    """Every grid node's linear start as (cost under ``objective``, internal vector), best
+    first."""
+    lo, _ = _scale_bounds(data)
     ymin = float(data.size.min())
     # the smallest point's stretch (y_min / scale)^(1/m): dense near 1, where dry states sit
     top = max((ymin / math.exp(lo)) ** (1.0 / data.power) - 1.0, 4e-3)
@@ -222,22 +234,40 @@ def global_starts(data: SwellingData, t_ref: float, sigma_t: float, sigma_y: np.
             if q is None:
                 continue
             coef, scale = _physical(q, t_ref)
-            d = distances(coef, scale, data, sigma_t, sigma_y, grid).signed
+            if objective == "temperature":
+                d = np.clip(temperature_residuals(coef, scale, data, sigma_t), -BAD, BAD)
+            else:
+                d = distances(coef, scale, data, sigma_t, sigma_y, grid).signed
             out.append((float(d @ d), q))
     out.sort(key=lambda p: p[0])
     return out
 
 
 # ---------------------------------------------------------------- the fit
+def temperature_residuals(coef: Gel | _Coeffs, scale: float, data: SwellingData,
+                          sigma_t: float) -> np.ndarray:
+    """The paper's residual (sec. Eql): (T(lambda_i) - T_i) / sigma_t at the measured
+    stretch lambda_i = (y_i / scale)^(1/m); BAD where lambda_i <= 1 (no temperature)."""
+    lam = stretch_of(data.size, scale, data.power)
+    with np.errstate(invalid="ignore"):
+        tm = np.where(lam > 1.0, model_temperature(coef, np.maximum(lam, 1.0 + 1e-12)), np.nan)
+    r = (tm - data.temperature) / sigma_t
+    return np.where(np.isfinite(r), r, BAD)
+
+
 def _residual_fn(data: SwellingData, t_ref: float, free: np.ndarray, q_fixed: np.ndarray,
-                 sigma_t: float, sigma_y: np.ndarray, root_w: np.ndarray):
+                 sigma_t: float, sigma_y: np.ndarray, root_w: np.ndarray,
+                 objective: str = "orthogonal"):
     grid = stretch_grid()
 
     def fun(p: np.ndarray) -> np.ndarray:
         q = q_fixed.copy()
         q[free] = p
         coef, scale = _physical(q, t_ref)
-        r = root_w * distances(coef, scale, data, sigma_t, sigma_y, grid).signed
+        if objective == "temperature":
+            r = root_w * temperature_residuals(coef, scale, data, sigma_t)
+        else:
+            r = root_w * distances(coef, scale, data, sigma_t, sigma_y, grid).signed
         return np.where(np.isfinite(r), np.clip(r, -BAD, BAD), BAD)
     return fun
 
@@ -270,8 +300,16 @@ def _fixed_internal(fixed: Mapping[str, float], t_ref: float) -> dict[int, float
 
 def fit_equilibrium(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma: float = 0.01,
                     fixed: Mapping[str, float] | None = None, n_starts: int = 6,
-                    absolute_sigma: bool = False, max_nfev: int = 400) -> FitResult:
+                    absolute_sigma: bool = False, max_nfev: int = 400,
+                    objective: str = "orthogonal",
+                    below_dry_sigmas: float = BELOW_DRY_SIGMAS) -> FitResult:
     """Fit eq. EqlEqn to equilibrium swelling data (module doc).
+
+    ``objective``: 'orthogonal' (default; errors in both variables, judged by chi-square
+    under the stated noise) or 'temperature' (the paper's residual T(lambda_i) - T_i at the
+    measured sizes; every point above the dry size).  The dry size (``scale``) is bounded by
+    the data: no point more than ``below_dry_sigmas`` size-noise widths below it; or fix it
+    (``fixed={"scale": dry size in the data's unit}``).
 
     Each point's residual is its orthogonal distance to the curve (T(lambda), scale lambda^m)
     in units of the noise, ``sigma_t`` in K and ``size_rel_sigma`` times the size; with
@@ -280,6 +318,8 @@ def fit_equilibrium(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma
     b0, b0, a1 with b1, b1, scale).  Raises ParameterError for data that cannot determine
     the fit (too few points; all on one side of the transition).
     """
+    if objective not in OBJECTIVES:
+        raise ParameterError("objective", objective, " or ".join(OBJECTIVES))
     sigma_t = float(sigma_t)
     size_rel_sigma = float(size_rel_sigma)
     if not (math.isfinite(sigma_t) and sigma_t > 0):
@@ -299,14 +339,16 @@ def fit_equilibrium(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma
                              f"at least {min(p, 4)} distinct temperatures")
     root_w = np.sqrt(data.weight) if data.weight is not None else np.ones(n)
     sigma_y = size_rel_sigma * data.size
-    lo_s, hi_s = _scale_bounds(data)
+    lo_s, hi_s = _scale_bounds(data, objective, size_rel_sigma, below_dry_sigmas)
     lb = np.array([math.log(OMEGA_RANGE[0]), -np.inf, -np.inf, -np.inf, -np.inf, lo_s])
     ub = np.array([math.log(OMEGA_RANGE[1]), np.inf, np.inf, np.inf, np.inf, hi_s])
     for i, val in fix.items():
         if i in (0, 5) and not (lb[i] <= val <= ub[i]):
             raise ParameterError(f"fixed.{PARAMS[i]}", math.exp(val),
                                  f"{math.exp(lb[i]):.4g}-{math.exp(ub[i]):.4g}")
-    starts = global_starts(data, t_ref, sigma_t, sigma_y)
+    starts = [(c, q) for c, q in global_starts(data, t_ref, sigma_t, sigma_y,
+                                               objective=objective)
+              if lo_s <= q[5] <= hi_s]
     if not starts:
         raise ParameterError("data", "no start", "data for which some gel has a finite "
                              "equilibrium temperature at every point")
@@ -322,7 +364,7 @@ def fit_equilibrium(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma
     best = None
     nfev = 0
     for q0 in chosen:
-        fun = _residual_fn(data, t_ref, free, q0, sigma_t, sigma_y, root_w)
+        fun = _residual_fn(data, t_ref, free, q0, sigma_t, sigma_y, root_w, objective)
         x0 = np.clip(q0[free], lb[free] + 1e-12, ub[free] - 1e-12)
         res = least_squares(fun, x0, bounds=(lb[free], ub[free]), x_scale="jac",
                             method="trf", max_nfev=max_nfev, xtol=1e-10, ftol=1e-10)
@@ -333,8 +375,14 @@ def fit_equilibrium(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma
             best = (q, res)
     assert best is not None
     q, res = best
-    return _report(data, q, res, free, t_ref, fixed, nfev, len(chosen), absolute_sigma,
-                   sigma_t, size_rel_sigma)
+    out = _report(data, q, res, free, t_ref, fixed, nfev, len(chosen), absolute_sigma,
+                  sigma_t, size_rel_sigma, objective)
+    out.extra["dry_size_bound"] = {
+        "upper": math.exp(hi_s), "rule": "every point above the dry size" if objective ==
+        "temperature" else f"no point more than {below_dry_sigmas:g} size-noise widths "
+        f"({below_dry_sigmas * size_rel_sigma:.1%}) below the dry size",
+        "at_bound": bool(5 in free and q[5] >= hi_s - 1e-6)}
+    return out
 
 
 # ---------------------------------------------------------------- the report
@@ -430,7 +478,8 @@ def _transition_intervals(q: np.ndarray, cov_q: np.ndarray, t_ref: float,
 
 def _report(data: SwellingData, q: np.ndarray, res,
             free: np.ndarray, t_ref: float, fixed: dict, nfev: int, n_starts: int,
-            absolute_sigma: bool, sigma_t: float, size_rel_sigma: float) -> FitResult:
+            absolute_sigma: bool, sigma_t: float, size_rel_sigma: float,
+            objective: str = "orthogonal") -> FitResult:
     n, p = len(data), free.size
     cov_free, chi2 = covariance_from_jacobian(res.jac, res.fun, p, absolute_sigma)
     cov_q = np.zeros((6, 6))
@@ -467,9 +516,11 @@ def _report(data: SwellingData, q: np.ndarray, res,
     near = distances(coef, scale, data, sigma_t, size_rel_sigma * data.size, stretch_grid())
     lam = near.stretch
     resid = data.temperature - near.temperature
-    # the rms distance to the curve in noise units, expressed in kelvin: the temperature
-    # error that alone would explain the misfit
+    # the rms residual in noise units, expressed in kelvin: for the orthogonal objective the
+    # temperature error that alone would explain the misfit (not a temperature residual)
     rms = float(sigma_t * np.sqrt(np.mean(res.fun**2)))
+    judged = judge(data, coef_scale=_physical(q, t_ref), sigma_t=sigma_t,
+                   size_rel_sigma=size_rel_sigma, n_free=p)
     size_resid = data.size / (scale * near.size) - 1.0
     rng = (float(lam.min()), float(lam.max()))
     gel = _gel_of(q, t_ref)
@@ -485,15 +536,15 @@ def _report(data: SwellingData, q: np.ndarray, res,
         covariance=cov.tolist(), correlation=correlation(cov).tolist(), fixed=dict(fixed),
         success=success, status=int(res.status), message=msg, nfev=nfev, n_points=n,
         rms_residual=rms, chi2_reduced=chi2, warnings=warns,
-        extra={"rms_residual_K": rms, "transitions": found,
-               "rms_residual_K_meaning": "sigma_t times the rms orthogonal distance of the "
-                                         "points to the curve in noise units",
+        extra={"objective": objective, **judged, "transitions": found,
                "rms_residual_size": float(np.sqrt(np.mean(size_resid**2))),
                "residuals_K": resid.tolist(), "residuals_size": size_resid.tolist(),
                "stretch": lam.tolist(),
-               "model": "eq. EqlEqn, T(lambda) = -c/d; each point's residual is its "
-                        "orthogonal distance to the curve in noise units, split into a "
-                        "temperature part (K) and a relative size part",
+               "model": "eq. EqlEqn, T(lambda) = -c/d; " + (
+                   "each point's residual is T(lambda_i) - T_i at its measured size (the "
+                   "paper's)" if objective == "temperature" else
+                   "each point's residual is its orthogonal distance to the curve in noise "
+                   "units, split into a temperature part (K) and a relative size part"),
                "weighting": {"sigma_t_K": sigma_t, "size_rel_sigma": size_rel_sigma,
                              "absolute_sigma": absolute_sigma},
                "n_starts": n_starts,
@@ -501,6 +552,37 @@ def _report(data: SwellingData, q: np.ndarray, res,
                             "covariance": cov_q.tolist(), "t_ref": t_ref,
                             "correlation": corr_q.tolist(), "free": names_q},
                "size_kind": data.kind})
+
+
+def judge(data: SwellingData, coef_scale: tuple[_Coeffs, float], sigma_t: float,
+          size_rel_sigma: float, n_free: int) -> dict[str, float | int | str | None]:
+    """A fitted curve judged under the stated noise, whatever objective fitted it: the
+    orthogonal chi-square (errors in both variables) with its p-value, AIC and BIC (known
+    noise: AIC = chi2 + 2k, BIC = chi2 + k ln n), the paper's temperature residual over the
+    points above the dry size, and how many points lie below the dry size and how far."""
+    from scipy import stats
+
+    coef, scale = coef_scale
+    n = len(data)
+    d = distances(coef, scale, data, sigma_t, size_rel_sigma * data.size, stretch_grid())
+    w = data.weight if data.weight is not None else np.ones(n)
+    chi2 = float(np.sum(w * d.signed**2))
+    dof = max(n - n_free, 1)
+    tr = temperature_residuals(coef, scale, data, sigma_t)
+    above = tr != BAD
+    below = 1.0 - data.size / (scale * 1.0)  # size relative to the dry size (m-th power)
+    below = np.where(data.size < scale, below, 0.0)
+    return {"chi2": chi2, "dof": dof, "chi2_p_value": float(stats.chi2.sf(chi2, dof)),
+            "aic": chi2 + 2.0 * n_free, "bic": chi2 + n_free * math.log(n),
+            "rms_orthogonal_K": float(sigma_t * math.sqrt(chi2 / n)),
+            "rms_orthogonal_meaning": "sigma_t times the rms orthogonal distance of the "
+                                      "points to the curve in noise units (not a "
+                                      "temperature residual)",
+            "rms_temperature_residual_K": float(sigma_t * np.sqrt(np.mean(tr[above] ** 2)))
+            if np.any(above) else None,
+            "n_temperature_residual": int(np.sum(above)),
+            "points_below_dry": int(np.sum(data.size < scale)),
+            "max_below_dry_relative": float(below.max())}
 
 
 def _check_sides(found: list[dict], lam: np.ndarray) -> None:

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..equilibrium import Branch
 from ..errors import NotApplicableError
-from ..gel import Gel
+from ..gel import Gel, as_gel
 from ..thermo import osmotic_p
 from .evolve import (
     Array,
@@ -88,6 +88,7 @@ def sharp_front_trajectory(gel: Gel, t_start: float, t_end: float, *,
     Same inputs, stops and result as :func:`solver.front.front_trajectory` (conservative
     starts only); ``model`` is ``front-sharp``.
     """
+    gel = as_gel(gel)
     levels = front_levels(gel, t_start, t_end, branch)
     value = sharp_front_value(gel, float(t_start), float(t_end), branch)
     st = resolve_start(levels, start, True)

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..equilibrium import Branch
 from ..errors import ParameterError, SolverError, require_finite_positive
-from ..gel import Gel
+from ..gel import Gel, as_gel
 from .evolve import FrontCurve, leading_curve
 from .levels import FrontLevels, front_applicability, front_levels
 from .result import FrontResult
@@ -70,6 +70,7 @@ def front_trajectory(gel: Gel, t_start: float, t_end: float, *, branch: Branch |
     refused (ParameterError): the next-order correction was tried and did not help (see
     CORRECTION_NOT_KEPT).  NotApplicableError off the front regime (:func:`front_applicability`).
     """
+    gel = as_gel(gel)
     if correction:
         raise ParameterError("correction", correction, "False", CORRECTION_NOT_KEPT)
     levels = front_levels(gel, t_start, t_end, branch)
@@ -77,7 +78,6 @@ def front_trajectory(gel: Gel, t_start: float, t_end: float, *, branch: Branch |
     curve = leading_curve(levels, st.t0, st.front, st.solid)
     return sample_curve(levels, st, curve, until, target_radius, every, n, "front-leading",
                         {"applicability": front_applicability(gel, t_start, t_end, branch)[1],
-                         "radius_centre": float(curve.radius(0.0)),
                          "t_end_temperature": levels.t_end,
                          "chebyshev_degree": curve.rate.degree(),
                          "conservative": conservative})
@@ -99,7 +99,8 @@ def sample_curve(levels: FrontLevels, st: StartState, curve: FrontCurve, until: 
         raise SolverError(f"{model} model produced a non-finite state",
                           {"t_stop": t_stop, "front_stop": x_stop})
     diag = {"behaviour": levels.behaviour, "stop": reason,
-            "t_centre": curve.t_centre, "solid": st.solid, "a0": levels.a0, **extra,
+            "t_centre": curve.t_centre, "radius_centre": float(curve.radius(0.0)),
+            "solid": st.solid, "a0": levels.a0, **extra,
             **st.diagnostics}
     return FrontResult(t=t, radius=a, front=x, flux=amp, phi_minus=levels.phi_minus,
                        phi_plus=levels.phi_plus, model=model, start=st.label,

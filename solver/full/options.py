@@ -15,11 +15,12 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
+from ..limits import SOLVER_ELL_MAX, SOLVER_N_RANGE
 from .grids import GRIDS, grid_spec
 from .moving import MeshOptions
 
-N_RANGE = (10, 20000)
-ELL_MAX = 0.2  # the interfacial length must be small against the dry radius
+N_RANGE = SOLVER_N_RANGE
+ELL_MAX = SOLVER_ELL_MAX
 INTEGRATORS = ("implicit", "explicit")
 JACOBIANS = ("analytic", "fd")
 DEFAULT_MAX_STEPS = {"implicit": 500_000, "explicit": 20_000_000}

@@ -5,16 +5,22 @@ units of the loaded mass.  Cell i has the fixed dry volume dw_i and the fluid vo
 w_i(t) = r_{i+1}^3 - r_i^3 - dw_i (units of 4 pi R^3 / 3); between two mechanics samples
 the node volumes r_k^3 are linear in t, so the fluid flux through node k+1 (outward,
 relative to the solid, same units per time) is the constant Q_k = -d(r_{k+1}^3)/dt
-(continuity: Q_k = Q_{k-1} - dw_k/dt, Q = 0 at the centre).  Concentration per fluid
-volume c_i = m_i / w_i.  Fluxes out of cell i:
-advective Q_i c_upwind (the medium side carries K c_med), diffusive
-G_i (c_i - c_{i+1}) with the conductance of the two half cells in series,
-G = 3 r^2 / ((r - rc_i) / (phi_i D_i) + (rc_{i+1} - r) / (phi_{i+1} D_{i+1})) (frozen
-over each sample interval at its midpoint geometry) and
-D = D0 f(phi) (module ``hindrance``), and at the edge G_e (c_{n-1} - K c_med) with
-G_e = 3 a^2 phi_{n-1} D_{n-1} / (a - rc_{n-1}).  c_med = M / V_med (0 for a perfect sink).
-Every flux enters two rows with opposite signs, so the column sums of the operator vanish
-and the total mass is conserved by any linear integrator to round-off.
+(continuity: Q_k = Q_{k-1} - dw_k/dt, Q = 0 at the centre).  Pore concentration
+c_i = m_i / w_i; the partition K_i = K0 K_s(phi_i) (module ``hindrance``) makes
+u_i = c_i / K_i the concentration of the medium in equilibrium with cell i, the potential
+diffusion levels (flux on grad(c / K), continuous u across the front's jump of K).
+Fluxes out of cell i:
+advective W Q c_upwind (W the convective sieving of the face's tighter cell; the medium
+side carries c_med itself: inflowing medium is not enriched, the partition is set up by
+diffusion), diffusive G_i (u_i - u_{i+1}) with the conductance of the two half cells in
+series, G = 3 r^2 / ((r - rc_i) / (phi_i D_i K_i) + (rc_{i+1} - r) / (phi_{i+1} D_{i+1}
+K_{i+1})) (frozen over each sample interval at its midpoint geometry), D = D0 f (module
+``hindrance``), and at the edge G_e (u_{n-1} - c_med) with
+G_e = 3 a^2 phi_{n-1} D_{n-1} K_{n-1} / (a - rc_{n-1}).  c_med = M / V_med (0 for a
+perfect sink).  The mesh stretch of cell i (for f and W) is min(dr/drho, r/rho) or
+J^(1/3) (``hindrance.MESH_STRETCHES``).  Every flux enters two rows with opposite signs,
+so the column sums of the operator vanish and the total mass is conserved by any linear
+integrator to round-off.
 
 Time: TR-BDF2 (gamma = 2 - sqrt 2; Bank et al. 1985, Hosea & Shampine 1996), L-stable and
 second order, with the filtered error estimate (I - d h L)^-1 C h^3 y''' and steps that
@@ -28,19 +34,25 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .hindrance import hindrance_factor
+from .hindrance import diffusion_factor, partition_factor, sieving_factor
 
 
 class SoluteParams(NamedTuple):
     """The solute's constants by name, as :func:`release_run` reads them: free
-    diffusivity ``d0``, the hindrance law ``law_code`` with its ``sieve`` and exponent ``y``
-    (module ``hindrance``), and the gel/medium partition coefficient ``partition`` (K)."""
+    diffusivity ``d0``, the hindrance law ``law_code`` with ``mesh`` (r_s / xi_dry),
+    ``fiber`` (r_s / r_f) and exponent ``y``, the affinity ``partition`` K0 with the steric
+    ``partition_code``, ``convective`` (1: sieve the advective flux) and ``stretch_code``
+    (0: the smallest principal stretch sets the mesh; 1: J^(1/3)); module ``hindrance``."""
 
     d0: float
     law_code: int
-    sieve: float
+    mesh: float
+    fiber: float
     y: float
     partition: float
+    partition_code: int = 0
+    convective: int = 1
+    stretch_code: int = 0
 
 GAMMA = 2.0 - np.sqrt(2.0)
 D_COEF = GAMMA / 2.0
@@ -53,18 +65,40 @@ OK, BUDGET, BAD = 0, 1, 2
 
 
 @njit(cache=True)
-def conductances(r3, dw, d0, code, sieve, yfree, g):
+def cell_props(r3, dw, rho, par, phi, lam, kcell, wcell):
+    """Per cell at node volumes ``r3`` (dry node radii ``rho``): porosity, mesh stretch,
+    partition K0 K_s(phi) and convective transmission W."""
+    n = dw.size
+    for i in range(n):
+        vol = r3[i + 1] - r3[i]
+        p = (vol - dw[i]) / vol if vol > 0.0 else 0.0
+        phi[i] = p
+        if par.stretch_code == 1:
+            lm = np.cbrt(vol / dw[i]) if vol > 0.0 else 0.0
+        else:
+            lr = (np.cbrt(r3[i + 1]) - np.cbrt(r3[i])) / (rho[i + 1] - rho[i])
+            rc = np.cbrt(0.5 * (r3[i] + r3[i + 1]))
+            pc = np.cbrt(0.5 * (rho[i] ** 3 + rho[i + 1] ** 3))
+            lm = min(lr, rc / pc)
+        lam[i] = lm
+        kcell[i] = par.partition * partition_factor(p, par.partition_code, par.fiber)
+        wcell[i] = sieving_factor(lm, par.mesh) if par.convective != 0 else 1.0
+
+
+@njit(cache=True)
+def conductances(r3, dw, rho, par, g, phi, lam, kcell, wcell):
     """Diffusive conductances at node volumes ``r3``: g[k] through node k+1 (k < n-1, between
     cells k and k+1; the two half cells in series) and g[n-1] at the edge (the last half
-    cell).  Units of volume (4 pi R^3 / 3) per time and per unit concentration."""
+    cell), on the potential u = c / K.  Units of volume (4 pi R^3 / 3) per time."""
     n = dw.size
+    cell_props(r3, dw, rho, par, phi, lam, kcell, wcell)
     cond_prev = 0.0
     rc_prev = 0.0
     for i in range(n):
-        vol = r3[i + 1] - r3[i]
-        phi = (vol - dw[i]) / vol
+        p = phi[i]
         rc = np.cbrt(0.5 * (r3[i] + r3[i + 1]))
-        cond = phi * d0 * hindrance_factor(phi, code, sieve, yfree) if phi > 0.0 else 0.0
+        cond = p * par.d0 * kcell[i] * diffusion_factor(
+            p, lam[i], par.law_code, par.mesh, par.fiber, par.y) if p > 0.0 else 0.0
         if i > 0:
             rf = np.cbrt(r3[i])
             g[i - 1] = 0.0
@@ -78,7 +112,7 @@ def conductances(r3, dw, d0, code, sieve, yfree, g):
 
 
 @njit(cache=True)
-def operator(r3, dw, qrate, g, kpart, vmed, lo, di, up, fw, fl):
+def operator(r3, dw, rho, par, qrate, g, vmed, lo, di, up, fw, fl, phi, lam, kcell, wcell):
     """The tridiagonal operator L (dm/dt = L m) at node volumes ``r3`` (n + 1 values from the
     centre, r3[0] = 0), node flux rates ``qrate`` (Q at node k+1 in qrate[k]) and
     conductances ``g`` (:func:`conductances`).
@@ -93,16 +127,17 @@ def operator(r3, dw, qrate, g, kpart, vmed, lo, di, up, fw, fl):
         lo[i] = 0.0
         di[i] = 0.0
         up[i] = 0.0
+    cell_props(r3, dw, rho, par, phi, lam, kcell, wcell)
     for i in range(n):
         w = r3[i + 1] - r3[i] - dw[i]
         if not (w > 0.0):
             return False
         fw[i] = w
     inv_v = 1.0 / vmed if vmed > 0.0 else 0.0
-    # diffusion and advection through the interior nodes 1..n-1
+    # diffusion (on u = c / K) and advection through the interior nodes 1..n-1
     for k in range(n - 1):
-        a, b = g[k] / fw[k], g[k] / fw[k + 1]
-        q = qrate[k]
+        a, b = g[k] / (fw[k] * kcell[k]), g[k] / (fw[k + 1] * kcell[k + 1])
+        q = qrate[k] * min(wcell[k], wcell[k + 1])
         if q >= 0.0:
             a += q / fw[k]
         else:
@@ -112,11 +147,11 @@ def operator(r3, dw, qrate, g, kpart, vmed, lo, di, up, fw, fl):
         up[k] += b
         di[k + 1] -= b
     # the edge: diffusion and advection between cell n-1 and the medium (unknown n)
-    q = qrate[n - 1]
+    q = qrate[n - 1] * wcell[n - 1]
     adv_c = q / fw[n - 1] if q >= 0.0 else 0.0  # outflow per unit m_{n-1}
-    adv_m = -q * kpart * inv_v if q < 0.0 else 0.0  # inflow of K c_med, per unit M
-    dif_c = g[n - 1] / fw[n - 1]
-    dif_m = g[n - 1] * kpart * inv_v
+    adv_m = -q * inv_v if q < 0.0 else 0.0  # inflow of c_med, per unit M
+    dif_c = g[n - 1] / (fw[n - 1] * kcell[n - 1])
+    dif_m = g[n - 1] * inv_v
     di[n - 1] -= adv_c + dif_c
     lo[n - 1] += adv_c + dif_c
     up[n - 1] += adv_m + dif_m
@@ -177,7 +212,7 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
     """
     n = dw.size
     size = n + 1
-    d0, code, sieve, yfree, kpart = par.d0, par.law_code, par.sieve, par.y, par.partition
+    d0 = par.d0
     lo = np.zeros(size)
     di = np.zeros(size)
     up = np.zeros(size)
@@ -199,6 +234,15 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
     err = np.zeros(size)
     est = np.zeros(size)
     cp = np.zeros(size)
+    rho = np.zeros(n + 1)
+    for i in range(n):
+        rho[i + 1] = rho[i] + dw[i]
+    for i in range(n + 1):
+        rho[i] = np.cbrt(rho[i])
+    phi = np.zeros(n)
+    lam = np.zeros(n)
+    kcell = np.zeros(n)
+    wcell = np.zeros(n)
     adv = 0.0
     h = 1e-9 * max(1.0, ts[-1] - ts[0])
     a3_0 = s3[0, n]
@@ -221,7 +265,7 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
             q[i] = -(s3[k + 1, i + 1] - s3[k, i + 1]) / span
         if d0 > 0.0:  # frozen at the interval's midpoint (second order in the sample spacing)
             _geometry(s3[k], s3[k + 1], 0.5, r3)
-            conductances(r3, dw, d0, code, sieve, yfree, gf)
+            conductances(r3, dw, rho, par, gf, phi, lam, kcell, wcell)
         t = ta
         fresh = False  # f0, g0 hold L(t) m at this t (the last accepted step's f1, g1)
         while t < tb:
@@ -235,7 +279,8 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
             if not fresh:  # f0 at t
                 _geometry(s3[k], s3[k + 1], (t - ta) / span, r3)
                 vm = vmed0 + (a3_0 - r3[n]) if vmed0 > 0.0 else 0.0
-                if not operator(r3, dw, q, gf, kpart, vm, lo, di, up, fw, fl):
+                if not operator(r3, dw, rho, par, q, gf, vm, lo, di, up, fw, fl, phi, lam,
+                                kcell, wcell):
                     return BAD
                 _apply(lo, di, up, m, f0)
                 g0 = fl[0] * m[n - 1] + fl[1] * m[n]
@@ -243,7 +288,8 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
             # stage 1: trapezoid to t + gamma h
             _geometry(s3[k], s3[k + 1], (t + GAMMA * hh - ta) / span, r3)
             vm = vmed0 + (a3_0 - r3[n]) if vmed0 > 0.0 else 0.0
-            if not operator(r3, dw, q, gf, kpart, vm, lo, di, up, fw, fl):
+            if not operator(r3, dw, rho, par, q, gf, vm, lo, di, up, fw, fl, phi, lam, kcell,
+                            wcell):
                 return BAD
             for i in range(size):
                 rhs[i] = m[i] + dh * f0[i]
@@ -255,7 +301,8 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
             tt = t + hh
             _geometry(s3[k], s3[k + 1], min(1.0, (tt - ta) / span), r3)
             vm = vmed0 + (a3_0 - r3[n]) if vmed0 > 0.0 else 0.0
-            if not operator(r3, dw, q, gf, kpart, vm, lo1, di1, up1, fw, fl1):
+            if not operator(r3, dw, rho, par, q, gf, vm, lo1, di1, up1, fw, fl1, phi, lam, kcell,
+                        wcell):
                 return BAD
             for i in range(size):
                 rhs[i] = A_U * u[i] + A_N * m[i]

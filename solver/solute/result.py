@@ -13,7 +13,7 @@ from ..json_safe import json_safe
 
 _ARRAYS = ("t", "radius", "released_fraction", "advected_fraction", "expelled_fraction",
            "in_gel_fraction", "medium_concentration", "temperature", "profile_t", "profiles",
-           "profile_radii")
+           "profile_radii", "squeezed_fraction")
 
 
 @dataclass
@@ -27,7 +27,11 @@ class ReleaseResult:
     ``medium_concentration`` (per loaded mass and per volume of 4 pi R^3 / 3; 0 for a perfect
     sink) and temperature.  ``profiles`` (len(profile_t), n): pore concentrations c / c0
     (c0 the loaded concentration) at cell-centre radii ``profile_radii``.
-    ``mass_balance_error`` is max |in gel + released - 1| over the run.
+    ``mass_balance_error`` is max |in gel + released - 1| over the run (and its D0 = 0
+    twin's).  ``squeezed_fraction``: the release of the same mechanics with D0 = 0 (what
+    the fluid's motion alone releases; grid-independent, unlike ``advected_fraction``, the
+    released mass that crossed the edge with the fluid); ``start_partition`` K at the start
+    state.
     """
 
     t: np.ndarray
@@ -44,6 +48,26 @@ class ReleaseResult:
     mass_balance_error: float = 0.0
     effective_diffusivity: float = 0.0
     diagnostics: dict[str, Any] = field(default_factory=dict)
+    squeezed_fraction: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    start_partition: float = 1.0
+
+    def squeezed_at(self, time: float) -> float:
+        """The D0 = 0 twin's release at ``time`` (the advected part if no twin was run)."""
+        s = self.squeezed_fraction if np.size(self.squeezed_fraction) == np.size(self.t) \
+            else self.advected_fraction
+        return float(np.interp(time, self.t, s))
+
+    def peclet(self, start: float, end: float) -> float | None:
+        """The heating's Peclet number between ``start`` and ``end``: the mean shrinking
+        speed (a(start) - a(end)) / (end - start) times the swollen radius a(0) over the
+        start state's hindered diffusivity D0 f(phi0) (``effective_diffusivity``); None
+        without diffusion or without a span (Pe >> 1: the fluid's motion outruns diffusion,
+        the release is squeezed out; Pe << 1: diffusion dominates)."""
+        if not (end > start) or self.effective_diffusivity <= 0.0:
+            return None
+        a = np.interp([start, end], self.t, self.radius)
+        return float(abs(a[0] - a[1]) / (end - start) * self.radius[0]
+                     / self.effective_diffusivity)
 
     @property
     def diffused_fraction(self) -> np.ndarray:
@@ -83,6 +107,7 @@ class ReleaseResult:
             out[name] = getattr(self, name)
         out["mass_balance_error"] = self.mass_balance_error
         out["effective_diffusivity"] = self.effective_diffusivity
+        out["start_partition"] = self.start_partition
         out["diagnostics"] = self.diagnostics
         return json_safe(out)
 
@@ -92,6 +117,7 @@ class ReleaseResult:
         arrays = {name: np.asarray(getattr(self, name)) for name in _ARRAYS}
         extra = {"mass_balance_error": self.mass_balance_error,
                  "effective_diffusivity": self.effective_diffusivity,
+                 "start_partition": self.start_partition,
                  "diagnostics": self.diagnostics}
         np.savez_compressed(p, extra=np.array(json.dumps(json_safe(extra))), **arrays)
         return p if p.suffix == ".npz" else p.with_name(p.name + ".npz")

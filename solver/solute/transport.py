@@ -21,8 +21,8 @@ import numpy as np
 
 from ..errors import ParameterError, SolverError
 from ..full.result import FullResult
-from .hindrance import Hindrance, hindrance_factor
-from .kernels import BAD, BUDGET, SoluteParams, release_run
+from .hindrance import MESH_STRETCHES, PARTITION_LAWS, Hindrance
+from .kernels import BAD, BUDGET, SoluteParams, cell_props, release_run
 from .result import ReleaseResult
 
 D_MAX = 1e8  # solute diffusivity / gel diffusivity
@@ -46,7 +46,9 @@ def _number(name: str, value: Any) -> float:
 class Solute:
     """A passive solute, dimensionless: ``diffusivity`` D0 in the pore fluid (units of the
     gel's R^2 / tau; 0 allowed: carried by the fluid alone), the ``hindrance`` law
-    D = D0 f(phi), the equilibrium ``partition`` K = c_pore / c_medium, and the
+    D = D0 f (with the convective sieving W and the steric partition K_s(phi)), the
+    equilibrium ``partition`` K0 = c_pore / c_medium (the solute's affinity; the partition
+    is K0 K_s(phi), K_s = 1 under the default ``hindrance.partition_law``), and the
     ``release_volume`` of a well-mixed medium at t = 0 (units of 4 pi R^3 / 3; None: a
     perfect sink).  Loading: uniform in the pore fluid at the start state."""
 
@@ -80,8 +82,21 @@ class Solute:
             object.__setattr__(self, "release_volume", v)
 
     def diffusivity_at(self, phi: float | np.ndarray) -> float | np.ndarray:
-        """The hindered diffusivity D0 f(phi)."""
+        """The hindered diffusivity D0 f(phi) (isotropic state)."""
         return self.diffusivity * self.hindrance.factor(phi)
+
+    def partition_at(self, phi: float | np.ndarray) -> float | np.ndarray:
+        """The partition K0 K_s(phi) (c_pore / c_medium in equilibrium)."""
+        return self.partition * self.hindrance.steric_partition(phi)
+
+    def params(self, diffusivity: float | None = None) -> SoluteParams:
+        """The kernels' constants (``diffusivity`` overrides D0: the D0 = 0 twin run)."""
+        h = self.hindrance
+        d0 = self.diffusivity if diffusivity is None else float(diffusivity)
+        return SoluteParams(float(d0), int(h.code), float(h.mesh_ratio), float(h.fiber_ratio),
+                            float(h.y), float(self.partition),
+                            int(PARTITION_LAWS[h.partition_law]), int(h.convective),
+                            int(MESH_STRETCHES[h.mesh_stretch]))
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
@@ -125,9 +140,14 @@ def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
             profiles: int = 51, max_steps: int = MAX_STEPS) -> ReleaseResult:
     """Integrate the solute through the mechanics samples of ``res`` (Lagrangian grid).
 
-    The solute starts uniform in the pore fluid of the first sample (the loaded bead in
-    equilibrium, loaded mass 1), enters and leaves with the fluid (upwind), diffuses with
-    D0 f(phi) and leaves at the edge into the medium (kernels module).  The samples should
+    The solute starts in equilibrium with one loading solution in the pore fluid of the
+    first sample (c = K c_load, uniform in a uniform gel; loaded mass 1), enters and leaves
+    with the fluid (upwind, sieved), diffuses with D0 f on grad(c / K) and leaves at the
+    edge into the medium (kernels module).  ``squeezed_fraction`` is the release of the
+    same mechanics with D0 = 0 (the twin run): what the fluid's motion alone releases,
+    grid-independent (the released mass crossing the edge with the fluid,
+    ``advected_fraction``, is not: diffusion moves solute to the edge cell on the grid's
+    own scale).  The samples should
     be dense enough for the fluid's motion (``simulate(..., every=...)``); the time steps
     adapt within them to ``rtol``.  ``profiles`` concentration profiles are kept at evenly
     spread samples.
@@ -147,9 +167,14 @@ def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
     if vol is not None and vol <= a3[0]:
         raise ParameterError("release_volume", vol, f"> {a3[0]:.6g} (the swollen bead's "
                              "volume, units of 4 pi R^3/3): the medium must hold the bead")
+    par = solute.params()
+    phi0c, lam0, k0c, w0c = (np.zeros(n) for _ in range(4))
+    rho = np.cbrt(np.concatenate(([0.0], np.cumsum(dw))))
+    cell_props(np.ascontiguousarray(s3[0]), dw, rho, par, phi0c, lam0, k0c, w0c)
     m = np.zeros(n + 1)
-    m[:n] = (s3[0, 1:] - s3[0, :-1] - dw) / w0
+    m[:n] = (s3[0, 1:] - s3[0, :-1] - dw) * k0c
     m[:n] /= m[:n].sum()
+    m_start = m.copy()
     k_prof = max(2, min(int(profiles), MAX_PROFILES, ts.size))
     picks = np.unique(np.round(np.linspace(0, ts.size - 1, k_prof)).astype(np.int64))
     prof_idx = np.full(ts.size, -1, dtype=np.int64)
@@ -158,24 +183,28 @@ def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
     rel = np.zeros(ts.size)
     adv = np.zeros(ts.size)
     h = solute.hindrance
-    par = SoluteParams(float(solute.diffusivity), int(h.code), float(h.sieve), float(h.y),
-                       float(solute.partition))
     counters = np.zeros(2, dtype=np.int64)
     gel = np.zeros(ts.size)
-    status = release_run(ts, s3, dw, -1.0 if vol is None else float(vol), par, m, rel, adv,
-                         gel, out_prof, prof_idx, float(rtol), int(max_steps), counters)
-    if status == BUDGET:
-        raise SolverError(f"solute transport: step budget exhausted ({max_steps} steps)",
-                          {"steps": int(counters[0])})
-    if status == BAD:
-        raise SolverError("solute transport: unphysical state (a cell without fluid or a "
-                          "non-finite error)", {"steps": int(counters[0])})
+    vmed = -1.0 if vol is None else float(vol)
+    _check(release_run(ts, s3, dw, vmed, par, m, rel, adv, gel, out_prof, prof_idx,
+                       float(rtol), int(max_steps), counters), max_steps, counters)
     balance = float(np.max(np.abs(gel + rel - 1.0)))
+    if solute.diffusivity > 0.0:  # the D0 = 0 twin: the release of the fluid's motion alone
+        squeezed, twin_gel = np.zeros(ts.size), np.zeros(ts.size)
+        twin_counters = np.zeros(2, dtype=np.int64)
+        _check(release_run(ts, s3, dw, vmed, solute.params(0.0), m_start, squeezed,
+                           np.zeros(ts.size), twin_gel, np.zeros_like(out_prof), prof_idx,
+                           float(rtol), int(max_steps), twin_counters), max_steps,
+               twin_counters)
+        balance = max(balance, float(np.max(np.abs(twin_gel + squeezed - 1.0))))
+    else:
+        squeezed = rel.copy()
     if vol is None:
         conc = np.zeros(ts.size)
     else:
         conc = rel / (vol + (a3[0] - a3))
     phi0 = 1.0 - 1.0 / float(a3[0])  # the loaded bead's mean porosity (solid volume 1)
+    d_eff = float(solute.diffusivity * h.factor(phi0))
     radii = np.cbrt(0.5 * (s3[picks, 1:] + s3[picks, :-1]))
     diag = {"steps": int(counters[0]), "rejected": int(counters[1]), "rtol": rtol,
             "samples": int(ts.size), "n": n, "solute": solute.to_dict(),
@@ -186,10 +215,17 @@ def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
         expelled_fraction=(a3[0] - a3) / w0, in_gel_fraction=gel,
         medium_concentration=conc, temperature=np.asarray(res.temperature, dtype=float).copy(),
         profile_t=ts[picks].copy(), profiles=out_prof * w0, profile_radii=radii,
-        mass_balance_error=balance,
-        effective_diffusivity=float(solute.diffusivity * hindrance_factor(
-            phi0, h.code, h.sieve, h.y)),
-        diagnostics=diag)
+        mass_balance_error=balance, effective_diffusivity=d_eff, diagnostics=diag,
+        squeezed_fraction=squeezed, start_partition=float(solute.partition_at(phi0)))
+
+
+def _check(status: int, max_steps: int, counters: np.ndarray) -> None:
+    if status == BUDGET:
+        raise SolverError(f"solute transport: step budget exhausted ({max_steps} steps)",
+                          {"steps": int(counters[0])})
+    if status == BAD:
+        raise SolverError("solute transport: unphysical state (a cell without fluid or a "
+                          "non-finite error)", {"steps": int(counters[0])})
 
 
 def simulate_release(gel: Any, t_start: float, solute: Solute, *, t_end: float | None = None,

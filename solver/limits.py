@@ -1,0 +1,31 @@
+"""Every range a rule checks, defined once (pure constants: no numba, no numpy).
+
+The solver (``solver.full.options``), the planner's truth (``dosing.scenario``), the HTTP
+schemas and the CLI all import their bounds from here; ``tests/test_limits.py`` fails if a
+range is written again elsewhere.  Two kinds of range are deliberately distinct: what the
+solver can run at all (``SOLVER_*``) and what the planner accepts for a validation, where a
+run must also be affordable and converged (``TRUTH_*``).
+"""
+
+from __future__ import annotations
+
+# temperatures: liquid water at 1 atm (K)
+T_MIN = 273.15
+T_MAX = 373.15
+
+# grid cells of one full-solver run
+SOLVER_N_RANGE = (10, 20000)
+# the interfacial length ell (dry radii) must stay small against the dry radius
+SOLVER_ELL_MAX = 0.2
+
+# grid cells of a validation run (its check run has n / 2, a ladder's finest rung 4 n)
+TRUTH_N_RANGE = (20, 6400)
+# ell of a ladder (uniform grids: its finest rung at TRUTH_N_RANGE's top)
+TRUTH_LADDER_ELL_RANGE = (0.000625, 0.02)
+# ell of a direct run on the moving grid: down to a 10 um dry bead's xi_lo / a_d
+TRUTH_DIRECT_ELL_RANGE = (2e-5, 0.02)
+# the ladder's coarsest ell: its rungs ell/2, ell/4 stay within TRUTH_LADDER_ELL_RANGE, and above
+# 0.01 the nucleation delay is a third of an 80 % dose (three rungs can look asymptotic
+# while they are not: ANB from 0.02 misses the limit by 1 %)
+LADDER_RUNGS = 3
+TRUTH_LADDER_START_RANGE = (TRUTH_LADDER_ELL_RANGE[0] * (1 << (LADDER_RUNGS - 1)), 0.01)
