@@ -16,7 +16,7 @@ import sys
 from solver.errors import NotApplicableError, ParameterError, SolverError  # a leaf module
 
 COMMANDS = ["equilibrium", "classify", "phase_map", "serve", "front", "dose", "schedule",
-            "simulate", "plot", "bench", "sweep", "fit", "release"]
+            "simulate", "plot", "bench", "sweep", "fit", "release", "sensitivity"]
 
 
 def build_parser(commands: list[str] | None = None) -> argparse.ArgumentParser:
@@ -26,6 +26,7 @@ def build_parser(commands: list[str] | None = None) -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     for name in COMMANDS if commands is None else commands:
         importlib.import_module(f"api.commands.{name}").register(sub)
+    importlib.import_module("api.commands.units").accept_units(sub)  # "50 um", "29 degC"
     return parser
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 from dosing.drug import REFERENCE_TEMPERATURE_K
 from solver.limits import T_MAX, T_MIN
@@ -24,6 +24,14 @@ class _StrictIn(BaseModel):
     this module: the same config, written here to keep the import one-way)."""
 
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _units(cls, value: Any, info: ValidationInfo) -> Any:
+        """Strings with a unit ("1 mg", "5 nm") in physical fields (dosing.quantity)."""
+        from dosing.quantity import from_edge
+
+        return from_edge(info.field_name or "", value)
 
 
 class DrugIn(_StrictIn):

@@ -24,6 +24,7 @@ from dosing.jobs import exit_with_parent
 from . import errors
 from . import schemas as s
 from .routers import dosing, fit, page, physics, service, sweep, validations
+from .routers import sensitivity as sensitivity_routes
 from .service import ServiceState
 from .version import package_version
 
@@ -79,6 +80,7 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
     app.include_router(fit.router)
     app.include_router(sweep.router)
     app.include_router(page.router)
+    app.include_router(sensitivity_routes.router)
     return app
 
 

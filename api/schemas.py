@@ -24,6 +24,7 @@ from pydantic import (
     model_validator,
 )
 
+from dosing.quantity import from_edge
 from dosing.request import ScheduleRequest as PlannerSchedule
 from dosing.scenario import DEFAULT_INTERFACIAL_LENGTH
 from solver.limits import T_MAX, T_MIN, TRUTH_DIRECT_ELL_RANGE, TRUTH_LADDER_START_RANGE
@@ -106,6 +107,14 @@ class RequestModel(BaseModel):
     @classmethod
     def _no_negative_zero(cls, value: Any) -> Any:
         return _positive_zero(value)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _units(cls, value: Any, info: ValidationInfo) -> Any:
+        """A physical field (named by its unit: t_start, dry_radius_um, ...) also takes a
+        string with a unit ("50 um", "29 degC", "10 min"), converted to its documented
+        unit by dosing.quantity; a wrong unit is a 422 naming the field."""
+        return from_edge(info.field_name or "", value)
 
 
 

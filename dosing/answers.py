@@ -121,6 +121,17 @@ class DoseAnswer:
         """Plain-data form (JSON-ready)."""
         return asdict(self)
 
+    def to_dataframe(self) -> Any:
+        """One row: the answer, its error and uncertainty parts, the truth (pandas)."""
+        from .tables import answer_frame
+
+        return answer_frame(self)
+
+    def _repr_html_(self) -> str:
+        from .tables import answer_html
+
+        return answer_html(self)
+
 
 @dataclass(frozen=True)
 class Answered:

@@ -148,3 +148,55 @@ def kelvin_offset(unit: str) -> float:
     """What to add to a temperature in ``unit`` ('K' or 'degC') to get kelvin (affine
     temperature units: the one place this offset is known)."""
     return to_unit(f"0 {unit}", "temperature", "temperature_unit")
+
+
+# A field's kind from its name: the request fields name their unit (t_start, dry_radius_um,
+# viscosity_pa_s, ...); suffixes are tried in order (longest first where they overlap).
+_FIELD_NAMES: dict[str, str] = {
+    "t_start": "temperature", "t_end": "temperature", "temperature": "temperature",
+    "t_min": "temperature", "t_max": "temperature", "temperature_k": "temperature",
+}
+_FIELD_SUFFIXES: tuple[tuple[str, str], ...] = (
+    ("_ug_per_ul", "concentration"), ("_cm2_s", "diffusivity"), ("_pa_s", "viscosity"),
+    ("_k_per_s", "temperature_rate"), ("_um", "length"), ("_nm", "mesh_length"),
+    ("_ul", "volume"), ("_ug", "mass"), ("_m2", "permeability"), ("_m3", "molecular_volume"),
+    ("_seconds", "time"), ("_s", "time"),
+)
+
+
+def field_kind(name: str) -> str | None:
+    """The kind of physical quantity (a key of ``UNITS``) a request field named ``name``
+    holds, from its name ('dry_radius_um' -> 'length'), or None for other fields."""
+    key = name.lower()
+    if key in _FIELD_NAMES:
+        return _FIELD_NAMES[key]
+    for suffix, kind in _FIELD_SUFFIXES:
+        if key.endswith(suffix):
+            return kind
+    return None
+
+
+def _edge_one(value: Any, kind: str, field: str) -> Any:
+    if not (isinstance(value, str) or _is_quantity(value)):
+        return value
+    try:
+        q = parse(value, field)
+    except ParameterError:
+        return value  # not a quantity ('water', a typo): the field's own check answers
+    if _is_quantity(q) and q.dimensionless:
+        return value  # a bare number in a string stays a string (strict models refuse it)
+    return to_unit(q, kind, field)
+
+
+def from_edge(field: str, value: Any) -> Any:
+    """A request value with its unit converted to the field's documented unit (a float),
+    when the field is physical (:func:`field_kind`) and the value a string with a unit or
+    a pint Quantity (lists element-wise); anything else is returned unchanged for the
+    field's own validation.  A wrong dimension ("50 K" for a radius) raises a
+    ``ParameterError`` naming the field."""
+    kind = field_kind(field)
+    if kind is None:
+        return value
+    if isinstance(value, (list, tuple)):
+        return type(value)(_edge_one(v, kind, f"{field}[{i}]") for i, v in enumerate(value))
+    return _edge_one(value, kind, field)

@@ -141,6 +141,13 @@ def resolve_dry_radius(dry_radius_um: float | None, swollen_radius_um: float | N
 
 def _resolve_scenario(req: Any) -> tuple[Jump, float | None]:
     """Validate and normalise the fields a dose and a schedule request share (in place)."""
+    from dataclasses import fields as _fields
+
+    from .quantity import from_edge  # "50 um", "29 degC", pint Quantities -> documented unit
+
+    for f in _fields(req):
+        if f.init:
+            object.__setattr__(req, f.name, from_edge(f.name, getattr(req, f.name)))
     gel = resolve_gel(req.gel)
     object.__setattr__(req, "gel", gel)
     object.__setattr__(req, "constants", calibrated_constants(gel, _constants(req.constants)))

@@ -63,10 +63,29 @@ class ScheduleAnswer:
     truth: str = ""  # the protocol runs' model, ell and bead size, in words
     interfacial_length: float = 0.0
     method: str = "direct"
+    t_start: float | None = None  # K: the rests' temperature
+    t_end: float | None = None  # K: the actuation temperature
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
         return asdict(self)
+
+    def to_dataframe(self) -> Any:
+        """One row per dose (event): start, duration, temperature, dose, amount (pandas)."""
+        from .tables import schedule_frame
+
+        return schedule_frame(self)
+
+    def to_xarray(self, request: Any = None) -> Any:
+        """The event table as an xarray Dataset (:func:`dosing.export.schedule_dataset`)."""
+        from .export import schedule_dataset
+
+        return schedule_dataset(self, request)
+
+    def _repr_html_(self) -> str:
+        from .tables import schedule_html
+
+        return schedule_html(self)
 
 
 def hold_rows(req: ScheduleRequest, answers: Sequence[DoseAnswer]) -> tuple[str, list[HoldRow]]:
@@ -170,4 +189,4 @@ def _answer(req: ScheduleRequest, model: str, hold: list[HoldRow],
         scenario_key=Scenario(req.gel, req.t_start, req.t_end, branch=req.branch,
                               settings=req.settings).key(), note=note,
         truth=truth_text(req), interfacial_length=s.interfacial_length,
-        method=s.method if s.regularized else "paper")
+        method=s.method if s.regularized else "paper", t_start=req.t_start, t_end=req.t_end)

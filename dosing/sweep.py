@@ -290,6 +290,18 @@ class SweepResult:
                                                  else r[n]) for n in COLUMNS])
         return buf.getvalue()
 
+    def to_dataframe(self) -> Any:
+        """One row per point, columns ``name [unit]`` (pandas)."""
+        from .tables import sweep_frame
+
+        return sweep_frame(self)
+
+    def to_xarray(self, request: Any = None) -> Any:
+        """The map over (gel, t_end, dry_radius_um, dose_fraction) as an xarray Dataset."""
+        from .export import sweep_dataset
+
+        return sweep_dataset(self, request)
+
 
 
 def _chunk_failed(chunk: list[dict[str, Any]], exc: BaseException) -> list[dict[str, Any]]:

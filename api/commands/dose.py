@@ -21,6 +21,7 @@ from .common import (
 )
 from .drug_cli import add_wait_options, run_drug_dose
 from .drug_options import add_drug_options, drug_from_args
+from .outfile import add_format_option, figure_path
 
 
 def _viscosity(text: str) -> float | str:
@@ -124,6 +125,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with --validate: draw the validation (dose time against ell with "
                         "its bounds, the model-form bound and the answer) to this file "
                         "(needs matplotlib)")
+    add_format_option(p)
     add_batch_options(p)
     add_drug_options(p)
     add_wait_options(p)
@@ -230,7 +232,8 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from api.plots.validation import draw_validation
 
-        print(f"wrote {draw_validation(ans.to_dict(), args.plot)}", file=sys.stderr)
+        print(f"wrote {draw_validation(ans.to_dict(), figure_path(args.plot, args.format))}",
+              file=sys.stderr)
     batch = None
     if dist is not None:
         from dosing.batch_truth import plan_batch

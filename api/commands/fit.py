@@ -15,6 +15,7 @@ from typing import Any
 from solver.errors import ParameterError
 
 from .common import print_json
+from .outfile import add_format_option, figure_path, request_of
 
 
 def _fix(text: str) -> tuple[str, float]:
@@ -125,6 +126,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", default=None, metavar="PNG", help="draw the fit to this file")
+    add_format_option(p)
+    p.add_argument("--out", default=None, metavar="FILE.nc",
+                   help="write the fit as netCDF (.nc: estimates, intervals, covariance, "
+                        "units and provenance) or tidy CSV (.csv)")
     p.add_argument("--save", default=None, metavar="NAME",
                    help="store the fitted gel under NAME (usable as --gel NAME)")
     p.add_argument("--gels-dir", default=None,
@@ -169,6 +174,10 @@ def run_swelling(args: argparse.Namespace) -> int:
             size_rel_sigma=args.size_rel_sigma, fixed=dict(args.fix),
             fits={args.objective: res})
     dd = data_dict(data)
+    if args.out:
+        from dosing import export
+
+        report["file"] = str(export.save(res.to_xarray(request=request_of(args)), args.out))
     if args.save:
         from solver.fit import fit_gel
 
@@ -178,7 +187,7 @@ def run_swelling(args: argparse.Namespace) -> int:
     if args.plot:
         from api.plots.fit import draw_swelling_fit
 
-        paths = draw_swelling_fit(report, dd, args.plot)
+        paths = draw_swelling_fit(report, dd, figure_path(args.plot, args.format))
         report["plots"] = [str(p) for p in paths]
     if args.json:
         print_json(report)
@@ -283,6 +292,10 @@ def run_kinetics(args: argparse.Namespace) -> int:
         report["front_laws"] = laws
     report["read"] = read
     dd = data_dict(data)
+    if args.out:
+        from dosing import export
+
+        report["file"] = str(export.save(res.to_xarray(request=request_of(args)), args.out))
     if args.save:
         from solver.gel import Gel
 
@@ -300,7 +313,8 @@ def run_kinetics(args: argparse.Namespace) -> int:
     if args.plot:
         from api.plots.fit import draw_kinetics_fit
 
-        report["plots"] = [str(draw_kinetics_fit(report, dd, args.plot))]
+        report["plots"] = [str(draw_kinetics_fit(report, dd,
+                                                 figure_path(args.plot, args.format)))]
     if args.json:
         print_json(report)
         return 0

@@ -12,6 +12,7 @@ from solver.errors import ParameterError
 from .common import add_gel_options, gel_from_args, print_json
 from .dose import _viscosity
 from .drug_options import add_drug_options, drug_from_args
+from .outfile import OUT_HELP, request_of, save
 from .simulate import add_protocol_options
 
 
@@ -41,7 +42,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="mechanics tolerance (default: the truth's, 1e-5)")
     p.add_argument("--samples", type=int, default=2000,
                    help="mechanics samples the drug is integrated on (default 2000)")
-    p.add_argument("--out", default=None, help="save the release result to this .npz file")
+    p.add_argument("--out", default=None, help="save the release result to this file: "
+                   + OUT_HELP)
     p.add_argument("--plot", default=None, metavar="PNG",
                    help="draw cumulative release and concentration profiles (matplotlib)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -83,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
     tau = timescale(args.dry_radius_um, t_ref, constants) if args.dry_radius_um else None
     d_gel = constants.diffusivity(t_ref) * 1e4
     d_eff = rel.effective_diffusivity * d_gel
-    saved = rel.save(args.out) if args.out else None
+    saved = save(args.out, rel.save, lambda: _dataset(rel, args, tau)) if args.out else None
     if args.plot:
         from api.plots.release import draw_release
 
@@ -138,3 +140,13 @@ def _medium(rel: object, drug: object, args: argparse.Namespace, a0: float) -> l
     grown = volume_to_ul(4.0 * math.pi / 3.0 * (a0**3 - rel.radius**3),  # type: ignore[attr-defined]
                          args.dry_radius_um)
     return (rel.released_fraction * load / (args.release_volume_ul + grown)).tolist()  # type: ignore[attr-defined]
+
+
+def _dataset(rel: object, args: argparse.Namespace, tau: object) -> object:
+    """The release run as an xarray Dataset with units and provenance."""
+    from dosing.export import release_dataset
+
+    return release_dataset(
+        rel, args.dry_radius_um, tau and tau.seconds, request_of(args),  # type: ignore[arg-type,attr-defined]
+        f"full solver (Lagrangian grid, N = {args.n}) with the drug carried by the pore "
+        f"fluid; interfacial length {args.interfacial_length:g}")

@@ -14,6 +14,7 @@ from dosing.scenario import GRIDS
 from solver.errors import ParameterError
 
 from .common import add_gel_options, gel_from_args, print_json
+from .outfile import OUT_HELP, request_of, save
 
 
 def _protocol(text: str) -> list[tuple[float, float]]:
@@ -60,7 +61,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="interfacial energy length ell in dry radii (default 0: the paper's "
                    "model; resolve it with --n >= 2/L on the Lagrangian grid, "
                    "docs/interfacial.md)")
-    p.add_argument("--out", default=None, help="save the run to this .npz file")
+    p.add_argument("--out", default=None, help="save the run to this file: " + OUT_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--profiles", action="store_true", help="with --json: include phi snapshots")
     p.set_defaults(func=run)
@@ -102,7 +103,8 @@ def run(args: argparse.Namespace) -> int:
                        integrator=args.integrator, rtol=args.rtol, every=args.every,
                        branch=args.branch, dt=args.dt, max_steps=args.max_steps,
                        progress=progress, interfacial_length=args.interfacial_length)
-    saved = res.save(args.out) if args.out else None
+    saved = save(args.out, res.save, lambda: res.to_xarray(
+        request=request_of(args), truth=_truth(res))) if args.out else None
     if args.json:
         out = res.to_json_dict(profiles=args.profiles)
         if saved is not None:
@@ -127,3 +129,12 @@ def run(args: argparse.Namespace) -> int:
     if saved is not None:
         print(f"wrote {saved}")
     return 0
+
+
+def _truth(res: object) -> str:
+    """The model a run solved, in words (the export's ``truth`` attribute)."""
+    d = res.diagnostics  # type: ignore[attr-defined]
+    ell = d.get("interfacial_length")
+    return (f"full solver, {d.get('grid')} grid, N = {d.get('n')}, {d.get('integrator')}; "
+            + (f"the regularized model at interfacial length {ell:g}" if ell
+               else "the paper's model (no interfacial energy)"))

@@ -19,6 +19,7 @@ from typing import Any
 from solver.errors import ParameterError
 
 from .common import print_json
+from .outfile import add_format_option, figure_path, request_of
 
 
 def parse_axis(name: str, text: str) -> list[float]:
@@ -106,6 +107,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                                                                "('-': stdout)")
     p.add_argument("--plot", default=None, metavar="FILE",
                    help="heat maps of time and error (PNG, PDF or SVG)")
+    add_format_option(p)
+    p.add_argument("--out", default=None, metavar="FILE.nc",
+                   help="write the map as netCDF (.nc: gel x t_end x dry_radius_um x "
+                        "dose_fraction, units and provenance) or tidy CSV (.csv)")
     p.add_argument("--plot-gel", type=int, default=0, metavar="I",
                    help="which gel of the grid to plot (default 0, the first)")
     p.add_argument("--cache", default=None, help="validation cache file")
@@ -191,6 +196,11 @@ def run(args: argparse.Namespace) -> int:
         if planner is not None:
             _wait(planner, result, args.no_progress)
     table = result.to_dict()
+    if args.out:
+        from dosing import export
+
+        print(f"wrote {export.save(result.to_xarray(request=request_of(args)), args.out)}",
+              file=sys.stderr)
     if args.csv:
         _write(result.to_csv(), args.csv)
     if args.json == "-":
@@ -202,7 +212,8 @@ def run(args: argparse.Namespace) -> int:
 
         if not 0 <= args.plot_gel < grid.shape[0]:
             raise ParameterError("--plot-gel", args.plot_gel, f"0-{grid.shape[0] - 1}")
-        print(f"wrote {draw_sweep(table, args.plot, args.plot_gel)}", file=sys.stderr)
+        print(f"wrote {draw_sweep(table, figure_path(args.plot, args.format), args.plot_gel)}",
+              file=sys.stderr)
     counts = ", ".join(f"{v} {k}" for k, v in result.counts.items())
     print(f"{grid.size} points ({' x '.join(map(str, grid.shape))} gels x T_end x radius x "
           f"dose) in {result.seconds:.3f} s: {counts}", file=sys.stderr)

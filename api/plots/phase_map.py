@@ -30,6 +30,76 @@ def region_masks(gel: Gel, temps: np.ndarray, stretches: np.ndarray) -> tuple[np
     return spin, coex
 
 
+def region_bounds(gel: Gel, stretches: np.ndarray, n: int = 600
+                  ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """The regions' boundaries as curves T(lambda), computed, not read off a grid.
+
+    Both tests are affine in T at fixed lambda: the spinodal stiffness s0 + T s1 < 0
+    (eq. Spinodal) holds for T beyond -s0 / s1, and the tangent gap g0(n) + T g1(n) of each
+    normal stretch n (eq. Coexistence) is negative beyond -g0 / g1.  So at each lambda the
+    region is {T > above} U {T < below} with ``above`` the smallest crossing of the
+    decreasing lines and ``below`` the largest of the increasing ones (NaN: no such part).
+    Returns {'spinodal': (above, below), 'coexistence': (above, below)}.
+    """
+    lam = np.asarray(stretches, dtype=float)
+    s0 = spinodal_stiffness(gel, 0.0, lam)
+    s1 = spinodal_stiffness(gel, 1.0, lam) - s0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_sp = -s0 / s1
+    spin = (np.where(s1 < 0, t_sp, np.nan), np.where(s1 > 0, t_sp, np.nan))
+    above, below = np.full(lam.size, np.nan), np.full(lam.size, np.nan)
+    for i, x in enumerate(lam):
+        grid = _normal_grid(x, n)
+        # n -> lambda is the spinodal's limit (below): there g0 and g1 are round-off
+        grid = grid[np.abs(grid - x) > 1e-3 * x]
+        g0 = tangent_gap(gel, 0.0, grid, x)
+        g1 = tangent_gap(gel, 1.0, grid, x) - g0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tn = -g0 / g1
+        dec, inc = (g1 < 0) & np.isfinite(tn), (g1 > 0) & np.isfinite(tn)
+        if dec.any():
+            above[i] = tn[dec].min()
+        if inc.any():
+            below[i] = tn[inc].max()
+    # the spinodal lies inside the coexistence region (the gap's curvature at n = lambda)
+    above = np.fmin(above, spin[0])
+    below = np.fmax(below, spin[1])
+    return {"spinodal": spin, "coexistence": (above, below)}
+
+
+def _runs_only(x: np.ndarray, shortest: int = 3) -> np.ndarray:
+    """``x`` with runs of fewer than ``shortest`` finite samples set to NaN: where s1 (or
+    g1) passes through zero with s0 the ratio is 0/0 at a sample or two, not a boundary."""
+    out = x.copy()
+    ok = np.isfinite(x)
+    i = 0
+    while i < x.size:
+        if ok[i]:
+            j = i
+            while j < x.size and ok[j]:
+                j += 1
+            if j - i < shortest:
+                out[i:j] = np.nan
+            i = j
+        else:
+            i += 1
+    return out
+
+
+def _fill_region(ax: Any, lams: np.ndarray, bounds: tuple[np.ndarray, np.ndarray],
+                 t_lo: float, t_hi: float, color: str, ls: str) -> None:
+    """Fill {T > above} U {T < below} between the axis limits; draw its boundary curves."""
+    above, below = (_runs_only(b) for b in bounds)
+    ok = np.isfinite(above) & (above < t_hi)
+    ax.fill_betweenx(lams, np.clip(np.where(ok, above, t_hi), t_lo, t_hi), t_hi, where=ok,
+                     color=color, lw=0, interpolate=True)
+    ax.plot(above, lams, "k", ls=ls, lw=0.8)  # the axes clip it
+    ok = np.isfinite(below) & (below > t_lo)
+    ax.fill_betweenx(lams, t_lo, np.clip(np.where(ok, below, t_lo), t_lo, t_hi), where=ok,
+                     color=color, lw=0, interpolate=True)
+    ax.plot(below, lams, "k", ls=ls, lw=0.8)
+
+
 def draw_phase_map(gel: Gel, out: str | Path | BinaryIO, t_min: float | None = None,
                    t_max: float | None = None, lambda_max: float | None = None,
                    jump: tuple[float, float, float, float] | None = None,
@@ -37,30 +107,23 @@ def draw_phase_map(gel: Gel, out: str | Path | BinaryIO, t_min: float | None = N
     """Draw fig. 3 for ``gel`` to ``out`` (PNG or PDF; a file object gets ``fmt``) and
     return it.  ``jump = (T_start, a0, T_end, a_final)`` draws the heating jump at fixed
     stretch and the shrinking to the final equilibrium that follows it."""
-    import matplotlib
+    from .style import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fl = folds(gel)
     centre = np.mean([f.temperature for f in fl]) if fl else 305.0
     t_min = t_min if t_min is not None else max(T_MIN, centre - 10.0)
     t_max = t_max if t_max is not None else min(T_MAX, centre + 10.0)
     curve = equilibrium_curve(gel, t_min, t_max)
     lam_hi = lambda_max if lambda_max is not None else 1.15 * float(curve.stretch.max())
-    temps = np.linspace(t_min, t_max, 300)
-    lams = np.linspace(1.0 + 1e-3, lam_hi, 220)
-    spin, coex = region_masks(gel, temps, lams)
+    lams = np.linspace(1.0 + 1e-3, lam_hi, 400)
+    bounds = region_bounds(gel, lams)
     if jump is not None:
         t_min = min(t_min, jump[0] - 1.0, jump[2] - 1.0)
         t_max = max(t_max, jump[0] + 1.0, jump[2] + 1.0)
     fig, ax = plt.subplots(figsize=size)
-    ax.contourf(temps, lams, coex.astype(float), levels=[0.5, 1.5], colors=["#c6dbef"])
-    ax.contourf(temps, lams, spin.astype(float), levels=[0.5, 1.5], colors=["#6baed6"])
-    ax.contour(temps, lams, spin.astype(float), levels=[0.5], colors="k", linestyles="--",
-               linewidths=0.8)
-    ax.contour(temps, lams, coex.astype(float), levels=[0.5], colors="k", linestyles=":",
-               linewidths=0.8)
+    _fill_region(ax, lams, bounds["coexistence"], t_min, t_max, "#c6dbef", ":")
+    _fill_region(ax, lams, bounds["spinodal"], t_min, t_max, "#6baed6", "--")
     st = curve.stable
     lam_s = np.where(st, curve.stretch, np.nan)
     lam_u = np.where(~st, curve.stretch, np.nan)
@@ -78,10 +141,10 @@ def draw_phase_map(gel: Gel, out: str | Path | BinaryIO, t_min: float | None = N
     ax.legend(loc="upper right", fontsize=8)
     fig.tight_layout()
     if isinstance(out, (str, Path)):
-        out = Path(out)
-        fig.savefig(out, dpi=150)
-    else:
-        fig.savefig(out, dpi=150, format=fmt)
+        from .style import save
+
+        return save(fig, out, Path(out).suffix.lstrip(".") or fmt)
+    fig.savefig(out, dpi=150, format=fmt)
     plt.close(fig)
     return out
 

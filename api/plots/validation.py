@@ -12,8 +12,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 
-def draw_validation(answer: dict[str, Any], out: Path) -> Path:
+
+def draw_validation(answer: dict[str, Any], out: Path, fmt: str | None = None) -> Path:
     """Write the figure of ``answer`` (``DoseAnswer.to_dict()`` with a regularized
     validation, direct or ladder) to ``out`` (PNG)."""
     rep = answer.get("validation") or {}
@@ -21,58 +23,59 @@ def draw_validation(answer: dict[str, Any], out: Path) -> Path:
     if not direct and rep.get("limit") is None:
         raise ValueError("the answer has no regularized validation to draw (validate it, with "
                          "interfacial_length > 0)")
-    import matplotlib
+    from .style import pyplot, save
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     if direct:
         fig = _direct_figure(plt, answer, rep)
     else:
         fig = _ladder_figure(plt, answer, rep)
     fig.tight_layout()
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=120)
-    plt.close(fig)
-    return out
+    return save(fig, out, fmt or (Path(out).suffix.lstrip(".") or None))
 
 
 def _direct_figure(plt: Any, answer: dict[str, Any], rep: dict[str, Any]) -> Any:
-    """Dose time against ell (log axis): the truth with its numerical bound, the ell range's
-    ends (shaded), the delayed-transition time and the answer."""
-    from matplotlib.ticker import NullFormatter
-
+    """A dot chart of the dose times (units of tau, and s on a second axis when the bead
+    size is known): the truth at the bead's ell with its numerical bound, the times at the
+    ends of the ell range, the delayed-transition time of the model form and the answer,
+    one row each, so every estimate is on one linear time axis (not a single point on an
+    empty log-ell axis)."""
     ell, truth = float(rep["interfacial_length"]), float(rep["time"])
     unc = rep.get("uncertainty") or {}
-    fig, ax = plt.subplots(figsize=(6.0, 5.4))
-    span = [float(x) for x in unc.get("interfacial_lengths") or []]
-    times = [t for t in unc.get("interfacial_length_times") or [] if t is not None]
-    if len(span) == 2:
-        ax.axvspan(min(span), max(span), color="C0", alpha=0.08,
-                   label="plausible range of ell (mesh length)")
-    if len(times) == len(span) and times:
-        ax.plot(span, times, "s", color="C0", mfc="none", label="full solver at the range's ends")
+    rows: list[tuple[str, float, float, str, str]] = []  # label, time, +-, marker, colour
     err = float(rep.get("error") or 0.0) * truth
-    ax.errorbar([ell], [truth], yerr=[[err], [err]], fmt="o", color="C0", capsize=4,
-                label=f"truth at the bead's ell = {ell:.3g}: {truth:.4g} (numerical bound)")
-    ax.axhline(answer["time"], color="C3", lw=1.2,
-               label=f"answer ({answer['model']}): {answer['time']:.4g}")
+    rows.append((f"truth: ell = {ell:.2g} (bead's own)\n+- numerical bound (n vs n/2)", truth,
+                 err, "o", "C0"))
+    span = [float(x) for x in unc.get("interfacial_lengths") or []]
+    times = list(unc.get("interfacial_length_times") or [])
+    for x, t in zip(span, times, strict=False):
+        if t is not None:
+            rows.append((f"ell = {x:.2g} (end of the mesh-length range)", float(t), 0.0, "s",
+                         "C0"))
     delayed = unc.get("delayed_transition_time")
-    if delayed is not None:  # far above the rest (1.5-9x): a legend line, not a data line
-        ratio = float(unc.get("delayed_transition_ratio") or float(delayed) / truth)
-        ax.plot([], [], " ", label=f"model form: the delayed transition gives {float(delayed):.4g}"
-                                   f" ({ratio:.2f}x, off this scale)")
-    ax.set_xscale("log")
-    ax.xaxis.set_minor_formatter(NullFormatter())
-    lo, hi = min([ell, *span]), max([ell, *span])
-    ax.set_xlim(lo / 2.0, hi * 2.0)
-    ax.set_xlabel("interfacial length ell (dry radii)")
-    ax.set_ylabel("time to the dose (units of tau)")
+    if delayed is not None:
+        spread = float(unc.get("delayed_transition_spread") or 0.0) * float(delayed)
+        rows.append(("model form: delayed transition (ell = 0)", float(delayed), spread, "D",
+                     "C7"))
+    rows.append((f"answer ({answer['model']})", float(answer["time"]),
+                 float(answer.get("error_estimate") or 0.0) * float(answer["time"]), "*",
+                 "C3"))
+    fig, ax = plt.subplots(figsize=(6.4, 0.55 * len(rows) + 1.9))
+    ys = np.arange(len(rows))[::-1]
+    for y, (_, t, e, marker, colour) in zip(ys, rows, strict=True):
+        ax.errorbar([t], [y], xerr=[[e], [e]] if e else None, fmt=marker, color=colour,
+                    capsize=4, ms=8 if marker == "*" else 6)
+    ax.axvline(truth, color="C0", lw=0.6, ls=":")
+    ax.set_yticks(ys, [r[0] for r in rows], fontsize=8)
+    ax.set_ylim(-0.6, len(rows) - 0.4)
+    ax.set_xlabel("time to the dose (units of tau)")
+    tau = answer.get("timescale_seconds")
+    if tau:
+        sec = ax.secondary_xaxis("top", functions=(lambda t: t * tau, lambda s: s / tau))
+        sec.set_xlabel("time to the dose (s)")
     ax.set_title(f"{answer['dose_fraction']:.0%} dose, direct validation: error estimate "
                  f"{answer['error_estimate']:.1%}", fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), frameon=False)
+    ax.grid(True, axis="x", alpha=0.3)
     return fig
 
 

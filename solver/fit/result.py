@@ -65,6 +65,23 @@ class FitResult:
                 "rms_residual": self.rms_residual, "chi2_reduced": self.chi2_reduced,
                 "confidence": CONFIDENCE, "warnings": list(self.warnings), **self.extra}
 
+    def to_xarray(self, request: Any = None) -> Any:
+        """This fit as an xarray Dataset (:func:`dosing.export.fit_dataset`)."""
+        from dosing.export import fit_dataset  # the export layer, imported on use only
+
+        return fit_dataset(self, request)
+
+    def to_dataframe(self) -> Any:
+        """One row per parameter: estimate, 95% interval, stderr, unit (pandas)."""
+        from dosing.tables import fit_frame
+
+        return fit_frame(self)
+
+    def _repr_html_(self) -> str:
+        from dosing.tables import fit_html
+
+        return fit_html(self)
+
 
 def t_quantile(dof: int, confidence: float = CONFIDENCE) -> float:
     """Two-sided Student-t quantile for ``dof`` degrees of freedom."""

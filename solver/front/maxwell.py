@@ -13,6 +13,7 @@ convex hull of w on a log grid, then polished by Newton's method.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from ..errors import NotApplicableError
 from ..gel import Gel
@@ -23,18 +24,22 @@ GRID = 4001
 NEWTON_STEPS = 50
 
 
-def _lower_hull(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Indices of the lower convex hull of the points (x, y), x increasing (monotone chain)."""
-    hull: list[int] = []
+@njit(cache=True)
+def _lower_hull(x: np.ndarray, y: np.ndarray) -> np.ndarray:  # pragma: no cover - numba
+    """Indices of the lower convex hull of the points (x, y), x increasing (monotone chain;
+    compiled: it runs once per front trajectory step, on 4001 points)."""
+    hull = np.empty(x.size, dtype=np.int64)
+    m = 0
     for i in range(x.size):
-        while len(hull) >= 2:
-            i0, i1 = hull[-2], hull[-1]
+        while m >= 2:
+            i0, i1 = hull[m - 2], hull[m - 1]
             if (x[i1] - x[i0]) * (y[i] - y[i0]) - (y[i1] - y[i0]) * (x[i] - x[i0]) <= 0.0:
-                hull.pop()
+                m -= 1
             else:
                 break
-        hull.append(i)
-    return np.array(hull)
+        hull[m] = i
+        m += 1
+    return hull[:m].copy()
 
 
 def maxwell_pair(gel: Gel, temperature: float, lambda_t: float) -> tuple[float, float]:

@@ -235,3 +235,31 @@ class FullResult:
     def load(cls, path: str | Path) -> FullResult:
         """Read a file written by :meth:`save`."""
         return cls.from_npz(Path(path).read_bytes())
+
+    # -- tables and files (dosing.export / dosing.tables; xarray and pandas lazily) --------
+    def to_xarray(self, dry_radius_um: float | None = None,
+                  timescale_seconds: float | None = None, request: Any = None,
+                  truth: str | None = None) -> Any:
+        """This run as an xarray Dataset with units, long names and provenance
+        (:func:`dosing.export.run_dataset`; um and s where the bead size and tau are given)."""
+        from dosing.export import run_dataset  # the export layer, imported on use only
+
+        return run_dataset(self, dry_radius_um, timescale_seconds, request, truth)
+
+    def to_netcdf(self, path: str | Path, **kwargs: Any) -> Path:
+        """Write :meth:`to_xarray` to a netCDF file (``kwargs`` go to :meth:`to_xarray`)."""
+        from dosing.export import to_netcdf
+
+        return to_netcdf(self.to_xarray(**kwargs), path)
+
+    def to_dataframe(self, dry_radius_um: float | None = None,
+                     timescale_seconds: float | None = None) -> Any:
+        """One row per output time (pandas; columns ``name [unit]``)."""
+        from dosing.tables import run_frame
+
+        return run_frame(self, dry_radius_um, timescale_seconds)
+
+    def _repr_html_(self) -> str:
+        from dosing.tables import run_html
+
+        return run_html(self)

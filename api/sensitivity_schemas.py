@@ -1,0 +1,62 @@
+"""Pydantic models of ``POST /v1/sensitivity`` (dosing.sensitivity): strict and finite."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import Field
+
+from .outputs import Out
+from .schemas import GelSpec, RequestModel
+
+VaryName = Literal["dry_radius_um", "t_start", "t_end", "dose_fraction", "viscosity_pa_s",
+                   "polymer_volume_m3", "permeability_m2", "omega", "a0", "b0", "a1", "b1"]
+MAX_TRAJECTORIES = 400  # front trajectories one request may need (~50 ms each)
+
+
+class VaryIn(RequestModel):
+    """One varied input: a request field name and its range."""
+
+    name: VaryName = Field(description="the input (a request field or gel parameter)")
+    low: float = Field(description="lower bound, in the field's unit")
+    high: float = Field(description="upper bound, in the field's unit")
+    log: bool = Field(False, description="log-uniform (uniform in log10) instead of uniform")
+
+
+class SensitivityRequest(RequestModel):
+    """Global sensitivity of the dose time in seconds over the ``vary`` ranges."""
+
+    gel: GelSpec = "ANB"
+    t_start: float | str = Field(302.0, description="start temperature: K, or a string with "
+                                                    "a unit ('29 degC')")
+    t_end: float | str = Field(308.0, description="end temperature: K, or '35 degC'")
+    dose_fraction: float = Field(0.8, gt=0.0, lt=1.0, description="base dose, 0-1")
+    dry_radius_um: float | str = Field(50.0, description="base dry radius: um, or '50 um'")
+    viscosity_pa_s: float = Field(1.0e-3, gt=0.0, le=10.0, description="base eta, Pa s")
+    permeability_m2: float = Field(8.0e-20, gt=0.0, le=1e-10, description="base k0, m^2")
+    polymer_volume_m3: float = Field(3.0e-25, gt=0.0, le=1e-20,
+                                     description="base Omega_p, m^3")
+    vary: list[VaryIn] = Field(min_length=1, max_length=12, description="the varied inputs")
+    method: Literal["sobol", "morris"] = Field("sobol", description="Sobol or Morris")
+    samples: int = Field(512, ge=4, le=4096, description="Sobol base samples N, or Morris "
+                                                          "trajectories")
+    seed: int = Field(0, ge=0, le=2**31 - 1, description="sampling seed")
+
+
+class SensitivityResponse(Out):
+    """Indices keyed by input name: S1, S1_conf, ST, ST_conf (Sobol) or mu, mu_star,
+    mu_star_conf, sigma (Morris), with the output's summary."""
+
+    method: str
+    output: str = Field(description="what the indices are of: the dose time in seconds")
+    names: list[str]
+    indices: dict[str, dict[str, float]]
+    vary: list[dict[str, Any]]
+    base: dict[str, Any]
+    samples: int
+    evaluations: int
+    output_summary: dict[str, float]
+    seconds: float
+    model: str
+    confidence: float
+    notes: list[str]
