@@ -13,6 +13,16 @@ import importlib
 from concurrent.futures import Executor, ThreadPoolExecutor
 from typing import TYPE_CHECKING, Any
 
+from solver.presenters import register as _register_presenters
+
+# the solver's records (runs, fits) get their tables, netCDF and notebook views from this
+# layer (dosing.export, dosing.tables), imported only when one is asked for
+_register_presenters(
+    run_dataset="dosing.export:run_dataset", fit_dataset="dosing.export:fit_dataset",
+    to_netcdf="dosing.export:to_netcdf", run_frame="dosing.tables:run_frame",
+    run_html="dosing.tables:run_html", fit_frame="dosing.tables:fit_frame",
+    fit_html="dosing.tables:fit_html")
+
 if TYPE_CHECKING:
     from .answers import (
         Answered,

@@ -317,8 +317,7 @@ def sweep_dataset(sw: SweepResult, request: Any = None) -> xr.Dataset:
     text columns (status, model, behaviour, message) as strings."""
     import xarray as xr
 
-    from .sweep import COLUMNS
-
+    COLUMNS = sw.COLUMNS
     g = sw.grid
     gels = [x.get("name", "custom") for x in g["gels"]]
     shape = (len(gels), len(g["t_ends"]), len(g["dry_radii_um"]), len(g["doses"]))
@@ -459,3 +458,4 @@ def save(ds: xr.Dataset, path: str | Path) -> Path:
         dataset_frame(ds).to_excel(p, index=False)
         return p
     return to_netcdf(ds, p)
+

@@ -20,7 +20,7 @@ from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import Executor, Future, as_completed
 from dataclasses import dataclass, field, replace
 from itertools import product
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.gel import Gel
@@ -251,6 +251,7 @@ def select(rows: list[dict[str, Any]], which: str | Iterable[int]) -> list[int]:
 class SweepResult:
     """The table of a sweep: one row per point (:data:`COLUMNS`), with the grid and timing."""
 
+    COLUMNS: ClassVar[dict[str, tuple[str, str]]] = COLUMNS  # for the export layer
     grid: dict[str, Any]
     rows: list[dict[str, Any]]
     seconds: float = 0.0

@@ -119,8 +119,7 @@ def schedule_html(ans: ScheduleAnswer) -> str:
 # ---------------------------------------------------------------------------- sweeps
 def sweep_frame(sw: SweepResult) -> pd.DataFrame:
     """The sweep's rows, one per point, columns ``name [unit]`` (dosing.sweep.COLUMNS)."""
-    from .sweep import COLUMNS
-
+    COLUMNS = sw.COLUMNS
     cols = {n: [r.get(n) for r in sw.rows] for n in COLUMNS}
     units = {n: ("1" if u == "tau" else u) for n, (u, _) in COLUMNS.items()}
     return _frame(cols, units, {"grid": sw.grid})
@@ -175,3 +174,4 @@ def run_html(res: FullResult) -> str:
     ell = d.get("interfacial_length")
     truth = f"gel {gel}, " + (f"interfacial length {ell:g}" if ell else "the paper's model")
     return _table("thermogel full run" + (" (spinodal)" if res.spinodal else ""), rows, truth)
+

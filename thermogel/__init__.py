@@ -47,6 +47,7 @@ def __getattr__(name: str) -> Any:
     module = _WHERE.get(name)
     if module is None:
         raise AttributeError(f"module 'thermogel' has no attribute {name!r}")
+    importlib.import_module("dosing")  # runs and fits get their tables (registered, lazy)
     value = getattr(importlib.import_module(module), name)
     globals()[name] = value
     return value

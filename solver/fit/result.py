@@ -16,6 +16,8 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from ..presenters import html_or_none, presenter
+
 CONFIDENCE = 0.95
 CORRELATION_WARN = 0.995  # |r| above this: the two parameters are not separately identifiable
 RELATIVE_WARN = 1.0  # 95% half-width above 100% of the value: not identifiable
@@ -67,20 +69,14 @@ class FitResult:
 
     def to_xarray(self, request: Any = None) -> Any:
         """This fit as an xarray Dataset (:func:`dosing.export.fit_dataset`)."""
-        from dosing.export import fit_dataset  # the export layer, imported on use only
-
-        return fit_dataset(self, request)
+        return presenter("fit_dataset")(self, request)
 
     def to_dataframe(self) -> Any:
         """One row per parameter: estimate, 95% interval, stderr, unit (pandas)."""
-        from dosing.tables import fit_frame
+        return presenter("fit_frame")(self)
 
-        return fit_frame(self)
-
-    def _repr_html_(self) -> str:
-        from dosing.tables import fit_html
-
-        return fit_html(self)
+    def _repr_html_(self) -> str | None:
+        return html_or_none("fit_html", self)
 
 
 def t_quantile(dof: int, confidence: float = CONFIDENCE) -> float:

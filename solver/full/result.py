@@ -22,6 +22,7 @@ import numpy as np
 
 from ..crossing import first_fall, hermite_root, linear_cube_root
 from ..json_safe import json_safe
+from ..presenters import html_or_none, presenter
 
 _ARRAYS = ("t", "radius", "front", "jump", "phi", "coords", "temperature", "expelled_volume",
            "solid_error", "step_t", "step_radius", "step_rate", "step_edge", "nodes")
@@ -236,30 +237,22 @@ class FullResult:
         """Read a file written by :meth:`save`."""
         return cls.from_npz(Path(path).read_bytes())
 
-    # -- tables and files (dosing.export / dosing.tables; xarray and pandas lazily) --------
+    # -- tables and files (presenters registered by dosing.export / dosing.tables) -------
     def to_xarray(self, dry_radius_um: float | None = None,
                   timescale_seconds: float | None = None, request: Any = None,
                   truth: str | None = None) -> Any:
         """This run as an xarray Dataset with units, long names and provenance
         (:func:`dosing.export.run_dataset`; um and s where the bead size and tau are given)."""
-        from dosing.export import run_dataset  # the export layer, imported on use only
-
-        return run_dataset(self, dry_radius_um, timescale_seconds, request, truth)
+        return presenter("run_dataset")(self, dry_radius_um, timescale_seconds, request, truth)
 
     def to_netcdf(self, path: str | Path, **kwargs: Any) -> Path:
         """Write :meth:`to_xarray` to a netCDF file (``kwargs`` go to :meth:`to_xarray`)."""
-        from dosing.export import to_netcdf
-
-        return to_netcdf(self.to_xarray(**kwargs), path)
+        return presenter("to_netcdf")(self.to_xarray(**kwargs), path)
 
     def to_dataframe(self, dry_radius_um: float | None = None,
                      timescale_seconds: float | None = None) -> Any:
         """One row per output time (pandas; columns ``name [unit]``)."""
-        from dosing.tables import run_frame
+        return presenter("run_frame")(self, dry_radius_um, timescale_seconds)
 
-        return run_frame(self, dry_radius_um, timescale_seconds)
-
-    def _repr_html_(self) -> str:
-        from dosing.tables import run_html
-
-        return run_html(self)
+    def _repr_html_(self) -> str | None:
+        return html_or_none("run_html", self)
