@@ -21,7 +21,7 @@ from fastapi.concurrency import run_in_threadpool
 
 from dosing.jobs import exit_with_parent
 
-from . import errors
+from . import errors, guard
 from . import schemas as s
 from .routers import dosing, fit, page, physics, service, sweep, validations
 from .service import ServiceState
@@ -61,7 +61,7 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
         finally:
             await run_in_threadpool(state.stop)
 
-    app = FastAPI(
+    app = guard.GuardedFastAPI(
         title="thermogel planner", version=package_version(), lifespan=lifespan,
         max_body_size=max_body_bytes,
         description="Plan drug release from thermo-responsive gel beads (Butler & "
@@ -72,6 +72,7 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
                    422: {"model": s.ErrorResponse, "description": "bad input; loc names it"}})
     app.state.service = state
     errors.install(app)
+    guard.add(app)
     app.include_router(service.router)
     app.include_router(physics.router)
     app.include_router(dosing.router)

@@ -279,8 +279,8 @@ class ConstantsIn(RequestModel):
         description="the gel's dry mesh (interfacial) length xi_dry in nm, 0 < xi <= 1000: "
                     "the truth's interfacial length is xi_dry / a_d (default 4 nm, "
                     "docs/interfacial.md sec. 1)")
-    mesh_length_range_nm: tuple[float, float] | None = Field(
-        None, examples=[[2.0, 8.0]],
+    mesh_length_range_nm: list[float] | None = Field(
+        None, min_length=2, max_length=2, examples=[[2.0, 8.0]],
         description="plausible range [lo, hi] of mesh_length_nm in nm, over which the "
                     "answer's interfacial-length uncertainty is measured (default [2, 8])")
 
@@ -478,7 +478,8 @@ class ValidationResponse(_Out):
     :class:`ValidationReport` (dose) or a :class:`ScheduleResponse` (schedule)."""
 
     id: str = Field(description="validation id")
-    kind: Literal["dose", "schedule"] = Field("dose", description="what was checked")
+    kind: Literal["dose", "schedule", "drug-dose"] = Field(
+        "dose", description="what was checked ('drug-dose': a drug dose's runs)")
     status: Literal["pending", "running", "done", "failed"] = Field(description="its state")
     result: dict[str, Any] | None = Field(
         None, description="when done: the truth's time for the dose, every run behind it and "
@@ -576,7 +577,9 @@ class ScheduleResponse(_Out):
 class HealthResponse(_Out):
     """Liveness and readiness of the service."""
 
-    status: Literal["ok", "starting"] = Field(description="'ok' once the kernels are warm")
+    status: Literal["ok", "starting", "degraded"] = Field(
+        description="'ok' once the kernels are warm; 'degraded' after a server fault (e.g. "
+                    "a full disk): planner.degraded_because says why")
     version: str = Field(description="thermogel version")
     kernels_warm: int = Field(description="numba kernels compiled or loaded from the cache")
     kernels_cold: list[str] = Field(

@@ -10,10 +10,11 @@ from fastapi.responses import JSONResponse
 from .. import schemas as s
 from ..deps import PlannerDep, StateDep
 from ..drug_schemas import DrugDoseResponse, DrugScheduleResponse
+from ..safe_route import SafeRoute
 from ..service import Accepted, dose_time, schedule
 from .compute import compute
 
-router = APIRouter(prefix="/v1", tags=["dosing"])
+router = APIRouter(prefix="/v1", tags=["dosing"], route_class=SafeRoute)
 
 _FULL = {"model": s.ErrorResponse, "description": "queue full: the message says which"}
 
@@ -30,9 +31,10 @@ def answer_or_pending(out: dict[str, Any] | Accepted) -> Any:
     202: {"model": s.PendingResponse, "description": "needs the full solver: poll "
                                                      "validation_url, then ask again"},
     429: _FULL})
-async def dose(body: s.DoseTimeRequest, planner: PlannerDep) -> Any:
-    """How long to heat a bead to release a dose (front model at once, or 202)."""
-    return answer_or_pending(await compute(dose_time, planner, body))
+async def dose(body: s.DoseTimeRequest, planner: PlannerDep, state: StateDep) -> Any:
+    """How long to heat a bead to release a dose (front model at once, or 202; a drug dose
+    whose runs are not cached is a job: 202, its validation's result is the answer)."""
+    return answer_or_pending(await compute(dose_time, planner, body, state))
 
 
 @router.post("/schedule", response_model=s.ScheduleResponse | DrugScheduleResponse,

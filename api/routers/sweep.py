@@ -25,6 +25,7 @@ from dosing import JobRunner, SolverSettings, UnknownValidationError
 from dosing.sweep import COLUMNS, SweepGrid, SweepResult, fill_validations, run_sweep
 from solver.json_safe import json_safe
 
+from ..safe_route import SafeRoute
 from ..schemas import (
     Branch,
     ConstantsIn,
@@ -38,7 +39,7 @@ from ..schemas import (
 from ..service import to_gel
 from .compute import compute
 
-router = APIRouter(tags=["design maps"])
+router = APIRouter(tags=["design maps"], route_class=SafeRoute)
 
 MAX_SERVICE_POINTS = 20_000  # points in one sweep request (the CLI takes up to 100,000)
 SWEEP_QUEUE = 4  # sweeps queued or running before 429

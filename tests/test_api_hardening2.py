@@ -1,0 +1,178 @@
+"""Service hardening, round two (issue 22), through a real uvicorn and the ASGI transport.
+
+Lone UTF-16 surrogates (N2), JSON 413s and short 422s, mesh_length_range_nm over HTTP (N6),
+server faults as 500/503 with /health degraded (N5), a live /health under drug doses (N1).
+"""
+
+from __future__ import annotations
+
+import http.client
+import json
+import sqlite3
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+from api_support import asgi, fake_full_solver, fake_planner, fake_server
+
+from api.http import create_app
+
+FRONT = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.8,
+         "dry_radius_um": 50.0}
+SMOOTH = {"gel": "ANB", "t_start": 300.0, "t_end": 303.0, "dose_fraction": 0.2}
+EQUILIBRIUM = {"gel": "ANB", "temperature": 305.0}
+# per POST route: a body with a lone surrogate in one string, and where the 422 must point
+SURROGATE = "AN\ud800B"
+POSTS: dict[str, tuple[dict[str, Any], list[Any]]] = {
+    "/v1/equilibrium": ({**EQUILIBRIUM, "gel": SURROGATE}, ["body", "gel"]),
+    "/v1/classify": ({"gel": {"name": SURROGATE}, "t_start": 302.0, "t_end": 308.0},
+                     ["body", "gel", "name"]),
+    "/v1/dose-time": ({**FRONT, "gel": SURROGATE}, ["body", "gel"]),
+    "/v1/schedule": ({"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "doses": [0.3],
+                      "branch": SURROGATE}, ["body", "branch"]),
+    "/v1/sweep": ({"gels": ["ANB", SURROGATE], "t_ends": [308.0], "dry_radii_um": [50.0],
+                   "doses": [0.5]}, ["body", "gels", 1]),
+    "/v1/fit/swelling": ({"temperature_K": [300.0] * 8, "radius": [2.0] * 8,
+                          "save": SURROGATE}, ["body", "save"]),
+    "/v1/fit/kinetics": ({"time_s": [0.0, 1.0], "radius": [1.0, 0.9], "gel": SURROGATE,
+                          "t_start": 302.0, "t_end": 308.0}, ["body", "gel"]),
+    "/v1/front-curve": ({"gel": SURROGATE, "t_start": 302.0, "t_end": 308.0},
+                        ["body", "gel"]),
+}
+
+
+def _post(conn: http.client.HTTPConnection, path: str, body: Any) -> tuple[int, bytes, str]:
+    raw = body if isinstance(body, bytes) else json.dumps(body).encode()  # ascii: \ud800
+    conn.request("POST", path, body=raw, headers={"Content-Type": "application/json"})
+    resp = conn.getresponse()
+    return resp.status, resp.read(), resp.getheader("connection") or ""
+
+
+def test_lone_surrogates_are_422_naming_the_field_on_every_post_route(tmp_path: Path) -> None:
+    """N2: a lone surrogate in a value, and in a key, of a body of every POST route is a 422
+    naming it; the keep-alive connection then answers a valid request."""
+    with fake_server(tmp_path / "c.sqlite", 0.0) as (url, _):
+        spec = httpx.get(f"{url}/openapi.json").json()
+        posts = {p for p, ops in spec["paths"].items() if "post" in ops}
+        assert posts == set(POSTS), posts ^ set(POSTS)  # a new route needs a case here
+        port = int(url.rsplit(":", 1)[1])
+        conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
+        conn.connect()
+        local = conn.sock.getsockname()
+        for path, (body, loc) in POSTS.items():
+            for bad, where in ((body, loc), ({**body, "x\ud800y": 1}, ["body", "x\\ud800y"])):
+                raw = json.dumps(bad).encode()
+                assert b"\\ud800" in raw
+                status, answer, connection = _post(conn, path, raw)
+                assert status == 422, (path, answer[:300])
+                detail = json.loads(answer)["detail"]
+                assert where in [d["loc"] for d in detail], (path, detail)
+                assert "close" not in connection.lower()
+                status, answer, _ = _post(conn, "/v1/equilibrium", EQUILIBRIUM)
+                assert status == 200, answer[:300]
+        assert conn.sock.getsockname() == local  # one connection all along
+        conn.close()
+
+
+@pytest.fixture
+def anyio_backend() -> str:
+    return "asyncio"
+
+
+@pytest.fixture
+def planner(tmp_path):
+    with fake_full_solver(delay=0.0) as fake, \
+            fake_planner(tmp_path / "c.sqlite", fake, max_pending=4) as p:
+        yield p
+
+
+@pytest.fixture
+async def raw_client(planner):
+    async with asgi(create_app(planner=planner, warm=False, max_body_bytes=50_000)) as (_, raw):
+        yield raw
+
+
+@pytest.mark.anyio
+async def test_a_413_is_json(raw_client) -> None:
+    """A body over the limit is a 413 with a JSON error body (as the spec says)."""
+    big = json.dumps({**FRONT, "pad": "x" * 100_000}).encode()
+    r = await raw_client.post("/v1/dose-time", content=big,
+                              headers={"content-type": "application/json"})
+    assert r.status_code == 413
+    assert r.headers["content-type"].startswith("application/json")
+    assert r.json()["detail"][0]["type"] == "body_too_large"
+
+
+@pytest.mark.anyio
+async def test_a_huge_unknown_key_gives_a_short_422(tmp_path) -> None:
+    """A 100 kB unknown key (under the default 1 MiB limit) answers under 5 kB."""
+    with fake_full_solver(0.0) as fake, fake_planner(tmp_path / "c.sqlite", fake) as p:
+        async with asgi(create_app(planner=p, warm=False)) as (_, raw):
+            key = "k" * 100_000
+            r = await raw.post("/v1/dose-time", json={**FRONT, key: 1, "v": "w" * 100_000})
+            assert r.status_code == 422
+            assert len(r.content) < 5_000, len(r.content)
+            locs = [d["loc"] for d in r.json()["detail"]]
+            assert any(loc[0] == "body" and str(loc[1]).startswith("kkk") for loc in locs)
+
+
+@pytest.mark.anyio
+async def test_mesh_length_range_is_accepted(raw_client) -> None:
+    """N6: constants.mesh_length_range_nm = [2, 8] is accepted; [8, 2] and [2] are 422s."""
+    r = await raw_client.post("/v1/dose-time", json={
+        **FRONT, "constants": {"mesh_length_nm": 4.0, "mesh_length_range_nm": [2.0, 8.0]}})
+    assert r.status_code == 200, r.text
+    for bad in ([8.0, 2.0], [2.0], [2.0, 8.0, 9.0], ["2", 8.0]):
+        r = await raw_client.post("/v1/dose-time", json={
+            **FRONT, "constants": {"mesh_length_range_nm": bad}})
+        assert r.status_code == 422, (bad, r.text)
+        assert r.json()["detail"][0]["loc"][:3] == ["body", "constants",
+                                                   "mesh_length_range_nm"], r.text
+
+
+def _fail(exc: Exception):
+    def boom(*args: object, **kwargs: object) -> None:
+        raise exc
+    return boom
+
+
+@pytest.mark.anyio
+async def test_a_full_disk_is_503_naming_the_cache_and_health_degraded(planner, raw_client,
+                                                                        monkeypatch) -> None:
+    """N5: SQLite's 'database or disk is full' on a write is a 503 naming the cache (not a
+    422 'solver_error'); /health then says 'degraded' and why."""
+    r = await raw_client.get("/health")
+    assert r.json()["status"] == "ok"
+    monkeypatch.setattr(planner.cache, "_write",
+                        _fail(sqlite3.OperationalError("database or disk is full")))
+    r = await raw_client.post("/v1/dose-time", json={**SMOOTH, "validate": True})
+    assert r.status_code == 503, r.text
+    item = r.json()["detail"][0]
+    assert item["type"] == "cache_unavailable" and item["loc"] == ["cache"]
+    assert "disk is full" in item["msg"] and "Retry-After" in r.headers
+    h = (await raw_client.get("/health")).json()
+    assert h["status"] == "degraded" and "disk is full" in h["planner"]["degraded_because"]
+    assert "/" not in h["planner"]["cache"]  # the file name, not the server's path
+
+
+@pytest.mark.anyio
+async def test_a_malformed_cache_read_is_503(planner, raw_client, monkeypatch) -> None:
+    """N5: 'database disk image is malformed' on a read is a 503 too."""
+    monkeypatch.setattr(planner, "answer",
+                        _fail(sqlite3.DatabaseError("database disk image is malformed")))
+    r = await raw_client.post("/v1/dose-time", json=SMOOTH)
+    assert r.status_code == 503 and "malformed" in r.json()["detail"][0]["msg"], r.text
+
+
+@pytest.mark.anyio
+async def test_an_unexpected_exception_is_a_500_with_a_stable_code(planner, raw_client,
+                                                                    monkeypatch) -> None:
+    """N5: a bug is a 500 'internal_error' (no exception name or text leaks), not a 422."""
+    monkeypatch.setattr(planner, "answer", _fail(KeyError("secret internals")))
+    r = await raw_client.post("/v1/dose-time", json=SMOOTH)
+    assert r.status_code == 500, r.text
+    item = r.json()["detail"][0]
+    assert item["type"] == "internal_error"
+    assert "KeyError" not in r.text and "secret" not in r.text
+    assert (await raw_client.post("/v1/equilibrium", json=EQUILIBRIUM)).status_code == 200
