@@ -176,3 +176,98 @@ async def test_an_unexpected_exception_is_a_500_with_a_stable_code(planner, raw_
     assert item["type"] == "internal_error"
     assert "KeyError" not in r.text and "secret" not in r.text
     assert (await raw_client.post("/v1/equilibrium", json=EQUILIBRIUM)).status_code == 200
+
+
+# ----------------------------------------------------------------------------- N8, N11-N14
+
+@pytest.mark.parametrize("name", ["abc\n", "", "Custom", "CUSTOM", "anb", "a/b", "x" * 65])
+def test_unusable_gel_names_are_refused(name: str) -> None:
+    """N11-N13: a control character, an empty name, a reserved name in any case."""
+    from dosing.gel_store import check_name
+    from solver.errors import ParameterError
+
+    with pytest.raises(ParameterError):
+        check_name(name)
+    assert check_name("my-gel.1") == "my-gel.1"
+
+
+@pytest.mark.anyio
+async def test_an_unknown_gel_lists_a_few_stored_names(raw_client, tmp_path, monkeypatch):
+    """N14: with 12 stored gels, an unknown gel's 422 names at most five of them."""
+    from dosing.gel_store import GelStore
+    from solver.gel import PRESETS
+
+    monkeypatch.setenv("THERMOGEL_GELS", str(tmp_path / "gels"))
+    store = GelStore()
+    for i in range(12):
+        store.save(f"stored{i:02d}", PRESETS["ANB"])
+    r = await raw_client.post("/v1/dose-time", json={**FRONT, "gel": "nope"})
+    assert r.status_code == 422, r.text
+    text = r.text
+    assert sum(f"stored{i:02d}" in text for i in range(12)) <= 5 and "7 more" in text, text
+    r = await raw_client.post("/v1/dose-time", json={**FRONT, "gel": "stored11"})
+    assert r.status_code == 200, r.text
+
+
+SWELL = {"temperature_K": [290.0, 295.0, 300.0, 303.0, 305.0, 306.0, 307.0, 308.0],
+         "radius": [2.87, 2.69, 2.44, 2.19, 1.95, 1.13, 1.12, 1.11]}
+KIN = {"time_s": [0.0, 50.0, 100.0, 200.0], "radius": [115.0, 100.0, 90.0, 75.0],
+       "gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dry_radius_um": 50.0}
+
+
+@pytest.mark.anyio
+@pytest.mark.parametrize(("path", "body", "loc"), [
+    ("/v1/fit/swelling", {**SWELL, "fixed": {"bogus": 1.0}}, ["body", "fixed", "bogus"]),
+    ("/v1/fit/swelling", {**SWELL, "save": "abc\n"}, ["body", "save"]),
+    ("/v1/fit/swelling", {**SWELL, "save": ""}, ["body", "save"]),
+    ("/v1/fit/swelling", {**SWELL, "save": "Custom"}, ["body", "save"]),
+    ("/v1/fit/kinetics", {**KIN, "t_start": -1e300}, ["body", "t_start"]),
+    ("/v1/fit/kinetics", {**KIN, "t_end": 1e4}, ["body", "t_end"]),
+    ("/v1/fit/kinetics", {**KIN, "viscosity_pa_s": -1.0}, ["body", "viscosity_pa_s"]),
+    ("/v1/fit/kinetics", {**KIN, "swollen_radius_um": 115.0}, ["body"]),
+])
+async def test_fit_requests_are_checked_before_the_job(raw_client, path, body, loc) -> None:
+    """N8: refused with a 422 naming the field; no job is queued."""
+    r = await raw_client.post(path, json=body)
+    assert r.status_code == 422, r.text
+    locs = [d["loc"] for d in r.json()["detail"]]
+    assert any(got[:len(loc)] == loc for got in locs), locs
+
+
+@pytest.mark.anyio
+async def test_a_sweep_validate_index_past_the_end_is_refused_at_once(raw_client) -> None:
+    """N8: validate [0, 4] of a 4-point sweep is a 422 at ['body', 'validate', 1]."""
+    body = {"gels": ["ANB"], "t_start": 302.0, "t_ends": [308.0, 309.0],
+            "dry_radii_um": [50.0], "doses": [0.3, 0.5], "validate": [0, 4]}
+    r = await raw_client.post("/v1/sweep", json=body)
+    assert r.status_code == 422, r.text
+    assert r.json()["detail"][0]["loc"] == ["body", "validate", 1]
+    r = await raw_client.post("/v1/sweep", json={**body, "validate": [0, 3]})
+    assert r.status_code == 202, r.text
+
+
+@pytest.mark.anyio
+async def test_a_full_sweep_queue_says_so(planner, monkeypatch) -> None:
+    """N14: the sweep queue's 429 names the sweep queue, not the validations'."""
+    import threading
+
+    from api.routers import sweep as sweep_module
+
+    gate = threading.Event()
+
+    def held(*args: object, **kwargs: object) -> None:
+        gate.wait(30)
+        raise RuntimeError("stopped")
+
+    monkeypatch.setattr(sweep_module, "run_sweep", held)
+    monkeypatch.setattr(sweep_module, "SWEEP_QUEUE", 1)
+    try:
+        async with asgi(create_app(planner=planner, warm=False)) as (_, raw):
+            body = {"t_start": 302.0, "t_ends": [308.0], "dry_radii_um": [50.0], "doses": [0.3]}
+            assert (await raw.post("/v1/sweep", json=body)).status_code == 202
+            r = await raw.post("/v1/sweep", json={**body, "doses": [0.4]})
+            assert r.status_code == 429, r.text
+            assert "sweeps queue" in r.text and "validations" not in r.text
+            assert "Retry-After" in r.headers
+    finally:
+        gate.set()

@@ -23,6 +23,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from dosing import JobRunner, SolverSettings, UnknownValidationError
 from dosing.sweep import COLUMNS, SweepGrid, SweepResult, fill_validations, run_sweep
+from solver.errors import ParameterError
 from solver.json_safe import json_safe
 
 from ..safe_route import SafeRoute
@@ -140,7 +141,7 @@ class _Sweeps:
 
     def __init__(self) -> None:
         self.runner = JobRunner(ThreadPoolExecutor(1, thread_name_prefix="sweep"),
-                                max_pending=SWEEP_QUEUE)
+                                max_pending=SWEEP_QUEUE, what="sweeps")
         self.progress: dict[str, list[int]] = {}
         self.results: OrderedDict[str, SweepResult] = OrderedDict()
         self.lock = threading.Lock()
@@ -189,8 +190,17 @@ def _run(sweeps: _Sweeps, key: str, planner: Any, grid: SweepGrid, validate: Any
                                planner=planner, validate=validate, progress=step))
 
 
+def _check_validate(body: SweepRequest, size: int) -> None:
+    """A ``validate`` index past the grid is refused before the sweep runs (422)."""
+    if isinstance(body.validate_points, list):
+        for i, idx in enumerate(body.validate_points):
+            if idx >= size:
+                raise ParameterError(f"validate[{i}]", idx, f"a point index 0-{size - 1}")
+
+
 def _submit(request: Request, body: SweepRequest) -> dict[str, Any]:
     grid = to_grid(body)  # ParameterError: 422 naming the field
+    _check_validate(body, grid.size)
     key = hashlib.sha256(body.model_dump_json().encode()).hexdigest()[:24]
     jobs = _sweeps(request)
     planner = request.app.state.service.planner
