@@ -271,3 +271,49 @@ async def test_a_full_sweep_queue_says_so(planner, monkeypatch) -> None:
             assert "Retry-After" in r.headers
     finally:
         gate.set()
+
+
+# ----------------------------------------------------------------------------- N1
+
+def test_health_answers_within_2_s_under_40_concurrent_drug_doses(tmp_path: Path) -> None:
+    """N1: 40 distinct drug doses with diffusion at once (each needs full-solver drug
+    runs) are answered 202 (a job) or 429 (the job queue), never by holding an HTTP
+    thread; /health, polled all along, answers every time within 2 s."""
+    import threading
+    import time
+    from concurrent.futures import ThreadPoolExecutor
+
+    dose = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.3,
+            "dry_radius_um": 50.0, "interfacial_length": 0.01}
+    with fake_server(tmp_path / "c.sqlite", 0.0) as (url, _):
+        lat: list[float] = []
+        stop = threading.Event()
+
+        def poll_health() -> None:
+            with httpx.Client(base_url=url, timeout=30) as c:
+                while not stop.is_set():
+                    t0 = time.perf_counter()
+                    r = c.get("/health")
+                    lat.append(time.perf_counter() - t0)
+                    assert r.status_code == 200 and r.json()["status"] == "ok"
+                    time.sleep(0.1)
+
+        def one(i: int) -> int:
+            body = {**dose, "drug": {"diffusivity_cm2_s": 1e-7 * (1 + i / 100),
+                                     "load_ug": 1.0}}
+            with httpx.Client(base_url=url, timeout=60) as c:
+                return c.post("/v1/dose-time", json=body).status_code
+
+        watcher = threading.Thread(target=poll_health)
+        watcher.start()
+        try:
+            with ThreadPoolExecutor(40) as pool:
+                codes = list(pool.map(one, range(40)))
+            time.sleep(3.0)  # the admitted jobs compute meanwhile
+        finally:
+            stop.set()
+            watcher.join(30)
+    assert set(codes) <= {202, 429} and codes.count(202) >= 1, codes
+    assert len(lat) >= 10 and max(lat) < 2.0, (len(lat), [round(x, 2) for x in lat])
+    print(f"/health: {len(lat)} polls, max {max(lat) * 1e3:.0f} ms; doses {codes.count(202)} "
+          f"x 202, {codes.count(429)} x 429")
