@@ -14,7 +14,7 @@ from typing import Any
 
 import httpx
 import pytest
-from api_support import asgi, fake_full_solver, fake_planner, fake_server
+from api_support import asgi, fake_full_solver, fake_planner, fake_server, serve
 
 from api.http import create_app
 
@@ -285,7 +285,9 @@ def test_health_answers_within_2_s_under_40_concurrent_drug_doses(tmp_path: Path
 
     dose = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.3,
             "dry_radius_um": 50.0, "interfacial_length": 0.01}
-    with fake_server(tmp_path / "c.sqlite", 0.0) as (url, _):
+    # the real service (warm kernels, runs in its process pool): the fake server would run
+    # the drug runs on a thread of its own process, competing with /health for the GIL
+    with serve(tmp_path / "c.sqlite", "--max-pending", "4") as url:
         lat: list[float] = []
         stop = threading.Event()
 
@@ -307,6 +309,8 @@ def test_health_answers_within_2_s_under_40_concurrent_drug_doses(tmp_path: Path
         watcher = threading.Thread(target=poll_health)
         watcher.start()
         try:
+            time.sleep(2.0)  # a baseline under this machine's load
+            base = list(lat)
             with ThreadPoolExecutor(40) as pool:
                 codes = list(pool.map(one, range(40)))
             time.sleep(3.0)  # the admitted jobs compute meanwhile
@@ -314,6 +318,38 @@ def test_health_answers_within_2_s_under_40_concurrent_drug_doses(tmp_path: Path
             stop.set()
             watcher.join(30)
     assert set(codes) <= {202, 429} and codes.count(202) >= 1, codes
-    assert len(lat) >= 10 and max(lat) < 2.0, (len(lat), [round(x, 2) for x in lat])
+    print("baseline", [round(x, 2) for x in base])
+    lat = lat[len(base):]
+    assert len(lat) >= 10 and max(lat) < 2.0, (len(lat), str([round(x, 2) for x in lat]))
     print(f"/health: {len(lat)} polls, max {max(lat) * 1e3:.0f} ms; doses {codes.count(202)} "
           f"x 202, {codes.count(429)} x 429")
+
+
+# ----------------------------------------------------------------------------- N5 rows
+
+def test_a_corrupted_row_is_detected_and_computed_again(tmp_path: Path) -> None:
+    """N5: flip bytes in a stored trajectory's blob; a new planner on the file detects it
+    (checksum), drops the row, computes the run again and gives the same answer."""
+    from dosing import DoseRequest, SolverSettings
+    from dosing.cache import ValidationCache
+
+    cache = tmp_path / "c.sqlite"
+    req = DoseRequest("ANB", 300.0, 303.0, dose_fraction=0.2,
+                      settings=SolverSettings(method="direct"))
+    log = tmp_path / "calls.log"
+    with fake_full_solver(0.0, calls_log=log) as fake, fake_planner(cache, fake) as p:
+        first = p.dose(req)
+    runs = len(log.read_text().splitlines())
+    assert runs >= 1
+    with sqlite3.connect(cache) as con:
+        key, blob = con.execute("SELECT key, data FROM trajectories LIMIT 1").fetchone()
+        bad = bytearray(blob)
+        bad[len(bad) // 2] ^= 0xFF
+        con.execute("UPDATE trajectories SET data = ? WHERE key = ?", (bytes(bad), key))
+    with ValidationCache(cache) as c:
+        assert c.get(key) is None and c.corrupt_rows == 1  # detected and dropped
+        assert key not in c
+    with fake_full_solver(0.0, calls_log=log) as fake, fake_planner(cache, fake) as p:
+        again = p.dose(req)
+    assert len(log.read_text().splitlines()) > runs  # computed again
+    assert again.model == first.model == "full" and again.time == first.time

@@ -17,7 +17,7 @@ import anyio.to_thread
 
 from ..service import solver_guard
 
-COMPUTE_THREADS = 8
+COMPUTE_THREADS = 4
 _LIMITERS: weakref.WeakKeyDictionary[Any, anyio.CapacityLimiter] = weakref.WeakKeyDictionary()
 
 
