@@ -353,3 +353,29 @@ def test_a_corrupted_row_is_detected_and_computed_again(tmp_path: Path) -> None:
         again = p.dose(req)
     assert len(log.read_text().splitlines()) > runs  # computed again
     assert again.model == first.model == "full" and again.time == first.time
+
+
+# ----------------------------------------------------------------------------- N4
+
+@pytest.mark.anyio
+async def test_a_tiny_validated_dose_is_answered_and_poisons_nothing(raw_client) -> None:
+    """N4: a validated dose of 1e-15 is answered (before and after its validation is done,
+    with a finite error estimate); the same request with 0.5 then answers too."""
+    import asyncio
+    import math
+
+    body = {**FRONT, "dose_fraction": 1e-15, "validate": True}
+    for _ in range(2):  # the second time, its validation is done and cached
+        r = await raw_client.post("/v1/dose-time", json=body)
+        assert r.status_code == 200, r.text
+        got = r.json()
+        assert got["time"] >= 0.0 and math.isfinite(got["error_estimate"]), got
+        url = got["validation_url"]
+        for _ in range(600):
+            v = await raw_client.get(url)
+            if v.json()["status"] in ("done", "failed"):
+                break
+            await asyncio.sleep(0.1)
+        assert v.status_code == 200 and v.json()["status"] == "done", v.text
+    r = await raw_client.post("/v1/dose-time", json={**body, "dose_fraction": 0.5})
+    assert r.status_code == 200, r.text
