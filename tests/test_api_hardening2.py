@@ -379,3 +379,33 @@ async def test_a_tiny_validated_dose_is_answered_and_poisons_nothing(raw_client)
         assert v.status_code == 200 and v.json()["status"] == "done", v.text
     r = await raw_client.post("/v1/dose-time", json={**body, "dose_fraction": 0.5})
     assert r.status_code == 200, r.text
+
+
+# ----------------------------------------------------------------------------- N3
+
+@pytest.mark.anyio
+async def test_a_finished_sweep_is_serialised_once(planner) -> None:
+    """N3: polls of a finished sweep (JSON, CSV, SVG) are rendered once, then served from
+    the rendered bytes (the same bytes)."""
+    import asyncio
+
+    app = create_app(planner=planner, warm=False)
+    async with asgi(app) as (_, raw):
+        r = await raw.post("/v1/sweep", json={"t_start": 302.0, "t_ends": [308.0, 309.0],
+                                              "dry_radii_um": [20.0, 50.0],
+                                              "doses": [0.3, 0.8]})
+        url = r.headers["location"]
+        for _ in range(600):
+            first = await raw.get(url)
+            if first.json()["status"] == "done":
+                break
+            await asyncio.sleep(0.1)
+        assert first.json()["status"] == "done" and len(first.json()["result"]["rows"]) == 8
+        rendered = app.state.sweeps.rendered
+        assert any(fmt == "json" for _, fmt in rendered)
+        key = next(k for k in rendered if k[1] == "json")
+        rendered[key] = b'{"served": "from the rendered bytes"}'
+        assert (await raw.get(url)).json() == {"served": "from the rendered bytes"}
+        csv = await raw.get(url, params={"format": "csv"})
+        assert csv.headers["content-type"].startswith("text/csv")
+        assert (await raw.get(url, params={"format": "csv"})).content == csv.content
