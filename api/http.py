@@ -18,11 +18,13 @@ from typing import Any
 
 from fastapi import FastAPI
 from fastapi.concurrency import run_in_threadpool
+from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from dosing.jobs import exit_with_parent
 
 from . import errors, guard
 from . import schemas as s
+from .auth import TokenAuth
 from .routers import dosing, fit, page, physics, service, sweep, validations
 from .service import ServiceState
 from .version import package_version
@@ -34,7 +36,8 @@ SUPERVISOR_ENV = "THERMOGEL_SUPERVISOR_PID"
 def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool = True,
                max_pending: int | None = None, executor: Any = None,
                max_body_bytes: int = DEFAULT_MAX_BODY,
-               lease_seconds: float | None = None) -> FastAPI:
+               lease_seconds: float | None = None, api_token: str | None = None,
+               allowed_hosts: list[str] | None = None) -> FastAPI:
     """The planner service.
 
     ``planner``: a ``dosing.Planner`` to serve (the caller closes it); by default one is
@@ -42,7 +45,9 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
     ``max_pending`` (validations queued or running) and ``lease_seconds`` (how long a
     crashed server's claim on a run outlives it) and closed at shutdown, its process pool
     stopped.  ``warm``: warm every numba kernel first.  ``max_body_bytes``: larger request
-    bodies are refused with 413 before they are read.
+    bodies are refused with 413 before they are read.  ``api_token``: every route but
+    /health needs ``Authorization: Bearer <token>`` (:mod:`api.auth`).  ``allowed_hosts``:
+    Host headers accepted (Starlette's TrustedHostMiddleware; default any).
     """
     options: dict[str, Any] = {"cache_path": cache_path}
     if executor is not None:
@@ -73,6 +78,10 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
     app.state.service = state
     errors.install(app)
     guard.add(app)
+    if api_token:
+        app.add_middleware(TokenAuth, token=api_token)
+    if allowed_hosts:
+        app.add_middleware(TrustedHostMiddleware, allowed_hosts=allowed_hosts)
     app.include_router(service.router)
     app.include_router(physics.router)
     app.include_router(dosing.router)
@@ -88,7 +97,8 @@ def app_from_env() -> FastAPI:
 
     THERMOGEL_CACHE (cache file), THERMOGEL_MAX_PENDING (validations queued or running),
     THERMOGEL_MAX_BODY (bytes), THERMOGEL_LEASE_SECONDS, THERMOGEL_WARMUP ('0' skips the
-    warm-up).  A uvicorn worker process (``--workers`` > 1) ends itself when the
+    warm-up), THERMOGEL_API_TOKEN (the bearer token), THERMOGEL_ALLOWED_HOSTS (comma-
+    separated Host names).  A uvicorn worker process (``--workers`` > 1) ends itself when the
     supervisor it was started by is gone.
     """
     supervisor = os.environ.get(SUPERVISOR_ENV)
@@ -99,4 +109,7 @@ def app_from_env() -> FastAPI:
                       max_pending=int(env("THERMOGEL_MAX_PENDING") or 0) or None,
                       max_body_bytes=int(env("THERMOGEL_MAX_BODY") or DEFAULT_MAX_BODY),
                       lease_seconds=float(env("THERMOGEL_LEASE_SECONDS") or 0) or None,
-                      warm=env("THERMOGEL_WARMUP", "1") != "0")
+                      warm=env("THERMOGEL_WARMUP", "1") != "0",
+                      api_token=env("THERMOGEL_API_TOKEN") or None,
+                      allowed_hosts=[h.strip() for h in (env("THERMOGEL_ALLOWED_HOSTS") or "")
+                                     .split(",") if h.strip()] or None)

@@ -409,3 +409,42 @@ async def test_a_finished_sweep_is_serialised_once(planner) -> None:
         csv = await raw.get(url, params={"format": "csv"})
         assert csv.headers["content-type"].startswith("text/csv")
         assert (await raw.get(url, params={"format": "csv"})).content == csv.content
+
+
+# ----------------------------------------------------------------------------- item 7
+
+@pytest.mark.anyio
+async def test_the_api_token_and_allowed_hosts(planner) -> None:
+    """With a token, every route but /health needs 'Authorization: Bearer <token>' (401 as
+    JSON otherwise); a Host outside the allowed list is refused."""
+    app = create_app(planner=planner, warm=False, api_token="s3cret",
+                     allowed_hosts=["test", "127.0.0.1"])
+    async with asgi(app) as (_, raw):
+        assert (await raw.get("/health")).status_code == 200
+        r = await raw.post("/v1/equilibrium", json=EQUILIBRIUM)
+        assert r.status_code == 401 and r.json()["detail"][0]["type"] == "unauthorized"
+        bad = await raw.post("/v1/equilibrium", json=EQUILIBRIUM,
+                             headers={"Authorization": "Bearer wrong"})
+        assert bad.status_code == 401
+        ok = await raw.post("/v1/equilibrium", json=EQUILIBRIUM,
+                            headers={"Authorization": "Bearer s3cret"})
+        assert ok.status_code == 200, ok.text
+        evil = await raw.get("/health", headers={"Host": "evil.example"})
+        assert evil.status_code == 400
+
+
+def test_serve_beyond_loopback_needs_a_token(monkeypatch) -> None:
+    """thermogel serve --host 0.0.0.0 without a token refuses to start (exit 2 naming
+    --token); on loopback no token is needed."""
+    import argparse
+
+    from api.commands import serve as serve_cmd
+    from solver.errors import ParameterError
+
+    monkeypatch.delenv("THERMOGEL_API_TOKEN", raising=False)
+    parser = argparse.ArgumentParser()
+    serve_cmd.register(parser.add_subparsers())
+    args = parser.parse_args(["serve", "--host", "0.0.0.0"])
+    with pytest.raises(ParameterError) as err:
+        serve_cmd.run(args)
+    assert err.value.field == "--token"
