@@ -42,6 +42,9 @@ KINETICS_MODELS = ("auto", "front", "front-sharp", "full")
 
 
 # ---------------------------------------------------------------- CSV
+MAX_CSV_BYTES = 8 << 20  # a measured curve is kB; a file this big is not one
+
+
 def _read_table(source: str | Path, what: str, first: str) -> tuple[dict[str, np.ndarray], str]:
     """Columns of a CSV (file path or the text itself) as float arrays, and the size column."""
     text = source if isinstance(source, str) and "\n" in source else None
@@ -49,6 +52,10 @@ def _read_table(source: str | Path, what: str, first: str) -> tuple[dict[str, np
         p = Path(source)
         if not p.is_file():
             raise ParameterError("file", str(source), "a readable CSV file")
+        size = p.stat().st_size
+        if size > MAX_CSV_BYTES:  # refused before it is read whole (issue 22, N15)
+            raise ParameterError("file", str(source), f"a CSV of at most {MAX_CSV_BYTES} bytes",
+                                 f"it has {size} bytes")
         try:
             text = p.read_text(encoding="utf-8-sig")
         except (OSError, UnicodeDecodeError) as exc:

@@ -448,3 +448,22 @@ def test_serve_beyond_loopback_needs_a_token(monkeypatch) -> None:
     with pytest.raises(ParameterError) as err:
         serve_cmd.run(args)
     assert err.value.field == "--token"
+
+
+def test_a_fit_csv_over_the_limit_is_refused_before_it_is_read(tmp_path, monkeypatch) -> None:
+    """N15: a CSV over MAX_CSV_BYTES is refused from its size (read_text is never called)."""
+    from dosing import fit
+    from solver.errors import ParameterError
+
+    big = tmp_path / "big.csv"
+    with open(big, "wb") as f:
+        f.write(b"temperature_K,radius\n")
+        f.truncate(fit.MAX_CSV_BYTES + 1)  # sparse: no disk used
+
+    def never(*args: object, **kwargs: object) -> str:
+        raise AssertionError("the file was read")
+
+    monkeypatch.setattr(Path, "read_text", never)
+    with pytest.raises(ParameterError) as err:
+        fit.read_swelling_csv(big)
+    assert err.value.field == "file" and "bytes" in str(err.value)
