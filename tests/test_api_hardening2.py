@@ -467,3 +467,14 @@ def test_a_fit_csv_over_the_limit_is_refused_before_it_is_read(tmp_path, monkeyp
     with pytest.raises(ParameterError) as err:
         fit.read_swelling_csv(big)
     assert err.value.field == "file" and "bytes" in str(err.value)
+
+
+def test_the_spec_documents_faults_and_headers() -> None:
+    """Item 8 (part): every operation documents 500 and 503; the dose route's 202 its
+    Location header and its 429 the Retry-After header."""
+    spec = create_app(warm=False).openapi()
+    for path, ops in spec["paths"].items():
+        for method, op in ops.items():
+            assert {"500", "503"} <= set(op["responses"]), (method, path)
+    dose = spec["paths"]["/v1/dose-time"]["post"]["responses"]
+    assert "Location" in dose["202"]["headers"] and "Retry-After" in dose["429"]["headers"]

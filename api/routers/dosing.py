@@ -16,7 +16,11 @@ from .compute import compute
 
 router = APIRouter(prefix="/v1", tags=["dosing"], route_class=SafeRoute)
 
-_FULL = {"model": s.ErrorResponse, "description": "queue full: the message says which"}
+_FULL = {"model": s.ErrorResponse, "description": "queue full: the message says which",
+         "headers": {"Retry-After": {"description": "seconds to wait",
+                                     "schema": {"type": "integer"}}}}
+_LOCATION = {"Location": {"description": "the validation_url to poll",
+                          "schema": {"type": "string"}}}
 
 
 def answer_or_pending(out: dict[str, Any] | Accepted) -> Any:
@@ -28,8 +32,9 @@ def answer_or_pending(out: dict[str, Any] | Accepted) -> Any:
 
 
 @router.post("/dose-time", response_model=s.DoseTimeResponse | DrugDoseResponse, responses={
-    202: {"model": s.PendingResponse, "description": "needs the full solver: poll "
-                                                     "validation_url, then ask again"},
+    202: {"model": s.PendingResponse, "headers": _LOCATION,
+          "description": "needs the full solver: poll validation_url, then ask again (a "
+                         "drug dose: the validation's result is the answer)"},
     429: _FULL})
 async def dose(body: s.DoseTimeRequest, planner: PlannerDep, state: StateDep) -> Any:
     """How long to heat a bead to release a dose (front model at once, or 202; a drug dose
@@ -39,7 +44,8 @@ async def dose(body: s.DoseTimeRequest, planner: PlannerDep, state: StateDep) ->
 
 @router.post("/schedule", response_model=s.ScheduleResponse | DrugScheduleResponse,
              responses={
-    202: {"model": s.PendingResponse, "description": "queued as a job: poll validation_url"},
+    202: {"model": s.PendingResponse, "headers": _LOCATION,
+          "description": "queued as a job: poll validation_url"},
     429: _FULL})
 async def schedule_route(body: s.ScheduleRequest, state: StateDep, _: PlannerDep) -> Any:
     """A multi-dose schedule: hold times at once; protocol check and correction as a job."""
