@@ -41,6 +41,9 @@ GelName = Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]{
 Branch = Literal["swollen", "shrunken"]
 
 
+
+MIN_RADIUS_UM = 1.0e-3  # 1 nm: a subnormal radius would make tau 0 (issue 22)
+
 def interfacial_length_field() -> Any:
     """The validation truth's interfacial length: None (the bead's own), 0 (the paper's
     model) or a given ell."""
@@ -319,11 +322,11 @@ class DoseTimeRequest(RequestModel):
         None, gt=0.0, le=1.0e6, examples=[2.0],
         description="drug concentration of the loaded fluid in ug/uL, 0 < c <= 1e6")
     dry_radius_um: float | None = Field(
-        None, gt=0.0, le=1.0e5, examples=[50.0],
-        description="dry bead radius in micrometres, 0 < r <= 1e5")
+        None, ge=MIN_RADIUS_UM, le=1.0e5, examples=[50.0],
+        description="dry bead radius in micrometres, 1e-3 <= r <= 1e5")
     swollen_radius_um: float | None = Field(
-        None, gt=0.0, le=1.0e6, examples=[114.6],
-        description="bead radius swollen at T_start in micrometres, 0 < r <= 1e6")
+        None, ge=MIN_RADIUS_UM, le=1.0e6, examples=[114.6],
+        description="bead radius swollen at T_start in micrometres, 1e-3 <= r <= 1e6")
     branch: Branch | None = Field(
         None, description="start branch at T_start (default: swollen)")
     constants: ConstantsIn | None = Field(
@@ -516,11 +519,11 @@ class ScheduleRequest(RequestModel):
         None, max_length=19, description="the rests in seconds instead (needs a bead size), "
                                          "0-1e7 s each")
     dry_radius_um: float | None = Field(
-        None, gt=0.0, le=1.0e5, examples=[50.0],
-        description="dry bead radius in micrometres, 0 < r <= 1e5")
+        None, ge=MIN_RADIUS_UM, le=1.0e5, examples=[50.0],
+        description="dry bead radius in micrometres, 1e-3 <= r <= 1e5")
     swollen_radius_um: float | None = Field(
-        None, gt=0.0, le=1.0e6, description="bead radius swollen at T_start in micrometres, "
-                                            "0 < r <= 1e6")
+        None, ge=MIN_RADIUS_UM, le=1.0e6,
+        description="bead radius swollen at T_start in micrometres, 1e-3 <= r <= 1e6")
     branch: Branch | None = Field(None, description="start branch at T_start (default swollen)")
     constants: ConstantsIn | None = Field(None, description="timescale constants")
     check_protocol: bool = Field(

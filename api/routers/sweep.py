@@ -47,7 +47,7 @@ SWEEP_QUEUE = 4  # sweeps queued or running before 429
 SWEEP_PREFIX = "sweep-"
 SWEEPS_KEPT = 8  # finished sweep tables kept in memory (20,000 rows: tens of MB each)
 Temperature = Annotated[float, Field(ge=273.15, le=373.15)]
-Radius = Annotated[float, Field(gt=0.0, le=1.0e5)]
+Radius = Annotated[float, Field(ge=1.0e-3, le=1.0e5)]
 Fraction = Annotated[float, Field(gt=0.0, le=1.0)]
 
 
@@ -69,7 +69,7 @@ class SweepRequest(RequestModel):
         description="1-200 end (actuation) temperatures in K, 273.15-373.15 each")
     dry_radii_um: list[Radius] = Field(
         min_length=1, max_length=200, examples=[[20.0, 50.0, 100.0]],
-        description="1-200 dry bead radii in micrometres, 0 < r <= 1e5 each")
+        description="1-200 dry bead radii in micrometres, 1e-3 <= r <= 1e5 each")
     doses: list[Fraction] = Field(
         min_length=1, max_length=100, examples=[[0.3, 0.5, 0.8]],
         description="1-100 doses, fractions of the stored fluid, 0 < f <= 1 each")
