@@ -1,6 +1,8 @@
 # thermogel planner service: FastAPI under uvicorn on the embedded SQLite validation cache.
 #   docker build -t thermogel .
-#   docker run -p 8000:8000 -v thermogel-data:/data thermogel
+#   docker run -p 8000:8000 -v thermogel-data:/data -e THERMOGEL_API_TOKEN=<secret> thermogel
+# It binds 0.0.0.0, so it needs an API token (clients send 'Authorization: Bearer <secret>';
+# /health stays open for the health check); THERMOGEL_ALLOWED_HOSTS limits the Host names.
 FROM python:3.11-slim
 
 ENV PYTHONDONTWRITEBYTECODE=1 \

@@ -1,8 +1,9 @@
 """The service layer of drug doses and schedules (requests with a ``drug``).
 
-A drug dose without diffusion is the fluid answer (milliseconds); otherwise a drug run of
-the full solver answers, blocking in the route's thread (seconds; deduplicated on the
-planner's executor and cached).  A drug schedule is answered at once under the hold
+A drug dose without diffusion is the fluid answer (milliseconds); otherwise drug runs of
+the full solver answer it: at once when they are all cached, else as a stored job (202;
+poll /v1/validations/drug-dose-<id>, whose result is the answer), so that no HTTP worker
+thread waits on a run (issue 22, N1).  A drug schedule is answered at once under the hold
 reading with D0 = 0, else as a job (202; poll /v1/validations/schedule-<id>, the queue of
 the schedule jobs).
 """
@@ -63,6 +64,38 @@ def dose_answer(planner: Any, body: s.DoseTimeRequest, to_gel: Any) -> dict[str,
     """A drug dose's answer (blocking: a drug run takes seconds; cached)."""
     req = to_drug_dose_request(body, to_gel)
     return {"status": "answered", "drug": True, **plan_drug_dose(planner, req).to_dict()}
+
+
+class RunNotCached(LookupError):
+    """A drug run the answer needs is not in the cache (:class:`CachedRuns`)."""
+
+
+class CachedRuns:
+    """A planner's drug runs, cached ones only: a missing run raises RunNotCached instead
+    of computing it."""
+
+    def __init__(self, runs: Any) -> None:
+        self.runs = runs
+
+    def run(self, sc: Any) -> Any:
+        """The cached run for ``sc``, or RunNotCached."""
+        hit = self.runs.cached(sc)
+        if hit is None:
+            raise RunNotCached(sc.key())
+        return hit
+
+
+def dose_now(planner: Any, body: s.DoseTimeRequest, to_gel: Any) -> dict[str, Any] | None:
+    """A drug dose's answer when nothing needs a new run (no diffusion, or every run cached),
+    else None: the caller queues it as a job (:func:`dose_answer` then runs)."""
+    from dosing.drug import runs_for
+
+    req = to_drug_dose_request(body, to_gel)
+    try:
+        ans = plan_drug_dose(planner, req, runs=CachedRuns(runs_for(planner)))
+    except RunNotCached:
+        return None
+    return {"status": "answered", "drug": True, **ans.to_dict()}
 
 
 def schedule_is_quick(body: s.ScheduleRequest, to_gel: Any) -> bool:

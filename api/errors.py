@@ -22,13 +22,31 @@ from fastapi.responses import JSONResponse
 from dosing import QueueFullError, UnknownValidationError
 from solver.errors import NotApplicableError, ParameterError, SolverError
 
+from .safe_route import printable
+
 RETRY_AFTER_SECONDS = 5
 MAX_ERRORS = 20  # validation errors reported per answer
 EXCERPT_CHARS = 80
+MSG_CHARS = 400
 
 
 class ServiceUnavailable(RuntimeError):
     """The planner is not ready (start-up not finished, or shut down)."""
+
+
+class CacheFault(RuntimeError):
+    """The validation cache failed (SQLite: disk full, a malformed page, an I/O error): a
+    server fault, HTTP 503 naming the cache; /health says 'degraded' for a while."""
+
+    def __init__(self, reason: str) -> None:
+        super().__init__(f"the validation cache failed: {reason}; the service is degraded "
+                         "(an operator must free disk space or repair the cache file)")
+        self.reason = reason
+
+
+class InternalError(RuntimeError):
+    """An unexpected exception in the service: HTTP 500 with the stable code
+    'internal_error' (the traceback goes to the log, not to the client)."""
 
 
 def loc_of(name: str | None, root: str = "body") -> list[str | int]:
@@ -46,18 +64,21 @@ def excerpt(value: Any) -> str | float | int | bool | None:
     if isinstance(value, float):
         return value if math.isfinite(value) else str(value)
     if isinstance(value, str):
-        return value if len(value) <= EXCERPT_CHARS else value[:EXCERPT_CHARS] + "..."
+        return printable(value, EXCERPT_CHARS)
     if isinstance(value, (list, tuple)):
         return f"a list of {len(value)} items"
     if isinstance(value, dict):
-        keys = ", ".join(map(str, list(value)[:8]))
-        return (f"an object with keys {keys}" + (", ..." if len(value) > 8 else ""))[
-            :EXCERPT_CHARS]
+        keys = ", ".join(printable(str(k), 20) for k in list(value)[:8])
+        return printable(f"an object with keys {keys}" + (", ..." if len(value) > 8 else ""),
+                         EXCERPT_CHARS)
     return type(value).__name__
 
 
 def _item(loc: list[str | int], msg: str, kind: str, **extra: Any) -> dict[str, Any]:
-    return {"loc": loc, "msg": msg, "type": kind, **extra}
+    """One error item, UTF-8 safe and short: a 100 kB unknown key is echoed as 80 chars."""
+    loc = [p if isinstance(p, int) else printable(str(p), EXCERPT_CHARS) for p in loc]
+    return {"loc": loc, "msg": printable(msg, MSG_CHARS), "type": printable(kind, 40),
+            **extra}
 
 
 @dataclass(frozen=True)
@@ -92,6 +113,11 @@ ERRORS: dict[type[Exception], Rule] = {
         msg=lambda e: f"no validation with id {e.args[0]!r}"),
     ServiceUnavailable: Rule(503, "unavailable", plain=True,
                              headers=lambda e: {"Retry-After": str(RETRY_AFTER_SECONDS)}),
+    CacheFault: Rule(503, "cache_unavailable", loc=lambda e: ["cache"],
+                     headers=lambda e: {"Retry-After": str(6 * RETRY_AFTER_SECONDS)}),
+    InternalError: Rule(500, "internal_error",
+                        msg=lambda e: "internal server error: the service failed on this "
+                                      "request (logged); please report it"),
 }
 
 
@@ -112,7 +138,11 @@ def error_response(exc: Exception) -> JSONResponse:
     return JSONResponse({"detail": detail}, status_code=rule.status, headers=rule.headers(exc))
 
 
-async def _table_handler(_: Request, exc: Exception) -> JSONResponse:
+async def _table_handler(request: Request, exc: Exception) -> JSONResponse:
+    if isinstance(exc, CacheFault):  # /health reports it
+        state = getattr(request.app.state, "service", None)
+        if state is not None and hasattr(state, "record_fault"):
+            state.record_fault(exc.reason)
     return error_response(exc)
 
 

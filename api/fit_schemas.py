@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from api.schemas import GelSpec, RequestModel
+from dosing.gel_store import check_name
 
 SIZE_FIELDS = ("radius", "diameter", "volume_ratio")
+FixedName = Literal["omega", "a0", "b0", "a1", "b1", "scale"]  # solver.fit.equilibrium.PARAMS
+Temperature = Annotated[float, Field(ge=273.15, le=373.15)]
 MAX_POINTS = 2000
 
 
@@ -31,6 +34,13 @@ class _In(RequestModel):
         description="store the fitted gel under this name (usable "
         "as the gel of later dose, schedule and simulate requests)",
     )
+
+    @field_validator("save")
+    @classmethod
+    def _storable(cls, name: str | None) -> str | None:
+        if name is not None:
+            check_name(name)  # ParameterError is a ValueError: a 422 at ['body', 'save']
+        return name
 
     @model_validator(mode="after")
     def _one_size(self) -> _In:
@@ -69,7 +79,7 @@ class SwellingFitRequest(_In):
     temperature_K: list[float] = Field(max_length=MAX_POINTS, description="temperatures in K")
     sigma_t: float = Field(0.05, gt=0, description="temperature noise, K")
     size_rel_sigma: float = Field(0.01, gt=0, description="relative size noise")
-    fixed: dict[str, float] | None = Field(
+    fixed: dict[FixedName, float] | None = Field(
         None, description="parameters kept fixed (omega, scale, b0, b1; a0 with b0, a1 with b1)"
     )
     n_starts: int = Field(6, ge=1, le=50, description="polished starts of the global search")
@@ -105,14 +115,15 @@ class KineticsFitRequest(_In):
 
     time_s: list[float] = Field(max_length=MAX_POINTS, description="times after the jump, s")
     gel: GelSpec = "ANB"
-    t_start: float = Field(description="start temperature, K")
-    t_end: float = Field(description="jump temperature, K")
+    t_start: Temperature = Field(description="start temperature, K, 273.15-373.15")
+    t_end: Temperature = Field(description="jump temperature, K, 273.15-373.15")
     branch: Literal["swollen", "shrunken"] | None = Field(
         None, description="start branch at T_start (default swollen when heating)")
     dry_radius_um: float | None = Field(None, gt=0, description="dry bead radius, um")
     swollen_radius_um: float | None = Field(None, gt=0, description="bead radius at T_start")
-    viscosity_pa_s: float | Literal["water"] = Field(
-        1.0e-3, description="fluid viscosity in Pa s, or 'water' (water at T_end), for k0")
+    viscosity_pa_s: Annotated[float, Field(gt=0.0, le=10.0)] | Literal["water"] = Field(
+        1.0e-3, description="fluid viscosity in Pa s, 0 < eta <= 10, or 'water' (water at "
+                            "T_end), for k0")
     polymer_volume_m3: float = Field(3.0e-25, gt=0, description="Omega_p in m^3, for k0")
     model: Literal["auto", "front", "front-sharp", "full"] = Field(
         "auto", description="model of the curve: the front models (milliseconds), the full "
@@ -123,6 +134,12 @@ class KineticsFitRequest(_In):
                                "0 < beta < 10: fixed, or the start of its fit")
     interfacial_length: float | None = Field(None, ge=0, description="full solver's ell")
     size_rel_sigma: float = Field(0.01, gt=0, description="relative size noise")
+
+    @model_validator(mode="after")
+    def _one_bead_size(self) -> KineticsFitRequest:
+        if self.dry_radius_um is not None and self.swollen_radius_um is not None:
+            raise ValueError("give at most one bead size: dry_radius_um or swollen_radius_um")
+        return self
 
 
 class FitJobResponse(BaseModel):

@@ -18,16 +18,20 @@ from typing import Any
 
 from fastapi import FastAPI
 from fastapi.concurrency import run_in_threadpool
+from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from dosing.jobs import exit_with_parent
 
-from . import errors
+from . import errors, guard
 from . import schemas as s
+from .auth import TokenAuth
 from .routers import dosing, fit, page, physics, service, sweep, validations
 from .routers import sensitivity as sensitivity_routes
 from .service import ServiceState
 from .version import package_version
 
+RETRY_HEADER = {"description": "seconds to wait before asking again",
+                "schema": {"type": "integer"}}
 DEFAULT_MAX_BODY = 1 << 20  # bytes: the largest valid request is a few kB
 SUPERVISOR_ENV = "THERMOGEL_SUPERVISOR_PID"
 
@@ -35,7 +39,8 @@ SUPERVISOR_ENV = "THERMOGEL_SUPERVISOR_PID"
 def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool = True,
                max_pending: int | None = None, executor: Any = None,
                max_body_bytes: int = DEFAULT_MAX_BODY,
-               lease_seconds: float | None = None) -> FastAPI:
+               lease_seconds: float | None = None, api_token: str | None = None,
+               allowed_hosts: list[str] | None = None) -> FastAPI:
     """The planner service.
 
     ``planner``: a ``dosing.Planner`` to serve (the caller closes it); by default one is
@@ -43,7 +48,9 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
     ``max_pending`` (validations queued or running) and ``lease_seconds`` (how long a
     crashed server's claim on a run outlives it) and closed at shutdown, its process pool
     stopped.  ``warm``: warm every numba kernel first.  ``max_body_bytes``: larger request
-    bodies are refused with 413 before they are read.
+    bodies are refused with 413 before they are read.  ``api_token``: every route but
+    /health needs ``Authorization: Bearer <token>`` (:mod:`api.auth`).  ``allowed_hosts``:
+    Host headers accepted (Starlette's TrustedHostMiddleware; default any).
     """
     options: dict[str, Any] = {"cache_path": cache_path}
     if executor is not None:
@@ -62,7 +69,7 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
         finally:
             await run_in_threadpool(state.stop)
 
-    app = FastAPI(
+    app = guard.GuardedFastAPI(
         title="thermogel planner", version=package_version(), lifespan=lifespan,
         max_body_size=max_body_bytes,
         description="Plan drug release from thermo-responsive gel beads (Butler & "
@@ -70,9 +77,19 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
                     "radii and times in units of tau (eq. timescale).",
         responses={400: {"model": s.ErrorResponse, "description": "unreadable body"},
                    413: {"model": s.ErrorResponse, "description": "body over the limit"},
-                   422: {"model": s.ErrorResponse, "description": "bad input; loc names it"}})
+                   422: {"model": s.ErrorResponse, "description": "bad input; loc names it"},
+                   500: {"model": s.ErrorResponse,
+                         "description": "internal error (type 'internal_error'; logged)"},
+                   503: {"model": s.ErrorResponse, "headers": {"Retry-After": RETRY_HEADER},
+                         "description": "starting, or the validation cache failed (type "
+                                        "'cache_unavailable'; /health says degraded)"}})
     app.state.service = state
     errors.install(app)
+    guard.add(app)
+    if api_token:
+        app.add_middleware(TokenAuth, token=api_token)
+    if allowed_hosts:
+        app.add_middleware(TrustedHostMiddleware, allowed_hosts=allowed_hosts)
     app.include_router(service.router)
     app.include_router(physics.router)
     app.include_router(dosing.router)
@@ -89,7 +106,8 @@ def app_from_env() -> FastAPI:
 
     THERMOGEL_CACHE (cache file), THERMOGEL_MAX_PENDING (validations queued or running),
     THERMOGEL_MAX_BODY (bytes), THERMOGEL_LEASE_SECONDS, THERMOGEL_WARMUP ('0' skips the
-    warm-up).  A uvicorn worker process (``--workers`` > 1) ends itself when the
+    warm-up), THERMOGEL_API_TOKEN (the bearer token), THERMOGEL_ALLOWED_HOSTS (comma-
+    separated Host names).  A uvicorn worker process (``--workers`` > 1) ends itself when the
     supervisor it was started by is gone.
     """
     supervisor = os.environ.get(SUPERVISOR_ENV)
@@ -100,4 +118,7 @@ def app_from_env() -> FastAPI:
                       max_pending=int(env("THERMOGEL_MAX_PENDING") or 0) or None,
                       max_body_bytes=int(env("THERMOGEL_MAX_BODY") or DEFAULT_MAX_BODY),
                       lease_seconds=float(env("THERMOGEL_LEASE_SECONDS") or 0) or None,
-                      warm=env("THERMOGEL_WARMUP", "1") != "0")
+                      warm=env("THERMOGEL_WARMUP", "1") != "0",
+                      api_token=env("THERMOGEL_API_TOKEN") or None,
+                      allowed_hosts=[h.strip() for h in (env("THERMOGEL_ALLOWED_HOSTS") or "")
+                                     .split(",") if h.strip()] or None)

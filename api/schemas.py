@@ -45,6 +45,9 @@ GelName = Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]{
 Branch = Literal["swollen", "shrunken"]
 
 
+
+MIN_RADIUS_UM = 1.0e-3  # 1 nm: a subnormal radius would make tau 0 (issue 22)
+
 def interfacial_length_field() -> Any:
     """The validation truth's interfacial length: None (the bead's own), 0 (the paper's
     model) or a given ell."""
@@ -295,8 +298,8 @@ class ConstantsIn(RequestModel):
         description="the gel's dry mesh (interfacial) length xi_dry in nm, 0 < xi <= 1000: "
                     "the truth's interfacial length is xi_dry / a_d (default 4 nm, "
                     "docs/interfacial.md sec. 1)")
-    mesh_length_range_nm: tuple[float, float] | None = Field(
-        None, examples=[[2.0, 8.0]],
+    mesh_length_range_nm: list[float] | None = Field(
+        None, min_length=2, max_length=2, examples=[[2.0, 8.0]],
         description="plausible range [lo, hi] of mesh_length_nm in nm, over which the "
                     "answer's interfacial-length uncertainty is measured (default [2, 8])")
 
@@ -410,11 +413,11 @@ class DoseTimeRequest(RequestModel):
         None, gt=0.0, le=1.0e6, examples=[2.0],
         description="drug concentration of the loaded fluid in ug/uL, 0 < c <= 1e6")
     dry_radius_um: float | None = Field(
-        None, gt=0.0, le=1.0e5, examples=[50.0],
-        description="dry bead radius in micrometres, 0 < r <= 1e5")
+        None, ge=MIN_RADIUS_UM, le=1.0e5, examples=[50.0],
+        description="dry bead radius in micrometres, 1e-3 <= r <= 1e5")
     swollen_radius_um: float | None = Field(
-        None, gt=0.0, le=1.0e6, examples=[114.6],
-        description="bead radius swollen at T_start in micrometres, 0 < r <= 1e6")
+        None, ge=MIN_RADIUS_UM, le=1.0e6, examples=[114.6],
+        description="bead radius swollen at T_start in micrometres, 1e-3 <= r <= 1e6")
     branch: Branch | None = Field(
         None, description="start branch at T_start (default: swollen)")
     constants: ConstantsIn | None = Field(
@@ -652,7 +655,8 @@ class ValidationResponse(_Out):
     :class:`ValidationReport` (dose) or a :class:`ScheduleResponse` (schedule)."""
 
     id: str = Field(description="validation id")
-    kind: Literal["dose", "schedule"] = Field("dose", description="what was checked")
+    kind: Literal["dose", "schedule", "drug-dose"] = Field(
+        "dose", description="what was checked ('drug-dose': a drug dose's runs)")
     status: Literal["pending", "running", "done", "failed"] = Field(description="its state")
     result: dict[str, Any] | None = Field(
         None, description="when done: the truth's time for the dose, every run behind it and "
@@ -693,11 +697,11 @@ class ScheduleRequest(RequestModel):
         None, max_length=19, description="the rests in seconds instead (needs a bead size), "
                                          "0-1e7 s each")
     dry_radius_um: float | None = Field(
-        None, gt=0.0, le=1.0e5, examples=[50.0],
-        description="dry bead radius in micrometres, 0 < r <= 1e5")
+        None, ge=MIN_RADIUS_UM, le=1.0e5, examples=[50.0],
+        description="dry bead radius in micrometres, 1e-3 <= r <= 1e5")
     swollen_radius_um: float | None = Field(
-        None, gt=0.0, le=1.0e6, description="bead radius swollen at T_start in micrometres, "
-                                            "0 < r <= 1e6")
+        None, ge=MIN_RADIUS_UM, le=1.0e6,
+        description="bead radius swollen at T_start in micrometres, 1e-3 <= r <= 1e6")
     branch: Branch | None = Field(None, description="start branch at T_start (default swollen)")
     constants: ConstantsIn | None = Field(None, description="timescale constants")
     check_protocol: bool = Field(
@@ -758,7 +762,9 @@ class ScheduleResponse(_Out):
 class HealthResponse(_Out):
     """Liveness and readiness of the service."""
 
-    status: Literal["ok", "starting"] = Field(description="'ok' once the kernels are warm")
+    status: Literal["ok", "starting", "degraded"] = Field(
+        description="'ok' once the kernels are warm; 'degraded' after a server fault (e.g. "
+                    "a full disk): planner.degraded_because says why")
     version: str = Field(description="thermogel version")
     kernels_warm: int = Field(description="numba kernels compiled or loaded from the cache")
     kernels_cold: list[str] = Field(

@@ -11,6 +11,9 @@ share.  No physics here.
 from __future__ import annotations
 
 import logging
+import sqlite3
+import threading
+import time
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
@@ -37,11 +40,13 @@ from solver.phase import classify_jump
 
 from . import drug_service, stored_jobs
 from . import schemas as s
+from .errors import CacheFault, InternalError, ServiceUnavailable
 from .warmup import WarmupReport, warm_up
 
 log = logging.getLogger("thermogel.service")
 
 JOB_QUEUE = 8  # stored jobs (schedules, fits) queued or running before 429
+FAULT_SECONDS = 120.0  # /health is 'degraded' this long after a cache fault
 
 
 # ----------------------------------------------------------------------------- physics
@@ -80,20 +85,33 @@ def classify_answer(req: s.ClassifyRequest) -> dict[str, Any]:
 
 @contextmanager
 def solver_guard() -> Iterator[None]:
-    """Let input and solver errors through; turn any other failure inside the physics into a
-    SolverError (a 422 naming the failure, logged with its traceback) instead of a 500."""
+    """Let input and solver errors through; a failure of the cache file (SQLite) becomes a
+    CacheFault (503 naming the cache), any other exception an InternalError (500, logged
+    with its traceback): server faults are not input errors."""
     try:
         yield
     except (ParameterError, NotApplicableError, SolverError, QueueFullError,
-            UnknownValidationError):
+            UnknownValidationError, CacheFault, InternalError, ServiceUnavailable):
         raise
+    except sqlite3.Error as exc:
+        log.exception("validation cache failure on a request")
+        raise CacheFault(str(exc) or type(exc).__name__) from exc
     except Exception as exc:
-        log.exception("solver failure on a request")
-        raise SolverError(f"internal failure ({type(exc).__name__}: {exc})",
-                          {"exception": type(exc).__name__}) from exc
+        log.exception("internal failure on a request")
+        raise InternalError(type(exc).__name__) from exc
 
 
 # ----------------------------------------------------------------------------- state
+
+def _unfinished(runner: JobRunner) -> int | None:
+    """Unfinished groups of a job runner, from a copy of its table (dict.copy is atomic):
+    no lock, so /health never waits on the compute threads."""
+    try:
+        entries = runner._jobs.copy()
+        return len({e.group for e in entries.values() if not e.outer.done()})
+    except Exception:  # a stand-in runner: unknown
+        return None
+
 
 def validation_url(vid: str) -> str:
     """The path to poll a validation or stored job."""
@@ -132,6 +150,11 @@ class ServiceState:
     options: dict[str, Any] = field(default_factory=dict)
     _jobs: JobRunner | None = None
     _job_pool: ThreadPoolExecutor | None = None
+    _fault: tuple[float, str] | None = None
+    _probed: int | None = None
+    _probe: Any = None
+    _health_pool: ThreadPoolExecutor | None = None
+    _probe_lock: threading.Lock = field(default_factory=threading.Lock)
 
     @property
     def jobs(self) -> JobRunner:
@@ -154,14 +177,49 @@ class ServiceState:
         if warm:
             self.warmup = warm_up(self.planner)
 
+    def record_fault(self, reason: str) -> None:
+        """Remember a server fault (a failed cache): /health is 'degraded' for
+        ``FAULT_SECONDS`` after the last one, and says why."""
+        self._fault = (time.monotonic(), reason)
+
+    def fault(self) -> str | None:
+        """Why the service is degraded (a recent cache fault, a failed cache probe), or None."""
+        if self._fault is not None and time.monotonic() - self._fault[0] < FAULT_SECONDS:
+            return f"the validation cache failed: {self._fault[1]}"
+        return None
+
     def describe(self) -> dict[str, Any]:
-        """Cache path and queue state for /health (empty for a stand-in planner)."""
+        """Queue state for /health, read without any lock the compute threads take and
+        without the cache file (the cached count comes from :meth:`probe`)."""
         p = self.planner
         if p is None or not hasattr(p, "jobs") or not hasattr(p, "cache"):
             return {}
-        return {"cache": str(p.cache.path), "cached_trajectories": len(p.cache),
-                "validations_unfinished": p.jobs.pending(), "max_pending": p.jobs.max_pending,
-                "jobs_unfinished": self.jobs.pending()}
+        out: dict[str, Any] = {"cache": p.cache.path.name,
+                               "cached_trajectories": self._probed,
+                               "validations_unfinished": _unfinished(p.jobs),
+                               "max_pending": p.jobs.max_pending}
+        out["jobs_unfinished"] = 0 if self._jobs is None else _unfinished(self._jobs)
+        return out
+
+    def probe(self) -> Any:
+        """Start a look at the cache file on the health thread (never the compute threads'
+        pool) unless one is under way; a concurrent.futures.Future, or None."""
+        p = self.planner
+        if p is None or not hasattr(p, "cache"):
+            return None
+        with self._probe_lock:  # only the health route takes it
+            if self._probe is not None and not self._probe.done():
+                return self._probe
+            if self._health_pool is None:
+                self._health_pool = ThreadPoolExecutor(1, thread_name_prefix="health")
+            self._probe = self._health_pool.submit(self._look, p.cache)
+            return self._probe
+
+    def _look(self, cache: Any) -> None:
+        try:
+            self._probed = len(cache)
+        except sqlite3.Error as exc:
+            self.record_fault(str(exc))
 
     def stop(self, wait: bool = False) -> None:
         """Drop queued stored jobs (``wait``: join the running one; they stay in the cache
@@ -171,6 +229,9 @@ class ServiceState:
             if self._job_pool is not None:
                 self._job_pool.shutdown(wait=wait, cancel_futures=True)
             self._jobs = self._job_pool = None
+        if self._health_pool is not None:
+            self._health_pool.shutdown(wait=False, cancel_futures=True)
+            self._health_pool = None
         if self.owns_planner and self.planner is not None:
             self.planner.close()
             self.planner = None
@@ -242,16 +303,34 @@ PROTOCOL_PENDING_NOTE = (
     "with until-steps may take one more round per until-step).")
 
 
-def dose_time(planner: Planner, body: s.DoseTimeRequest) -> dict[str, Any] | Accepted:
+DRUG_PENDING_NOTE = (
+    "This drug dose needs full-solver drug runs that are not cached yet: it is queued as a "
+    "job. Poll validation_url; once done, its result is the answer (asking again is then "
+    "answered at once from the cache).")
+
+
+def _drug_dose_job(planner: Planner, body: s.DoseTimeRequest) -> dict[str, Any]:
+    """A stored drug-dose job's run: the answer, computing its drug runs (blocking)."""
+    return drug_service.dose_answer(planner, body, to_gel)
+
+
+def dose_time(planner: Planner, body: s.DoseTimeRequest,
+              state: ServiceState | None = None) -> dict[str, Any] | Accepted:
     """The answer (front model or cache; 200), or :class:`Accepted` with a validation id;
     one planner call (:meth:`dosing.Planner.answer`).  A dose with a drug is answered by
-    :mod:`api.drug_service`."""
+    :mod:`api.drug_service`: at once when its runs are cached, else (given ``state``) as a
+    stored 'drug-dose' job, so that no HTTP worker thread waits on a run."""
     if body.size_distribution is not None and (body.drug is not None
                                                or body.protocol is not None):
         raise ParameterError("size_distribution", "a batch", "null with a drug or a protocol "
                              "(a batch's drug dose or protocol dose is not built yet)")
     if body.drug is not None and body.protocol is None:
-        return drug_service.dose_answer(planner, body, to_gel)
+        if state is None:
+            return drug_service.dose_answer(planner, body, to_gel)
+        now = drug_service.dose_now(planner, body, to_gel)
+        if now is not None:
+            return now
+        return Accepted(stored_jobs.submit(state, "drug-dose", body), DRUG_PENDING_NOTE)
     req = to_dose_request(body)
     out = planner.answer(req, validate=body.validate_full)
     if isinstance(out, Pending):
@@ -302,6 +381,7 @@ def schedule(state: ServiceState, body: s.ScheduleRequest) -> dict[str, Any] | A
 
 
 stored_jobs.register(stored_jobs.JobKind("schedule", s.ScheduleRequest, _schedule_result))
+stored_jobs.register(stored_jobs.JobKind("drug-dose", s.DoseTimeRequest, _drug_dose_job))
 
 
 def validation(state: ServiceState, vid: str) -> dict[str, Any]:

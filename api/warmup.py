@@ -110,6 +110,8 @@ def representative_workload(planner: Any = None) -> list[Callable[[], Any]]:
     ]
     if planner is not None:
         work.append(lambda: _front_dose(planner))
+        work.append(lambda: _drug_dose_lookup(planner))
+        work.append(lambda: _start_pool(planner))
     work.append(_tiny_full_runs)
     work.append(_tiny_drug_run)
     return work
@@ -138,6 +140,34 @@ def _tiny_full_runs() -> None:
             simulate(ANB, 302.0, protocol=[(1.0e-4, 308.0)], grid=grid, n=20,
                      integrator=integrator, rtol=1.0e-3,
                      interfacial_length=0.01 if grid == "moving" else 0.0)
+
+
+def _start_pool(planner: Any) -> Any:
+    """Start the planner's executor (a process pool's spawned worker imports the solver)
+    now, not under the first burst of requests that need a run."""
+    jobs = getattr(planner, "jobs", None)
+    if jobs is None:
+        return None
+    return jobs.executor.submit(_import, "dosing.drug").result(timeout=300)
+
+
+def _import(name: str) -> None:
+    """Import a module (in a pool worker; returns nothing picklable-heavy)."""
+    importlib.import_module(name)
+
+
+def _drug_dose_lookup(planner: Any) -> Any:
+    """A drug dose with diffusion looked up in the cache (nothing is computed): the first
+    real one then finds its modules imported and its kernels loaded (a burst of drug doses
+    does not hold the GIL for seconds in the server process)."""
+    from . import drug_service
+    from . import schemas as s
+    from .service import to_gel
+
+    body = s.DoseTimeRequest.model_validate({
+        "gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.3,
+        "dry_radius_um": 50.0, "drug": {"diffusivity_cm2_s": 1e-7, "load_ug": 1.0}})
+    return drug_service.dose_now(planner, body, to_gel)
 
 
 def _front_dose(planner: Any) -> Any:

@@ -10,11 +10,18 @@ table records validation requests, so ids survive a restart; a third, the leases
 each scenario computed once across processes sharing the file (a claim with an expiry,
 renewed while its holder works, taken over once it lapses or its holder's process is
 gone); a fourth stores jobs (schedule checks): their request, state and result.
+
+Each trajectory row carries a SHA-256 of its metadata and blob (column ``sha256``; rows
+written before it have none and are read as they are): a row whose bytes no longer match
+(a flipped bit, a torn page copied in) is detected on read, dropped and reported missing,
+so it is computed again instead of answering from damaged data.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
+import logging
 import os
 import socket
 import sqlite3
@@ -26,6 +33,8 @@ from typing import Any
 from solver.errors import ParameterError
 
 from .scenario import Trajectory
+
+log = logging.getLogger("thermogel.cache")
 
 ENV = "THERMOGEL_CACHE"
 BUSY_TIMEOUT_S = 60.0
@@ -80,12 +89,45 @@ def _owner_gone(owner: str) -> bool:
     return False
 
 
+def row_checksum(meta_text: str, blob: bytes) -> str:
+    """SHA-256 of a trajectory row's stored metadata text and blob."""
+    h = hashlib.sha256(meta_text.encode("utf-8"))
+    h.update(b"\0")
+    h.update(blob)
+    return h.hexdigest()
+
+
+def _add_checksum_column(con: sqlite3.Connection) -> None:
+    """Add the trajectories' ``sha256`` column to a file made before it (idempotent)."""
+    cols = {r[1] for r in con.execute("PRAGMA table_info(trajectories)")}
+    if "sha256" in cols:
+        return
+    try:
+        con.execute("ALTER TABLE trajectories ADD COLUMN sha256 TEXT")
+    except sqlite3.OperationalError as exc:  # another process added it meanwhile
+        if "duplicate column" not in str(exc):
+            raise
+
+
 def default_path() -> Path:
     """$THERMOGEL_CACHE, else ~/.cache/thermogel/validations.sqlite."""
     env = os.environ.get(ENV)
     if env:
         return Path(env).expanduser()
     return Path.home() / ".cache" / "thermogel" / "validations.sqlite"
+
+
+def _sound(meta_text: Any, blob: bytes, digest: str | None) -> bool:
+    """True if a row's checksum matches (rows without one: if their metadata parses)."""
+    if not isinstance(meta_text, str):
+        return False
+    if digest is not None:
+        return row_checksum(meta_text, bytes(blob)) == digest
+    try:
+        json.loads(meta_text)
+    except ValueError:
+        return False
+    return True
 
 
 class ValidationCache:
@@ -95,6 +137,7 @@ class ValidationCache:
         self.path = Path(path).expanduser() if path is not None else default_path()
         self._local = threading.local()
         self._lock = threading.Lock()
+        self.corrupt_rows = 0  # damaged rows detected (and dropped) by this object
         self._connections: list[tuple[threading.Thread, sqlite3.Connection]] = []
         try:
             if self.path.is_dir():
@@ -102,6 +145,7 @@ class ValidationCache:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             con = self._con()
             con.executescript(_SCHEMA)
+            _add_checksum_column(con)
             con.execute("BEGIN IMMEDIATE")  # a read-only file fails here, not mid-request
             con.execute("ROLLBACK")
         except (sqlite3.Error, OSError) as exc:
@@ -144,9 +188,10 @@ class ValidationCache:
     # trajectories ---------------------------------------------------------------------
     def put(self, key: str, meta: dict[str, Any], blob: bytes) -> None:
         """Store (or replace) a scenario's trajectory in one atomic transaction."""
-        self._write("INSERT OR REPLACE INTO trajectories (key, meta, data, created) "
-                    "VALUES (?, ?, ?, ?)", (key, json.dumps(meta), sqlite3.Binary(blob),
-                                            time.time()))
+        text = json.dumps(meta)
+        self._write("INSERT OR REPLACE INTO trajectories (key, meta, data, created, sha256) "
+                    "VALUES (?, ?, ?, ?, ?)", (key, text, sqlite3.Binary(blob), time.time(),
+                                               row_checksum(text, blob)))
 
     def put_if_longer(self, key: str, meta: dict[str, Any], blob: bytes) -> bool:
         """Store unless a row with at least this horizon is there (one atomic transaction).
@@ -156,13 +201,18 @@ class ValidationCache:
         con = self._con()
         con.execute("BEGIN IMMEDIATE")
         try:
-            row = con.execute("SELECT meta FROM trajectories WHERE key = ?", (key,)).fetchone()
-            old = -1.0 if row is None else float(json.loads(row[0]).get("horizon", -1.0))
+            row = con.execute("SELECT meta, data, sha256 FROM trajectories WHERE key = ?",
+                              (key,)).fetchone()
+            old = -1.0
+            if row is not None and _sound(row[0], row[1], row[2]):
+                old = float(json.loads(row[0]).get("horizon", -1.0))
             write = old < float(meta.get("horizon", 0.0))
             if write:
-                con.execute("INSERT OR REPLACE INTO trajectories (key, meta, data, created) "
-                            "VALUES (?, ?, ?, ?)", (key, json.dumps(meta),
-                                                    sqlite3.Binary(blob), time.time()))
+                text = json.dumps(meta)
+                con.execute("INSERT OR REPLACE INTO trajectories (key, meta, data, created, "
+                            "sha256) VALUES (?, ?, ?, ?, ?)",
+                            (key, text, sqlite3.Binary(blob), time.time(),
+                             row_checksum(text, blob)))
         except BaseException:
             con.execute("ROLLBACK")
             raise
@@ -173,13 +223,41 @@ class ValidationCache:
         """Store a :class:`Trajectory` under ``key``."""
         self.put(key, traj.meta, traj.to_npz())
 
-    def get(self, key: str) -> Trajectory | None:
-        """The stored trajectory for ``key``, or None."""
-        row = self._con().execute("SELECT meta, data FROM trajectories WHERE key = ?",
+    def _row(self, key: str) -> tuple[dict[str, Any], bytes] | None:
+        """(metadata, blob) of a sound row, or None: a row failing its checksum (or whose
+        metadata does not parse) is dropped and reported missing (computed again)."""
+        row = self._con().execute("SELECT meta, data, sha256 FROM trajectories WHERE key = ?",
                                   (key,)).fetchone()
         if row is None:
             return None
-        return Trajectory.from_npz(bytes(row[1]), json.loads(row[0]))
+        text, blob, digest = row[0], bytes(row[1]), row[2]
+        if not _sound(text, blob, digest):
+            self._drop_corrupt(key, digest)
+            return None
+        return json.loads(text), blob
+
+    def _drop_corrupt(self, key: str, digest: str | None) -> None:
+        """Delete a damaged row (unless a sound one replaced it meanwhile)."""
+        log.warning("cache row %s failed its checksum: dropped, it will be computed again",
+                    key)
+        self.corrupt_rows += 1
+        self._write("DELETE FROM trajectories WHERE key = ? AND sha256 IS ?", (key, digest))
+
+    def get(self, key: str) -> Trajectory | None:
+        """The stored trajectory for ``key``, or None (also for a damaged row: dropped)."""
+        raw = self._row(key)
+        if raw is None:
+            return None
+        try:
+            return Trajectory.from_npz(raw[1], raw[0])
+        except Exception:  # an unchecked (old) row that no longer decodes
+            self._drop_corrupt(key, self._digest(key))
+            return None
+
+    def _digest(self, key: str) -> str | None:
+        row = self._con().execute("SELECT sha256 FROM trajectories WHERE key = ?",
+                                  (key,)).fetchone()
+        return None if row is None else row[0]
 
     def get_many(self, keys: list[str] | tuple[str, ...]
                  ) -> dict[str, tuple[dict[str, Any], bytes]]:
@@ -214,16 +292,13 @@ class ValidationCache:
         return out
 
     def get_raw(self, key: str) -> tuple[dict[str, Any], bytes] | None:
-        """(metadata, npz blob) as stored, or None (no decoding)."""
-        row = self._con().execute("SELECT meta, data FROM trajectories WHERE key = ?",
-                                  (key,)).fetchone()
-        return None if row is None else (json.loads(row[0]), bytes(row[1]))
+        """(metadata, npz blob) as stored, or None (no decoding; checksum verified)."""
+        return self._row(key)
 
     def meta(self, key: str) -> dict[str, Any] | None:
-        """The metadata alone (no blob decoding), or None."""
-        row = self._con().execute("SELECT meta FROM trajectories WHERE key = ?",
-                                  (key,)).fetchone()
-        return None if row is None else json.loads(row[0])
+        """The metadata alone (no blob decoding; checksum verified), or None."""
+        raw = self._row(key)
+        return None if raw is None else raw[0]
 
     def __contains__(self, key: str) -> bool:
         return self._con().execute("SELECT 1 FROM trajectories WHERE key = ?",

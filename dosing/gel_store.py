@@ -23,7 +23,10 @@ from .scenario import code_version
 
 ENV = "THERMOGEL_GELS"
 SCHEMA = 1
-NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}\Z")  # match() from the start; \Z:
+# no trailing newline slips through ('$' would accept "abc\n")
+RESERVED = "custom"  # the name of a gel given by parameters
+NAMES_SHOWN = 5  # stored names an unknown gel's error lists
 
 
 def default_dir() -> Path:
@@ -33,14 +36,23 @@ def default_dir() -> Path:
 
 
 def check_name(name: str) -> str:
-    """A storable gel name: letters, digits, '_', '.', '-' (not a preset's name)."""
+    """A storable gel name: 1-64 letters, digits, '_', '.', '-' (no control character, not
+    empty), not a preset's name nor 'custom' in any case."""
     if not isinstance(name, str) or not NAME_RE.match(name):
         raise ParameterError("name", name, "1-64 characters: letters, digits, '_', '.', '-' "
                              "(starting with a letter or digit)")
-    if name.upper() in PRESETS or name == "custom":
+    if name.upper() in PRESETS or name.lower() == RESERVED:
         raise ParameterError("name", name, "a name other than the presets "
-                             + ", ".join(sorted(PRESETS)) + " and 'custom'")
+                             + ", ".join(sorted(PRESETS)) + " and 'custom' (in any case)")
     return name
+
+
+def _some(names: list[str], empty: str) -> str:
+    """At most NAMES_SHOWN names, and how many more (an error never lists the whole store)."""
+    if not names:
+        return empty
+    more = len(names) - NAMES_SHOWN
+    return ", ".join(names[:NAMES_SHOWN]) + (f" and {more} more" if more > 0 else "")
 
 
 def _code_version() -> str:
@@ -91,7 +103,7 @@ class GelStore:
         except FileNotFoundError:
             raise ParameterError("gel", name, "a preset (" + ", ".join(sorted(PRESETS))
                                  + ") or a stored fitted gel ("
-                                 + (", ".join(self.names()) or f"none in {self.dir}") + ")"
+                                 + _some(self.names(), "none stored yet") + ")"
                                  ) from None
         except (OSError, json.JSONDecodeError) as exc:
             raise ParameterError("gel", name, "a readable stored gel", str(exc)) from exc
@@ -143,8 +155,8 @@ def lookup(name: str, store: GelStore | None = None) -> Gel:
         return st.load(name)
     raise ParameterError("gel", name, "one of " + ", ".join(sorted(PRESETS))
                          + " or a stored fitted gel ("
-                         + (", ".join(st.names()) or "none stored yet: thermogel fit ... "
-                            "--save NAME") + ")")
+                         + _some(st.names(), "none stored yet: thermogel fit ... --save NAME")
+                         + ")")
 
 
 def record_for(gel: Gel, store: GelStore | None = None) -> dict[str, Any] | None:

@@ -337,7 +337,11 @@ def fill_validations(result: SweepResult, planner: Planner) -> int:
         vid = row.get("validation_id")
         if not vid or row.get("validation_status") in ("done", "failed"):
             continue
-        st = planner.validation(vid)
+        try:
+            st = planner.validation(vid)
+        except Exception as exc:  # one bad point never poisons the table (issue 22, N4)
+            row.update(validation_status="failed", message=f"validation failed: {exc}")
+            continue
         row["validation_status"] = st.status
         if st.status in ("pending", "running"):
             unfinished += 1

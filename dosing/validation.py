@@ -142,7 +142,8 @@ def validation_report(scs: list[Scenario], trajs: list[Any], start_radius: float
             if len(ok) > 1:
                 rep["grid_spread"] = rep["error"] = (max(ok) - min(ok)) / times[0]
     if rep["time"] is not None and t_front is not None:
-        rep["front_time_error"] = (t_front - rep["time"]) / rep["time"]
+        rep["front_time_error"] = ((t_front - rep["time"]) / rep["time"]
+                                   if rep["time"] > 0.0 else None)  # a 0 time: no ratio
         rep["front_volume_error"] = truth.get("front_volume_error")
     return ValidationReport(**rep)
 
@@ -223,8 +224,11 @@ def _direct(model: str, time: float, rep: ValidationReport) -> tuple[float, str]
         est = num
         text = f"Answered by the full solver: {run}"
     else:
-        gap = abs(time - truth) / truth
-        est = (abs(time - truth) + num * truth) / time
+        # a dose so small that a time is 0 (D6: never negative) has no relative gap: the
+        # estimate is then taken relative to the other time (issue 22, N4)
+        gap = abs(time - truth) / truth if truth > 0.0 else 0.0
+        denom = time if time > 0.0 else truth
+        est = (abs(time - truth) + num * truth) / denom if denom > 0.0 else num
         text = (f"The front model (a fast reduced model, the sharp-interface limit "
                 f"ell -> 0) gives {time:.5g}; {run}The front model is {_pct(gap)} off it. ")
     rng = unc["interfacial_length_range"]["relative"]

@@ -9,6 +9,8 @@ from __future__ import annotations
 import argparse
 import os
 
+H11_MAX_HEADER_BYTES = 64 * 1024  # request line and headers (uvicorn's h11 limit)
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the sub-command."""
@@ -31,6 +33,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--lease-seconds", type=float, default=None,
                    help="how long a crashed server's claim on a run outlives it before "
                         "another server on the same cache takes the run over (default 30)")
+    p.add_argument("--token", default=None,
+                   help="require 'Authorization: Bearer TOKEN' on every route but /health "
+                        "(default $THERMOGEL_API_TOKEN; required when --host is not loopback)")
+    p.add_argument("--allowed-hosts", default=None, metavar="H1,H2",
+                   help="Host headers to accept, comma-separated (default any; "
+                        "$THERMOGEL_ALLOWED_HOSTS)")
+    p.add_argument("--timeout-keep-alive", type=float, default=5.0,
+                   help="close a keep-alive connection idle this long, s (default 5)")
+    p.add_argument("--limit-concurrency", type=int, default=256,
+                   help="connections and requests at once before 503 (default 256)")
     p.add_argument("--log-level", default="info",
                    choices=["critical", "error", "warning", "info", "debug"])
     p.add_argument("--no-warmup", action="store_true",
@@ -51,6 +63,10 @@ def configure_env(args: argparse.Namespace) -> None:
         os.environ["THERMOGEL_MAX_BODY"] = str(args.max_body_bytes)
     if args.lease_seconds is not None:
         os.environ["THERMOGEL_LEASE_SECONDS"] = str(args.lease_seconds)
+    if args.token:
+        os.environ["THERMOGEL_API_TOKEN"] = args.token
+    if args.allowed_hosts:
+        os.environ["THERMOGEL_ALLOWED_HOSTS"] = args.allowed_hosts
     if args.workers > 1:  # its worker processes end themselves if this one is killed
         os.environ["THERMOGEL_SUPERVISOR_PID"] = str(os.getpid())
     os.environ["THERMOGEL_WARMUP"] = "0" if args.no_warmup else "1"
@@ -88,6 +104,15 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError("--lease-seconds", args.lease_seconds, "0.1-3600 s")
     if args.warmup_only:
         return warm_only()
+    from api.auth import is_loopback
+
+    if not is_loopback(args.host) and not (args.token or os.environ.get("THERMOGEL_API_TOKEN")):
+        raise ParameterError("--token", None, "a token (or $THERMOGEL_API_TOKEN) when --host "
+                             f"{args.host} is reachable beyond this machine")
+    if not 0.1 <= args.timeout_keep_alive <= 600:
+        raise ParameterError("--timeout-keep-alive", args.timeout_keep_alive, "0.1-600 s")
+    if args.limit_concurrency < 8:
+        raise ParameterError("--limit-concurrency", args.limit_concurrency, "an integer >= 8")
     from .common import checked_cache
 
     checked_cache(args.cache)
@@ -95,5 +120,8 @@ def run(args: argparse.Namespace) -> int:
     import uvicorn
 
     uvicorn.run("api.http:app_from_env", factory=True, host=args.host, port=args.port,
-                workers=args.workers, log_level=args.log_level, timeout_graceful_shutdown=10)
+                workers=args.workers, log_level=args.log_level, timeout_graceful_shutdown=10,
+                timeout_keep_alive=args.timeout_keep_alive,
+                limit_concurrency=args.limit_concurrency,
+                h11_max_incomplete_event_size=H11_MAX_HEADER_BYTES)
     return 0

@@ -10,12 +10,17 @@ from fastapi.responses import JSONResponse
 from .. import schemas as s
 from ..deps import PlannerDep, StateDep
 from ..drug_schemas import DrugDoseResponse, DrugScheduleResponse
+from ..safe_route import SafeRoute
 from ..service import Accepted, dose_time, schedule
 from .compute import compute
 
-router = APIRouter(prefix="/v1", tags=["dosing"])
+router = APIRouter(prefix="/v1", tags=["dosing"], route_class=SafeRoute)
 
-_FULL = {"model": s.ErrorResponse, "description": "queue full: the message says which"}
+_FULL = {"model": s.ErrorResponse, "description": "queue full: the message says which",
+         "headers": {"Retry-After": {"description": "seconds to wait",
+                                     "schema": {"type": "integer"}}}}
+_LOCATION = {"Location": {"description": "the validation_url to poll",
+                          "schema": {"type": "string"}}}
 
 
 def answer_or_pending(out: dict[str, Any] | Accepted) -> Any:
@@ -28,17 +33,20 @@ def answer_or_pending(out: dict[str, Any] | Accepted) -> Any:
 
 @router.post("/dose-time", response_model=s.DoseTimeResponse | DrugDoseResponse
              | s.ProtocolDoseResponse, responses={
-    202: {"model": s.PendingResponse, "description": "needs the full solver: poll "
-                                                     "validation_url, then ask again"},
+    202: {"model": s.PendingResponse, "headers": _LOCATION,
+          "description": "needs the full solver: poll validation_url, then ask again (a "
+                         "drug dose: the validation's result is the answer)"},
     429: _FULL})
-async def dose(body: s.DoseTimeRequest, planner: PlannerDep) -> Any:
-    """How long to heat a bead to release a dose (front model at once, or 202)."""
-    return answer_or_pending(await compute(dose_time, planner, body))
+async def dose(body: s.DoseTimeRequest, planner: PlannerDep, state: StateDep) -> Any:
+    """How long to heat a bead to release a dose (front model at once, or 202; a drug dose
+    whose runs are not cached is a job: 202, its validation's result is the answer)."""
+    return answer_or_pending(await compute(dose_time, planner, body, state))
 
 
 @router.post("/schedule", response_model=s.ScheduleResponse | DrugScheduleResponse,
              responses={
-    202: {"model": s.PendingResponse, "description": "queued as a job: poll validation_url"},
+    202: {"model": s.PendingResponse, "headers": _LOCATION,
+          "description": "queued as a job: poll validation_url"},
     429: _FULL})
 async def schedule_route(body: s.ScheduleRequest, state: StateDep, _: PlannerDep) -> Any:
     """A multi-dose schedule: hold times at once; protocol check and correction as a job."""

@@ -24,10 +24,11 @@ from solver.json_safe import json_safe
 from .. import stored_jobs
 from ..deps import StateDep
 from ..fit_schemas import FitJobResponse, KineticsFitRequest, SwellingFitRequest
+from ..safe_route import SafeRoute
 from ..service import to_gel
 from .compute import compute
 
-router = APIRouter(tags=["fit"])
+router = APIRouter(tags=["fit"], route_class=SafeRoute)
 KINDS = {"swelling": "fit-swelling", "kinetics": "fit-kinetics"}
 
 

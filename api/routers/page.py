@@ -23,6 +23,7 @@ from dosing.request import resolve_jump
 from dosing.scenario import SolverSettings
 from solver.errors import NotApplicableError
 
+from ..safe_route import SafeRoute
 from ..schemas import (
     T_MAX,
     T_MIN,
@@ -38,7 +39,7 @@ from ..schemas import (
 from ..service import to_gel
 from .compute import compute
 
-router = APIRouter()
+router = APIRouter(route_class=SafeRoute)
 STATIC = files("api") / "static"
 ASSETS = {"app.js": "text/javascript", "app.css": "text/css"}
 

@@ -7,10 +7,11 @@ from typing import Any
 from fastapi import APIRouter
 
 from .. import schemas as s
+from ..safe_route import SafeRoute
 from ..service import classify_answer, equilibrium_answer, presets_answer
 from .compute import compute
 
-router = APIRouter(prefix="/v1", tags=["physics"])
+router = APIRouter(prefix="/v1", tags=["physics"], route_class=SafeRoute)
 
 
 @router.get("/gels", response_model=s.GelsResponse)

@@ -11,21 +11,23 @@ planner's own (poll /v1/validations/{id}); each poll of the sweep fills those do
 from __future__ import annotations
 
 import hashlib
+import json
 import threading
 from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Request
-from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import JSONResponse, Response
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from dosing import JobRunner, SolverSettings, UnknownValidationError
 from dosing.sweep import COLUMNS, SweepGrid, SweepResult, fill_validations, run_sweep
+from solver.errors import ParameterError
 from solver.json_safe import json_safe
 from solver.limits import T_MAX, T_MIN
 
+from ..safe_route import SafeRoute
 from ..schemas import (
     Branch,
     ConstantsIn,
@@ -39,14 +41,14 @@ from ..schemas import (
 from ..service import to_gel
 from .compute import compute
 
-router = APIRouter(tags=["design maps"])
+router = APIRouter(tags=["design maps"], route_class=SafeRoute)
 
 MAX_SERVICE_POINTS = 20_000  # points in one sweep request (the CLI takes up to 100,000)
 SWEEP_QUEUE = 4  # sweeps queued or running before 429
 SWEEP_PREFIX = "sweep-"
-SWEEPS_KEPT = 32  # finished sweep tables kept in memory
+SWEEPS_KEPT = 8  # finished sweep tables kept in memory (20,000 rows: tens of MB each)
 Temperature = Annotated[float, Field(ge=T_MIN, le=T_MAX)]
-Radius = Annotated[float, Field(gt=0.0, le=1.0e5)]
+Radius = Annotated[float, Field(ge=1.0e-3, le=1.0e5)]
 Fraction = Annotated[float, Field(gt=0.0, le=1.0)]
 
 
@@ -68,7 +70,7 @@ class SweepRequest(RequestModel):
         description="1-200 end (actuation) temperatures in K, 273.15-373.15 each")
     dry_radii_um: list[Radius] = Field(
         min_length=1, max_length=200, examples=[[20.0, 50.0, 100.0]],
-        description="1-200 dry bead radii in micrometres, 0 < r <= 1e5 each")
+        description="1-200 dry bead radii in micrometres, 1e-3 <= r <= 1e5 each")
     doses: list[Fraction] = Field(
         min_length=1, max_length=100, examples=[[0.3, 0.5, 0.8]],
         description="1-100 doses, fractions of the stored fluid, 0 < f <= 1 each")
@@ -140,9 +142,10 @@ class _Sweeps:
 
     def __init__(self) -> None:
         self.runner = JobRunner(ThreadPoolExecutor(1, thread_name_prefix="sweep"),
-                                max_pending=SWEEP_QUEUE)
+                                max_pending=SWEEP_QUEUE, what="sweeps")
         self.progress: dict[str, list[int]] = {}
         self.results: OrderedDict[str, SweepResult] = OrderedDict()
+        self.rendered: dict[tuple[str, str], bytes] = {}  # final tables: JSON, CSV, SVG
         self.lock = threading.Lock()
 
     def keep(self, key: str, result: SweepResult) -> None:
@@ -153,6 +156,8 @@ class _Sweeps:
             while len(self.results) > SWEEPS_KEPT:
                 old, _ = self.results.popitem(last=False)
                 self.progress.pop(old, None)
+                for k in [k for k in self.rendered if k[0] == old]:
+                    del self.rendered[k]
 
 
 _CREATE = threading.Lock()
@@ -189,8 +194,17 @@ def _run(sweeps: _Sweeps, key: str, planner: Any, grid: SweepGrid, validate: Any
                                planner=planner, validate=validate, progress=step))
 
 
+def _check_validate(body: SweepRequest, size: int) -> None:
+    """A ``validate`` index past the grid is refused before the sweep runs (422)."""
+    if isinstance(body.validate_points, list):
+        for i, idx in enumerate(body.validate_points):
+            if idx >= size:
+                raise ParameterError(f"validate[{i}]", idx, f"a point index 0-{size - 1}")
+
+
 def _submit(request: Request, body: SweepRequest) -> dict[str, Any]:
     grid = to_grid(body)  # ParameterError: 422 naming the field
+    _check_validate(body, grid.size)
     key = hashlib.sha256(body.model_dump_json().encode()).hexdigest()[:24]
     jobs = _sweeps(request)
     planner = request.app.state.service.planner
@@ -246,13 +260,35 @@ async def sweep_status(
         format: Annotated[Literal["json", "csv"],
                           Query(description="'csv': the finished table as CSV")] = "json",
 ) -> Any:
-    """A sweep's progress; when done, its table (JSON with units, or CSV)."""
-    out = await compute(_status, request, sweep_id)
-    if format == "csv" and out["status"] == "done":
+    """A sweep's progress; when done, its table (JSON with units, or CSV).  Serialised off
+    the event loop; a final table (every validation settled) is serialised once."""
+    body, media = await compute(_render, request, sweep_id, format)
+    return Response(body, media_type=media)
+
+
+def _render(request: Request, sweep_id: str, fmt: str) -> tuple[bytes, str]:
+    """The poll's answer as bytes (in a compute thread), from the cache when final."""
+    jobs = _sweeps(request)
+    key = sweep_id.removeprefix(SWEEP_PREFIX)
+    with jobs.lock:
+        hit = jobs.rendered.get((key, fmt))
+    if hit is not None and key in jobs.results:
+        return hit, _MEDIA[fmt]
+    out = _status(request, sweep_id)
+    if fmt == "csv" and out["status"] == "done":
         res = SweepResult(out["result"]["grid"], out["result"]["rows"],
                           out["result"]["seconds"])
-        return Response(res.to_csv(), media_type="text/csv")
-    return json_safe(out)
+        body = res.to_csv().encode()
+    else:
+        fmt = "json"
+        body = json.dumps(json_safe(out), separators=(",", ":"), allow_nan=False).encode()
+    if out["status"] == "done" and not out.get("validations_unfinished"):
+        with jobs.lock:
+            jobs.rendered[(key, fmt)] = body
+    return body, _MEDIA[fmt]
+
+
+_MEDIA = {"json": "application/json", "csv": "text/csv", "svg": "image/svg+xml"}
 
 
 @router.get("/v1/sweeps/{sweep_id}/plot.svg", response_class=Response,
@@ -263,8 +299,19 @@ async def sweep_plot(
         sweep_id: str, request: Request,
         gel: Annotated[int, Query(ge=0, description="which gel of the grid")] = 0,
 ) -> Response:
-    """Heat maps of the finished sweep: actuation time and its error over T_end x radius."""
-    out = await compute(_status, request, sweep_id)
+    """Heat maps of the finished sweep: actuation time and its error over T_end x radius
+    (drawn once per final table and gel, off the event loop)."""
+    return await compute(_plot, request, sweep_id, gel)
+
+
+def _plot(request: Request, sweep_id: str, gel: int) -> Response:
+    jobs = _sweeps(request)
+    key = sweep_id.removeprefix(SWEEP_PREFIX)
+    with jobs.lock:
+        hit = jobs.rendered.get((key, f"svg{gel}"))
+    if hit is not None and key in jobs.results:
+        return Response(hit, media_type=_MEDIA["svg"])
+    out = _status(request, sweep_id)
     if out["status"] != "done":
         return JSONResponse({"detail": f"sweep {sweep_id} is {out['status']}"},
                             status_code=409)
@@ -272,8 +319,11 @@ async def sweep_plot(
         return JSONResponse({"detail": [{"loc": ["query", "gel"], "type": "value_error",
                                          "msg": "gel index beyond the grid's gels"}]},
                             status_code=422)
-    svg = await run_in_threadpool(_svg, out["result"], gel)
-    return Response(svg, media_type="image/svg+xml")
+    svg = _svg(out["result"], gel)
+    if not out.get("validations_unfinished"):
+        with jobs.lock:
+            jobs.rendered[(key, f"svg{gel}")] = svg
+    return Response(svg, media_type=_MEDIA["svg"])
 
 
 def _svg(table: dict[str, Any], gel: int) -> bytes:

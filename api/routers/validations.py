@@ -8,10 +8,11 @@ from fastapi import APIRouter
 
 from .. import schemas as s
 from ..deps import PlannerDep, StateDep
+from ..safe_route import SafeRoute
 from ..service import validation
 from .compute import compute
 
-router = APIRouter(prefix="/v1", tags=["dosing"])
+router = APIRouter(prefix="/v1", tags=["dosing"], route_class=SafeRoute)
 
 
 @router.get("/validations/{validation_id}", response_model=s.ValidationResponse, responses={
