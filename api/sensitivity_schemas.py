@@ -47,16 +47,22 @@ class SensitivityResponse(Out):
     """Indices keyed by input name: S1, S1_conf, ST, ST_conf (Sobol) or mu, mu_star,
     mu_star_conf, sigma (Morris), with the output's summary."""
 
-    method: str
+    method: str = Field(description="'sobol' (S1 and ST with confidence intervals) or "
+                                    "'morris' (elementary effects: screening)")
     output: str = Field(description="what the indices are of: the dose time in seconds")
-    names: list[str]
-    indices: dict[str, dict[str, float]]
-    vary: list[dict[str, Any]]
-    base: dict[str, Any]
-    samples: int
-    evaluations: int
-    output_summary: dict[str, float]
-    seconds: float
-    model: str
-    confidence: float
-    notes: list[str]
+    names: list[str] = Field(description="the varied inputs, request field names")
+    indices: dict[str, dict[str, float]] = Field(
+        description="per input: S1, S1_conf, ST, ST_conf (Sobol; dimensionless shares of "
+                    "the variance) or mu, mu_star, mu_star_conf, sigma (Morris; seconds)")
+    vary: list[dict[str, Any]] = Field(description="each input's range and scale as given")
+    base: dict[str, Any] = Field(description="the request the inputs vary around")
+    samples: int = Field(description="base samples (Sobol N, or Morris trajectories)")
+    evaluations: int = Field(description="front-model answers computed")
+    output_summary: dict[str, float] = Field(
+        description="the dose time's mean, standard deviation, 5th, 50th and 95th "
+                    "percentiles over the samples, seconds")
+    seconds: float = Field(description="wall time of the analysis, s")
+    model: str = Field(description="the model that answered each sample (front-sharp)")
+    confidence: float = Field(description="confidence level of the intervals (0.95)")
+    notes: list[str] = Field(description="what the indices mean and where they hold, in "
+                                         "words")
