@@ -25,6 +25,17 @@ from solver.errors import NotApplicableError, ParameterError, SolverError
 from .safe_route import printable
 
 RETRY_AFTER_SECONDS = 5
+# the path parameter of each kind's own poll route (a 404 names the id where it was given)
+_ID_PARAM = {"sweep": "sweep_id", "fit": "job_id", "schedule": "validation_id",
+             "drug-dose": "validation_id", "validation": "validation_id"}
+
+
+def job_kind(job_id: Any) -> str:
+    """The kind of job an id names (its prefix; a dose validation has none)."""
+    for kind in ("sweep", "fit", "schedule", "drug-dose"):
+        if str(job_id).startswith(kind + "-"):
+            return kind
+    return "validation"
 MAX_ERRORS = 20  # validation errors reported per answer
 EXCERPT_CHARS = 80
 MSG_CHARS = 400
@@ -109,8 +120,10 @@ ERRORS: dict[type[Exception], Rule] = {
                       msg=lambda e: f"the solver could not answer this scenario: {e}"),
     QueueFullError: Rule(429, "queue_full", headers=_retry, plain=True),
     UnknownValidationError: Rule(
-        404, "not_found", loc=lambda e: ["path", "validation_id"],
-        msg=lambda e: f"no validation with id {e.args[0]!r}"),
+        404, "not_found", loc=lambda e: ["path", e.args[1] if len(e.args) > 1
+                                         else _ID_PARAM[job_kind(e.args[0])]],
+        msg=lambda e: f"no {job_kind(e.args[0])} job with id {e.args[0]!r}"
+        if job_kind(e.args[0]) != "validation" else f"no validation with id {e.args[0]!r}"),
     ServiceUnavailable: Rule(503, "unavailable", plain=True,
                              headers=lambda e: {"Retry-After": str(RETRY_AFTER_SECONDS)}),
     CacheFault: Rule(503, "cache_unavailable", loc=lambda e: ["cache"],

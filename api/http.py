@@ -25,7 +25,7 @@ from dosing.jobs import exit_with_parent
 from . import errors, guard
 from . import schemas as s
 from .auth import TokenAuth
-from .routers import dosing, fit, page, physics, service, sweep, validations
+from .routers import dosing, fit, jobs, page, physics, service, sweep, validations
 from .routers import sensitivity as sensitivity_routes
 from .service import ServiceState
 from .version import package_version
@@ -98,6 +98,7 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
     app.include_router(sweep.router)
     app.include_router(page.router)
     app.include_router(sensitivity_routes.router)
+    app.include_router(jobs.router)
     return app
 
 

@@ -156,3 +156,22 @@ async def test_only_the_last_sweeps_are_kept(raw, monkeypatch: pytest.MonkeyPatc
     again = (await raw.post("/v1/sweep", json=one)).json()["sweep_url"]
     assert again == first and (await _done(raw, first))["result"]["counts"] == {
         "needs-full": 2, "answered": 4}
+
+
+async def test_one_poll_route_for_every_kind_of_job(raw) -> None:
+    """GET /v1/jobs/{id} answers for a sweep with the body of its own route, and a 404
+    names the kind of job the id claims and the path parameter."""
+    r = await raw.post("/v1/sweep", json=SWEEP)
+    sid = r.json()["sweep_id"]
+    own = await _done(raw, r.headers["location"])
+    via_jobs = (await raw.get(f"/v1/jobs/{sid}")).json()
+    assert via_jobs["status"] == "done" and via_jobs["result"]["rows"] == own["result"]["rows"]
+    for jid, kind in (("sweep-0000", "sweep"), ("fit-swelling-00", "fit"),
+                      ("schedule-00", "schedule"), ("abc123", "validation")):
+        miss = await raw.get(f"/v1/jobs/{jid}")
+        assert miss.status_code == 404
+        detail = miss.json()["detail"][0]
+        assert detail["loc"] == ["path", "job_id"] and f"no {kind}" in detail["msg"], detail
+    miss = await raw.get("/v1/sweeps/sweep-0000")
+    assert miss.json()["detail"][0]["loc"] == ["path", "sweep_id"]
+    assert "no sweep job" in miss.json()["detail"][0]["msg"]

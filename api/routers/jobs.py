@@ -1,0 +1,52 @@
+"""GET /v1/jobs/{id}: one poll route for every kind of job.
+
+A job's id says its kind (``sweep-...``, ``fit-...``, ``schedule-...``, ``drug-dose-...``;
+a dose validation's id has no prefix).  This route answers for all of them with the same
+body as the kind's own route (/v1/validations/{id}, /v1/fit/jobs/{id}, /v1/sweeps/{id},
+which stay), and an unknown id is a 404 naming the kind the id claims.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from fastapi import APIRouter, Request
+
+from dosing import UnknownValidationError
+
+from .. import schemas as s
+from ..deps import PlannerDep, StateDep
+from ..errors import job_kind
+from ..fit_schemas import FitJobResponse
+from ..safe_route import SafeRoute
+from ..service import validation
+from .compute import compute
+from .fit import _status as fit_status
+from .sweep import SweepStatus, _render
+
+router = APIRouter(tags=["jobs"], route_class=SafeRoute)
+
+
+@router.get("/v1/jobs/{job_id}", response_model=s.ValidationResponse | FitJobResponse
+            | SweepStatus, responses={
+                404: {"model": s.ErrorResponse, "description": "no job of that kind with "
+                                                               "that id"},
+                429: {"model": s.ErrorResponse,
+                      "description": "resuming it needs a queue slot"}})
+async def job_route(job_id: str, request: Request, state: StateDep,
+                    _: PlannerDep) -> Any:
+    """Any job's state (validation, schedule, drug dose, fit, sweep); when done, its result
+    (the same body as the kind's own poll route)."""
+    kind = job_kind(job_id)
+    try:
+        if kind == "sweep":
+            body, _media = await compute(_render, request, job_id, "json")
+            return json.loads(body)
+        if kind == "fit":
+            return await compute(fit_status, state, job_id)
+        return await compute(validation, state, job_id)
+    except UnknownValidationError:
+        raise UnknownValidationError(job_id, "job_id") from None
+
+
