@@ -6,11 +6,14 @@ from typing import Any, Literal
 
 from pydantic import Field
 
+from dosing.units import PhysicalConstants
+
 from .outputs import Out
 from .schemas import GelSpec, RequestModel
 
 VaryName = Literal["dry_radius_um", "t_start", "t_end", "dose_fraction", "viscosity_pa_s",
                    "polymer_volume_m3", "permeability_m2", "omega", "a0", "b0", "a1", "b1"]
+_BASE = PhysicalConstants()  # the timescale's defaults, written once (dosing.units)
 MAX_TRAJECTORIES = 400  # front trajectories one request may need (~50 ms each)
 
 
@@ -32,9 +35,11 @@ class SensitivityRequest(RequestModel):
     t_end: float | str = Field(308.0, description="end temperature: K, or '35 degC'")
     dose_fraction: float = Field(0.8, gt=0.0, lt=1.0, description="base dose, 0-1")
     dry_radius_um: float | str = Field(50.0, description="base dry radius: um, or '50 um'")
-    viscosity_pa_s: float = Field(1.0e-3, gt=0.0, le=10.0, description="base eta, Pa s")
-    permeability_m2: float = Field(8.0e-20, gt=0.0, le=1e-10, description="base k0, m^2")
-    polymer_volume_m3: float = Field(3.0e-25, gt=0.0, le=1e-20,
+    viscosity_pa_s: float = Field(_BASE.viscosity_pa_s, gt=0.0, le=10.0,
+                                  description="base eta, Pa s")
+    permeability_m2: float = Field(_BASE.permeability_m2, gt=0.0, le=1e-10,
+                                   description="base k0, m^2")
+    polymer_volume_m3: float = Field(_BASE.polymer_volume_m3, gt=0.0, le=1e-20,
                                      description="base Omega_p, m^3")
     vary: list[VaryIn] = Field(min_length=1, max_length=12, description="the varied inputs")
     method: Literal["sobol", "morris"] = Field("sobol", description="Sobol or Morris")

@@ -108,5 +108,12 @@ def test_a_generated_client_calls_every_route(tmp_path: Path) -> None:
         r = c.get_httpx_client().get(f"/v1/sweeps/{sid}", params={"format": "csv"})
         assert r.status_code == 200 and r.headers["content-type"].startswith("text/csv")
         call("design_maps", "sweep_plot_v1_sweeps_sweep_id_plot_svg_get", sid)
+        call("jobs", "job_route_v1_jobs_job_id_get", sid)  # one poll route for every job
+        call("jobs", "job_route_v1_jobs_job_id_get", "fit-nope", want=(404,))
+        call("sensitivity", "post_sensitivity_v1_sensitivity_post",
+             body=models.SensitivityRequest.from_dict(
+                 {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.5,
+                  "vary": [{"name": "dry_radius_um", "low": 20.0, "high": 80.0}],
+                  "method": "morris", "samples": 4}))
     ops = sum(len(o) for o in create_app(warm=False).openapi()["paths"].values())
-    assert len(called) == ops == 15, sorted(called)
+    assert len(called) == ops == 17, sorted(called)
