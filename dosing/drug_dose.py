@@ -309,10 +309,13 @@ def drug_uncertainty(planner: Any, req: DrugDoseRequest, runs: DrugRuns, sc: Dru
                                f"reach the dose ({exc})")
     fluid = None
     if 0.0 < fluid_fraction < 1.0:
-        fluid = planner.answer_now(DoseRequest(
-            req.gel, req.t_start, req.t_end, dose_fraction=fluid_fraction,
-            dry_radius_um=req.bead_dry_radius_um, constants=req.constants, branch=req.branch,
-            settings=req.settings))
+        try:
+            fluid = planner.answer_now(DoseRequest(
+                req.gel, req.t_start, req.t_end, dose_fraction=fluid_fraction,
+                dry_radius_um=req.bead_dry_radius_um, constants=req.constants,
+                branch=req.branch, settings=req.settings))
+        except ParameterError:  # the bead had shrunk to its final state: no fluid dose there
+            fluid = None
     u = fluid.uncertainty if fluid is not None else None
     if u is None:
         how = (f"not measured for this drug answer: validate the fluid dose (no drug) of the "
