@@ -8,10 +8,11 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from api.schemas import GelSpec, RequestModel
 from dosing.gel_store import check_name
+from solver.limits import T_MAX, T_MIN
 
 SIZE_FIELDS = ("radius", "diameter", "volume_ratio")
 FixedName = Literal["omega", "a0", "b0", "a1", "b1", "scale"]  # solver.fit.equilibrium.PARAMS
-Temperature = Annotated[float, Field(ge=273.15, le=373.15)]
+Temperature = Annotated[float, Field(ge=T_MIN, le=T_MAX)]
 MAX_POINTS = 2000
 
 

@@ -310,6 +310,10 @@ class Planner:
         from .gel_store import record_for
 
         if record_for(req.gel) is None:  # a preset or custom gel: no fit, no interval
+            from .units import timescale_uncertainty
+
+            ans.timescale_uncertainty = timescale_uncertainty(  # its seconds' range, stated
+                req.gel.omega, req.t_end, req.constants, ans.seconds, None)
             return ans
         from .fit_uncertainty import attach_parameter_interval  # scipy.stats: fitted gels only
 

@@ -39,6 +39,8 @@ POSTS: dict[str, tuple[dict[str, Any], list[Any]]] = {
                           "t_start": 302.0, "t_end": 308.0}, ["body", "gel"]),
     "/v1/front-curve": ({"gel": SURROGATE, "t_start": 302.0, "t_end": 308.0},
                         ["body", "gel"]),
+    "/v1/sensitivity": ({"gel": SURROGATE, "vary": [{"name": "dry_radius_um", "low": 20.0,
+                                                     "high": 80.0}]}, ["body", "gel"]),
 }
 
 

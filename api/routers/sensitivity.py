@@ -10,11 +10,12 @@ from fastapi import APIRouter
 from dosing.sensitivity import sensitivity
 from dosing.units import PhysicalConstants
 
+from ..safe_route import SafeRoute
 from ..sensitivity_schemas import MAX_TRAJECTORIES, SensitivityRequest, SensitivityResponse
 from ..service import to_gel
 from .compute import compute
 
-router = APIRouter(tags=["sensitivity"])
+router = APIRouter(tags=["sensitivity"], route_class=SafeRoute)
 
 
 def run_sensitivity(body: SensitivityRequest) -> dict[str, Any]:
