@@ -9,10 +9,10 @@ given.  Nothing here imports fastapi or matplotlib.
 
 from __future__ import annotations
 
-import importlib
 from concurrent.futures import Executor, ThreadPoolExecutor
 from typing import TYPE_CHECKING, Any
 
+from solver.lazy import lazy_names
 from solver.presenters import register as _register_presenters
 
 # the solver's records (runs, fits) get their tables, netCDF and notebook views from this
@@ -57,13 +57,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_names(__name__, _LAZY, globals())
 
 
 def _one_shot(cache_path: str | None, executor: Executor | None, **kw: Any) -> Planner:

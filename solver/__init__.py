@@ -6,13 +6,13 @@ radius, time by tau of eq. timescale, stresses by k_B T / Omega_p); temperatures
 
 from __future__ import annotations
 
-import importlib
 import sys
 import types
 from typing import TYPE_CHECKING, Any
 
 from .errors import NotApplicableError, ParameterError, SolverError
 from .gel import ANB, HHT, PRESETS, Gel, Permeability, as_gel, check_temperature, preset
+from .lazy import lazy_names
 
 if TYPE_CHECKING:
     from .equilibrium import (
@@ -46,13 +46,7 @@ class _Package(types.ModuleType):
 sys.modules[__name__].__class__ = _Package
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_names(__name__, _LAZY, globals())
 
 __all__ = [
     "ANB", "HHT", "PRESETS", "Equilibrium", "Fold", "Gel", "JumpClass", "NotApplicableError",

@@ -9,9 +9,9 @@ discretisation as a ``SolverOptions`` (or its fields as keywords).
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from ..lazy import lazy_names
 from .numba_cache import refresh as _refresh_cache
 
 _refresh_cache()
@@ -28,12 +28,6 @@ _LAZY = {"GRIDS": ".grids", "MeshOptions": ".moving", "SolverOptions": ".options
          "FullResult": ".result", "simulate": ".run"}
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_names(__name__, _LAZY, globals())
 
 __all__ = ["GRIDS", "FullResult", "MeshOptions", "SolverOptions", "simulate"]
