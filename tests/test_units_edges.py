@@ -150,3 +150,21 @@ def test_every_float_cli_option_named_by_its_unit_takes_units() -> None:
                 action.type("3 kg*m/s^3/A")
         else:  # options read as text are converted by their command (sweep axes, plot)
             assert action.type is not float, name
+
+
+def test_sweep_axes_and_viscosity_take_units() -> None:
+    """The CLI's sweep axes and --viscosity read quantities too; a wrong kind names the
+    option."""
+    from api.commands.dose import _viscosity
+    from api.commands.sweep import parse_axis
+    from solver.errors import ParameterError
+
+    assert parse_axis("--t-end", "34 degC:36 degC:3") == pytest.approx([307.15, 308.15, 309.15])
+    assert parse_axis("--dry-radius-um", "20 um, 0.05 mm") == pytest.approx([20.0, 50.0])
+    assert parse_axis("--t-end", "306:308:3") == [306.0, 307.0, 308.0]
+    assert _viscosity("1 mPa s") == pytest.approx(1e-3) and _viscosity("water") == "water"
+    with pytest.raises(ParameterError) as err:
+        parse_axis("--dry-radius-um", "50 K, 3")
+    assert err.value.field == "--dry-radius-um" and "dimension" in str(err.value)
+    with pytest.raises(ParameterError):
+        _viscosity("2 um")

@@ -25,7 +25,12 @@ from .outfile import add_format_option, figure_path
 
 
 def _viscosity(text: str) -> float | str:
-    return text if text.strip().lower() == "water" else float(text)
+    """'water', a number in Pa s, or a quantity ('1 mPa s')."""
+    if text.strip().lower() == "water":
+        return text
+    from dosing.quantity import to_unit
+
+    return to_unit(text, "viscosity", "--viscosity")
 
 
 def add_planning_options(p: argparse.ArgumentParser) -> None:

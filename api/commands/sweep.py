@@ -26,13 +26,24 @@ def parse_axis(name: str, text: str) -> list[float]:
     """'a,b,c' or 'start:stop:num[:log]' as a list of floats (ParameterError names ``name``)."""
     import numpy as np
 
+    from dosing.quantity import field_kind, to_unit
+
+    kind = field_kind(name.removeprefix("--").replace("-", "_"))
+
+    def value(v: str) -> float:
+        """A number in the axis's unit, or a quantity with its own ('35 degC', '20 um')."""
+        v = v.strip()
+        if kind is None or not any(c.isalpha() for c in v.replace("e", "").replace("E", "")):
+            return float(v)
+        return to_unit(v, kind, name)
+
     try:
         if ":" not in text:
-            return [float(v) for v in text.split(",") if v.strip()]
+            return [value(v) for v in text.split(",") if v.strip()]
         parts = text.split(":")
         if len(parts) not in (3, 4) or (len(parts) == 4 and parts[3] != "log"):
             raise ValueError(text)
-        lo, hi, num = float(parts[0]), float(parts[1]), int(parts[2])
+        lo, hi, num = value(parts[0]), value(parts[1]), int(parts[2])
         if not 1 <= num <= 1000:
             raise ValueError(text)
         if len(parts) == 4:
@@ -40,6 +51,8 @@ def parse_axis(name: str, text: str) -> list[float]:
                 raise ValueError(text)
             return np.geomspace(lo, hi, num).tolist()
         return np.linspace(lo, hi, num).tolist()
+    except ParameterError:
+        raise  # a quantity of the wrong kind, named by to_unit
     except ValueError:
         raise ParameterError(name, text, "a comma list of numbers or start:stop:num[:log] "
                              "(1 <= num <= 1000; log needs positive ends)") from None
