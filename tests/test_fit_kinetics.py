@@ -45,7 +45,8 @@ def test_full_solver_curve_gives_tau_within_3_percent(tmp_path) -> None:
     st = SolverSettings(interfacial_length=0.0025, method="ladder")
     planner = Planner(cache_path=str(tmp_path / "c.sqlite"), executor=ThreadPoolExecutor(1))
     try:
-        traj = planner.trajectory(Scenario(ANB, 302.0, 308.0, settings=st), need_radius=1.12)
+        traj = planner.trajectory(Scenario(ANB, 302.0, 308.0, settings=st), need_radius=1.12,
+                                  need_time=0.4)  # the data window: a run stops at its need
         data = _curve(lambda t: np.interp(t, traj.step_t, traj.step_radius))
         for model in ("auto", "full"):
             res = fit_shrinking(data, "ANB", 302.0, 308.0, dry_radius_um=DRY_UM, model=model,

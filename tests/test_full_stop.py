@@ -83,3 +83,17 @@ def test_stop_takes_a_released_fraction_of_the_start_radius() -> None:
     with pytest.raises(ParameterError) as err:
         simulate("ANB", 302, 308, until=0.3, n=20, stop=Released(1.5))
     assert err.value.field == "stop.fraction"
+
+
+def test_a_stopped_runs_last_slope_is_its_steps_own() -> None:
+    """The stopped state's da/dt is the accepted step's cubic at the event (a dense state's
+    rhs was garbage on the Lagrangian grid, and a later time_to_radius over that last long
+    step read a crossing 12 % early: HHT 304 -> 307.6 K, smooth, long steps)."""
+    kw = dict(grid="lagrangian", n=800, interfacial_length=0.005, rtol=1e-5)
+    free = simulate("HHT", 304.0, 307.6, until=2.0, **kw)
+    target = float(np.interp(1.0, free.t, free.radius))
+    run = simulate("HHT", 304.0, 307.6, until=2.0, stop=target * (1 - 1e-6), **kw)
+    t, a, rate = run._dense()
+    assert rate[-1] == pytest.approx(np.interp(1.0, free.t, np.gradient(free.radius, free.t)),
+                                     rel=0.05)
+    assert run.time_to_radius(target) == pytest.approx(1.0, rel=1e-3)

@@ -214,6 +214,17 @@ def _direction(a: float, target: float | None) -> float:
     return -1.0 if a > target else 1.0
 
 
+def _hermite_slope(t0: float, t1: float, a0: float, a1: float, f0: float, f1: float,
+                   t: float) -> float:
+    """d/dt of the cubic Hermite of one step (values a0, a1, slopes f0, f1) at t."""
+    h = t1 - t0
+    if h <= 0.0:
+        return f1
+    x = (t - t0) / h
+    return ((6 * x * x - 6 * x) * (a0 - a1) / h + (3 * x * x - 4 * x + 1) * f0
+            + (3 * x * x - 2 * x) * f1)
+
+
 def _event_time(t0: float, t1: float, y0: np.ndarray, y1: np.ndarray, f0: np.ndarray,
                 f1: np.ndarray, ia: int, targets: list[tuple[float, float]]) -> float:
     """The first time in [t0, t1] at which the radius (cubic Hermite of the accepted step,
@@ -343,8 +354,11 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
                 if t_stop_ev <= t_until and ctrl[5] != 0.0 and (
                         (y[ia] - ctrl[4]) * ctrl[5] >= 0.0):
                     stats.t_stop = t_e
-                    f_e = ws.rhs(y_e, seg.par_at(t_e))
-                    stats.record(t_e, ctrl[4], f_e[ia] if f_e is not None else 0.0,
+                    # da/dt at the event from the step's own cubic (the rhs at the dense
+                    # state is not consistent with it: garbage on the Lagrangian grid)
+                    stats.record(t_e, ctrl[4], _hermite_slope(t0, t1, float(yold[ia]),
+                                                              float(y[ia]), float(fold[ia]),
+                                                              float(f[ia]), t_e),
                                  edge_porosity(ws.grid, y_e, ws.geo))
                     if k_out == 0 or out_times[k_out - 1] != t_e:
                         on_output(t_e, y_e)
