@@ -46,6 +46,9 @@ from .warmup import WarmupReport, warm_up
 log = logging.getLogger("thermogel.service")
 
 JOB_QUEUE = 8  # stored jobs (schedules, fits) queued or running before 429
+# threads running stored jobs: a long fit (minutes at the schema's limits) holds one, and
+# schedule checks and drug doses go on beside it (their runs go to the planner's pool)
+JOB_THREADS = 2
 FAULT_SECONDS = 120.0  # /health is 'degraded' this long after a cache fault
 
 
@@ -158,11 +161,11 @@ class ServiceState:
 
     @property
     def jobs(self) -> JobRunner:
-        """Stored jobs (schedules, fits; :mod:`api.stored_jobs`): one thread (their
-        full-solver runs go to the planner's executor), leased on the planner's cache so
-        that one server runs each job."""
+        """Stored jobs (schedules, drug doses, fits; :mod:`api.stored_jobs`): JOB_THREADS
+        threads (their full-solver runs go to the planner's executor), leased on the
+        planner's cache so that one server runs each job."""
         if self._jobs is None:
-            self._job_pool = ThreadPoolExecutor(1, thread_name_prefix="job")
+            self._job_pool = ThreadPoolExecutor(JOB_THREADS, thread_name_prefix="job")
             lease = float(self.options.get("lease_seconds") or DEFAULT_LEASE_SECONDS)
             self._jobs = JobRunner(self._job_pool, max_pending=JOB_QUEUE,
                                    leases=self.planner.cache,
