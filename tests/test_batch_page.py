@@ -5,20 +5,16 @@ CI); the service's side is checked without a browser too."""
 
 from __future__ import annotations
 
-import tempfile
 from pathlib import Path
 
 import httpx
 import pytest
 from fastapi.testclient import TestClient
 from test_page_browser import (
-    CHROMIUM,
-    FLAGS,
     FRONT,
     _artifacts,
     _fill,
-    _need_browser,
-    _serve_gracefully,
+    browser_page,
 )
 
 from api.http import create_app
@@ -38,44 +34,29 @@ def test_the_page_has_the_input_and_the_bounds_it_reads() -> None:
 
 @pytest.mark.slow  # a real server and a browser
 def test_batch_in_headless_chromium(tmp_path: Path) -> None:
-    sync_playwright = _need_browser()
-    with _serve_gracefully(tmp_path / "cache.sqlite") as url, \
-            tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
-        ctx = pw.chromium.launch_persistent_context(
-            profile, executable_path=CHROMIUM, args=FLAGS, headless=True,
-            viewport={"width": 1400, "height": 1000})
-        try:
-            page = ctx.new_page()
-            errors: list[str] = []
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            sent: list[str] = []
-            page.on("request", lambda r: sent.append(r.url) if "/v1/" in r.url else None)
-            page.goto(url + "/")
-            page.wait_for_selector("body[data-state=ready]", timeout=60_000)
-            page.select_option("#gel", "ANB")
-            _fill(page, t_start="302", t_end="308", doses="80", dry_radius_um="50",
-                  size_cv="0.2")
-            page.click("#plan")
-            page.wait_for_selector("body[data-state=answered]", timeout=120_000)
-            want = httpx.post(f"{url}/v1/dose-time", json={
-                **FRONT, "size_distribution": {"kind": "lognormal", "cv": 0.2}},
-                timeout=60).json()
-            assert float(page.get_attribute("#answer-batch", "data-value")) == \
-                want["batch"]["time"]
-            assert float(page.get_attribute("#answer-seconds", "data-value")) == want["seconds"]
-            assert "of the beads have delivered" in page.inner_text("#answer-batch")
-            page.screenshot(path=str(_artifacts() / "page-batch.png"), full_page=True)
-            sent.clear()
-            _fill(page, size_cv="2.5")
-            page.click("#plan")
-            page.wait_for_selector("body[data-state=invalid]")
-            assert "size CV" in page.inner_text("#err-size_cv")
-            page.wait_for_timeout(300)
-            assert sent == []
-            _fill(page, size_cv="")  # one bead again: no batch shown
-            page.click("#plan")
-            page.wait_for_selector("body[data-state=answered]", timeout=120_000)
-            assert page.locator("#answer-batch").is_hidden()
-            assert errors == []
-        finally:
-            ctx.close()
+    with browser_page(tmp_path) as (url, page, errors, sent):
+        page.select_option("#gel", "ANB")
+        _fill(page, t_start="302", t_end="308", doses="80", dry_radius_um="50",
+              size_cv="0.2")
+        page.click("#plan")
+        page.wait_for_selector("body[data-state=answered]", timeout=120_000)
+        want = httpx.post(f"{url}/v1/dose-time", json={
+            **FRONT, "size_distribution": {"kind": "lognormal", "cv": 0.2}},
+            timeout=60).json()
+        assert float(page.get_attribute("#answer-batch", "data-value")) == \
+            want["batch"]["time"]
+        assert float(page.get_attribute("#answer-seconds", "data-value")) == want["seconds"]
+        assert "of the beads have delivered" in page.inner_text("#answer-batch")
+        page.screenshot(path=str(_artifacts() / "page-batch.png"), full_page=True)
+        sent.clear()
+        _fill(page, size_cv="2.5")
+        page.click("#plan")
+        page.wait_for_selector("body[data-state=invalid]")
+        assert "size CV" in page.inner_text("#err-size_cv")
+        page.wait_for_timeout(300)
+        assert sent == []
+        _fill(page, size_cv="")  # one bead again: no batch shown
+        page.click("#plan")
+        page.wait_for_selector("body[data-state=answered]", timeout=120_000)
+        assert page.locator("#answer-batch").is_hidden()
+        assert errors == []

@@ -21,6 +21,7 @@ import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import httpx
 import pytest
@@ -74,13 +75,11 @@ def _serve_gracefully(cache: Path) -> Iterator[str]:
                 pass  # _server kills it
 
 
-def _fill(page, **fields: str) -> None:
-    for name, value in fields.items():
-        page.fill(f"#{name}", value)
 
-
-@pytest.mark.slow  # a real server, a browser, and one coarse full-solver validation
-def test_page_in_headless_chromium(tmp_path: Path) -> None:
+@contextmanager
+def browser_page(tmp_path: Path) -> Iterator[tuple[str, Any, list[str], list[str]]]:
+    """(url, page, page errors, /v1/ requests sent): a real ``thermogel serve`` and the page
+    loaded in headless Chromium, ready; closed after."""
     sync_playwright = _need_browser()
     with _serve_gracefully(tmp_path / "cache.sqlite") as url, \
             tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
@@ -95,94 +94,104 @@ def test_page_in_headless_chromium(tmp_path: Path) -> None:
             page.on("request", lambda r: sent.append(r.url) if "/v1/" in r.url else None)
             page.goto(url + "/")
             page.wait_for_selector("body[data-state=ready]", timeout=60_000)
-
-            # the acceptance request, read back against the JSON route
-            page.select_option("#gel", "ANB")
-            _fill(page, t_start="302", t_end="308", doses="80", dry_radius_um="50")
-            page.click("#plan")
-            page.wait_for_selector("body[data-state=answered]", timeout=120_000)
-            want = httpx.post(f"{url}/v1/dose-time", json=FRONT, timeout=60).json()
-            assert float(page.get_attribute("#answer-time", "data-value")) == want["time"]
-            assert float(page.get_attribute("#answer-seconds", "data-value")) == want["seconds"]
-            assert page.inner_text("#answer-seconds") == f"{want['seconds']:.4g} s"
-            assert want["error_explanation"] in page.inner_text("#answer-error-parts")
-            assert page.locator("#curve-radius").count() == 1  # the front curve is drawn
-            assert page.locator(".dose-mark").count() == 1
-            assert page.locator("#timeline-release").count() == 1
-            page.wait_for_function("document.getElementById('phase-map').complete && "
-                                   "document.getElementById('phase-map').naturalWidth > 0")
-            page.screenshot(path=str(_artifacts() / "page.png"), full_page=True)
-
-            # out of range: a message naming the field, and no request at all
-            sent.clear()
-            _fill(page, t_end="400")
-            page.click("#plan")
-            page.wait_for_selector("body[data-state=invalid]")
-            msg = page.inner_text("#err-t_end")
-            assert "T_end" in msg and "373.15" in msg
-            page.wait_for_timeout(500)
-            assert sent == []
-
-            # within the page's bounds but refused by the server: shown at the field
-            _fill(page, t_end="308", interfacial_length="0.00001")  # below the direct range
-            page.click("#plan")
-            page.wait_for_selector("body[data-state=server-error]", timeout=60_000)
-            assert page.inner_text("#err-interfacial_length").startswith("interfacial_length:")
-            assert page.inner_text("#err-t_end") == ""
-
-            # a design map of the default axes (9 x 9 x 4): the table the sweep route gives
-            _fill(page, interfacial_length="0.005")
-            page.click("#sweep")
-            page.wait_for_selector("body[data-sweep=done]", timeout=120_000)
-            page.wait_for_function("document.getElementById('sweep-plot').complete && "
-                                   "document.getElementById('sweep-plot').naturalWidth > 0")
-            csv_url = page.get_attribute("#sweep-links a", "href")
-            table = httpx.get(url + csv_url.split("?")[0], timeout=60).json()["result"]
-            assert len(table["rows"]) == 9 * 9 * 4 and table["grid"]["t_ends"][0] == 307.5
-            assert "324 answered" in page.inner_text("#sweep-status")
-            sent.clear()
-            _fill(page, sweep_t_end="300, 380, 5")
-            page.click("#sweep")
-            page.wait_for_selector("body[data-sweep=invalid]")
-            assert "373.15" in page.inner_text("#err-sweep_t_end")
-            page.wait_for_timeout(300)
-            assert sent == []
-            _fill(page, sweep_t_end="307.5, 311.5, 9")
-
-            # a saved custom gel: checked in the page, kept in the browser, sent as parameters
-            page.click("#custom-gel summary")
-            _fill(page, gel_name="soft ANB", gel_omega="-1")
-            sent.clear()
-            page.click("#save-gel")
-            assert "Omega" in page.inner_text("#err-gel_omega") and sent == []
-            _fill(page, gel_omega="120")
-            page.click("#save-gel")
-            page.wait_for_selector("body[data-gel=saved]")
-            assert page.input_value("#gel") == "saved:soft ANB"
-            page.click("#plan")
-            page.wait_for_selector("body[data-state=answered]", timeout=120_000)
-            soft = {"base": "ANB", "omega": 120.0, "a0": -12.947, "b0": 0.04496, "a1": 17.92,
-                    "b1": -0.0569}
-            want = httpx.post(f"{url}/v1/dose-time", json={**FRONT, "gel": soft}, timeout=60).json()
-            assert float(page.get_attribute("#answer-time", "data-value")) == want["time"]
-            page.click("#custom-gel summary")
-            page.select_option("#gel", "ANB")
-
-            # a validation, polled to its result (the coarsest ladder: ell = 0.01)
-            _fill(page, interfacial_length="0.01")
-            page.check("#validate")
-            page.click("#plan")
-            page.wait_for_selector("#validation-panel[data-status=done]", timeout=600_000)
-            assert "Truth (regularized)" in page.inner_text("#validation-result")
-            page.wait_for_selector("body[data-validated]", timeout=60_000)  # asked again
-            ell = {**FRONT, "interfacial_length": 0.01}
-            again = httpx.post(f"{url}/v1/dose-time", json=ell, timeout=60).json()
-            assert again["validation"] is not None  # now answered with the verdict
-            assert page.inner_text("#answer-error") == f"± {100 * again['error_estimate']:.3g} %"
-            page.screenshot(path=str(_artifacts() / "page-validated.png"), full_page=True)
-            assert errors == []
+            yield url, page, errors, sent
         finally:
             ctx.close()
+
+def _fill(page, **fields: str) -> None:
+    for name, value in fields.items():
+        page.fill(f"#{name}", value)
+
+
+@pytest.mark.slow  # a real server, a browser, and one coarse full-solver validation
+def test_page_in_headless_chromium(tmp_path: Path) -> None:
+    with browser_page(tmp_path) as (url, page, errors, sent):
+
+        # the acceptance request, read back against the JSON route
+        page.select_option("#gel", "ANB")
+        _fill(page, t_start="302", t_end="308", doses="80", dry_radius_um="50")
+        page.click("#plan")
+        page.wait_for_selector("body[data-state=answered]", timeout=120_000)
+        want = httpx.post(f"{url}/v1/dose-time", json=FRONT, timeout=60).json()
+        assert float(page.get_attribute("#answer-time", "data-value")) == want["time"]
+        assert float(page.get_attribute("#answer-seconds", "data-value")) == want["seconds"]
+        assert page.inner_text("#answer-seconds") == f"{want['seconds']:.4g} s"
+        assert want["error_explanation"] in page.inner_text("#answer-error-parts")
+        assert page.locator("#curve-radius").count() == 1  # the front curve is drawn
+        assert page.locator(".dose-mark").count() == 1
+        assert page.locator("#timeline-release").count() == 1
+        page.wait_for_function("document.getElementById('phase-map').complete && "
+                               "document.getElementById('phase-map').naturalWidth > 0")
+        page.screenshot(path=str(_artifacts() / "page.png"), full_page=True)
+
+        # out of range: a message naming the field, and no request at all
+        sent.clear()
+        _fill(page, t_end="400")
+        page.click("#plan")
+        page.wait_for_selector("body[data-state=invalid]")
+        msg = page.inner_text("#err-t_end")
+        assert "T_end" in msg and "373.15" in msg
+        page.wait_for_timeout(500)
+        assert sent == []
+
+        # within the page's bounds but refused by the server: shown at the field
+        _fill(page, t_end="308", interfacial_length="0.00001")  # below the direct range
+        page.click("#plan")
+        page.wait_for_selector("body[data-state=server-error]", timeout=60_000)
+        assert page.inner_text("#err-interfacial_length").startswith("interfacial_length:")
+        assert page.inner_text("#err-t_end") == ""
+
+        # a design map of the default axes (9 x 9 x 4): the table the sweep route gives
+        _fill(page, interfacial_length="0.005")
+        page.click("#sweep")
+        page.wait_for_selector("body[data-sweep=done]", timeout=120_000)
+        page.wait_for_function("document.getElementById('sweep-plot').complete && "
+                               "document.getElementById('sweep-plot').naturalWidth > 0")
+        csv_url = page.get_attribute("#sweep-links a", "href")
+        table = httpx.get(url + csv_url.split("?")[0], timeout=60).json()["result"]
+        assert len(table["rows"]) == 9 * 9 * 4 and table["grid"]["t_ends"][0] == 307.5
+        assert "324 answered" in page.inner_text("#sweep-status")
+        sent.clear()
+        _fill(page, sweep_t_end="300, 380, 5")
+        page.click("#sweep")
+        page.wait_for_selector("body[data-sweep=invalid]")
+        assert "373.15" in page.inner_text("#err-sweep_t_end")
+        page.wait_for_timeout(300)
+        assert sent == []
+        _fill(page, sweep_t_end="307.5, 311.5, 9")
+
+        # a saved custom gel: checked in the page, kept in the browser, sent as parameters
+        page.click("#custom-gel summary")
+        _fill(page, gel_name="soft ANB", gel_omega="-1")
+        sent.clear()
+        page.click("#save-gel")
+        assert "Omega" in page.inner_text("#err-gel_omega") and sent == []
+        _fill(page, gel_omega="120")
+        page.click("#save-gel")
+        page.wait_for_selector("body[data-gel=saved]")
+        assert page.input_value("#gel") == "saved:soft ANB"
+        page.click("#plan")
+        page.wait_for_selector("body[data-state=answered]", timeout=120_000)
+        soft = {"base": "ANB", "omega": 120.0, "a0": -12.947, "b0": 0.04496, "a1": 17.92,
+                "b1": -0.0569}
+        want = httpx.post(f"{url}/v1/dose-time", json={**FRONT, "gel": soft}, timeout=60).json()
+        assert float(page.get_attribute("#answer-time", "data-value")) == want["time"]
+        page.click("#custom-gel summary")
+        page.select_option("#gel", "ANB")
+
+        # a validation, polled to its result (the coarsest ladder: ell = 0.01)
+        _fill(page, interfacial_length="0.01")
+        page.check("#validate")
+        page.click("#plan")
+        page.wait_for_selector("#validation-panel[data-status=done]", timeout=600_000)
+        assert "Truth (regularized)" in page.inner_text("#validation-result")
+        page.wait_for_selector("body[data-validated]", timeout=60_000)  # asked again
+        ell = {**FRONT, "interfacial_length": 0.01}
+        again = httpx.post(f"{url}/v1/dose-time", json=ell, timeout=60).json()
+        assert again["validation"] is not None  # now answered with the verdict
+        assert page.inner_text("#answer-error") == f"± {100 * again['error_estimate']:.3g} %"
+        page.screenshot(path=str(_artifacts() / "page-validated.png"), full_page=True)
+        assert errors == []
 
 
 BATH_CSV = "time (s),T (degC)\n0,28.85\n10,31.0\n20,32.5\n40,34.0\n80,34.8\n120,34.85\n"
