@@ -76,14 +76,8 @@ def run_drug_schedule(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any
     """``thermogel schedule`` with a drug: doses in drug, leakage per rest, warnings."""
     from dosing.drug_schedule import DrugScheduleRequest, plan_drug_schedule
 
-    rests = args.rests
-    if rests is None and args.rests_seconds is None:
-        n = len(args.doses or args.doses_ug or [])
-        rests = [0.0] * max(n - 1, 0)
-    req = DrugScheduleRequest(drug=drug, doses=args.doses, doses_ug=args.doses_ug, rests=rests,
-                              rests_seconds=args.rests_seconds, wait=args.wait,
-                              wait_seconds=args.wait_seconds, check_protocol=not args.no_check,
-                              correct=not args.no_correct, tolerance=args.tolerance, **kwargs)
+    req = DrugScheduleRequest(drug=drug, doses=args.doses, doses_ug=args.doses_ug,
+                              wait=args.wait, wait_seconds=args.wait_seconds, **kwargs)
     planner = _planner(args)
     try:
         ans = plan_drug_schedule(planner, req)
@@ -97,7 +91,7 @@ def run_drug_schedule(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any
     print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K, drug doses "
           f"{', '.join(f'{d:.3g}' for d in ans.doses)} of the load, rests "
           f"{', '.join(f'{r:.4g}' for r in ans.rests) or '-'} (dimensionless)")
-    print(table_row(f"hold ({ans.model}):", [h["actuation_time"] for h in ans.hold]))
+    print(table_row(f"hold ({ans.model}):", [h.actuation_time for h in ans.hold]))
     for name, res in (("protocol check", ans.protocol_check), ("corrected", ans.corrected)):
         if not res or not res.get("actuation_times"):
             continue
@@ -119,13 +113,12 @@ def run_drug_schedule(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any
 def _plot(planner: Any, req: Any, ans: Any, path: str) -> None:
     """Cumulative drug through the corrected (else the checked) protocol."""
     from api.plots.release import draw_schedule_release
-    from dosing.drug import DrugScenario, drug_settings, runs_for
+    from dosing.drug import runs_for
+    from dosing.drug_dose import DrugHeatings
 
     res = ans.corrected if ans.corrected and ans.corrected.get("actuation_times") \
         else ans.protocol_check
     if not res:
         raise ParameterError("plot", path, "used with the protocol check or the correction")
-    sc = DrugScenario(req.gel, req.t_start, tuple(tuple(s) for s in res["protocol"]),
-                      req.solute, req.branch, drug_settings(req.settings))
-    rel = runs_for(planner).run(sc)
+    rel = DrugHeatings(req, runs_for(planner), req.fractions).run(res["actuation_times"])
     print(f"wrote {draw_schedule_release(ans.to_dict(), rel, path)}")

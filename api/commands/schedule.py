@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from solver.errors import ParameterError
 
@@ -41,6 +42,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+def schedule_kwargs(args: argparse.Namespace) -> dict[str, Any]:
+    """The ScheduleCase fields (dosing.request) of the options, fluid or drug."""
+    return dict(rests=args.rests, rests_seconds=args.rests_seconds,
+                check_protocol=not args.no_check, correct=not args.no_correct,
+                tolerance=args.tolerance, **planning_kwargs(args))
+
+
 def run(args: argparse.Namespace) -> int:
     """Print the schedule."""
     from api.schemas import ScheduleRequest as HttpSchedule
@@ -53,16 +61,11 @@ def run(args: argparse.Namespace) -> int:
     drug = drug_from_args(args)
     if drug is not None or args.doses_ug is not None:
         return run_drug_schedule(args, drug or drug_from_args(args, always=True),
-                                 planning_kwargs(args))
+                                 schedule_kwargs(args))
     if args.plot:
         raise ParameterError("plot", args.plot, "used with a drug option (e.g. "
                              "--drug-diffusivity-cm2-s)")
-    rests = args.rests
-    if rests is None and args.rests_seconds is None:
-        rests = [0.0] * (len(args.doses) - 1)
-    req = ScheduleRequest(doses=args.doses, rests=rests, rests_seconds=args.rests_seconds,
-                          check_protocol=not args.no_check, correct=not args.no_correct,
-                          tolerance=args.tolerance, **planning_kwargs(args))
+    req = ScheduleRequest(doses=args.doses, **schedule_kwargs(args))
     ans = plan_schedule(req, cache_path=args.cache)
     if args.json:
         print_json(ans.to_dict())
