@@ -175,4 +175,3 @@ class HoldRow(ByKey):
     actuation_time: float
     actuation_seconds: float | None
     error_estimate: float | None = None  # None: a drug run's hold reading (no estimate)
-    dose_ug: float | None = None  # a drug schedule's dose in ug (with a load)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from itertools import accumulate
 from typing import Any
 
@@ -37,6 +37,13 @@ from .truth import Part, Uncertainty, truth_text
 from .units import timescale, volume_to_ul
 
 LEAK_WARNING = 0.1  # a rest leaking more than this share of the next dose is flagged
+
+
+@dataclass(frozen=True)
+class DrugHoldRow(HoldRow):
+    """A drug schedule's hold row: the fluid one's fields, and the dose in ug (with a load)."""
+
+    dose_ug: float | None = None
 
 
 @dataclass(frozen=True)
@@ -96,7 +103,7 @@ class DrugScheduleAnswer(StatedTruth):
     load_ug: float | None
     rests: list[float]
     wait: float
-    hold: list[HoldRow]
+    hold: list[DrugHoldRow]
     protocol_check: dict[str, Any] | None
     corrected: dict[str, Any] | None
     warnings: list[str]
@@ -210,7 +217,7 @@ def _shoot(run: DrugHeatings, guesses: Sequence[float]) -> tuple[dict[str, Any],
     return res, warnings + _leak_warnings(req, res, "corrected")
 
 
-def _hold(planner: Any, run: DrugHeatings, tau: float | None) -> tuple[str, list[HoldRow]]:
+def _hold(planner: Any, run: DrugHeatings, tau: float | None) -> tuple[str, list[DrugHoldRow]]:
     """(model, rows) of the hold reading: the doses read off one continuous heating (with
     D0 = 0 the fluid schedule's, else one drug run read off at each cumulative dose)."""
     req = run.req
@@ -218,8 +225,8 @@ def _hold(planner: Any, run: DrugHeatings, tau: float | None) -> tuple[str, list
     if carried_by_fluid(run.solute):
         model, rows = hold_schedule(planner, req.fluid_schedule())
         return (f"{model} (D0 = 0: drug = fluid on one heating)",
-                [replace(r, dose_ug=None if load is None else r.dose_fraction * load)
-                 for r in rows])
+                [DrugHoldRow(**asdict(r), dose_ug=None if load is None
+                             else r.dose_fraction * load) for r in rows])
     total = DrugHeatings(req, run.runs, [sum(req.fractions)], run.settings)
     got = read_off(total, [], 0, FIRST_HEATING / 2.0)
     if isinstance(got, Short):
@@ -229,10 +236,11 @@ def _hold(planner: Any, run: DrugHeatings, tau: float | None) -> tuple[str, list
             for c in accumulate(req.fractions)]
     rows, prev = [], 0.0
     for d, c, e in zip(req.fractions, accumulate(req.fractions), ends, strict=True):
-        rows.append(HoldRow(dose_fraction=d, cumulative_fraction=c, start=prev, end=e,
-                            actuation_time=e - prev,
-                            actuation_seconds=None if tau is None else (e - prev) * tau,
-                            error_estimate=None, dose_ug=None if load is None else d * load))
+        rows.append(DrugHoldRow(dose_fraction=d, cumulative_fraction=c, start=prev, end=e,
+                                actuation_time=e - prev,
+                                actuation_seconds=None if tau is None else (e - prev) * tau,
+                                error_estimate=None,
+                                dose_ug=None if load is None else d * load))
         prev = e
     return "full", rows
 
