@@ -229,6 +229,7 @@ def _hold(planner: Any, run: DrugHeatings, tau: float | None) -> tuple[str, list
                              else r.dose_fraction * load) for r in rows])
     total = DrugHeatings(req, run.runs, [sum(req.fractions)], run.settings)
     got = read_off(total, [], 0, FIRST_HEATING / 2.0)
+    run.count += total.count  # the schedule's runs include its hold reading's
     if isinstance(got, Short):
         raise ParameterError("doses", list(req.fractions), f"summing to below {got.most:.4f}",
                              "one continuous heating releases at most that")

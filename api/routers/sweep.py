@@ -240,9 +240,12 @@ def _status(request: Request, sweep_id: str) -> dict[str, Any]:
     if not sweep_id.startswith(SWEEP_PREFIX):
         raise UnknownValidationError(sweep_id)
     job = stored_jobs.status(state, sweep_id)
-    body = SweepRequest.model_validate(state.planner.cache.get_job(sweep_id)["request"])
-    total = len(body.gels) * len(body.t_ends) * len(body.dry_radii_um) * len(body.doses)
-    done = total if job["status"] == "done" else _PROGRESS.get(sweep_id, [0])[0]
+    if job["status"] == "done":
+        total = done = len(job["result"]["rows"])
+    else:  # the stored body (no table yet): its grid's size
+        d = state.planner.cache.get_job(sweep_id)["request"]
+        total = len(d["gels"]) * len(d["t_ends"]) * len(d["dry_radii_um"]) * len(d["doses"])
+        done = _PROGRESS.get(sweep_id, [0])[0]
     out: dict[str, Any] = {"id": sweep_id, "status": job["status"], "points": total,
                            "points_done": done}
     if job["status"] == "done":
