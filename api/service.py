@@ -31,6 +31,9 @@ from dosing import (
     SolverSettings,
     UnknownValidationError,
 )
+from dosing.drug import DrugModel, carried_by_fluid
+from dosing.drug_dose import DrugDoseRequest, drug_dose_now, plan_drug_dose
+from dosing.drug_schedule import DrugScheduleRequest, plan_drug_schedule
 from dosing.jobs import DEFAULT_LEASE_SECONDS
 from dosing.request import resolve_gel
 from solver.equilibrium import equilibria, folds
@@ -38,8 +41,8 @@ from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.gel import PRESETS, Gel
 from solver.phase import classify_jump
 
-from . import drug_service, stored_jobs
 from . import schemas as s
+from . import stored_jobs
 from .errors import CacheFault, InternalError, ServiceUnavailable
 from .warmup import WarmupReport, warm_up
 
@@ -261,34 +264,51 @@ def _protocol(body: s.DoseTimeRequest) -> Any:
     return Protocol(body.t_start, body.protocol, files=False)
 
 
+def _case(body: s.DoseTimeRequest | s.ScheduleRequest) -> dict[str, Any]:
+    """The :class:`dosing.request.Case` fields every request body shares (t_end aside)."""
+    return {"gel": to_gel(body.gel), "t_start": body.t_start,
+            "dry_radius_um": body.dry_radius_um, "swollen_radius_um": body.swollen_radius_um,
+            "constants": _constants(body.constants), "branch": body.branch,
+            "settings": SolverSettings(interfacial_length=body.interfacial_length,
+                                       method=body.validation_method)}
+
+
 def to_dose_request(body: s.DoseTimeRequest) -> DoseRequest:
     """The planner's request (it checks the dose against the stored fluid: ParameterError)."""
     protocol = _protocol(body)
     return DoseRequest(
-        to_gel(body.gel), body.t_start, None if protocol is not None else body.t_end,
+        **_case(body), t_end=None if protocol is not None else body.t_end,
         protocol=protocol, dose_fraction=body.dose_fraction,
         dose_volume_ul=body.dose_volume_ul, drug_mass_ug=body.drug_mass_ug,
         concentration_ug_per_ul=body.concentration_ug_per_ul,
-        dry_radius_um=body.dry_radius_um, swollen_radius_um=body.swollen_radius_um,
-        constants=_constants(body.constants), branch=body.branch,
-        settings=SolverSettings(interfacial_length=body.interfacial_length,
-                                method=body.validation_method),
         size_distribution=None if body.size_distribution is None
         else body.size_distribution.model_dump(exclude_none=True))
 
 
-def to_schedule_request(body: s.ScheduleRequest) -> ScheduleRequest:
-    """The planner's schedule request."""
-    return ScheduleRequest(
-        to_gel(body.gel), body.t_start, body.t_end, doses=tuple(body.doses),
-        rests=body.rests if body.rests is not None or body.rests_seconds is not None
-        else [0.0] * (len(body.doses) - 1),
-        rests_seconds=body.rests_seconds, dry_radius_um=body.dry_radius_um,
-        swollen_radius_um=body.swollen_radius_um, constants=_constants(body.constants),
-        branch=body.branch, check_protocol=body.check_protocol, correct=body.correct,
-        tolerance=body.tolerance,
-        settings=SolverSettings(interfacial_length=body.interfacial_length,
-                                method=body.validation_method))
+def to_schedule_request(body: s.ScheduleRequest) -> ScheduleRequest | DrugScheduleRequest:
+    """The planner's schedule request: of fluid, or of drug with a ``drug``."""
+    fields = dict(_case(body), t_end=body.t_end, rests=body.rests,
+                  rests_seconds=body.rests_seconds, check_protocol=body.check_protocol,
+                  correct=body.correct, tolerance=body.tolerance)
+    if body.drug is None:
+        return ScheduleRequest(**fields, doses=tuple(body.doses))
+    return DrugScheduleRequest(**fields, doses=tuple(body.doses), **_drug(body))
+
+
+def _drug(body: s.DoseTimeRequest | s.ScheduleRequest) -> dict[str, Any]:
+    """The :class:`dosing.drug_dose.DrugCase` fields of a body with a ``drug``."""
+    return {"drug": DrugModel(**body.drug.model_kwargs()), "wait": body.drug.wait,
+            "wait_seconds": body.drug.wait_seconds}
+
+
+def to_drug_dose_request(body: s.DoseTimeRequest) -> DrugDoseRequest:
+    """The planner's drug dose request (ParameterError names a bad field)."""
+    for name in ("dose_volume_ul", "concentration_ug_per_ul"):
+        if getattr(body, name) is not None:
+            raise ParameterError(name, getattr(body, name), "null with a drug (give "
+                                 "dose_fraction of the load or drug_mass_ug)")
+    return DrugDoseRequest(**_case(body), t_end=body.t_end, **_drug(body),
+                           dose_fraction=body.dose_fraction, drug_mass_ug=body.drug_mass_ug)
 
 
 DOSE_PENDING_NOTE = (
@@ -312,27 +332,31 @@ DRUG_PENDING_NOTE = (
     "answered at once from the cache).")
 
 
+def _drug_answer(ans: Any) -> dict[str, Any]:
+    return {"status": "answered", "drug": True, **ans.to_dict()}
+
+
 def _drug_dose_job(planner: Planner, body: s.DoseTimeRequest) -> dict[str, Any]:
     """A stored drug-dose job's run: the answer, computing its drug runs (blocking)."""
-    return drug_service.dose_answer(planner, body, to_gel)
+    return _drug_answer(plan_drug_dose(planner, to_drug_dose_request(body)))
 
 
 def dose_time(planner: Planner, body: s.DoseTimeRequest,
               state: ServiceState | None = None) -> dict[str, Any] | Accepted:
     """The answer (front model or cache; 200), or :class:`Accepted` with a validation id;
-    one planner call (:meth:`dosing.Planner.answer`).  A dose with a drug is answered by
-    :mod:`api.drug_service`: at once when its runs are cached, else (given ``state``) as a
-    stored 'drug-dose' job, so that no HTTP worker thread waits on a run."""
+    one planner call (:meth:`dosing.Planner.answer`).  A dose with a drug is answered at
+    once when its runs are cached (:func:`dosing.drug_dose.drug_dose_now`), else (given
+    ``state``) as a stored 'drug-dose' job, so that no HTTP worker thread waits on a run."""
     if body.size_distribution is not None and (body.drug is not None
                                                or body.protocol is not None):
         raise ParameterError("size_distribution", "a batch", "null with a drug or a protocol "
                              "(a batch's drug dose or protocol dose is not built yet)")
     if body.drug is not None and body.protocol is None:
         if state is None:
-            return drug_service.dose_answer(planner, body, to_gel)
-        now = drug_service.dose_now(planner, body, to_gel)
+            return _drug_dose_job(planner, body)
+        now = drug_dose_now(planner, to_drug_dose_request(body))
         if now is not None:
-            return now
+            return _drug_answer(now)
         return Accepted(stored_jobs.submit(state, "drug-dose", body), DRUG_PENDING_NOTE)
     req = to_dose_request(body)
     out = planner.answer(req, validate=body.validate_full)
@@ -352,19 +376,20 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest,
 
 def _schedule_result(planner: Planner, body: s.ScheduleRequest) -> dict[str, Any]:
     """The whole schedule (blocking): fluid, or drug with a ``drug``."""
-    if body.drug is not None:
-        return drug_service.schedule_result(planner, body, to_gel)
-    return planner.schedule(to_schedule_request(body)).to_dict()
+    req = to_schedule_request(body)
+    if isinstance(req, DrugScheduleRequest):
+        return {"drug": True, **plan_drug_schedule(planner, req).to_dict()}
+    return planner.schedule(req).to_dict()
 
 
 def _schedule_now(planner: Planner, body: s.ScheduleRequest) -> dict[str, Any] | None:
     """The schedule when nothing in it needs a new full-solver run (one planner call for a
     fluid schedule: :meth:`dosing.Planner.schedule_now`), else None."""
-    if body.drug is not None:
-        if not drug_service.schedule_is_quick(body, to_gel):
-            return None
-        return drug_service.schedule_result(planner, body, to_gel)
-    now = planner.schedule_now(to_schedule_request(body))
+    req = to_schedule_request(body)
+    if isinstance(req, DrugScheduleRequest):  # the hold reading of a drug the fluid carries
+        quick = not (req.check_protocol or req.correct) and carried_by_fluid(req.solute)
+        return {"drug": True, **plan_drug_schedule(planner, req).to_dict()} if quick else None
+    now = planner.schedule_now(req)
     return None if now is None else now.to_dict()
 
 

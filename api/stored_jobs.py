@@ -1,4 +1,4 @@
-"""Jobs kept in the planner's cache: schedule checks and gel fits (HTTP 202 + poll).
+"""Jobs kept in the planner's cache: schedules, drug doses, fits, sweeps (HTTP 202 + poll).
 
 A job is a request body of a registered kind, stored in the cache's ``jobs`` table under an
 id made of the kind and the body's hash; it runs on the service's job runner (leased on the
@@ -6,7 +6,8 @@ cache, so one server runs it) and its outcome is stored beside it.  A job that i
 when polled and runs nowhere here (a restart, a crashed server) is queued again: jobs
 survive kill -9.  Adding a kind is one :func:`register` call with the request model (the
 stored body is validated with it again before it runs) and a blocking ``run(planner,
-body) -> dict``.
+body) -> dict``; a kind may run on a runner of its own (``runner(state)``: sweeps keep
+their one thread and queue), else on the service's job threads.
 """
 
 from __future__ import annotations
@@ -28,6 +29,11 @@ class JobKind:
     name: str
     request: type[BaseModel]
     run: Callable[[Any, Any], dict[str, Any]]
+    runner: Callable[[Any], Any] | None = None  # state -> its JobRunner (default state.jobs)
+
+    def runner_of(self, state: Any) -> Any:
+        """The JobRunner this kind's jobs run on."""
+        return state.jobs if self.runner is None else self.runner(state)
 
 
 KINDS: dict[str, JobKind] = {}
@@ -66,7 +72,7 @@ def _run(state: Any, jid: str, kind: JobKind, stored: dict[str, Any]) -> dict[st
 
 def _start(state: Any, jid: str, kind: JobKind, stored: dict[str, Any]) -> None:
     """Queue a stored job here, unless it is queued or running already."""
-    runner = state.jobs
+    runner = kind.runner_of(state)
     if runner.state(jid) in ("pending", "running"):
         return
 
@@ -110,7 +116,7 @@ def status(state: Any, jid: str) -> dict[str, Any]:
     out: dict[str, Any] = {"id": jid, "kind": row["kind"], "status": row["status"]}
     if row["status"] == "pending":
         _start(state, jid, kind, row["request"])
-        out["status"] = state.jobs.state(jid) or "pending"
+        out["status"] = kind.runner_of(state).state(jid) or "pending"
         if out["status"] in ("done", "failed"):  # finished just now
             row = state.planner.cache.get_job(jid) or row
             out["status"] = row["status"]

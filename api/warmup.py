@@ -160,15 +160,12 @@ def _drug_dose_lookup(planner: Any) -> Any:
     """A drug dose with diffusion looked up in the cache (nothing is computed): the first
     real one then finds its modules imported and its kernels loaded (a burst of drug doses
     does not hold the GIL for seconds in the server process)."""
-    from dosing.request import resolve_gel
+    from dosing.drug import DrugModel
+    from dosing.drug_dose import DrugDoseRequest, drug_dose_now
 
-    from . import drug_service
-    from . import schemas as s
-
-    body = s.DoseTimeRequest.model_validate({
-        "gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.3,
-        "dry_radius_um": 50.0, "drug": {"diffusivity_cm2_s": 1e-7, "load_ug": 1.0}})
-    return drug_service.dose_now(planner, body, resolve_gel)  # a preset by name
+    return drug_dose_now(planner, DrugDoseRequest(
+        "ANB", 302.0, 308.0, DrugModel(diffusivity_cm2_s=1e-7, load_ug=1.0),
+        dose_fraction=0.3, dry_radius_um=50.0))
 
 
 def _front_dose(planner: Any) -> Any:

@@ -174,4 +174,4 @@ class HoldRow(ByKey):
     end: float
     actuation_time: float
     actuation_seconds: float | None
-    error_estimate: float
+    error_estimate: float | None = None  # None: a drug run's hold reading (no estimate)

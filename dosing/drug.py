@@ -576,28 +576,3 @@ class StatedTruth:
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
         return asdict(self)
-
-
-class DrugRequest:
-    """What drug dose and schedule requests share (their dataclasses hold ``jump``,
-    ``drug``, ``t_end``, ``constants`` and ``bead_dry_radius_um``; the request resolver sets
-    ``settings`` and ``interfacial_range`` as for fluid requests, so ``truth.truth_text``
-    reads a drug request as it reads a fluid one)."""
-
-    jump: Any
-    drug: DrugModel
-    t_end: float
-    constants: Any
-    bead_dry_radius_um: float | None
-    interfacial_range: tuple[float, float] | None
-
-    @property
-    def start_radius(self) -> float:
-        """a(0): the equilibrium stretch at T_start."""
-        return self.jump.start_radius
-
-    @property
-    def solute(self) -> Any:
-        """The dimensionless solute of this request."""
-        return self.drug.solute(self.start_radius, self.t_end, self.constants,
-                                self.bead_dry_radius_um)

@@ -13,6 +13,7 @@ front model's shell is offered.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -22,7 +23,6 @@ from solver.errors import ParameterError, require_finite_positive
 
 from .drug import (
     DrugModel,
-    DrugRequest,
     DrugRuns,
     DrugScenario,
     StatedTruth,
@@ -31,14 +31,16 @@ from .drug import (
     leak_time,
     runs_for,
 )
-from .request import DoseRequest, Jump, _resolve_scenario
+from .protocol import Reach, Short, heat_cool_protocol, read_off, windows
+from .request import Case, resolve_case
+from .scenario import SolverSettings, Step
 from .truth import Part, Uncertainty, truth_text
 from .units import PhysicalConstants, timescale, volume_to_ul
 
 MAX_HORIZON = 32.0  # tau: one simulate step holds at most 100000 samples (2000 per tau)
+FIRST_HEATING = 0.5  # tau: the first drug run's heating (read_off grows it x GROWTH)
 SPLIT = ("Squeezed out: the release of the same mechanics with D0 = 0 (the fluid's motion "
          "alone, sieved by the mesh); diffused: the rest (the extra release diffusion makes).")
-DEFAULT_HORIZON = 0.5
 
 
 def resolve_drug_amount(name_fraction: str, fraction: float | None, name_mass: str,
@@ -65,47 +67,108 @@ def resolve_drug_amount(name_fraction: str, fraction: float | None, name_mass: s
 
 
 @dataclass(frozen=True)
-class DrugDoseRequest(DrugRequest):
-    """One drug dose: ``dose_fraction`` of the loaded drug, or ``drug_mass_ug`` (needs the
-    load); ``wait`` (tau) or ``wait_seconds`` at T_start in the medium before heating."""
+class DrugCase(Case):
+    """A case with a drug as its payload: ``drug`` (a DrugModel or a dict of its fields)
+    dissolved in the pore fluid, ``wait`` (tau) or ``wait_seconds`` in the medium at T_start
+    before the first heating.  Resolved: the load in ug (None when unknown) and the wait in
+    tau (``lead``).  Drug dose and schedule requests compose it as fluid ones compose Case."""
 
-    gel: Any
-    t_start: float
-    t_end: float
-    drug: DrugModel | dict[str, Any]
-    dose_fraction: float | None = None
-    drug_mass_ug: float | None = None
-    wait: float | None = None
-    wait_seconds: float | None = None
-    dry_radius_um: float | None = None
-    swollen_radius_um: float | None = None
-    constants: PhysicalConstants | dict[str, Any] | None = None
-    branch: str | None = None
-    settings: Any = None
-    jump: Jump = field(init=False, repr=False, compare=False)
-    bead_dry_radius_um: float | None = field(init=False, repr=False, compare=False)
-    fraction: float = field(init=False, repr=False, compare=False)
+    drug: DrugModel | dict[str, Any] | None = None
+    wait: float | None = field(default=None, kw_only=True)
+    wait_seconds: float | None = field(default=None, kw_only=True)
     load_ug: float | None = field(init=False, repr=False, compare=False)
     lead: float = field(init=False, repr=False, compare=False)
 
-    def __post_init__(self) -> None:
-        jump, dry = _resolve_scenario(self)
+    def resolve_drug(self) -> float | None:
+        """Resolve the case, the drug, its load and the wait (in place); the dry radius."""
+        jump, dry = resolve_case(self)
+        if self.drug is None:
+            raise ParameterError("drug", None, "a DrugModel or a dict of its fields")
         drug = DrugModel.from_any(self.drug)
         object.__setattr__(self, "drug", drug)
         stored_ul = None if dry is None else volume_to_ul(jump.stored_volume, dry)
-        load = drug.load(stored_ul, jump.start_radius, self.constants)
-        object.__setattr__(self, "load_ug", load)
-        object.__setattr__(self, "fraction", resolve_drug_amount(
-            "dose_fraction", self.dose_fraction, "drug_mass_ug", self.drug_mass_ug, load))
+        object.__setattr__(self, "load_ug", drug.load(stored_ul, jump.start_radius,
+                                                      self.constants))
         object.__setattr__(self, "lead", resolve_wait(self.wait, self.wait_seconds, dry,
                                                       self.t_end, self.constants))
+        return dry
+
+    @property
+    def solute(self) -> Any:
+        """The dimensionless solute of this request (validates the release volume)."""
+        return self.drug.solute(self.start_radius, self.t_end, self.constants,
+                                self.bead_dry_radius_um)
+
+
+@dataclass(frozen=True)
+class DrugDoseRequest(DrugCase):
+    """One drug dose: ``dose_fraction`` of the loaded drug, or ``drug_mass_ug`` (needs the
+    load); the :class:`DrugCase` fields (the wait) and the :class:`Case` fields."""
+
+    dose_fraction: float | None = None
+    drug_mass_ug: float | None = None
+    fraction: float = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        self.resolve_drug()
+        object.__setattr__(self, "fraction", resolve_drug_amount(
+            "dose_fraction", self.dose_fraction, "drug_mass_ug", self.drug_mass_ug,
+            self.load_ug))
         self.solute  # noqa: B018 - validates the release volume against the bead
 
-    def fluid_request(self, fraction: float) -> DoseRequest:
-        """The fluid dose of the same bead and jump."""
-        return DoseRequest(self.gel, self.t_start, self.t_end, dose_fraction=fraction,
-                           dry_radius_um=self.bead_dry_radius_um, constants=self.constants,
-                           branch=self.branch, settings=self.settings)
+
+class DrugHeatings:
+    """A drug case's heatings (:class:`dosing.protocol.Heatings`): the wait at T_start, then
+    heat at T_end / rest at T_start; ``targets`` fractions of the loaded drug; each run the
+    full solver with the drug on its cells (cached by ``runs``, counted)."""
+
+    max_horizon = MAX_HORIZON
+
+    def __init__(self, req: DrugCase, runs: DrugRuns, targets: Sequence[float],
+                 settings: SolverSettings | None = None) -> None:
+        self.req, self.runs, self.targets = req, runs, tuple(targets)
+        self.tolerance = float(getattr(req, "tolerance", 0.0))
+        self.rests = tuple(getattr(req, "rests", None) or ())
+        self.settings = settings or drug_settings(req.settings)
+        self.solute = req.solute
+        self.count = 0
+
+    def steps(self, durations: Sequence[float]) -> tuple[Step, ...]:
+        """The protocol's (duration, temperature) steps, the wait first."""
+        r = self.req
+        lead = ((r.lead, r.t_start),) if r.lead > 0.0 else ()
+        return (*lead, *heat_cool_protocol(durations, self.rests, r.t_start, r.t_end))
+
+    def scenario(self, durations: Sequence[float]) -> DrugScenario:
+        """The drug run of these actuation times."""
+        r = self.req
+        return DrugScenario(r.gel, r.t_start, self.steps(durations), self.solute, r.branch,
+                            self.settings)
+
+    def run(self, durations: Sequence[float]) -> Any:
+        """The drug run (a ReleaseResult) of these actuation times."""
+        self.count += 1
+        return self.runs.run(self.scenario(durations))
+
+    def windows(self, durations: Sequence[float]) -> list[tuple[float, float]]:
+        """(start, end) of each heating, after the wait."""
+        return [(a + self.req.lead, b + self.req.lead) for a, b in windows(durations,
+                                                                            self.rests)]
+
+    def delivered(self, rel: Any, durations: Sequence[float]) -> list[float]:
+        """The drug each heating releases, fractions of the load."""
+        return [rel.released_at(e) - rel.released_at(s) for s, e in self.windows(durations)]
+
+    def reach(self, rel: Any, durations: Sequence[float], k: int) -> Reach:
+        """Where heating k releases dose k; else the most it releases and its late part (a
+        drug the collapsed shell holds releases ever more slowly)."""
+        start = self.windows(durations)[k][0]
+        try:
+            return Reach(rel.time_to_release(self.targets[k], after=start) - start)
+        except ValueError:
+            end = float(rel.released_fraction[-1])
+            return Reach(None, end - rel.released_at(start),
+                         end - rel.released_at(start + durations[k] / 2.0))
 
 
 def resolve_wait(wait: float | None, wait_seconds: float | None, dry: float | None,
@@ -204,8 +267,10 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
                   interfacial_length=settings.interfacial_length,
                   bead_dry_radius_um=dry, truth=truth_text(req))
     common.update(mesh=req.drug.mesh_note(req.start_radius, c))
+    # the drug dose's model choice: D0 = 0 -> the fluid answer (exact on one heating);
+    # else the full solver with the drug on its cells
     if carried_by_fluid(solute):
-        fluid = planner.dose(req.fluid_request(req.fraction))
+        fluid = planner.dose(req.dose_request(req.fraction))
         return DrugDoseAnswer(
             model=fluid.model, time=fluid.time, seconds=fluid.seconds,
             leaked_before_heating=0.0, leaked_before_heating_ug=ug(0.0),
@@ -220,32 +285,19 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
                   f"({fluid.model}) for the same fraction; nothing leaks while it waits at "
                   "T_start. " + fluid.note), **common)
     runs = runs or runs_for(planner)
-    horizon = DEFAULT_HORIZON
-    while True:
-        steps = ((req.lead, req.t_start),) if req.lead > 0.0 else ()
-        sc = DrugScenario(req.gel, req.t_start, (*steps, (horizon, req.t_end)), solute,
-                          req.branch, settings)
-        rel = runs.run(sc)
-        try:
-            t_hit = rel.time_to_release(req.fraction, after=req.lead)
-            break
-        except ValueError:
-            most = rel.released_fraction[-1] - rel.released_at(req.lead)
-            late = rel.released_fraction[-1] - rel.released_at(req.lead + horizon / 2.0)
-            # a retained drug (sieved by the collapsed shell) releases ever more slowly: if
-            # even the last half-horizon's rate kept up to MAX_HORIZON falls short, stop
-            hopeless = most + max(late, 0.0) * (MAX_HORIZON - horizon) / (horizon / 2.0) \
-                < req.fraction
-            if horizon >= MAX_HORIZON or hopeless:
-                name = "dose_fraction" if req.drug_mass_ug is None else "drug_mass_ug"
-                raise ParameterError(
-                    name, getattr(req, name), f"below {most:.4f} of the load"
-                    + (f" ({most * load:.4g} ug)" if load else ""),
-                    f"after waiting {req.lead:.4g} tau, heating for {horizon:g} tau releases "
-                    "at most that" + ("" if horizon >= MAX_HORIZON else
-                                      f" (and at its late rate not more by {MAX_HORIZON:g} "
-                                      "tau: the collapsed shell holds the rest)")) from None
-            horizon *= 4.0
+    heat = DrugHeatings(req, runs, [req.fraction], settings)
+    got = read_off(heat, [], 0, FIRST_HEATING / 2.0)
+    if isinstance(got, Short):
+        name = "dose_fraction" if req.drug_mass_ug is None else "drug_mass_ug"
+        raise ParameterError(
+            name, getattr(req, name), f"below {got.most:.4f} of the load"
+            + (f" ({got.most * load:.4g} ug)" if load else ""),
+            f"after waiting {req.lead:.4g} tau, heating for {got.horizon:g} tau releases at "
+            "most that" + ("" if got.capped else f" (and at its late rate not more by "
+                                                 f"{MAX_HORIZON:g} tau: the collapsed shell "
+                                                 "holds the rest)"))
+    rel, sc = got.result, heat.scenario(got.trial)  # the run it was read off
+    t_hit = req.lead + got.duration
     unc = drug_uncertainty(planner, req, runs, sc, t_hit, _fluid_fraction(req, rel, t_hit))
     before = rel.released_at(req.lead)
     squeezed = rel.squeezed_at(t_hit) - rel.squeezed_at(req.lead)
@@ -281,6 +333,34 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
               "not carry to another, Tokita & Tanaka 1991)."), **common)
 
 
+class RunNotCached(LookupError):
+    """A drug run an answer needs is not in the cache (:class:`CachedRuns`)."""
+
+
+class CachedRuns:
+    """A planner's drug runs, cached ones only: a missing run raises RunNotCached instead
+    of computing it."""
+
+    def __init__(self, runs: DrugRuns) -> None:
+        self.runs = runs
+
+    def run(self, sc: DrugScenario) -> Any:
+        """The cached run for ``sc``, or RunNotCached."""
+        hit = self.runs.cached(sc)
+        if hit is None:
+            raise RunNotCached(sc.key())
+        return hit
+
+
+def drug_dose_now(planner: Any, req: DrugDoseRequest) -> DrugDoseAnswer | None:
+    """The drug dose's answer when nothing needs a new run (no diffusion, or every drug run
+    cached), else None: the service then queues it as a job (no HTTP thread waits)."""
+    try:
+        return plan_drug_dose(planner, req, runs=CachedRuns(runs_for(planner)))
+    except RunNotCached:
+        return None
+
+
 def _fluid_fraction(req: DrugDoseRequest, rel: Any, t: float) -> float:
     """The fraction of the stored fluid expelled by ``t`` in a drug run (eq. FluidVolExpelled)."""
     return (float(rel.radius[0]) ** 3 - _a3_at(rel, t)) / (req.start_radius**3 - 1.0)
@@ -310,10 +390,7 @@ def drug_uncertainty(planner: Any, req: DrugDoseRequest, runs: DrugRuns, sc: Dru
     fluid = None
     if 0.0 < fluid_fraction < 1.0:
         try:
-            fluid = planner.answer_now(DoseRequest(
-                req.gel, req.t_start, req.t_end, dose_fraction=fluid_fraction,
-                dry_radius_um=req.bead_dry_radius_um, constants=req.constants,
-                branch=req.branch, settings=req.settings))
+            fluid = planner.answer_now(req.dose_request(fluid_fraction))
         except ParameterError:  # the bead had shrunk to its final state: no fluid dose there
             fluid = None
     u = fluid.uncertainty if fluid is not None else None
@@ -346,4 +423,4 @@ def _conc(req: DrugDoseRequest, released: float, radius: float) -> float | None:
     return released * req.load_ug / (v + grown)
 
 
-__all__ = ["DrugDoseAnswer", "DrugDoseRequest", "plan_drug_dose"]
+__all__ = ["DrugCase", "DrugDoseAnswer", "DrugDoseRequest", "DrugHeatings", "plan_drug_dose"]

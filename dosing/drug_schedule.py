@@ -19,82 +19,47 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from itertools import accumulate
 from typing import Any
 
+import numpy as np
+
 from solver.errors import ParameterError, SolverError, require_finite_positive
 
-from .drug import (
-    DrugModel,
-    DrugRequest,
-    DrugRuns,
-    DrugScenario,
-    StatedTruth,
-    carried_by_fluid,
-    drug_settings,
-    leak_time,
-    runs_for,
-)
-from .drug_dose import MAX_HORIZON, resolve_wait
-from .protocol import heat_cool_protocol, windows
-from .request import Jump, ScheduleRequest, _resolve_scenario, resolve_rests
-from .scenario import SolverSettings, Step
+from .answers import HoldRow
+from .drug import DrugRuns, StatedTruth, carried_by_fluid, drug_settings, leak_time, runs_for
+from .drug_dose import FIRST_HEATING, DrugCase, DrugHeatings
+from .protocol import Short, read_off, shoot_durations
+from .request import ScheduleCase, ScheduleRequest
 from .schedule import hold_schedule
 from .truth import Part, Uncertainty, truth_text
-from .units import PhysicalConstants, timescale, volume_to_ul
+from .units import timescale, volume_to_ul
 
-MAX_EXTENSIONS = 4
-MAX_SECANT = 10
 LEAK_WARNING = 0.1  # a rest leaking more than this share of the next dose is flagged
 
 
 @dataclass(frozen=True)
-class DrugScheduleRequest(DrugRequest):
-    """Drug doses (``doses`` fractions of the load, or ``doses_ug``) with ``rests`` (tau)
-    or ``rests_seconds`` at T_start between them, after ``wait`` at T_start."""
+class DrugHoldRow(HoldRow):
+    """A drug schedule's hold row: the fluid one's fields, and the dose in ug (with a load)."""
 
-    gel: Any
-    t_start: float
-    t_end: float
-    drug: DrugModel | dict[str, Any]
+    dose_ug: float | None = None
+
+
+@dataclass(frozen=True)
+class DrugScheduleRequest(DrugCase, ScheduleCase):
+    """Drug doses (``doses`` fractions of the load, or ``doses_ug``): the
+    :class:`~dosing.request.ScheduleCase` fields (rests, check, correction, tolerance) and
+    the :class:`~dosing.drug_dose.DrugCase` ones (the drug, the wait at T_start)."""
+
     doses: Sequence[float] | None = None
     doses_ug: Sequence[float] | None = None
-    rests: Sequence[float] | None = None
-    rests_seconds: Sequence[float] | None = None
-    wait: float | None = None
-    wait_seconds: float | None = None
-    dry_radius_um: float | None = None
-    swollen_radius_um: float | None = None
-    constants: PhysicalConstants | dict[str, Any] | None = None
-    branch: str | None = None
-    settings: Any = None
-    check_protocol: bool = True
-    correct: bool = True
-    tolerance: float = 0.01
-    jump: Jump = field(init=False, repr=False, compare=False)
-    bead_dry_radius_um: float | None = field(init=False, repr=False, compare=False)
-    load_ug: float | None = field(init=False, repr=False, compare=False)
     fractions: tuple[float, ...] = field(init=False, repr=False, compare=False)
-    lead: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        jump, dry = _resolve_scenario(self)
-        drug = DrugModel.from_any(self.drug)
-        object.__setattr__(self, "drug", drug)
-        load = drug.load(None if dry is None else volume_to_ul(jump.stored_volume, dry),
-                         jump.start_radius, self.constants)
-        object.__setattr__(self, "load_ug", load)
-        object.__setattr__(self, "fractions", self._resolve_doses(load))
-        object.__setattr__(self, "rests", resolve_rests(self.rests, self.rests_seconds,
-                                                        len(self.fractions), dry, self.t_end,
-                                                        self.constants))
-        object.__setattr__(self, "lead", resolve_wait(self.wait, self.wait_seconds, dry,
-                                                      self.t_end, self.constants))
-        tol = require_finite_positive("tolerance", self.tolerance)
-        if tol > 0.2:
-            raise ParameterError("tolerance", self.tolerance, "0 < tolerance <= 0.2")
-        object.__setattr__(self, "tolerance", tol)
+        dry = self.resolve_drug()
+        object.__setattr__(self, "fractions", self._resolve_doses(self.load_ug))
+        self.resolve_schedule(len(self.fractions), dry)
         self.solute  # noqa: B018 - validates the release volume against the bead
 
     def _resolve_doses(self, load: float | None) -> tuple[float, ...]:
@@ -124,12 +89,8 @@ class DrugScheduleRequest(DrugRequest):
 
     def fluid_schedule(self) -> ScheduleRequest:
         """The same schedule read as fluid fractions (for the hold times with D0 = 0)."""
-        return ScheduleRequest(self.gel, self.t_start, self.t_end, doses=self.fractions,
-                               rests=self.rests, dry_radius_um=self.bead_dry_radius_um,
-                               constants=self.constants, branch=self.branch,
-                               settings=self.settings, check_protocol=False, correct=False)
-
-
+        return ScheduleRequest(**self.case_fields(), doses=self.fractions, rests=self.rests,
+                               check_protocol=False, correct=False)
 
 
 @dataclass
@@ -142,7 +103,7 @@ class DrugScheduleAnswer(StatedTruth):
     load_ug: float | None
     rests: list[float]
     wait: float
-    hold: list[dict[str, Any]]
+    hold: list[DrugHoldRow]
     protocol_check: dict[str, Any] | None
     corrected: dict[str, Any] | None
     warnings: list[str]
@@ -153,48 +114,18 @@ class DrugScheduleAnswer(StatedTruth):
     uncertainty: Uncertainty | None = None
 
 
-class _Runner:
-    """Drug runs of protocols for one request."""
-
-    def __init__(self, planner: Any, req: DrugScheduleRequest, runs: DrugRuns,
-                 settings: SolverSettings | None = None) -> None:
-        self.req, self.runs = req, runs
-        self.solute = req.solute
-        self.count = 0
-        self.settings = settings or drug_settings(req.settings)
-
-    def steps(self, durations: Sequence[float]) -> tuple[Step, ...]:
-        r = self.req
-        lead = ((r.lead, r.t_start),) if r.lead > 0.0 else ()
-        return (*lead, *heat_cool_protocol(durations, r.rests, r.t_start, r.t_end))
-
-    def __call__(self, durations: Sequence[float]) -> Any:
-        r = self.req
-        self.count += 1
-        return self.runs.run(DrugScenario(r.gel, r.t_start, self.steps(durations), self.solute,
-                                          r.branch, self.settings))
-
-    def windows(self, durations: Sequence[float]) -> list[tuple[float, float]]:
-        return [(a + self.req.lead, b + self.req.lead)
-                for a, b in windows(durations, self.req.rests)]
-
-
-def _reading(run: _Runner, rel: Any, durations: Sequence[float]) -> dict[str, Any]:
+def _reading(run: DrugHeatings, rel: Any, durations: Sequence[float]) -> dict[str, Any]:
     """What each heating delivers (drug, its squeezed part, fluid) and each rest leaks."""
     req = run.req
     win = run.windows(durations)
-    import numpy as np
-
     a3 = rel.radius**3
 
     def at(arr: Any, t: float) -> float:
         return float(np.interp(t, rel.t, arr))
 
     scale = req.start_radius**3 - 1.0
-    drug = [at(rel.released_fraction, e) - at(rel.released_fraction, s) for s, e in win]
-    sq = rel.squeezed_fraction if np.size(rel.squeezed_fraction) == np.size(rel.t) \
-        else rel.advected_fraction  # the D0 = 0 twin's release (grid-independent)
-    squeezed = [at(sq, e) - at(sq, s) for s, e in win]
+    drug = run.delivered(rel, durations)
+    squeezed = [rel.squeezed_at(e) - rel.squeezed_at(s) for s, e in win]
     fluid = [(at(a3, s) - at(a3, e)) / scale for s, e in win]
     leaks = [at(rel.released_fraction, win[k + 1][0]) - at(rel.released_fraction, win[k][1])
              for k in range(len(win) - 1)]
@@ -234,8 +165,8 @@ def _schedule_uncertainty(planner: Any, req: DrugScheduleRequest, runs: DrugRuns
     if reading is None:
         return None
     times = reading["actuation_times"]
-    half = _Runner(planner, req, runs, settings=s.check())
-    coarse = _reading(half, half(times), times)["delivered_fractions"]
+    half = DrugHeatings(req, runs, req.fractions, settings=s.check())
+    coarse = _reading(half, half.run(times), times)["delivered_fractions"]
     fine = reading["delivered_fractions"]  # (a schedule not met has fewer heatings)
     gap = max(abs(c - f) / d for c, f, d in zip(coarse, fine, req.fractions[:len(fine)],
                                                 strict=True))
@@ -263,66 +194,20 @@ def _leak_warnings(req: DrugScheduleRequest, reading: dict[str, Any], label: str
     return out
 
 
-def _read_off(run: _Runner, durations: list[float], k: int, guess: float
-              ) -> tuple[float | None, float]:
-    """(duration of heating k delivering dose k read off a longer heating, or None if no
-    heating reaches it; the most it delivers)."""
-    target = run.req.fractions[k]
-    horizon = max(2.0 * guess, guess + 0.05)
-    most = 0.0
-    for _ in range(MAX_EXTENSIONS):
-        rel = run([*durations, horizon])
-        start = run.windows([*durations, horizon])[k][0]
-        try:
-            return rel.time_to_release(target, after=start) - start, 0.0
-        except ValueError:
-            most = float(rel.released_fraction[-1] - rel.released_at(start))
-            late = float(rel.released_fraction[-1] - rel.released_at(start + horizon / 2.0))
-            # a drug the collapsed shell holds: even the late rate kept to the cap falls short
-            if horizon >= MAX_HORIZON or most + max(late, 0.0) * (
-                    MAX_HORIZON - horizon) / (horizon / 2.0) < target:
-                break
-            horizon = min(4.0 * horizon, MAX_HORIZON)
-    return None, most
-
-
-def _secant(run: _Runner, durations: list[float], k: int, d0: float, tol: float) -> float:
-    """Refine heating k's duration until its drug meets the dose within ``tol``."""
-    target = run.req.fractions[k]
-
-    def got(d: float) -> float:
-        trial = [*durations, d]
-        return _reading(run, run(trial), trial)["delivered_fractions"][k]
-
-    g0 = got(d0)
-    if abs(g0 / target - 1.0) <= tol:
-        return d0
-    d1 = d0 * (target / g0) if g0 > 0 else 1.5 * d0
-    g1 = got(d1)
-    for _ in range(MAX_SECANT):
-        if abs(g1 / target - 1.0) <= tol or g1 == g0:
-            break
-        d0, g0, d1 = d1, g1, max(d1 + (target - g1) * (d1 - d0) / (g1 - g0), 1e-6)
-        g1 = got(d1)
-    return d1
-
-
-def _shoot(run: _Runner, guesses: Sequence[float]) -> tuple[dict[str, Any], list[str]]:
+def _shoot(run: DrugHeatings, guesses: Sequence[float]) -> tuple[dict[str, Any], list[str]]:
+    """The corrected schedule (:func:`dosing.protocol.shoot_durations`), with warnings for a
+    dose no actuation time meets and for leaky rests."""
     req = run.req
-    tol = req.tolerance / 2.0
-    durations: list[float] = []
+    durations, short = shoot_durations(run, guesses)
     warnings: list[str] = []
-    for k, g in enumerate(guesses):
-        d, most = _read_off(run, durations, k, g)
-        if d is None:
-            warnings.append(f"corrected: no actuation time meets dose {k + 1} "
-                            f"({req.fractions[k]:.3g} of the load): heating then delivers "
-                            f"at most {most:.3g}; doses from {k + 1} on are not corrected")
-            break
-        durations.append(_secant(run, durations, k, d, tol))
+    if short is not None:
+        k = short.k
+        warnings.append(f"corrected: no actuation time meets dose {k + 1} "
+                        f"({req.fractions[k]:.3g} of the load): heating then delivers "
+                        f"at most {short.most:.3g}; doses from {k + 1} on are not corrected")
     if not durations:
         return {"actuation_times": [], "met": False, "runs": run.count}, warnings
-    res = _reading(run, run(durations), durations)
+    res = _reading(run, run.run(durations), durations)
     errs = [abs(e) for e in res["relative_errors"]]
     res.update(runs=run.count, max_relative_error=max(errs),
                met=len(durations) == len(req.fractions) and max(errs) <= req.tolerance)
@@ -330,6 +215,35 @@ def _shoot(run: _Runner, guesses: Sequence[float]) -> tuple[dict[str, Any], list
         raise SolverError(f"shooting did not meet the drug doses within {req.tolerance:.2%} "
                           f"(worst {max(errs):.2%})", res)
     return res, warnings + _leak_warnings(req, res, "corrected")
+
+
+def _hold(planner: Any, run: DrugHeatings, tau: float | None) -> tuple[str, list[DrugHoldRow]]:
+    """(model, rows) of the hold reading: the doses read off one continuous heating (with
+    D0 = 0 the fluid schedule's, else one drug run read off at each cumulative dose)."""
+    req = run.req
+    load = req.load_ug
+    if carried_by_fluid(run.solute):
+        model, rows = hold_schedule(planner, req.fluid_schedule())
+        return (f"{model} (D0 = 0: drug = fluid on one heating)",
+                [DrugHoldRow(**asdict(r), dose_ug=None if load is None
+                             else r.dose_fraction * load) for r in rows])
+    total = DrugHeatings(req, run.runs, [sum(req.fractions)], run.settings)
+    got = read_off(total, [], 0, FIRST_HEATING / 2.0)
+    run.count += total.count  # the schedule's runs include its hold reading's
+    if isinstance(got, Short):
+        raise ParameterError("doses", list(req.fractions), f"summing to below {got.most:.4f}",
+                             "one continuous heating releases at most that")
+    ends = [got.result.time_to_release(c, after=req.lead) - req.lead
+            for c in accumulate(req.fractions)]
+    rows, prev = [], 0.0
+    for d, c, e in zip(req.fractions, accumulate(req.fractions), ends, strict=True):
+        rows.append(DrugHoldRow(dose_fraction=d, cumulative_fraction=c, start=prev, end=e,
+                                actuation_time=e - prev,
+                                actuation_seconds=None if tau is None else (e - prev) * tau,
+                                error_estimate=None,
+                                dose_ug=None if load is None else d * load))
+        prev = e
+    return "full", rows
 
 
 def _seconds(res: dict[str, Any] | None, tau: float | None) -> None:
@@ -342,44 +256,17 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
                        runs: DrugRuns | None = None) -> DrugScheduleAnswer:
     """Plan ``req``: hold times, the protocol check and the corrected schedule."""
     runs = runs or runs_for(planner)
-    run = _Runner(planner, req, runs)
-    solute = req.solute
+    run = DrugHeatings(req, runs, req.fractions)
+    solute = run.solute
     dry = req.bead_dry_radius_um
     tau = timescale(dry, req.t_end, req.constants).seconds if dry is not None else None
     warnings: list[str] = []
-    if carried_by_fluid(solute):
-        model, rows = hold_schedule(planner, req.fluid_schedule())
-        hold = [row.to_dict() for row in rows]
-        model = f"{model} (D0 = 0: drug = fluid on one heating)"
-    else:
-        model = "full"
-        hold = []
-        horizon = 0.5
-        for _ in range(MAX_EXTENSIONS + 1):
-            rel = run([horizon])
-            try:
-                ends = [rel.time_to_release(c, after=req.lead) - req.lead
-                        for c in accumulate(req.fractions)]
-                break
-            except ValueError:
-                if horizon >= MAX_HORIZON:
-                    raise ParameterError("doses", list(req.fractions), f"summing to below "
-                                         f"{rel.released_fraction[-1]:.4f}", "one continuous "
-                                         "heating releases at most that") from None
-                horizon = min(4.0 * horizon, MAX_HORIZON)
-        prev = 0.0
-        for d, c, e in zip(req.fractions, accumulate(req.fractions), ends, strict=True):
-            hold.append({"dose_fraction": d, "cumulative_fraction": c, "start": prev, "end": e,
-                         "actuation_time": e - prev,
-                         "actuation_seconds": None if tau is None else (e - prev) * tau})
-            prev = e
+    model, hold = _hold(planner, run, tau)
     load = req.load_ug
-    for row in hold:
-        row["dose_ug"] = None if load is None else row["dose_fraction"] * load
-    guesses = [row["actuation_time"] for row in hold]
+    guesses = [row.actuation_time for row in hold]
     checked = None
     if req.check_protocol:
-        checked = _reading(run, run(guesses), guesses)
+        checked = _reading(run, run.run(guesses), guesses)
         warnings += _leak_warnings(req, checked, "protocol check")
     corrected = None
     if req.correct:

@@ -3,16 +3,18 @@
 A schedule heats at T_end for each actuation and rests at T_start between them; while it
 rests the gel takes up fresh fluid.  The volume a dose really delivers is what leaves
 during its heating window, (4 pi/3)(a(start)^3 - a(end)^3) (eq. FluidVolExpelled),
-reported as a fraction of the stored fluid (4 pi/3)(a0^3 - 1).  ``shoot`` finds
-actuation times that meet every dose: each time is read off a longer run of the same
-protocol prefix, then refined by the secant method on the exact protocol.
+reported as a fraction of the stored fluid (4 pi/3)(a0^3 - 1).  ``shoot_durations`` is the
+one shooting routine of fluid and drug schedules (and the one horizon search of the drug
+dose): each actuation time is read off a longer run of the same protocol prefix, then
+refined by the secant method on the exact protocol; a schedule is a :class:`Heatings`.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -22,8 +24,9 @@ from .request import ScheduleRequest
 from .scenario import Step, Trajectory
 
 Runner = Callable[[tuple[Step, ...]], Trajectory]
-MAX_EXTENSIONS = 6
-MAX_SECANT = 8
+MAX_EXTENSIONS = 6  # longer heatings tried when reading a dose off (x GROWTH each)
+GROWTH = 4.0
+MAX_SECANT = 10  # secant steps per heating
 
 
 def heat_cool_protocol(durations: Sequence[float], rests: Sequence[float], t_start: float,
@@ -95,69 +98,158 @@ def _window_target(req: ScheduleRequest, a_start: float, fraction: float, k: int
     return a3 ** (1.0 / 3.0)
 
 
-def _read_off(run: Runner, req: ScheduleRequest, durations: list[float], k: int,
-              guess: float) -> float:
-    """Duration of heating k read off a longer run of the same prefix."""
-    horizon = max(2.0 * guess, guess + 0.05)
+# ---------------------------------------------------------------- the one shooting routine
+
+class Heatings(Protocol):
+    """What shooting needs of a schedule, fluid or drug: the doses (``targets``, one per
+    heating), the tolerance, runs of the heat/rest protocol for given actuation times, what
+    each heating of a run delivers, and where in a run's heating k dose k is reached."""
+
+    targets: Sequence[float]
+    tolerance: float
+    max_horizon: float
+
+    def run(self, durations: Sequence[float]) -> Any: ...
+
+    def delivered(self, result: Any, durations: Sequence[float]) -> list[float]: ...
+
+    def reach(self, result: Any, durations: Sequence[float], k: int) -> Reach: ...
+
+
+@dataclass(frozen=True)
+class Reach:
+    """Heating k of a run: the duration at which it delivers dose k (``duration``), or, when
+    it does not within the run, the most it delivers and what its second half delivered
+    (``late``; None where no late-rate bound applies, as for the fluid's exact limit)."""
+
+    duration: float | None = None
+    most: float = 0.0
+    late: float | None = None
+
+
+@dataclass(frozen=True)
+class Short:
+    """Dose ``k`` is not reached: heating k delivers at most ``most`` (of a heating up to
+    ``horizon``); ``capped``: the horizon reached the runs' cap (else the late rate showed
+    the dose out of reach)."""
+
+    k: int
+    most: float
+    horizon: float
+    capped: bool
+
+
+@dataclass(frozen=True)
+class ReadOff:
+    """Heating k delivers dose k after ``duration``, read off ``result``, the run of the
+    actuation times ``trial`` (the earlier ones and the longer heating)."""
+
+    duration: float
+    result: Any
+    trial: list[float]
+
+
+def read_off(h: Heatings, durations: Sequence[float], k: int, guess: float) -> ReadOff | Short:
+    """Heating k's duration delivering dose k, read off a longer heating after the earlier
+    ``durations``: the one horizon search (from twice ``guess``,
+    x GROWTH up to MAX_EXTENSIONS times and the runs' cap; a slowly releasing heating whose
+    late rate kept to the cap falls short is given up early)."""
+    horizon = min(max(2.0 * guess, guess + 0.05), h.max_horizon)
     for _ in range(MAX_EXTENSIONS):
-        traj = run(heat_cool_protocol([*durations, horizon], req.rests, req.t_start, req.t_end))
-        start = windows([*durations, horizon], req.rests)[k][0]
-        target = _window_target(req, traj.radius_at(start), req.doses[k], k)
-        try:
-            return traj.time_to_radius(target, after=start) - start
-        except ValueError:
-            horizon *= 3.0
-    raise SolverError(f"dose {k} is not reached within a heating of {horizon:.4g}",
-                      {"dose": k, "horizon": horizon})
+        trial = [*durations, horizon]
+        result = h.run(trial)
+        got = h.reach(result, trial, k)
+        if got.duration is not None:
+            return ReadOff(got.duration, result, trial)
+        capped = horizon >= h.max_horizon
+        hopeless = got.late is not None and got.most + max(got.late, 0.0) * (
+            h.max_horizon - horizon) / (horizon / 2.0) < h.targets[k]
+        if capped or hopeless:
+            return Short(k, got.most, horizon, capped)
+        horizon = min(GROWTH * horizon, h.max_horizon)
+    return Short(k, got.most, horizon, False)
 
 
-def _delivered_k(run: Runner, req: ScheduleRequest, durations: list[float], k: int,
-                 d: float) -> float:
-    trial = [*durations[:k], d]
-    traj = run(heat_cool_protocol(trial, req.rests, req.t_start, req.t_end))
-    return delivery(traj, trial, req.rests, req.start_radius).delivered[k]
+def secant(h: Heatings, durations: Sequence[float], k: int, d0: float, tol: float) -> float:
+    """Refine heating k's duration (after ``durations``) until it delivers dose k within
+    ``tol`` on the exact protocol (at most MAX_SECANT steps)."""
+    target = h.targets[k]
 
+    def got(d: float) -> float:
+        trial = [*durations, d]
+        return h.delivered(h.run(trial), trial)[k]
 
-def _secant(run: Runner, req: ScheduleRequest, durations: list[float], k: int, d0: float,
-            got0: float, tol: float) -> tuple[float, int]:
-    """Refine heating k's duration until its delivery meets the dose within ``tol``."""
-    target = req.doses[k]
-    d1 = d0 * target / got0 if got0 > 0 else 1.5 * d0
-    got1 = _delivered_k(run, req, durations, k, d1)
-    runs = 1
-    while abs(got1 / target - 1.0) > tol and runs < MAX_SECANT:
-        if got1 == got0:
+    g0 = got(d0)
+    if abs(g0 / target - 1.0) <= tol:
+        return d0
+    d1 = d0 * target / g0 if g0 > 0 else 1.5 * d0
+    g1 = got(d1)
+    for _ in range(MAX_SECANT):
+        if abs(g1 / target - 1.0) <= tol or g1 == g0:
             break
-        d0, got0, d1 = d1, got1, d1 + (target - got1) * (d1 - d0) / (got1 - got0)
-        d1 = max(d1, 1e-9)
-        got1 = _delivered_k(run, req, durations, k, d1)
-        runs += 1
-    return d1, runs
+        d0, g0, d1 = d1, g1, max(d1 + (target - g1) * (d1 - d0) / (g1 - g0), 1e-9)
+        g1 = got(d1)
+    return d1
+
+
+def shoot_durations(h: Heatings, guesses: Sequence[float]) -> tuple[list[float], Short | None]:
+    """Actuation times meeting the doses one after another (a heating's delivery depends only
+    on the steps before it): each read off a longer heating, then refined by the secant
+    method aiming inside half the tolerance; stops at the first dose out of reach."""
+    tol = h.tolerance / 2.0  # aim inside the tolerance, the final check must pass
+    durations: list[float] = []
+    for k, g in enumerate(guesses):
+        got = read_off(h, durations, k, g)
+        if isinstance(got, Short):
+            return durations, got
+        durations.append(secant(h, durations, k, got.duration, tol))
+    return durations, None
+
+
+class FluidHeatings:
+    """A fluid schedule's heatings (:class:`Heatings`): doses of the stored fluid, runs of
+    the heat/rest protocol by ``run``, counted."""
+
+    max_horizon = math.inf  # a fluid dose beyond reach is refused exactly (_window_target)
+
+    def __init__(self, run: Runner, req: ScheduleRequest) -> None:
+        self._run, self.req = run, req
+        self.targets, self.tolerance = req.doses, req.tolerance
+        self.count = 0
+
+    def steps(self, durations: Sequence[float]) -> tuple[Step, ...]:
+        """The protocol's (duration, temperature) steps."""
+        return heat_cool_protocol(durations, self.req.rests, self.req.t_start, self.req.t_end)
+
+    def run(self, durations: Sequence[float]) -> Trajectory:
+        """The protocol run with these actuation times."""
+        self.count += 1
+        return self._run(self.steps(durations))
+
+    def delivered(self, result: Trajectory, durations: Sequence[float]) -> list[float]:
+        """Each heating's delivery, fractions of the stored fluid."""
+        return delivery(result, durations, self.req.rests, self.req.start_radius).delivered
+
+    def reach(self, result: Trajectory, durations: Sequence[float], k: int) -> Reach:
+        """Where heating k delivers dose k (the radius it must fall to)."""
+        start = windows(durations, self.req.rests)[k][0]
+        target = _window_target(self.req, result.radius_at(start), self.req.doses[k], k)
+        try:
+            return Reach(result.time_to_radius(target, after=start) - start)
+        except ValueError:
+            return Reach(None, self.delivered(result, durations)[k])
 
 
 def shoot(run: Runner, req: ScheduleRequest, guesses: Sequence[float]) -> dict[str, Any]:
     """Actuation times meeting every dose within ``req.tolerance`` in the real protocol."""
-    tol = req.tolerance / 2.0  # aim inside the tolerance, the final check must pass
-    durations: list[float] = []
-    for k, g in enumerate(guesses):
-        durations.append(_read_off(run, req, durations, k, g))
-    runs = len(guesses)
-    for _ in range(3):
-        res = check(run, req, durations)
-        runs += 1
-        bad = [k for k, e in enumerate(res["relative_errors"]) if abs(e) > tol]
-        if not bad:
-            break
-        k0 = bad[0]
-        for k in range(k0, len(durations)):
-            got = _delivered_k(run, req, durations, k, durations[k])
-            if abs(got / req.doses[k] - 1.0) > tol:
-                durations[k], n = _secant(run, req, durations, k, durations[k], got, tol)
-                runs += n
-            runs += 1
+    h = FluidHeatings(run, req)
+    durations, short = shoot_durations(h, guesses)
+    if short is not None:
+        raise SolverError(f"dose {short.k} is not reached within a heating of "
+                          f"{short.horizon:.4g}", {"dose": short.k, "horizon": short.horizon})
     res = check(run, req, durations)
     worst = float(np.max(np.abs(res["relative_errors"])))
-    res.update({"runs": runs, "max_relative_error": worst,
+    res.update({"runs": h.count + 1, "max_relative_error": worst,
                 "met": bool(worst <= req.tolerance)})
     if not res["met"]:
         raise SolverError(f"shooting did not meet the doses within {req.tolerance:.2%} "

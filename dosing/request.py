@@ -139,8 +139,8 @@ def resolve_dry_radius(dry_radius_um: float | None, swollen_radius_um: float | N
 
 
 
-def _resolve_scenario(req: Any) -> tuple[Jump, float | None]:
-    """Validate and normalise the fields a dose and a schedule request share (in place)."""
+def resolve_case(req: Case) -> tuple[Jump, float | None]:
+    """Validate and normalise the fields every request shares (:class:`Case`, in place)."""
     from dataclasses import fields as _fields
 
     from .quantity import from_edge  # "50 um", "29 degC", pint Quantities -> documented unit
@@ -163,6 +163,42 @@ def _resolve_scenario(req: Any) -> tuple[Jump, float | None]:
     object.__setattr__(req, "settings", settings)
     object.__setattr__(req, "interfacial_range", ell_range)
     return jump, dry
+
+
+@dataclass(frozen=True)
+class Case:
+    """What every request shares, resolved once on construction (:func:`resolve_case`): the
+    gel, the jump t_start -> t_end on its branch, the bead size (``dry_radius_um`` or
+    ``swollen_radius_um`` at T_start), the constants and the truth's settings.  Dose and
+    schedule requests, fluid or drug, compose it; their own fields follow ``t_end``."""
+
+    gel: Gel | str | dict[str, Any]
+    t_start: float
+    t_end: float | None = None
+    dry_radius_um: float | None = field(default=None, kw_only=True)
+    swollen_radius_um: float | None = field(default=None, kw_only=True)
+    constants: PhysicalConstants | dict[str, Any] | None = field(default=None, kw_only=True)
+    branch: str | None = field(default=None, kw_only=True)
+    settings: SolverSettings | dict[str, Any] | None = field(default=None, kw_only=True)
+    jump: Jump = field(init=False, repr=False, compare=False)
+    bead_dry_radius_um: float | None = field(init=False, repr=False, compare=False)
+    interfacial_range: tuple[float, float] | None = field(init=False, repr=False,
+                                                          compare=False)
+
+    @property
+    def start_radius(self) -> float:
+        """a(0): the equilibrium stretch at T_start."""
+        return self.jump.start_radius
+
+    def case_fields(self) -> dict[str, Any]:
+        """The resolved case as keyword arguments of another request on the same bead."""
+        return {"gel": self.gel, "t_start": self.t_start, "t_end": self.t_end,
+                "dry_radius_um": self.bead_dry_radius_um, "constants": self.constants,
+                "branch": self.branch, "settings": self.settings}
+
+    def dose_request(self, fraction: float) -> DoseRequest:
+        """The fluid dose of ``fraction`` of the stored fluid on the same case."""
+        return DoseRequest(**self.case_fields(), dose_fraction=fraction)
 
 
 def _clamp_length(ell: float) -> float:
@@ -230,34 +266,22 @@ def check_fraction(name: str, value: float, jump: Jump, limit: float | None = No
 
 
 @dataclass(frozen=True)
-class DoseRequest:
+class DoseRequest(Case):
     """One dose: how long to heat a bead from T_start to T_end to release it.
 
     Give exactly one of ``dose_fraction`` (of the stored fluid), ``dose_volume_ul``, or
     ``drug_mass_ug`` with ``concentration_ug_per_ul``; volumes and seconds need a bead
-    size (``dry_radius_um`` or ``swollen_radius_um`` at T_start).
+    size (``dry_radius_um`` or ``swollen_radius_um`` at T_start; the :class:`Case` fields).
     """
 
-    gel: Gel | str | dict[str, Any]
-    t_start: float
-    t_end: float | None = None
     dose_fraction: float | None = None
     dose_volume_ul: float | None = None
     drug_mass_ug: float | None = None
     concentration_ug_per_ul: float | None = None
-    dry_radius_um: float | None = None
-    swollen_radius_um: float | None = None
-    constants: PhysicalConstants | dict[str, Any] | None = None
-    branch: str | None = None
-    settings: SolverSettings | dict[str, Any] | None = None
-    size_distribution: Any = None  # a batch (dosing.size_distribution; dosing.batch answers)
-    jump: Jump = field(init=False, repr=False, compare=False)
-    bead_dry_radius_um: float | None = field(init=False, repr=False, compare=False)
-    interfacial_range: tuple[float, float] | None = field(init=False, repr=False,
-                                                          compare=False)
+    size_distribution: Any = field(default=None, kw_only=True)  # a batch (dosing.batch)
     fraction: float = field(init=False, repr=False, compare=False)
     # a heating protocol in place of t_end (dosing.heating; the dose: dosing.protocol_dose)
-    protocol: Any = None
+    protocol: Any = field(default=None, kw_only=True)
     heating: Any = field(init=False, repr=False, compare=False, default=None)
 
     def __post_init__(self) -> None:
@@ -265,7 +289,7 @@ class DoseRequest:
         from .size_distribution import request_sizes
 
         request_sizes(self)  # a batch: its number-weighted mean is the bead size
-        jump, dry = _resolve_scenario(self)
+        jump, dry = resolve_case(self)
         object.__setattr__(self, "fraction", self._resolve_fraction(jump, dry))
 
     def _resolve_fraction(self, jump: Jump, dry: float | None) -> float:
@@ -308,11 +332,6 @@ class DoseRequest:
                 f"{jump.max_fraction:.1%} of it at T_end"
                 + ("; this dose is larger than the stored fluid" if f > 1.0 else ""))
         return f
-
-    @property
-    def start_radius(self) -> float:
-        """a(0): the equilibrium stretch at T_start."""
-        return self.jump.start_radius
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form of the request as resolved (gel parameters, fraction, sizes)."""
@@ -376,36 +395,40 @@ def resolve_rests(rests: Sequence[float] | None, rests_seconds: Sequence[float] 
 
 
 @dataclass(frozen=True)
-class ScheduleRequest:
-    """Several doses (fractions of the stored fluid) with rests at T_start between them.
+class ScheduleCase(Case):
+    """What every schedule shares (fluid or drug): ``rests`` between consecutive doses
+    (dimensionless, time / tau), or ``rests_seconds`` with a bead size (none given: back to
+    back); ``check_protocol`` simulates the real heat/cool protocol with the full solver;
+    ``correct`` then shoots for actuation times meeting every dose within ``tolerance``."""
 
-    ``rests`` are dimensionless (time / tau), or give ``rests_seconds`` with a bead size;
-    there is one rest between consecutive doses.  ``check_protocol`` simulates the real
-    heat/cool protocol with the full solver; ``correct`` then shoots for actuation times
-    that meet every dose within ``tolerance``.
-    """
+    rests: Sequence[float] | None = field(default=None, kw_only=True)
+    rests_seconds: Sequence[float] | None = field(default=None, kw_only=True)
+    check_protocol: bool = field(default=True, kw_only=True)
+    correct: bool = field(default=True, kw_only=True)
+    tolerance: float = field(default=0.01, kw_only=True)
 
-    gel: Gel | str | dict[str, Any]
-    t_start: float
-    t_end: float
+    def resolve_schedule(self, n_doses: int, dry: float | None) -> None:
+        """Rests in tau (zeros when none are given) and the tolerance (0 < tol <= 0.2)."""
+        rests = self.rests
+        if rests is None and self.rests_seconds is None:
+            rests = (0.0,) * max(n_doses - 1, 0)
+        object.__setattr__(self, "rests", resolve_rests(rests, self.rests_seconds, n_doses,
+                                                        dry, self.t_end, self.constants))
+        tol = require_finite_positive("tolerance", self.tolerance)
+        if tol > 0.2:
+            raise ParameterError("tolerance", self.tolerance, "0 < tolerance <= 0.2")
+        object.__setattr__(self, "tolerance", tol)
+
+
+@dataclass(frozen=True)
+class ScheduleRequest(ScheduleCase):
+    """Several doses (fractions of the stored fluid) with rests at T_start between them
+    (the :class:`ScheduleCase` fields)."""
+
     doses: Sequence[float] = ()
-    rests: Sequence[float] | None = None
-    rests_seconds: Sequence[float] | None = None
-    dry_radius_um: float | None = None
-    swollen_radius_um: float | None = None
-    constants: PhysicalConstants | dict[str, Any] | None = None
-    branch: str | None = None
-    settings: SolverSettings | dict[str, Any] | None = None
-    check_protocol: bool = True
-    correct: bool = True
-    tolerance: float = 0.01
-    jump: Jump = field(init=False, repr=False, compare=False)
-    bead_dry_radius_um: float | None = field(init=False, repr=False, compare=False)
-    interfacial_range: tuple[float, float] | None = field(init=False, repr=False,
-                                                          compare=False)
 
     def __post_init__(self) -> None:
-        jump, dry = _resolve_scenario(self)
+        jump, dry = resolve_case(self)
         doses = tuple(self.doses or ())
         if not doses:
             raise ParameterError("doses", self.doses, "a non-empty list of fractions")
@@ -415,23 +438,4 @@ class ScheduleRequest:
                                  f"{jump.max_fraction:.4f}", f"they sum to {sum(doses):.4g}: "
                                  "more than the gel can expel at T_end")
         object.__setattr__(self, "doses", doses)
-        object.__setattr__(self, "rests", self._resolve_rests(len(doses), dry))
-        tol = require_finite_positive("tolerance", self.tolerance)
-        if tol > 0.2:
-            raise ParameterError("tolerance", self.tolerance, "0 < tolerance <= 0.2")
-        object.__setattr__(self, "tolerance", tol)
-
-    def _resolve_rests(self, n_doses: int, dry: float | None) -> tuple[float, ...]:
-        return resolve_rests(self.rests, self.rests_seconds, n_doses, dry, self.t_end,
-                             self.constants)
-
-    @property
-    def start_radius(self) -> float:
-        """a(0): the equilibrium stretch at T_start."""
-        return self.jump.start_radius
-
-    def dose_request(self, fraction: float) -> DoseRequest:
-        """The single-dose request for one cumulative fraction (same gel, jump and bead)."""
-        return DoseRequest(self.gel, self.t_start, self.t_end, dose_fraction=fraction,
-                           dry_radius_um=self.bead_dry_radius_um, constants=self.constants,
-                           branch=self.branch, settings=self.settings)
+        self.resolve_schedule(len(doses), dry)

@@ -1,4 +1,4 @@
-"""The ``drug`` field of the dose and schedule routes (api/drug_schemas.py, drug_service.py)."""
+"""The ``drug`` field of the dose and schedule routes (api/drug_schemas.py, api/service.py)."""
 
 from __future__ import annotations
 

@@ -13,8 +13,9 @@ import csv
 import io
 import time
 
+import httpx
 import pytest
-from api_support import asgi, fake_full_solver, fake_planner
+from api_support import asgi, fake_full_solver, fake_planner, fake_server
 
 from api.http import create_app
 from dosing.model_choice import front_run
@@ -142,17 +143,54 @@ async def test_page_and_assets_are_served(raw) -> None:
     assert bad.status_code == 422 and bad.json()["detail"][0]["loc"] == ["query", "omega"]
 
 
+def _poll(c: httpx.Client, url: str, timeout: float = 120.0) -> dict:
+    deadline = time.monotonic() + timeout
+    while True:
+        out = c.get(url).json()
+        if out["status"] in ("done", "failed") and not out.get("validations_unfinished"):
+            return out
+        assert time.monotonic() < deadline, out
+        time.sleep(0.1)
+
+
+@pytest.mark.slow
+def test_a_finished_sweep_survives_kill_and_restart(tmp_path) -> None:
+    """Sweeps are stored jobs: a finished sweep is answered, unchanged and without running
+    again, by a server restarted on the same cache after a kill -9 (the schedule jobs'
+    test, tests/test_api_hardening.py), on its own route and on GET /v1/jobs/{id}."""
+    cache = tmp_path / "c.sqlite"
+    body = {**SWEEP, "validate": [0]}
+    with fake_server(cache, 0.05) as (url, _), httpx.Client(base_url=url, timeout=60) as c:
+        r = c.post("/v1/sweep", json=body)
+        assert r.status_code == 202, r.text
+        sid = r.json()["sweep_id"]
+        table = _poll(c, f"/v1/jobs/{sid}")
+        assert table["status"] == "done" and sum(table["result"]["counts"].values()) == 12
+    # SIGKILLed on leaving the block
+    with fake_server(cache, 0.05) as (url, _), httpx.Client(base_url=url, timeout=60) as c:
+        again = c.get(f"/v1/sweeps/{sid}").json()
+        assert again["status"] == "done" and again["points_done"] == again["points"] == 12
+        assert again["result"]["rows"] == table["result"]["rows"]
+        assert c.get(f"/v1/jobs/{sid}").json()["result"]["rows"] == table["result"]["rows"]
+        assert c.post("/v1/sweep", json=body).json()["sweep_id"] == sid
+
+
 async def test_only_the_last_sweeps_are_kept(raw, monkeypatch: pytest.MonkeyPatch) -> None:
-    """Finished tables are bounded in memory: a dropped sweep is a 404 until posted again."""
+    """Rendered tables are bounded in memory (SWEEPS_KEPT); the tables themselves are stored
+    jobs, so a sweep whose rendering was dropped is read back from the store, and posting it
+    again is the same job with the same table."""
     import api.routers.sweep as routes
 
     monkeypatch.setattr(routes, "SWEEPS_KEPT", 1)
     one = {**SWEEP, "doses": [0.3]}
     first = (await raw.post("/v1/sweep", json=one)).json()["sweep_url"]
-    assert (await _done(raw, first))["status"] == "done"
+    table = await _done(raw, first)
+    assert table["status"] == "done"
     second = (await raw.post("/v1/sweep", json={**one, "doses": [0.4]})).json()["sweep_url"]
     assert (await _done(raw, second))["status"] == "done"
-    assert (await raw.get(first)).status_code == 404
+    kept = raw._transport.app.state.sweeps.rendered  # the ASGI transport's app
+    assert {k[0] for k in kept} == {second.rsplit("/", 1)[1]}
+    assert (await raw.get(first)).json()["result"]["rows"] == table["result"]["rows"]
     again = (await raw.post("/v1/sweep", json=one)).json()["sweep_url"]
     assert again == first and (await _done(raw, first))["result"]["counts"] == {
         "needs-full": 2, "answered": 4}

@@ -70,7 +70,8 @@ def test_simulate_out_nc_is_read_back_with_units_and_version(tmp_path: Path,
                                                              capsys) -> None:
     out = tmp_path / "run.nc"
     assert main(["simulate", "--gel", "ANB", "--t-start", "302", "--t-end", "308",
-                 "--until", "0.01", "--n", "40", "--every", "0.002", "--out", str(out)]) == 0
+                 "--until", "0.01", "--n", "40", "--every", "0.002", "--out", str(out),
+                 "--paper"]) == 0
     assert f"wrote {out}" in capsys.readouterr().out
     ds = xr.open_dataset(out, engine="scipy")
     _every_variable_has_units(ds)

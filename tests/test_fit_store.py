@@ -54,7 +54,7 @@ def test_schedule_and_simulate_take_the_name(store, capsys) -> None:
     req = ScheduleRequest("mygel", 300.0, 310.0, doses=(0.2, 0.2), rests=(0.5,))
     assert req.gel.name == "mygel"
     assert main(["simulate", "--gel", "mygel", "--t-start", "300", "--t-end", "310",
-                 "--until", "0.002", "--n", "40", "--json"]) == 0
+                 "--until", "0.002", "--n", "40", "--json", "--paper"]) == 0
     assert '"mygel"' in capsys.readouterr().out
 
 

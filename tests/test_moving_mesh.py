@@ -201,18 +201,33 @@ def test_protocol_steps_restart_the_mesh_motion() -> None:
     assert np.max(adapted.solid_error) < 1e-12
 
 
-def test_direct_dose_times_with_their_numerical_bound() -> None:
-    """ANB ell = 0.005, 50% and 80%: the uniform grid's converged values (N = 800; docs/
-    interfacial.md sec. 6, converged to 1e-5) lie within 0.1% and within the stated bound
-    (the 400- vs 200-cell gap, a threefold safety for a second-order scheme)."""
-    from solver.full.direct import direct_dose_times
+def test_the_truths_dose_times_with_their_numerical_bound(tmp_path) -> None:
+    """The planner's direct truth at ANB ell = 0.005 (dosing.truth: the moving grid on
+    N = 400, checked on N / 2), 50% and 80%: the uniform grid's converged values (N = 800;
+    docs/interfacial.md sec. 6, converged to 1e-5) lie within 0.1% and within the stated
+    numerical bound (the 400- vs 200-cell gap, a threefold safety for a second-order
+    scheme); the front nucleates at the edge before the first dose; ell = 0 is no direct
+    truth (the paper's model)."""
+    from concurrent.futures import ThreadPoolExecutor
 
-    a0 = equilibrium(ANB, 302.0).stretch
-    radii = fraction_radius(a0, np.array([0.5, 0.8]))
-    d = direct_dose_times("ANB", 302.0, 308.0, list(radii), 0.005, n=400)
-    for t, ref, bound in zip(d.times, (0.024513, 0.081977), d.numerical, strict=True):
+    from dosing import Planner, Scenario, SolverSettings
+    from solver.phase import nucleation_level
+
+    truth = SolverSettings(interfacial_length=0.005)
+    assert (truth.direct, truth.grid, truth.n, truth.check().n) == (True, "moving", 400, 200)
+    radii = fraction_radius(equilibrium(ANB, 302.0).stretch, np.array([0.5, 0.8]))
+    planner = Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1))
+    try:
+        fine, coarse = (planner.trajectory(Scenario(ANB, 302.0, 308.0, settings=s),
+                                           need_radius=float(radii[-1]))
+                        for s in (truth, truth.check()))
+    finally:
+        planner.close()
+    for a, ref in zip(radii, (0.024513, 0.081977), strict=True):
+        t, t_check = fine.time_to_radius(a), coarse.time_to_radius(a)
+        bound = abs(t - t_check) / t
         assert abs(t / ref - 1.0) < 1e-3
         assert abs(t / ref - 1.0) <= bound + 2e-5  # + the reference's own rounding
-    assert d.nucleation_time is not None and 0.0 < d.nucleation_time < d.times[0]
-    with pytest.raises(ParameterError):
-        direct_dose_times("ANB", 302.0, 308.0, list(radii), 0.0)
+    nuc = fine.nucleation_time(nucleation_level(ANB, 302.0, 308.0))
+    assert 0.0 < nuc < fine.time_to_radius(radii[0])
+    assert not SolverSettings(interfacial_length=0.0).direct

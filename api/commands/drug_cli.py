@@ -1,4 +1,5 @@
-"""Drug doses and schedules on the command line (``dose`` / ``schedule`` with drug options)."""
+"""Drug doses and schedules on the command line (``dose`` / ``schedule`` with drug options;
+``schedule`` prints both kinds)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from typing import Any
 
 from solver.errors import ParameterError
 
-from .common import print_json, print_uncertainty, table_row, wrap
+from .common import print_json, print_uncertainty, wrap
 
 
 def add_wait_options(p: argparse.ArgumentParser) -> None:
@@ -72,18 +73,13 @@ def run_drug_dose(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any]) -
     return 0
 
 
-def run_drug_schedule(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any]) -> int:
-    """``thermogel schedule`` with a drug: doses in drug, leakage per rest, warnings."""
+def run_drug_schedule(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any]
+                      ) -> tuple[Any, Any]:
+    """``thermogel schedule`` with a drug: (request, answer); ``--plot`` draws it."""
     from dosing.drug_schedule import DrugScheduleRequest, plan_drug_schedule
 
-    rests = args.rests
-    if rests is None and args.rests_seconds is None:
-        n = len(args.doses or args.doses_ug or [])
-        rests = [0.0] * max(n - 1, 0)
-    req = DrugScheduleRequest(drug=drug, doses=args.doses, doses_ug=args.doses_ug, rests=rests,
-                              rests_seconds=args.rests_seconds, wait=args.wait,
-                              wait_seconds=args.wait_seconds, check_protocol=not args.no_check,
-                              correct=not args.no_correct, tolerance=args.tolerance, **kwargs)
+    req = DrugScheduleRequest(drug=drug, doses=args.doses, doses_ug=args.doses_ug,
+                              wait=args.wait, wait_seconds=args.wait_seconds, **kwargs)
     planner = _planner(args)
     try:
         ans = plan_drug_schedule(planner, req)
@@ -91,41 +87,18 @@ def run_drug_schedule(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any
             _plot(planner, req, ans, args.plot)
     finally:
         planner.close()
-    if args.json:
-        print_json(ans.to_dict())
-        return 0
-    print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K, drug doses "
-          f"{', '.join(f'{d:.3g}' for d in ans.doses)} of the load, rests "
-          f"{', '.join(f'{r:.4g}' for r in ans.rests) or '-'} (dimensionless)")
-    print(table_row(f"hold ({ans.model}):", [h["actuation_time"] for h in ans.hold]))
-    for name, res in (("protocol check", ans.protocol_check), ("corrected", ans.corrected)):
-        if not res or not res.get("actuation_times"):
-            continue
-        print(table_row(f"{name}: actuation times", res["actuation_times"]))
-        print(table_row("  drug delivered (of the load)", res["delivered_fractions"]))
-        print(table_row("  ... squeezed out", res["squeezed_fractions"]))
-        print(table_row("  fluid delivered (of stored)", res["fluid_fractions"]))
-        print(table_row("  leaked in each rest", res["rest_leak_fractions"] or [0.0]))
-        if res.get("actuation_seconds"):
-            print(table_row("  actuation seconds", res["actuation_seconds"]))
-    for w in ans.warnings:
-        print(f"  WARNING: {w}")
-    print(wrap(f"truth of the drug runs: {ans.truth}"))
-    print_uncertainty(ans.uncertainty, "the simulated schedule")
-    print(wrap(ans.note))
-    return 0
+    return req, ans
 
 
 def _plot(planner: Any, req: Any, ans: Any, path: str) -> None:
     """Cumulative drug through the corrected (else the checked) protocol."""
     from api.plots.release import draw_schedule_release
-    from dosing.drug import DrugScenario, drug_settings, runs_for
+    from dosing.drug import runs_for
+    from dosing.drug_dose import DrugHeatings
 
     res = ans.corrected if ans.corrected and ans.corrected.get("actuation_times") \
         else ans.protocol_check
     if not res:
         raise ParameterError("plot", path, "used with the protocol check or the correction")
-    sc = DrugScenario(req.gel, req.t_start, tuple(tuple(s) for s in res["protocol"]),
-                      req.solute, req.branch, drug_settings(req.settings))
-    rel = runs_for(planner).run(sc)
+    rel = DrugHeatings(req, runs_for(planner), req.fractions).run(res["actuation_times"])
     print(f"wrote {draw_schedule_release(ans.to_dict(), rel, path)}")

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from solver.errors import ParameterError
 
-from .common import check_bounds, checked_cache, print_json, table_row, wrap
+from .common import check_bounds, checked_cache, print_json, print_uncertainty, table_row, wrap
 from .dose import add_planning_options, planning_kwargs, planning_values
 from .drug_cli import add_wait_options, run_drug_schedule
 from .drug_options import add_drug_options, drug_from_args
@@ -41,8 +42,23 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+def schedule_kwargs(args: argparse.Namespace) -> dict[str, Any]:
+    """The ScheduleCase fields (dosing.request) of the options, fluid or drug."""
+    return dict(rests=args.rests, rests_seconds=args.rests_seconds,
+                check_protocol=not args.no_check, correct=not args.no_correct,
+                tolerance=args.tolerance, **planning_kwargs(args))
+
+
+FLUID_ROWS = (("  delivered (fraction of stored)", "delivered_fractions", "{:.4g}"),
+              ("  relative error", "relative_errors", "{:+.2%}"))
+DRUG_ROWS = (("  drug delivered (of the load)", "delivered_fractions", "{:.4g}"),
+             ("  ... squeezed out", "squeezed_fractions", "{:.4g}"),
+             ("  fluid delivered (of stored)", "fluid_fractions", "{:.4g}"),
+             ("  leaked in each rest", "rest_leak_fractions", "{:.4g}"))
+
+
 def run(args: argparse.Namespace) -> int:
-    """Print the schedule."""
+    """Print the schedule, of fluid or (with a drug option or --doses-ug) of drug."""
     from api.schemas import ScheduleRequest as HttpSchedule
     from dosing import ScheduleRequest, plan_schedule
 
@@ -50,37 +66,39 @@ def run(args: argparse.Namespace) -> int:
                                 "rests": args.rests, "rests_seconds": args.rests_seconds,
                                 "tolerance": args.tolerance}, partial=args.doses is None)
     checked_cache(args.cache)
-    drug = drug_from_args(args)
-    if drug is not None or args.doses_ug is not None:
-        return run_drug_schedule(args, drug or drug_from_args(args, always=True),
-                                 planning_kwargs(args))
-    if args.plot:
+    drug = drug_from_args(args, always=args.doses_ug is not None)
+    if drug is None and args.plot:
         raise ParameterError("plot", args.plot, "used with a drug option (e.g. "
                              "--drug-diffusivity-cm2-s)")
-    rests = args.rests
-    if rests is None and args.rests_seconds is None:
-        rests = [0.0] * (len(args.doses) - 1)
-    req = ScheduleRequest(doses=args.doses, rests=rests, rests_seconds=args.rests_seconds,
-                          check_protocol=not args.no_check, correct=not args.no_correct,
-                          tolerance=args.tolerance, **planning_kwargs(args))
-    ans = plan_schedule(req, cache_path=args.cache)
+    if drug is None:
+        req = ScheduleRequest(doses=args.doses, **schedule_kwargs(args))
+        ans = plan_schedule(req, cache_path=args.cache)
+    else:
+        req, ans = run_drug_schedule(args, drug, schedule_kwargs(args))
     if args.json:
         print_json(ans.to_dict())
         return 0
-    print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K, doses "
-          f"{', '.join(f'{d:.0%}' for d in ans.doses)}, rests "
+    doses = (f"drug doses {', '.join(f'{d:.3g}' for d in ans.doses)} of the load"
+             if drug is not None else f"doses {', '.join(f'{d:.0%}' for d in ans.doses)}")
+    print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K, {doses}, rests "
           f"{', '.join(f'{r:.4g}' for r in ans.rests) or '-'} (dimensionless)")
-    print(table_row(f"hold assumption ({ans.model}):", [h["actuation_time"] for h in ans.hold]))
+    print(table_row(f"hold assumption ({ans.model}):", [h.actuation_time for h in ans.hold]))
     for name, res in (("protocol check", ans.protocol_check), ("corrected", ans.corrected)):
-        if res is None:
+        if not res or not res.get("actuation_times"):
             continue
         print(table_row(f"{name}: actuation times", res["actuation_times"]))
-        print(table_row("  delivered (fraction of stored)", res["delivered_fractions"]))
-        print(table_row("  relative error", res["relative_errors"], "{:+.2%}"))
+        for label, key, fmt in FLUID_ROWS if drug is None else DRUG_ROWS:
+            print(table_row(label, res[key] or [0.0], fmt))
         if res.get("actuation_seconds"):
             print(table_row("  actuation seconds", res["actuation_seconds"]))
-    print(wrap(ans.timescale_formula))
+    if drug is None:
+        print(wrap(ans.timescale_formula))
+    for w in getattr(ans, "warnings", ()):
+        print(f"  WARNING: {w}")
     if ans.truth:
-        print(wrap(f"truth of the protocol runs: {ans.truth}"))
+        print(wrap(f"truth of the {'drug' if drug is not None else 'protocol'} runs: "
+                   f"{ans.truth}"))
+    if drug is not None:
+        print_uncertainty(ans.uncertainty, "the simulated schedule")
     print(wrap(ans.note))
     return 0

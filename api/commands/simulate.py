@@ -10,11 +10,15 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from dosing.scenario import GRIDS
+from dosing.scenario import GRIDS, PAPER, TRUTH
 from solver.errors import ParameterError
 
 from .common import add_gel_options, gel_from_args, print_json
 from .outfile import OUT_HELP, request_of, save
+
+# the moving grid's fewest cells at the default ell = 1e-4 (ANB 302 -> 308 K to t = 0.3:
+# 50 cells exhaust 20,000 steps by t = 0.002, 80 take 11,000 steps, 100 take 2,800)
+MOVING_N_FLOOR = 100
 
 
 def _protocol(text: str) -> list[tuple[float, float]]:
@@ -45,10 +49,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("simulate", help="full PDE solver: porosity, radius and front in time")
     add_gel_options(p)
     add_protocol_options(p, "start temperature in K")
-    p.add_argument("--grid", choices=list(GRIDS), default="eulerian",
-                   help="discretization: eulerian (the paper's, default), lagrangian (uniform "
-                        "dry cells) or moving (cells that follow the interface)")
-    p.add_argument("--n", type=int, default=400, help="grid cells (default 400)")
+    p.add_argument("--grid", choices=list(GRIDS), default=None,
+                   help="discretization: moving (cells that follow the interface; the default), "
+                        "lagrangian (uniform dry cells) or eulerian (the paper's; the default "
+                        "with --paper)")
+    p.add_argument("--n", type=int, default=None,
+                   help=f"grid cells (default {TRUTH.n}; on the moving grid at the default "
+                        f"interfacial length at least {MOVING_N_FLOOR})")
     p.add_argument("--integrator", choices=["implicit", "explicit"], default="implicit",
                    help="adaptive implicit (default) or the paper's forward Euler")
     p.add_argument("--rtol", type=float, default=1e-6, help="implicit tolerance (default 1e-6)")
@@ -57,10 +64,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--every", type=float, default=None, metavar="DT",
                    help="output interval (default: 200 outputs)")
     p.add_argument("--max-steps", type=int, default=None, help="step budget")
-    p.add_argument("--interfacial-length", type=float, default=0.0, metavar="L",
-                   help="interfacial energy length ell in dry radii (default 0: the paper's "
-                   "model; resolve it with --n >= 2/L on the Lagrangian grid, "
-                   "docs/interfacial.md)")
+    model = p.add_mutually_exclusive_group()
+    model.add_argument("--interfacial-length", type=float, default=None, metavar="L",
+                       help="interfacial energy length ell in dry radii: the well-posed model "
+                       f"(default {TRUTH.interfacial_length:g}, the planner's truth without a "
+                       "bead size; on a uniform grid resolve it with --n >= 2/L, "
+                       "docs/interfacial.md)")
+    model.add_argument("--paper", action="store_true",
+                       help="the paper's model (no interfacial energy, ill-posed where a front "
+                            f"forms) on its Eulerian grid, N = {PAPER.n}")
     p.add_argument("--out", default=None, help="save the run to this file: " + OUT_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--profiles", action="store_true", help="with --json: include phi snapshots")
@@ -91,18 +103,37 @@ def _progress_bar(enabled: bool) -> Iterator[Callable[[float], None] | None]:
         bar.close()
 
 
+def model_options(args: argparse.Namespace) -> tuple[str, int, float]:
+    """(grid, n, ell) of a run: by default the planner's truth without a bead size (the
+    well-posed model on the moving grid, dosing.scenario.TRUTH); ``--paper`` the paper's
+    model (dosing.scenario.PAPER).  On the moving grid at ell <= the default, fewer than
+    MOVING_N_FLOOR cells cannot follow the interface: refused (exit 2)."""
+    base = PAPER if args.paper or args.interfacial_length == 0.0 else TRUTH
+    ell = base.interfacial_length if args.interfacial_length is None \
+        else args.interfacial_length
+    grid = args.grid or base.grid
+    n = base.n if args.n is None else args.n
+    if grid == "moving" and 0.0 < ell <= TRUTH.interfacial_length and n < MOVING_N_FLOOR:
+        raise ParameterError("n", n, f">= {MOVING_N_FLOOR} on the moving grid at interfacial "
+                             f"length {ell:g} (or --paper, or a larger --interfacial-length)",
+                             "fewer cells cannot follow the interface: ANB 302 -> 308 K on 50 "
+                             "cells exhausts 20,000 steps by t = 0.002")
+    return grid, n, ell
+
+
 def run(args: argparse.Namespace) -> int:
     """Run, optionally save, and print a summary (or JSON)."""
     from solver.full import simulate
 
     if args.protocol is None and (args.t_end is None or args.until is None):
         raise ParameterError("t_end/until", None, "both --t-end and --until, or --protocol")
+    grid, n, ell = model_options(args)
     with _progress_bar(sys.stderr.isatty()) as progress:
         res = simulate(gel_from_args(args), args.t_start, args.t_end, until=args.until,
-                       protocol=args.protocol, grid=args.grid, n=args.n,
+                       protocol=args.protocol, grid=grid, n=n,
                        integrator=args.integrator, rtol=args.rtol, every=args.every,
                        branch=args.branch, dt=args.dt, max_steps=args.max_steps,
-                       progress=progress, interfacial_length=args.interfacial_length)
+                       progress=progress, interfacial_length=ell)
     saved = save(args.out, res.save, lambda: res.to_xarray(
         request=request_of(args), truth=_truth(res))) if args.out else None
     if args.json:
@@ -119,6 +150,7 @@ def run(args: argparse.Namespace) -> int:
              if d.get("interfacial_length") else ""))
     print(f"  {d['steps']} steps ({d['rejected']} rejected), {d['wall_time']:.2f} s, "
           f"max solid error {np.max(res.solid_error):.1e}")
+    print(f"  model: {_truth(res)}" + ("" if args.paper else " (--paper: the paper's)"))
     if res.spinodal:
         print(f"  WARNING: {d['message']}")
     print("       t        a(t)     R_f(t)   jump")

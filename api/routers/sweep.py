@@ -1,16 +1,19 @@
 """Design-map routes: ``POST /v1/sweep`` queues a sweep as a job (202 + Location), ``GET
-/v1/sweeps/{id}`` polls it (progress, then the table as JSON, or CSV with ``?format=csv``),
-``GET /v1/sweeps/{id}/plot.svg`` draws its heat maps.
+/v1/sweeps/{id}`` (or ``GET /v1/jobs/{id}``) polls it (progress, then the table as JSON, or
+CSV with ``?format=csv``), ``GET /v1/sweeps/{id}/plot.svg`` draws its heat maps.
 
-The sweep runs on a job thread of its own (the schedule jobs' pattern: a ``JobRunner`` on
-one thread, kept in memory) and spreads its chunks over the planner's executor, so a
-planner on a Dask cluster sweeps on the cluster.  Validations the request selects are the
-planner's own (poll /v1/validations/{id}); each poll of the sweep fills those done.
+A sweep is a stored job (:mod:`api.stored_jobs`, kind 'sweep'): its body and, once done, its
+table are kept in the planner's cache, so a finished sweep survives a restart and one
+pending at a kill -9 is run again when polled.  It runs on a job thread of its own (one
+thread, ``SWEEP_QUEUE`` queued before 429) and spreads its chunks over the planner's
+executor, so a planner on a Dask cluster sweeps on the cluster.  Validations the request
+selects are the planner's own (poll /v1/validations/{id}); each poll of the sweep fills
+those done, and the table is stored again once they all are.  Only rendered bodies of
+final tables are kept in memory (the last ``SWEEPS_KEPT``).
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import threading
 from collections import OrderedDict
@@ -27,6 +30,7 @@ from solver.errors import ParameterError
 from solver.json_safe import json_safe
 from solver.limits import T_MAX, T_MIN
 
+from .. import stored_jobs
 from ..safe_route import SafeRoute
 from ..schemas import (
     Branch,
@@ -46,7 +50,7 @@ router = APIRouter(tags=["design maps"], route_class=SafeRoute)
 MAX_SERVICE_POINTS = 20_000  # points in one sweep request (the CLI takes up to 100,000)
 SWEEP_QUEUE = 4  # sweeps queued or running before 429
 SWEEP_PREFIX = "sweep-"
-SWEEPS_KEPT = 8  # finished sweep tables kept in memory (20,000 rows: tens of MB each)
+SWEEPS_KEPT = 8  # final sweep tables kept rendered in memory (20,000 rows: tens of MB)
 Temperature = Annotated[float, Field(ge=T_MIN, le=T_MAX)]
 Radius = Annotated[float, Field(ge=1.0e-3, le=1.0e5)]
 Fraction = Annotated[float, Field(gt=0.0, le=1.0)]
@@ -137,37 +141,46 @@ class SweepStatus(BaseModel):
 
 
 class _Sweeps:
-    """The service's sweep jobs: one thread, a bounded queue, progress per job, and the
-    last ``SWEEPS_KEPT`` finished tables (an older one is run again when asked again)."""
+    """The service's sweep runner (one thread, a bounded queue), progress of the sweeps
+    running here, and the rendered bodies of the last ``SWEEPS_KEPT`` final tables."""
 
     def __init__(self) -> None:
         self.runner = JobRunner(ThreadPoolExecutor(1, thread_name_prefix="sweep"),
                                 max_pending=SWEEP_QUEUE, what="sweeps")
         self.progress: dict[str, list[int]] = {}
-        self.results: OrderedDict[str, SweepResult] = OrderedDict()
-        self.rendered: dict[tuple[str, str], bytes] = {}  # final tables: JSON, CSV, SVG
+        self.rendered: OrderedDict[tuple[str, str], bytes] = OrderedDict()  # JSON, CSV, SVG
         self.lock = threading.Lock()
 
-    def keep(self, key: str, result: SweepResult) -> None:
-        """Store a finished table, dropping the oldest beyond ``SWEEPS_KEPT``."""
+    def keep(self, key: tuple[str, str], body: bytes) -> None:
+        """Keep a final table's rendered body, dropping those of the oldest sweeps beyond
+        ``SWEEPS_KEPT`` (they are rendered again from the store when asked)."""
         with self.lock:
-            self.results[key] = result
-            self.results.move_to_end(key)
-            while len(self.results) > SWEEPS_KEPT:
-                old, _ = self.results.popitem(last=False)
-                self.progress.pop(old, None)
-                for k in [k for k in self.rendered if k[0] == old]:
-                    del self.rendered[k]
+            self.rendered[key] = body
+            self.rendered.move_to_end(key)
+            while len({k[0] for k in self.rendered}) > SWEEPS_KEPT:
+                self.rendered.popitem(last=False)
+
+    def cached(self, key: tuple[str, str]) -> bytes | None:
+        """A rendered body, or None."""
+        with self.lock:
+            return self.rendered.get(key)
 
 
 _CREATE = threading.Lock()
 
 
-def _sweeps(request: Request) -> _Sweeps:
+def _sweeps_of(state: Any) -> _Sweeps:
+    """The sweep runner of a service state (created on first use)."""
     with _CREATE:
-        jobs = getattr(request.app.state, "sweeps", None)
+        jobs = getattr(state, "sweeps", None)
         if jobs is None:
-            jobs = request.app.state.sweeps = _Sweeps()
+            jobs = state.sweeps = _Sweeps()
+    return jobs
+
+
+def _sweeps(request: Request) -> _Sweeps:
+    jobs = _sweeps_of(request.app.state.service)
+    request.app.state.sweeps = jobs
     return jobs
 
 
@@ -182,16 +195,23 @@ def to_grid(body: SweepRequest) -> SweepGrid:
                      settings=SolverSettings(interfacial_length=body.interfacial_length))
 
 
-def _run(sweeps: _Sweeps, key: str, planner: Any, grid: SweepGrid, validate: Any,
-         progress: list[int]) -> None:
-    """The job: the sweep on the planner's executor, its table kept in ``sweeps``."""
+def _run_job(planner: Any, body: SweepRequest) -> dict[str, Any]:
+    """The stored job's run: the sweep on the planner's executor; its table (a dict)."""
+    grid = to_grid(body)
+    progress = _PROGRESS.setdefault(stored_jobs.job_id("sweep", body), [0, grid.size])
+    progress[0] = 0
     jobs = getattr(planner, "jobs", None)
 
     def step(n: int) -> None:
         progress[0] += n
 
-    sweeps.keep(key, run_sweep(grid, executor=None if jobs is None else jobs.executor,
-                               planner=planner, validate=validate, progress=step))
+    return run_sweep(grid, executor=None if jobs is None else jobs.executor,
+                     planner=planner, validate=body.validate_points, progress=step).to_dict()
+
+
+_PROGRESS: dict[str, list[int]] = {}  # points done of the sweeps running in this process
+stored_jobs.register(stored_jobs.JobKind("sweep", SweepRequest, _run_job,
+                                         runner=lambda state: _sweeps_of(state).runner))
 
 
 def _check_validate(body: SweepRequest, size: int) -> None:
@@ -205,39 +225,41 @@ def _check_validate(body: SweepRequest, size: int) -> None:
 def _submit(request: Request, body: SweepRequest) -> dict[str, Any]:
     grid = to_grid(body)  # ParameterError: 422 naming the field
     _check_validate(body, grid.size)
-    key = hashlib.sha256(body.model_dump_json().encode()).hexdigest()[:24]
-    jobs = _sweeps(request)
-    planner = request.app.state.service.planner
-    with jobs.lock:  # a sweep queued, running or kept is not run again
-        state = jobs.runner.state(key)
-        if state in (None, "failed") or (state == "done" and key not in jobs.results):
-            progress = jobs.progress[key] = [0, grid.size]
-            jobs.runner.submit(key, _run, jobs, key, planner, grid, body.validate_points,
-                               progress)
-    vid = SWEEP_PREFIX + key
+    state = request.app.state.service
+    _sweeps(request)
+    vid = stored_jobs.submit(state, "sweep", body)  # one job per body; a full queue: 429
     return {"status": "pending", "sweep_id": vid, "sweep_url": f"/v1/sweeps/{vid}",
             "points": grid.size}
 
 
 def _status(request: Request, sweep_id: str) -> dict[str, Any]:
-    key = sweep_id[len(SWEEP_PREFIX):] if sweep_id.startswith(SWEEP_PREFIX) else None
-    jobs = _sweeps(request)
-    with jobs.lock:
-        state = None if key is None else jobs.runner.state(key)
-        res = jobs.results.get(key) if state == "done" else None
-        progress = jobs.progress.get(key) if key is not None else None
-    if state is None or progress is None or (state == "done" and res is None):
-        raise UnknownValidationError(sweep_id)  # never seen, or dropped: post it again
-    done, total = progress
-    out: dict[str, Any] = {"id": sweep_id, "status": state, "points": total,
+    """The sweep job's state from the store; when done, its table with the validations
+    filled (stored again once none is unfinished)."""
+    state = request.app.state.service
+    _sweeps(request)
+    if not sweep_id.startswith(SWEEP_PREFIX):
+        raise UnknownValidationError(sweep_id)
+    job = stored_jobs.status(state, sweep_id)
+    if job["status"] == "done":
+        total = done = len(job["result"]["rows"])
+    else:  # the stored body (no table yet): its grid's size
+        d = state.planner.cache.get_job(sweep_id)["request"]
+        total = len(d["gels"]) * len(d["t_ends"]) * len(d["dry_radii_um"]) * len(d["doses"])
+        done = _PROGRESS.get(sweep_id, [0])[0]
+    out: dict[str, Any] = {"id": sweep_id, "status": job["status"], "points": total,
                            "points_done": done}
-    fut = jobs.runner.get(key)
-    if res is not None:
-        out["validations_unfinished"] = fill_validations(res, request.app.state.service.planner)
+    if job["status"] == "done":
+        table = job["result"]
+        res = SweepResult(table["grid"], table["rows"], table["seconds"])
+        open_before = sum(1 for r in res.rows if r.get("validation_id")
+                          and r.get("validation_status") not in ("done", "failed"))
+        out["validations_unfinished"] = fill_validations(res, state.planner)
         out["result"] = res.to_dict()
-    elif state == "failed":
-        exc = fut.exception()
-        out["error"] = f"{type(exc).__name__}: {exc}"
+        if open_before and not out["validations_unfinished"]:  # settled: store it so
+            state.planner.cache.finish_job(sweep_id, "done", result=out["result"])
+        _PROGRESS.pop(sweep_id, None)
+    elif job["status"] == "failed":
+        out["error"] = job.get("error") or "failed"
     return out
 
 
@@ -269,10 +291,8 @@ async def sweep_status(
 def _render(request: Request, sweep_id: str, fmt: str) -> tuple[bytes, str]:
     """The poll's answer as bytes (in a compute thread), from the cache when final."""
     jobs = _sweeps(request)
-    key = sweep_id.removeprefix(SWEEP_PREFIX)
-    with jobs.lock:
-        hit = jobs.rendered.get((key, fmt))
-    if hit is not None and key in jobs.results:
+    hit = jobs.cached((sweep_id, fmt))
+    if hit is not None:
         return hit, _MEDIA[fmt]
     out = _status(request, sweep_id)
     if fmt == "csv" and out["status"] == "done":
@@ -283,8 +303,7 @@ def _render(request: Request, sweep_id: str, fmt: str) -> tuple[bytes, str]:
         fmt = "json"
         body = json.dumps(json_safe(out), separators=(",", ":"), allow_nan=False).encode()
     if out["status"] == "done" and not out.get("validations_unfinished"):
-        with jobs.lock:
-            jobs.rendered[(key, fmt)] = body
+        jobs.keep((sweep_id, fmt), body)
     return body, _MEDIA[fmt]
 
 
@@ -306,10 +325,8 @@ async def sweep_plot(
 
 def _plot(request: Request, sweep_id: str, gel: int) -> Response:
     jobs = _sweeps(request)
-    key = sweep_id.removeprefix(SWEEP_PREFIX)
-    with jobs.lock:
-        hit = jobs.rendered.get((key, f"svg{gel}"))
-    if hit is not None and key in jobs.results:
+    hit = jobs.cached((sweep_id, f"svg{gel}"))
+    if hit is not None:
         return Response(hit, media_type=_MEDIA["svg"])
     out = _status(request, sweep_id)
     if out["status"] != "done":
@@ -321,8 +338,7 @@ def _plot(request: Request, sweep_id: str, gel: int) -> Response:
                             status_code=422)
     svg = _svg(out["result"], gel)
     if not out.get("validations_unfinished"):
-        with jobs.lock:
-            jobs.rendered[(key, f"svg{gel}")] = svg
+        jobs.keep((sweep_id, f"svg{gel}"), svg)
     return Response(svg, media_type=_MEDIA["svg"])
 
 
