@@ -14,10 +14,10 @@ from functools import lru_cache
 from typing import Literal
 
 import numpy as np
-from scipy.optimize import brentq
 
 from .errors import ParameterError
 from .gel import T_MAX, T_MIN, Gel, as_gel, check_temperature
+from .roots import bracketed_roots
 from .thermo import osmotic_p
 
 LAMBDA_MIN = 1.0 + 1e-10
@@ -97,25 +97,28 @@ def energy_slope(gel: Gel, temperature: float, stretch: np.ndarray | float) -> n
 
 
 def _sign_change_roots(f, grid: np.ndarray, values: np.ndarray) -> list[float]:
-    """Every root of f bracketed by a sign change of ``values`` on ``grid`` (brentq)."""
-    roots: list[float] = []
+    """Every root of the vectorised f bracketed by a sign change of ``values`` on ``grid``
+    (solver.roots: all brackets at once, to brentq's xtol = 1e-15)."""
     s = np.sign(values)
-    for i in np.nonzero(s[:-1] * s[1:] <= 0)[0]:
-        if s[i] == 0:
-            roots.append(float(grid[i]))
-            continue
-        if s[i + 1] == 0:
-            continue
-        roots.append(brentq(f, grid[i], grid[i + 1], xtol=1e-15, rtol=1e-15, maxiter=200))
-    return roots
+    idx = np.nonzero(s[:-1] * s[1:] <= 0)[0]
+    idx = idx[(s[idx] == 0) | (s[idx + 1] != 0)]  # a zero at a right end: the next's left
+    if idx.size == 0:
+        return []
+    exact = s[idx] == 0
+    roots = np.array(grid[idx], dtype=float)
+    inner = idx[~exact]
+    if inner.size:
+        roots[~exact] = bracketed_roots(f, grid[inner], grid[inner + 1])
+    return [float(r) for r in roots]
 
 
 def equilibria(gel: Gel, temperature: float) -> list[Equilibrium]:
     """All free-swelling equilibria at T, smallest stretch first (eq. EqlEqn).
 
     Roots are bracketed between the critical points of the residual (where it is
-    monotone), then found with brentq; no Newton iteration from a guess.  Results are
-    memoised per (gel, T): the gel is immutable and the planner asks the same often.
+    monotone), then found by safeguarded regula falsi (solver.roots); no Newton iteration
+    from a guess.  Results are memoised per (gel, T): the gel is immutable and the planner
+    asks the same often.
     """
     gel = as_gel(gel)
     return list(_equilibria(gel, check_temperature(temperature)))
@@ -180,9 +183,9 @@ def folds(gel: Gel, t_min: float = T_MIN, t_max: float = T_MAX) -> list[Fold]:
     c, d, dc, dd = _parts(gel, _GRID)
     h = dc * d - c * dd
 
-    def hfun(lam: float) -> float:
+    def hfun(lam: np.ndarray) -> np.ndarray:
         ci, di, dci, ddi = _parts(gel, lam)
-        return float(dci * di - ci * ddi)
+        return dci * di - ci * ddi
 
     out = []
     for lam in _sign_change_roots(hfun, _GRID, h):

@@ -15,11 +15,11 @@ from functools import lru_cache
 from typing import Literal
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 from .equilibrium import Branch, equilibrium, nearest_stable
 from .errors import ParameterError
 from .gel import T_MAX, T_MIN, Gel, as_gel, check_temperature
+from .roots import bracketed_minimum, bracketed_root
 from .thermo import normal_energy, normal_stiffness, normal_stress, osmotic_dp, osmotic_p
 
 Behaviour = Literal["smooth", "front", "delayed_front", "spinodal"]
@@ -71,10 +71,9 @@ def coexistence_gap(gel: Gel, temperature: float, stretch: float) -> tuple[float
     gap = tangent_gap(gel, temperature, grid, lam)
     i = int(np.argmin(gap))
     lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
-    res = minimize_scalar(lambda v: float(tangent_gap(gel, temperature, v, lam)),
-                          bounds=(lo, hi), method="bounded", options={"xatol": 1e-12})
-    if res.fun < gap[i]:
-        return float(res.fun), float(res.x)
+    fun, x = bracketed_minimum(lambda v: float(tangent_gap(gel, temperature, v, lam)), lo, hi)
+    if fun < gap[i]:
+        return fun, x
     return float(gap[i]), float(grid[i])
 
 
@@ -138,7 +137,7 @@ def coexistence_points(gel: Gel, stretch: float) -> list[tuple[float, float]]:
             continue
         if abs(temps[i] - temps[i + 1]) > 5.0:  # a pole of T(lambda_new), not a root
             continue
-        ln = brentq(lambda v: float(chord(v)), grid[i], grid[i + 1], xtol=1e-14)
+        ln = bracketed_root(lambda v: float(chord(v)), grid[i], grid[i + 1], xtol=1e-14)
         t = float(temp_for(ln))
         if T_MIN <= t <= T_MAX:
             out.append((t, float(ln)))
@@ -239,7 +238,7 @@ def shrunken_level(gel: Gel, temperature: float) -> float:
     if idx.size == 0:
         raise ParameterError("t_end", temperature, "a temperature where P(phi) = 0 has a root")
     i = idx[0]
-    return float(brentq(lambda v: osmotic_p(v, chi0, chi1), phi[i], phi[i + 1], xtol=1e-15))
+    return bracketed_root(lambda v: osmotic_p(v, chi0, chi1), phi[i], phi[i + 1])
 
 
 def nucleation_level(gel: Gel, t_start: float, t_end: float, branch: Branch = "swollen") -> float:

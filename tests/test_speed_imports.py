@@ -77,3 +77,14 @@ def test_lazy_package_names_resolve() -> None:
     with pytest.raises(AttributeError):
         solver.no_such_name  # noqa: B018
     json.dumps(sorted(dosing.__all__))
+
+
+def test_front_model_path_needs_no_scipy_optimize() -> None:
+    """The equilibria, the jump's class and the shrunken level (the front model's inputs)
+    load no scipy.optimize (0.7 s of a CLI call): solver.roots finds their roots."""
+    code = ("from solver.equilibrium import equilibrium, folds\n"
+            "from solver.phase import classify_jump, shrunken_level\n"
+            "equilibrium('ANB', 302.0); folds('ANB')\n"
+            "classify_jump('ANB', 302.0, 308.0); shrunken_level('ANB', 308.0)\n"
+            "import solver.solute")
+    assert "scipy.optimize" not in _loaded(code)

@@ -14,11 +14,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import brentq
-from scipy.special import erfc
 
 
 def _ierfc(x: np.ndarray) -> np.ndarray:
+    from scipy.special import erfc  # here: importing the package needs no scipy.special
+
     return np.exp(-x * x) / math.sqrt(math.pi) - x * erfc(x)
 
 
@@ -49,6 +49,8 @@ def crank_sphere_finite(t: np.ndarray | float, diffusivity: float, radius: float
     """Released fraction of the load into a well-stirred volume (Crank 6.30)."""
     def g(x: float) -> float:
         return (3.0 + alpha * x * x) * math.sin(x) - 3.0 * x * math.cos(x)
+
+    from scipy.optimize import brentq  # here: importing the package needs no scipy.optimize
 
     # one root in each (k pi, (k + 1) pi), k >= 1: g changes sign between the ends
     q = np.array([brentq(g, k * math.pi, (k + 1) * math.pi, xtol=1e-14)
