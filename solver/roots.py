@@ -1,11 +1,12 @@
-"""Roots of a function in sign-change brackets, without scipy.optimize.
+"""Roots and minima of a scalar function in a bracket, without scipy.optimize.
 
-The front model's equilibria (eq. EqlEqn) and its shrunken level (P(phi) = 0) need a few
-bracketed roots per temperature; importing scipy.optimize for brentq costs 0.7 s of CPU, a
-quarter of a CLI call (issue 23).  This is the Illinois variant of regula falsi
-(superlinear), safeguarded by bisection whenever the bracket did not halve in two steps, and
-stopped by brentq's criterion (|error| <= xtol + 4 eps |x|); checked against brentq in
-tests/test_roots.py.
+The front model's inputs (the equilibria of eq. EqlEqn, the shrunken level P(phi) = 0, the
+coexistence test of eq. Coexistence) need a few bracketed roots and one bounded minimum per
+temperature; importing scipy.optimize for brentq and minimize_scalar cost 0.3-0.7 s of CPU
+of every front-model CLI call (issue 23).  The root is the Illinois variant of regula falsi
+(superlinear), safeguarded by bisection whenever the bracket did not halve in two steps and
+stopped by brentq's criterion (|error| <= xtol + 4 eps |x|); the minimum a golden-section
+search.  Both are checked against scipy in tests/test_roots.py.
 """
 
 from __future__ import annotations
