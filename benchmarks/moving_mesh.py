@@ -17,6 +17,10 @@ Sections (issue 12's acceptance):
              400, 800 (the delayed-transition bound, 0.116 and 0.221).
   speed      ell = 2e-4 on the moving grid to the 90% dose: wall time, steps; the custom
              gel (Omega = 300, ANB's chi) to its 50% dose at ell = 1e-4 and 8e-5.
+  thin       steps at thin fronts (issue 23): ANB and HHT at ell = 1e-3, 1e-4, 3e-5, the
+             planner's direct run (400 cells, and its 200-cell check: the numerical bound)
+             to t = 0.1; attempted and rejected steps, t50 / t80, and the attempted steps
+             at each ell relative to ell = 1e-3 (target: at most 1.5x at 3e-5).
 """
 
 from __future__ import annotations
@@ -159,10 +163,44 @@ def section_speed(gels: list[str]) -> None:
               f"{res.diagnostics['remaps']} remaps", flush=True)
 
 
+THIN_ELLS = (1e-3, 1e-4, 3e-5)
+
+
+def section_thin(gels: list[str]) -> None:
+    print("== thin fronts: the planner's direct run (400 cells, check 200; outputs every "
+          "t = 0.002) to t = 0.1, rtol 1e-5 ==")
+    simulate("ANB", 302.0, 308.0, until=1e-3, grid="moving", n=20, interfacial_length=0.05)
+    for gel in gels:
+        t_start, _ = CASES[gel]
+        base = None
+        for ell in THIN_ELLS:
+            row = {}
+            for n in (400, 200):
+                started = time.process_time()
+                res = simulate(gel, t_start, 308.0, until=0.1, grid="moving", n=n,
+                               interfacial_length=ell, rtol=RTOL, every=0.1 / 50)
+                cpu = time.process_time() - started
+                t = np.array([res.time_to_radius(a) for a in fraction_radius(
+                    equilibrium(preset(gel), t_start).stretch, np.array([0.5, 0.8]))])
+                d = res.diagnostics
+                attempted = d["steps"] + d["rejected"]
+                row[n] = t
+                print(f"{gel} ell={ell:<7g} n={n}: t50 {t[0]:.6f} t80 {t[1]:.6f}  "
+                      f"{attempted} attempted ({d['rejected']} rejected), {d['remaps']} remaps "
+                      f"/ {d['mesh_checks']} checks, {cpu:.2f} s CPU", flush=True)
+                if n == 400:
+                    base = attempted if base is None else base
+                    ratio = attempted / base
+            bound = np.abs(row[400] - row[200]) / row[400]
+            print(f"   {gel} ell={ell:g}: attempted {ratio:.2f}x those at ell = 1e-3; numerical "
+                  f"bound (400 vs 200) t50 {100 * bound[0]:.3f}% t80 {100 * bound[1]:.3f}%",
+                  flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--section", choices=("reproduce", "direct", "stiff", "delayed",
-                                              "speed"), action="append")
+                                              "speed", "thin"), action="append")
     parser.add_argument("--gel", choices=tuple(CASES), action="append")
     args = parser.parse_args()
     sections = args.section or ["reproduce", "direct", "stiff", "delayed", "speed"]
@@ -176,6 +214,8 @@ def main() -> None:
             section_stiff()
         elif s == "delayed":
             section_delayed(gels)
+        elif s == "thin":
+            section_thin(gels)
         else:
             section_speed(gels)
 
