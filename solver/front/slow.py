@@ -50,6 +50,7 @@ NUCLEATION_GRID = 48  # stretches at which T_n(lambda) is tabulated
 LEVEL_DEGREE = 12  # Chebyshev degree of phi_+(T) and F(T) over a run's temperatures
 THIN_SHELL = 1e-4  # the shell thickness (relative to a) the front stage starts from
 RTOL = 1e-8
+EDGE_FOLD = True  # nucleation waits for the edge's swollen root to vanish
 HORIZON = 50.0  # tau held at the last temperature after the program
 
 
@@ -80,15 +81,41 @@ def equilibrium_branches(gel: Gel, a0: float) -> tuple[np.ndarray, np.ndarray, f
     return np.concatenate([sw_t, sh_t[keep]]), np.concatenate([sw_l, sh_l[keep]]), fold
 
 
+def edge_fold(gel: Gel, lam: float, t_from: float) -> float:
+    """T_e(lambda): the temperature at which the swollen root J of the edge condition
+    (eq. Boundary_Dimless, J / a^4 - 1/J + Omega [...] = 0 at a = lambda) disappears on
+    heating from ``t_from`` (eq. Boundary_Dimless is affine in T: T(J) explicit)."""
+    jac = np.exp(np.linspace(math.log(1.0 + 1e-4), math.log(3.0 * lam**3), 8000))
+    g = jac / lam**4 - 1.0 / jac
+
+    def mix(temp: float) -> np.ndarray:
+        c0, c1 = gel.chi0(temp), gel.chi1(temp)
+        return gel.omega * (np.log1p(-1.0 / jac) + 1.0 / jac + (c0 - c1) / jac**2
+                            + 2.0 * c1 / jac**3)
+
+    m0 = mix(0.0)
+    temps = -(g + m0) / (mix(1.0) - m0)
+    cross = np.nonzero(np.diff(np.sign(temps - t_from)))[0]
+    if cross.size == 0:
+        return math.inf
+    j = int(cross[-1])
+    while j > 0 and temps[j - 1] >= temps[j]:
+        j -= 1
+    return float(temps[j])
+
+
 @lru_cache(maxsize=64)
-def nucleation_curve(gel: Gel, lam_lo: float, lam_hi: float) -> tuple[np.ndarray, np.ndarray]:
-    """(lambda, T_n): the lowest temperature at which the uniform state of isotropic stretch
-    lambda lies in the coexistence region (eq. Coexistence), on a grid of stretches."""
+def nucleation_curve(gel: Gel, lam_lo: float, lam_hi: float,
+                     t_from: float) -> tuple[np.ndarray, np.ndarray]:
+    """(lambda, T_n): the temperature at which a front forms in a uniform bead of stretch
+    lambda: the state is in the coexistence region (eq. Coexistence, the lowest such T) and
+    the edge has lost its swollen root (:func:`edge_fold`), whichever comes later."""
     lams = np.linspace(lam_lo, lam_hi, NUCLEATION_GRID)
     out = []
     for lam in lams:
         pts = [t for t, _ in coexistence_points(gel, float(lam))]
-        out.append(min(pts) if pts else math.inf)
+        t_c = min(pts) if pts else math.inf
+        out.append(max(t_c, edge_fold(gel, float(lam), t_from)) if EDGE_FOLD else t_c)
     return lams, np.array(out)
 
 
@@ -224,7 +251,7 @@ def slow_front_trajectory(gel: Gel | str, t_start: float, program: Program, *,
     b_t, b_l, fold = equilibrium_branches(gel, a0)
     tab = np.vstack([b_t, b_l**3])
     lam_lo = max(1.02, float(b_l.min()))
-    n_l, n_t = nucleation_curve(gel, lam_lo, a0 * 1.001)
+    n_l, n_t = nucleation_curve(gel, lam_lo, a0 * 1.001, float(t_start))
     nuc = np.vstack([n_l, np.where(np.isfinite(n_t), n_t, T_MAX + 100.0)])
     empty = np.zeros((3, LEVEL_DEGREE + 1))
     par = _params(gel, program, 1.0, t_start, t_hi)

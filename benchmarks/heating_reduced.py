@@ -1,0 +1,69 @@
+"""The slow-heating front model against the truth: its error table (issue 24).
+
+    python -m benchmarks.heating_reduced [--gel ANB HHT custom] [--markdown]
+
+For each gel (ANB and the custom gel 302 -> 308 K, HHT 304 -> 308 K), heating (the jump,
+ramps in K/min, baths with time constants in s) and dose (10-90 %), a 50 um dry bead: the
+truth's time (the full solver at the bead's own interfacial length on the moving grid,
+mobility 'kT', cached on disk by benchmarks/heating_truth.py) and the error of the
+slow-heating front model (solver/front/slow.py, sharp-interface front condition), with the
+model's CPU time per trajectory.  Where |error| <= the stated bound
+(dosing.protocol_reduced.STATED_ERROR) the planner answers from the model.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from dosing.units import timescale
+from solver.equilibrium import equilibrium
+from solver.front.slow import slow_front_trajectory
+from solver.heating import Released
+
+from .heating_truth import DRY_UM, FRACTIONS, STARTS, T_END, gel_named, heatings, program_for
+from .heating_truth import truth as truth_run
+
+
+def rows(gel_name: str) -> list[tuple[str, list[float], list[float], float]]:
+    """(heating, truth seconds, model errors, model ms) for every heating of one gel."""
+    gel = gel_named(gel_name)
+    t0 = STARTS[gel_name]
+    tau = timescale(DRY_UM, T_END).seconds
+    a0 = equilibrium(gel, t0, "swollen").stretch
+    targets = tuple(float(Released(f).radius(a0)) for f in FRACTIONS)
+    out = []
+    for label, kind, value in heatings(tau):
+        tr = truth_run(gel_name, kind, value)
+        prog = program_for(kind, value, tau)
+        slow_front_trajectory(gel, t0, prog, targets=targets)  # warm the tables
+        w = time.process_time()
+        res = slow_front_trajectory(gel, t0, prog, targets=targets)
+        ms = 1e3 * (time.process_time() - w)
+        model = [res.time_to_radius(a) for a in targets]
+        errs = [m / t - 1.0 for m, t in zip(model, tr["times"], strict=True)]
+        out.append((label, [t * tau for t in tr["times"]], errs, ms))
+    return out
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--gel", nargs="+", default=["ANB", "HHT", "custom"])
+    p.add_argument("--markdown", action="store_true")
+    args = p.parse_args()
+    for g in args.gel:
+        print(f"\n{g} {STARTS[g]:g} -> {T_END:g} K, {DRY_UM:g} um dry bead: truth s / model "
+              "error")
+        if args.markdown:
+            print("\n| heating | " + " | ".join(f"{f:.0%}" for f in FRACTIONS) + " | ms |")
+            print("|---" * (len(FRACTIONS) + 2) + "|")
+        for label, secs, errs, ms in rows(g):
+            cells = [f"{s:.1f} s, {e:+.1%}" for s, e in zip(secs, errs, strict=True)]
+            if args.markdown:
+                print(f"| {label} | " + " | ".join(cells) + f" | {ms:.1f} |")
+            else:
+                print(f"{label:16s} " + "  ".join(f"{c:>17s}" for c in cells) + f" {ms:6.1f}")
+
+
+if __name__ == "__main__":
+    main()
