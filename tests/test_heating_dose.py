@@ -189,13 +189,13 @@ def test_seconds_need_a_bead_size(planner):
 def test_real_solver_ramp_until_equals_dose(tmp_path):
     """The full solver (moving grid, the bead's own ell): the 30 % dose under a 5 K/min ramp
     is later than the jump's, and the until-hold ends at it to the printed digits."""
-    from dosing.protocol_dose import Mode, blocking_getter, protocol_dose
+    from dosing.protocol_dose import Mode, blocking_getter, dose, protocol_dose
 
     with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(2)) as p:
-        ramp = p.dose(_req(["Heat to 308 K at 5 K/min"], 0.3))
+        ramp = dose(p, _req(["Heat to 308 K at 5 K/min"], 0.3), model="full")
         then = p.dose(_req(["Heat to 308 K at 5 K/min", "Hold at 308 K until 30 % released",
                             "Rest at 302 K for 1 min"], 0.05))
-        jump = p.dose(_req(["Hold at 308 K"], 0.3))
+        jump = dose(p, _req(["Hold at 308 K"], 0.3), model="full")
         stairs = protocol_dose(_req(["Heat to 308 K at 5 K/min"], 0.3), blocking_getter(p),
                                mode=Mode(continuous=False))
     assert f"{then.until_steps[0].end_seconds:.4g}" == f"{ramp.seconds:.4g}"
