@@ -35,7 +35,7 @@ from .heating_program import program_spec, solver_program
 from .request import DoseRequest
 
 STATED_ERROR = 0.05  # the measured gap to the truth in the region is at most 4.5 %
-NUMERICAL = 1e-6  # the integration's relative error bound at rtol 1e-8 (tests/test_heating_slow.py)
+NUMERICAL = 1e-5  # measured <= 2.4e-6 (tests/test_heating_slow.py: rtol, thin-shell start, tables)
 TABLE_TAU_S = 2205.0  # tau of the table's 50 um dry bead at 308 K (eq. timescale)
 RAMP_MIN = 0.5 / 60.0 * TABLE_TAU_S  # K per tau: 0.5 K/min for the table's bead
 BATH_MAX = 300.0 / TABLE_TAU_S  # tau: a 300 s time constant for the table's bead

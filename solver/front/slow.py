@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 from numpy.polynomial import Chebyshev
+from scipy.interpolate import CubicSpline
 
 from ..equilibrium import equilibrium, residual
 from ..errors import NotApplicableError, ParameterError, SolverError
@@ -46,7 +47,8 @@ from ..phase import coexistence_points, shrunken_level
 from .maxwell import maxwell_pair
 from .slow_kernel import integrate, level_values, radius, rhs
 
-NUCLEATION_GRID = 48  # stretches at which T_n(lambda) is tabulated
+NUCLEATION_GRID = 24  # stretches at which the coexistence onset is found (spline between)
+EDGE_GRID = 200  # stretches at which T_n(lambda) is tabulated (linear between)
 LEVEL_DEGREE = 12  # Chebyshev degree of phi_+(T) and F(T) over a run's temperatures
 THIN_SHELL = 1e-4  # the shell thickness (relative to a) the front stage starts from
 RTOL = 1e-8
@@ -84,39 +86,50 @@ def equilibrium_branches(gel: Gel, a0: float) -> tuple[np.ndarray, np.ndarray, f
 def edge_fold(gel: Gel, lam: float, t_from: float) -> float:
     """T_e(lambda): the temperature at which the swollen root J of the edge condition
     (eq. Boundary_Dimless, J / a^4 - 1/J + Omega [...] = 0 at a = lambda) disappears on
-    heating from ``t_from`` (eq. Boundary_Dimless is affine in T: T(J) explicit)."""
-    jac = np.exp(np.linspace(math.log(1.0 + 1e-4), math.log(3.0 * lam**3), 8000))
-    g = jac / lam**4 - 1.0 / jac
+    heating from ``t_from`` (eq. Boundary_Dimless is affine in T: T(J) explicit; its local
+    maximum below the swollen root, on a grid polished by the parabola through three points)."""
+    lj = np.linspace(math.log(1e-4), math.log(3.0 * lam**3 - 1.0), 4000)
 
-    def mix(temp: float) -> np.ndarray:
-        c0, c1 = gel.chi0(temp), gel.chi1(temp)
-        return gel.omega * (np.log1p(-1.0 / jac) + 1.0 / jac + (c0 - c1) / jac**2
-                            + 2.0 * c1 / jac**3)
+    def temp_of(ljj: np.ndarray | float) -> np.ndarray:
+        jac = 1.0 + np.exp(ljj)
+        g = jac / lam**4 - 1.0 / jac
+        base = np.log1p(-1.0 / jac) + 1.0 / jac
+        m0 = gel.omega * (base + (gel.a0 - gel.a1) / jac**2 + 2.0 * gel.a1 / jac**3)
+        m1 = gel.omega * ((gel.b0 - gel.b1) / jac**2 + 2.0 * gel.b1 / jac**3)
+        return -(g + m0) / m1
 
-    m0 = mix(0.0)
-    temps = -(g + m0) / (mix(1.0) - m0)
+    temps = temp_of(lj)
     cross = np.nonzero(np.diff(np.sign(temps - t_from)))[0]
     if cross.size == 0:
         return math.inf
     j = int(cross[-1])
     while j > 0 and temps[j - 1] >= temps[j]:
         j -= 1
-    return float(temps[j])
+    if j == 0:
+        return float(temps[0])
+    y0, y1, y2 = temps[j - 1], temps[j], temps[j + 1]  # the parabola's vertex
+    den = y0 - 2.0 * y1 + y2
+    return float(y1 - 0.125 * (y2 - y0) ** 2 / den) if den < 0.0 else float(y1)
 
 
 @lru_cache(maxsize=64)
 def nucleation_curve(gel: Gel, lam_lo: float, lam_hi: float,
                      t_from: float) -> tuple[np.ndarray, np.ndarray]:
     """(lambda, T_n): the temperature at which a front forms in a uniform bead of stretch
-    lambda: the state is in the coexistence region (eq. Coexistence, the lowest such T) and
-    the edge has lost its swollen root (:func:`edge_fold`), whichever comes later."""
-    lams = np.linspace(lam_lo, lam_hi, NUCLEATION_GRID)
-    out = []
-    for lam in lams:
+    lambda: the state is in the coexistence region (eq. Coexistence, the lowest such T,
+    smooth in lambda: on NUCLEATION_GRID stretches, a cubic spline between) and the edge has
+    lost its swollen root (:func:`edge_fold`, on EDGE_GRID stretches), whichever is later."""
+    coarse = np.linspace(lam_lo, lam_hi, NUCLEATION_GRID)
+    t_c = []
+    for lam in coarse:
         pts = [t for t, _ in coexistence_points(gel, float(lam))]
-        t_c = min(pts) if pts else math.inf
-        out.append(max(t_c, edge_fold(gel, float(lam), t_from)) if EDGE_FOLD else t_c)
-    return lams, np.array(out)
+        t_c.append(min(pts) if pts else T_MAX + 100.0)
+    lams = np.linspace(lam_lo, lam_hi, EDGE_GRID)
+    onset = CubicSpline(coarse, np.minimum(t_c, T_MAX + 100.0))(lams)
+    if not EDGE_FOLD:
+        return lams, onset
+    edge = np.array([edge_fold(gel, float(lam), t_from) for lam in lams])
+    return lams, np.maximum(onset, edge)
 
 
 @lru_cache(maxsize=4096)
@@ -230,12 +243,13 @@ def _temp(heat: np.ndarray, t: float) -> float:
 def slow_front_trajectory(gel: Gel | str, t_start: float, program: Program, *,
                           targets: tuple[float, ...] = (), sharp: bool = True,
                           ends: dict[int, float] | None = None,
-                          horizon: float = HORIZON) -> SlowFrontResult:
+                          horizon: float = HORIZON, rtol: float = RTOL) -> SlowFrontResult:
     """The front model under ``program`` from the equilibrium at ``t_start`` (module doc),
     until the radius reaches the smallest of ``targets`` (dry radii; each crossing located)
     or ``horizon`` tau after the program.  ``ends``: until-steps' end times (as
     ``Program.pieces``); without them until-steps are resolved here, in order, by this
-    model's own crossing of their radii.  NotApplicableError where the temperature falls."""
+    model's own crossing of their radii; ``rtol`` the integrator's relative tolerance.
+    NotApplicableError where the temperature falls."""
     gel = as_gel(gel)
     a0 = float(equilibrium(gel, t_start, "swollen").stretch)
     tg = np.sort(np.array([float(x) for x in targets], dtype=float))[::-1].copy()
@@ -257,7 +271,7 @@ def slow_front_trajectory(gel: Gel | str, t_start: float, program: Program, *,
     par = _params(gel, program, 1.0, t_start, t_hi)
     t_end = t_last + horizon
     ts, rs, hits, t1, y1, flag = integrate(0, 0.0, a0**3, t_end, breaks, tg, heat, par, empty,
-                                           tab, nuc, RTOL, 1e-12)
+                                           tab, nuc, rtol, 1e-12)
     model = "front-slow-sharp" if sharp else "front-slow"
     res = SlowFrontResult(gel.name, a0, model, ts, rs, {}, None, None, None, None, dict(ends),
                           {"fold_temperature": fold, "stage": "uniform"})
@@ -272,7 +286,7 @@ def slow_front_trajectory(gel: Gel | str, t_start: float, program: Program, *,
         x0, dt0 = _thin_shell_start(a_n, t_n, heat, par, cheb, tab)
         left = tg[np.isnan(hits)]
         ts2, rs2, hits2, t2, y2, flag2 = integrate(1, t_n + dt0, x0, t_end, breaks, left,
-                                                   heat, par, cheb, tab, nuc, RTOL, 1e-14)
+                                                   heat, par, cheb, tab, nuc, rtol, 1e-14)
         hits[np.isnan(hits)] = hits2
         res.t, res.radius = np.concatenate([ts, ts2]), np.concatenate([rs, rs2])
         res.t_nucleation, res.temperature_nucleation, res.phi_minus = t_n, temp_n, 1.0 - sm
