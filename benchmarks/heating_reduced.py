@@ -1,6 +1,6 @@
 """The slow-heating front model against the truth: its error table (issue 24).
 
-    python -m benchmarks.heating_reduced [--gel ANB HHT custom] [--markdown]
+    python -m benchmarks.heating_reduced [--gel ANB HHT custom] [--markdown] [--summary]
 
 For each gel (ANB and the custom gel 302 -> 308 K, HHT 304 -> 308 K), heating (the jump,
 ramps in K/min, baths with time constants in s) and dose (10-90 %), a 50 um dry bead: the
@@ -8,7 +8,9 @@ truth's time (the full solver at the bead's own interfacial length on the moving
 mobility 'kT', cached on disk by benchmarks/heating_truth.py) and the error of the
 slow-heating front model (solver/front/slow.py, sharp-interface front condition), with the
 model's CPU time per trajectory.  Where |error| <= the stated bound
-(dosing.protocol_reduced.STATED_ERROR) the planner answers from the model.
+(dosing.heating_reduced.STATED_ERROR) and inside the planner's region
+(dosing.heating_reduced.choose) the planner answers from the model.  ``--summary``: one
+table, each cell the largest |error| over the three gels, in brackets outside the region.
 """
 
 from __future__ import annotations
@@ -46,11 +48,44 @@ def rows(gel_name: str) -> list[tuple[str, list[float], list[float], float]]:
     return out
 
 
+def in_region(kind: str, fraction: float) -> bool:
+    """The planner's region for the table's heatings (dosing/heating_reduced.py)."""
+    from dosing.heating_reduced import BATH_FRACTION_MIN, FRACTION_RANGE
+
+    lo = BATH_FRACTION_MIN if kind.startswith("bath") else FRACTION_RANGE[0]
+    return lo <= fraction <= FRACTION_RANGE[1]
+
+
+def summary(gels: list[str]) -> None:
+    """The largest |error| over the gels per heating and dose (markdown)."""
+    from dosing.heating_reduced import STATED_ERROR
+
+    per = [rows(g) for g in gels]
+    print(f"\n| heating | {' | '.join(f'{f:.0%}' for f in FRACTIONS)} |")
+    print("|---" * (len(FRACTIONS) + 1) + "|")
+    worst_in = 0.0
+    for k, (label, _, _, _) in enumerate(per[0]):
+        cells = []
+        for j, f in enumerate(FRACTIONS):
+            e = max(abs(p[k][2][j]) for p in per)
+            inside = in_region(label, f)
+            worst_in = max(worst_in, e) if inside else worst_in
+            cells.append(f"{e:.1%}" if inside else f"({e:.1%})")
+        print(f"| {label} | " + " | ".join(cells) + " |")
+    ms = max(r[3] for p in per for r in p)
+    print(f"\nlargest |error| inside the region {worst_in:.1%} (stated {STATED_ERROR:.0%}); "
+          f"model CPU per trajectory at most {ms:.1f} ms ({', '.join(gels)})")
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--gel", nargs="+", default=["ANB", "HHT", "custom"])
     p.add_argument("--markdown", action="store_true")
+    p.add_argument("--summary", action="store_true")
     args = p.parse_args()
+    if args.summary:
+        summary(args.gel)
+        return
     for g in args.gel:
         print(f"\n{g} {STARTS[g]:g} -> {T_END:g} K, {DRY_UM:g} um dry bead: truth s / model "
               "error")
