@@ -201,6 +201,10 @@ def test_real_solver_ramp_until_equals_dose(tmp_path):
     assert f"{then.until_steps[0].end_seconds:.4g}" == f"{ramp.seconds:.4g}"
     assert then.until_steps[0].end == ramp.time
     assert ramp.error_estimate < 0.02 and "continuous T(t)" in ramp.program
+    # the model-form part of a full-solver protocol answer: the reduced model's gap (2.0 %)
+    mf = ramp.uncertainty["model_form"]
+    assert mf["relative"] < 0.05 and "reduced model" in mf["text"]
+    assert "full solver was asked for" in ramp.model_reason
     # measured: 73.75 s against the jump's 13.81 s (issue 24: "about five times later")
     assert ramp.seconds > 4.0 * jump.seconds
     # the old path, a 0.05 K staircase of holds (mobility held at T_ref), 73.79 s: the
@@ -311,6 +315,27 @@ async def test_http_protocol_202_then_answer(tmp_path, fake):
             trace = {**body, "protocol": [{"step": "trace", "csv":
                                            "time (s),T (degC)\n0,28.85\n72,34.85\n"}]}
             assert (await raw.post("/v1/dose-time", json=trace)).status_code in (200, 202)
+
+
+@pytest.mark.anyio
+async def test_http_protocol_in_the_reduced_region_answers_at_once(tmp_path):
+    """On the real solver a 5 K/min ramp's 80 % dose is the reduced model's: 200, no 202,
+    no full-solver run; a 10 % dose (outside the region) is queued (202)."""
+    from api_support import asgi
+
+    from api.http import create_app
+
+    body = {"gel": "ANB", "t_start": 302.0, "dose_fraction": 0.8, "dry_radius_um": 50.0,
+            "protocol": ["Heat to 308 K at 5 K/min"]}
+    with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1)) as p:
+        async with asgi(create_app(planner=p, warm=False)) as (_, raw):
+            r = await raw.post("/v1/dose-time", json=body)
+            assert r.status_code == 200, r.text
+            ans = r.json()
+            assert ans["model"] == "front-slow-sharp" and "region" in ans["model_reason"]
+            assert ans["seconds"] == pytest.approx(231.4, rel=0.05)  # the truth's 231.4 s
+            r = await raw.post("/v1/dose-time", json={**body, "dose_fraction": 0.1})
+            assert r.status_code == 202, r.text
 
 
 @pytest.mark.anyio
