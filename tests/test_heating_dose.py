@@ -381,3 +381,36 @@ def test_heater_sweep_answers_which_heater(planner):
     with pytest.raises(ParameterError) as e:
         heater_sweep(planner, "oven", [1.0], 308.0, **fields)
     assert e.value.field == "kind"
+
+
+# ----------------------------------------------------------------------------- schedules
+def test_a_schedule_runs_as_one_protocol_with_until_steps_and_rests(planner):
+    """Two 30 % doses, a 5 K/min heating each, a 10 min rest at T_start between: one
+    protocol; each dose ends at its until-step, the second heating starts after the rest,
+    and the released fraction at each end is the cumulative dose."""
+    from dosing.protocol_dose import protocol_schedule, schedule_steps
+
+    steps = schedule_steps([0.3, 0.3], 302.0, 308.0, "10 min", "5 K/min")
+    assert steps == ["Heat to 308 K at 5 K/min", "Hold at 308 K until 30 % released",
+                     "Rest at 302 K for 10 min", "Heat to 308 K at 5 K/min",
+                     "Hold at 308 K until 60 % released"]
+    rows, ans = protocol_schedule(planner, [0.3, 0.3], 308.0, "10 min", "5 K/min", **BEAD)
+    assert [r.released for r in rows] == pytest.approx([0.3, 0.6])
+    assert rows[0].start_seconds == 0.0 and rows[0].end_seconds > 72.0
+    assert rows[1].start_seconds == pytest.approx(rows[0].end_seconds + 600.0)
+    assert rows[1].end_seconds > rows[1].start_seconds + 72.0
+    assert ans.seconds == pytest.approx(rows[1].end_seconds, rel=1e-5)  # separate runs
+    c = ans.curve
+    for r in rows:
+        k = int(np.argmin(np.abs(np.asarray(c["seconds"]) - r.end_seconds)))
+        assert c["released_fraction"][k] == pytest.approx(r.released, abs=5e-3)
+
+
+def test_schedule_doses_are_checked():
+    from dosing.protocol_dose import schedule_steps
+
+    with pytest.raises(ParameterError) as e:
+        schedule_steps([0.6, 0.5], 302.0, 308.0, "10 min")
+    assert e.value.field == "doses[1]"
+    with pytest.raises(ParameterError):
+        schedule_steps([], 302.0, 308.0, "10 min")
