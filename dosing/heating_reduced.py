@@ -12,7 +12,8 @@ over ANB, HHT and a custom gel, ramps of 0.5-100 K/min, baths of 1-300 s and dos
 The region, in the dimensionless units the table measured (tau at T_ref = the protocol's
 hottest temperature; a 50 um dry bead has tau = 2205 s at 308 K):
 
-* heating only (T never falls), steps Heat/Hold/Rest/Bath (no trace: not measured);
+* one ramp or bath from T_start to the protocol's hottest temperature (or a jump there),
+  then holds at it (for a time or until a condition): the heatings the table measured;
 * every ramp at least ``RAMP_MIN`` K per tau (0.5 K/min for the 50 um bead), every bath's
   time constant at most ``BATH_MAX`` tau (300 s);
 * doses of 30-90 % with ramps and holds only, 50-90 % when a bath is in the protocol
@@ -46,9 +47,10 @@ MODEL_TEXT = ("the front model under slow heating (solver/front/slow.py): unifor
               "with a linear poro-elastic lag, a front that nucleates when the bead's state "
               "enters the coexistence region and its edge loses the swollen root, then the "
               "sharp-interface front with its levels at the current temperature")
-REGION_TEXT = (f"heating only, ramps of at least {RAMP_MIN:.3g} K per tau (0.5 K/min for a 50 "
-               f"um bead), baths with time constants up to {BATH_MAX:.3g} tau (300 s), no "
-               "traces, doses of 30-90 % (50-90 % with a bath)")
+REGION_TEXT = ("one ramp or bath to the hottest temperature then holds there, ramps of at "
+               f"least {RAMP_MIN:.3g} K per tau (0.5 K/min for a 50 um bead), baths with time "
+               f"constants up to {BATH_MAX:.3g} tau (300 s), no traces, doses of 30-90 % "
+               "(50-90 % with a bath)")
 TABLE_TEXT = ("measured against the truth (the full solver at the bead's own interfacial "
               "length, moving grid) for ANB, HHT and a custom gel, ramps of 0.5-100 K/min, "
               "baths of 1-300 s and doses of 10-90 % of a 50 um dry bead "
@@ -78,6 +80,12 @@ def choose(req: DoseRequest, pieces: list[Piece], validate: bool) -> Choice:
         return Choice(False, f"the dose {req.fraction:.0%} is outside {lo:.0%}-{hi:.0%}, where "
                       "the reduced model is within its stated error (small doses are mostly "
                       "the front's nucleation and the uniform shrinking before it)")
+    hot = req.t_end
+    heating = [p for p in pieces if not (p.shape == "hold" and p.t1 == hot)]
+    if len(heating) > 1 or (heating and (heating[0] is not pieces[0] or heating[0].t1 != hot)):
+        return Choice(False, "the protocol is not one ramp or bath to its hottest temperature "
+                      "followed by holds there, the heatings the reduced model's error was "
+                      "measured for")
     cur = req.t_start
     for p in pieces:
         where = f"protocol[{p.step}]"

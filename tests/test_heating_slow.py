@@ -151,7 +151,10 @@ def test_a_ramp_dose_in_the_region_answers_from_the_reduced_model(real_planner):
     (["Heat to 308 K at 0.2 K/min"], 0.5, "slower than the measured"),
     (["Bath at 308 K with a time constant of 20 min"], 0.8, "longer than the measured"),
     (["Heat to 308 K at 5 K/min", "Hold at 308 K for 1 min", "Cool to 304 K at 5 K/min"], 0.8,
-     "cools"),
+     "not one ramp or bath"),
+    (["Heat to 306 K at 5 K/min", "Hold at 306 K for 30 min", "Heat to 308 K at 5 K/min"], 0.8,
+     "not one ramp or bath"),
+    ([{"step": "trace", "csv": "time (s),T (K)\n0,302\n72,308\n"}], 0.8, "measured trace"),
 ])
 def test_outside_the_region_the_full_solver_answers(protocol, fraction, why):
     from dosing.heating_reduced import choose
@@ -159,6 +162,14 @@ def test_outside_the_region_the_full_solver_answers(protocol, fraction, why):
     req = DoseRequest(**BEAD, protocol=protocol, dose_fraction=fraction)
     choice = choose(req, req.heating.program(2204.6), False)
     assert not choice.reduced and why in choice.why
+
+
+def test_holds_after_the_heating_stay_in_the_region():
+    from dosing.heating_reduced import choose
+
+    req = DoseRequest(**BEAD, protocol=["Bath at 308 K with a time constant of 30 s for 2 min",
+                                        "Hold at 308 K until 80 % released"], dose_fraction=0.8)
+    assert choose(req, req.heating.program(2204.6), False).reduced
 
 
 def test_validate_asks_for_the_full_solver():
