@@ -1,6 +1,7 @@
 """The slow-heating front model against the truth: its error table (issue 24).
 
     python -m benchmarks.heating_reduced [--gel ANB HHT custom] [--markdown] [--summary]
+    python -m benchmarks.heating_reduced --sizes 20 100 [--gel ANB HHT]
 
 For each gel (ANB and the custom gel 302 -> 308 K, HHT 304 -> 308 K), heating (the jump,
 ramps in K/min, baths with time constants in s) and dose (10-90 %), a 50 um dry bead: the
@@ -11,6 +12,9 @@ model's CPU time per trajectory.  Where |error| <= the stated bound
 (dosing.heating_reduced.STATED_ERROR) and inside the planner's region
 (dosing.heating_reduced.choose) the planner answers from the model.  ``--summary``: one
 table, each cell the largest |error| over the three gels, in brackets outside the region.
+``--sizes``: other dry radii (the truth at each bead's own interfacial length; the same
+heatings in K/min and s, so other rates in K per tau): the jump, 5 and 20 K/min ramps,
+10 and 30 s baths.
 """
 
 from __future__ import annotations
@@ -48,6 +52,30 @@ def rows(gel_name: str) -> list[tuple[str, list[float], list[float], float]]:
     return out
 
 
+SIZE_HEATINGS = (("jump", 0.0), ("ramp", 5.0), ("ramp", 20.0), ("bath", 10.0), ("bath", 30.0))
+
+
+def sizes(dries: list[float], gels: list[str]) -> None:
+    """The model's error at other bead sizes (markdown: heating, then each dose)."""
+    print(f"\n| bead | gel | heating | {' | '.join(f'{f:.0%}' for f in FRACTIONS)} |")
+    print("|---" * (len(FRACTIONS) + 3) + "|")
+    for dry in dries:
+        tau = timescale(dry, T_END).seconds
+        for g in gels:
+            gel = gel_named(g)
+            a0 = equilibrium(gel, STARTS[g], "swollen").stretch
+            tg = tuple(float(Released(f).radius(a0)) for f in FRACTIONS)
+            for kind, v in SIZE_HEATINGS:
+                tr = truth_run(g, kind, v, dry_um=dry)
+                res = slow_front_trajectory(gel, STARTS[g], program_for(kind, v, tau),
+                                            targets=tg)
+                label = {"jump": "jump", "ramp": f"ramp {v:g} K/min",
+                         "bath": f"bath {v:g} s"}[kind]
+                cells = [f"{t * tau:.1f} s, {res.time_to_radius(a) / t - 1.0:+.1%}"
+                         for a, t in zip(tg, tr["times"], strict=True)]
+                print(f"| {dry:g} um | {g} | {label} | " + " | ".join(cells) + " |")
+
+
 def in_region(kind: str, fraction: float) -> bool:
     """The planner's region for the table's heatings (dosing/heating_reduced.py)."""
     from dosing.heating_reduced import BATH_FRACTION_MIN, FRACTION_RANGE
@@ -82,7 +110,11 @@ def main() -> None:
     p.add_argument("--gel", nargs="+", default=["ANB", "HHT", "custom"])
     p.add_argument("--markdown", action="store_true")
     p.add_argument("--summary", action="store_true")
+    p.add_argument("--sizes", type=float, nargs="*", default=None)
     args = p.parse_args()
+    if args.sizes:
+        sizes(args.sizes, args.gel if args.gel != ["ANB", "HHT", "custom"] else ["ANB", "HHT"])
+        return
     if args.summary:
         summary(args.gel)
         return

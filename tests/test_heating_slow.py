@@ -172,6 +172,19 @@ def test_holds_after_the_heating_stay_in_the_region():
     assert choose(req, req.heating.program(2204.6), False).reduced
 
 
+def test_beads_under_50_um_and_no_bead_size_go_to_the_full_solver():
+    from dosing.heating_reduced import choose
+
+    for fields in ({**BEAD, "dry_radius_um": 20.0}, {"gel": "ANB", "t_start": 302.0}):
+        req = DoseRequest(**fields, protocol=["Heat to 308 K at 500 K/tau"], dose_fraction=0.8)
+        choice = choose(req, req.heating.program(None if "dry_radius_um" not in fields
+                                                 else 353.0), False)
+        assert not choice.reduced and "interfacial length" in choice.why
+    big = DoseRequest(**{**BEAD, "dry_radius_um": 100.0}, protocol=["Heat to 308 K at 5 K/min"],
+                      dose_fraction=0.8)
+    assert choose(big, big.heating.program(8818.0), False).reduced
+
+
 def test_validate_asks_for_the_full_solver():
     from dosing.heating_reduced import choose
 
