@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from solver.equilibrium import nearest_stable
-from solver.errors import ParameterError, SolverError
+from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.front.slow import slow_front_trajectory
 
 from . import heating_reduced
@@ -512,6 +512,16 @@ def _choice(planner: Any, req: DoseRequest, validate: bool, mode: Mode, model: s
     return heating_reduced.choose(req, pieces, validate)
 
 
+def _try_reduced(req: DoseRequest, mode: Mode, choice: heating_reduced.Choice
+                 ) -> ProtocolDoseAnswer | heating_reduced.Choice:
+    """The reduced model's answer, or (where it cannot give one: no front, a level that
+    does not converge) the choice of the full solver saying why."""
+    try:
+        return reduced_dose(req, mode, choice)
+    except (NotApplicableError, SolverError) as exc:
+        return heating_reduced.Choice(False, f"the reduced model could not answer ({exc})")
+
+
 def dose(planner: Any, req: DoseRequest, validate: bool = False, model: str = "auto"
          ) -> ProtocolDoseAnswer:
     """The dose under a protocol: the reduced model inside its region (milliseconds), else
@@ -520,7 +530,10 @@ def dose(planner: Any, req: DoseRequest, validate: bool = False, model: str = "a
     mode = mode_for(planner, req)
     choice = _choice(planner, req, validate, mode, model)
     if choice.reduced:
-        return reduced_dose(req, mode, choice)
+        fast = _try_reduced(req, mode, choice)
+        if isinstance(fast, ProtocolDoseAnswer):
+            return fast
+        choice = fast
     out = protocol_dose(req, blocking_getter(planner), validate, mode, choice.why)
     assert not isinstance(out, Pending)
     return out
@@ -533,7 +546,10 @@ def answer(planner: Any, req: DoseRequest, validate: bool = False, model: str = 
     mode = mode_for(planner, req)
     choice = _choice(planner, req, validate, mode, model)
     if choice.reduced:
-        return reduced_dose(req, mode, choice)
+        fast = _try_reduced(req, mode, choice)
+        if isinstance(fast, ProtocolDoseAnswer):
+            return fast
+        choice = fast
     return protocol_dose(req, queue_getter(planner, req.fraction, req.start_radius),
                          validate, mode, choice.why)
 

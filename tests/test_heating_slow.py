@@ -203,3 +203,33 @@ def test_until_hold_after_a_ramp_ends_at_the_reduced_dose_time(real_planner):
         "Hold at 308 K for 1 min"], dose_fraction=0.8))
     assert ramp.model == then.model == "front-slow-sharp"
     assert then.until_steps[0].end == ramp.time
+
+
+def test_a_reduced_model_failure_falls_back_to_the_full_solver(monkeypatch):
+    import dosing.protocol_dose as pdose
+    from dosing.heating_reduced import Choice
+    from solver.errors import SolverError
+
+    def boom(*a, **k):
+        raise SolverError("the shell levels did not converge", {})
+
+    monkeypatch.setattr(pdose, "reduced_dose", boom)
+    req = DoseRequest(**BEAD, protocol=["Heat to 308 K at 5 K/min"], dose_fraction=0.8)
+    out = pdose._try_reduced(req, pdose.Mode(), Choice(True, "inside"))
+    assert isinstance(out, Choice) and not out.reduced and "could not answer" in out.why
+
+
+def test_wide_heatings_of_other_gels_answer():
+    """Robustness beyond the table: HHT 300 -> 312 K at 18.4 K per tau (the Maxwell pair's
+    continuation over 12 K falls back to exact pairs) and a power-law permeability."""
+    from solver.gel import ANB, Gel, Permeability
+
+    hht = preset("HHT")
+    tg = _targets(hht, 300.0)
+    res = slow.slow_front_trajectory(hht, 300.0, Program((Ramp(312.0, 18.4),)), targets=tg)
+    times = [res.hits[a] for a in tg]
+    assert all(np.isfinite(times)) and times == sorted(times)
+    pw = Gel(300.0, ANB.a0, ANB.b0, ANB.a1, ANB.b1, permeability=Permeability("power", 2.0))
+    tg = _targets(pw, 302.0)
+    res = slow.slow_front_trajectory(pw, 302.0, Program((Ramp(308.0, 100.0),)), targets=tg)
+    assert all(np.isfinite([res.hits[a] for a in tg]))

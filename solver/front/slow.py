@@ -158,9 +158,17 @@ def level_tables(gel: Gel, phi_minus: float, t_lo: float, t_hi: float,
     n1, n2 = _pair_near(gel, round(float(temps[0]), 2), round(lt, 3)) if sharp else (1.0, 2.0)
     par = np.array([gel.omega, gel.a0, gel.b0, gel.a1, gel.b1])
     sp, fr, ok = level_values(par, temps, lt, phi0, n1, n2, sharp)
-    if not ok:  # the continuation left the pair: start from the exact pair
-        n1, n2 = maxwell_pair(gel, float(temps[0]), lt)
-        sp, fr, ok = level_values(par, temps, lt, phi0, n1, n2, sharp)
+    if not ok:  # the continuation left the pair: each node from its own exact pair
+        ok = True
+        for i, temp in enumerate(temps):
+            try:
+                n1, n2 = maxwell_pair(gel, float(temp), lt) if sharp else (1.0, 2.0)
+            except NotApplicableError:
+                ok = False
+                break
+            s_i, f_i, ok_i = level_values(par, temps[i:i + 1], lt, phi0, n1, n2, sharp)
+            sp[i], fr[i], ok = s_i[0], f_i[0], ok and ok_i
+            phi0 = 1.0 - s_i[0]
     if not (ok and np.all(np.isfinite(sp)) and np.all(np.isfinite(fr))):
         raise SolverError("slow front model: the shell levels did not converge",
                           {"t_lo": t_lo, "t_hi": t_hi, "phi_minus": phi_minus})
