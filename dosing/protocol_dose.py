@@ -512,14 +512,19 @@ def _choice(planner: Any, req: DoseRequest, validate: bool, mode: Mode, model: s
     return heating_reduced.choose(req, pieces, validate)
 
 
-def _try_reduced(req: DoseRequest, mode: Mode, choice: heating_reduced.Choice
-                 ) -> ProtocolDoseAnswer | heating_reduced.Choice:
-    """The reduced model's answer, or (where it cannot give one: no front, a level that
-    does not converge) the choice of the full solver saying why."""
+def _reduced_or_why(planner: Any, req: DoseRequest, validate: bool, model: str
+                    ) -> tuple[ProtocolDoseAnswer | None, Mode, str]:
+    """(the reduced model's answer or None, the run mode, why the full solver answers):
+    the reduced model inside its region; where it cannot answer (no front, a level that
+    does not converge) the full solver, saying why."""
+    mode = mode_for(planner, req)
+    choice = _choice(planner, req, validate, mode, model)
+    if not choice.reduced:
+        return None, mode, choice.why
     try:
-        return reduced_dose(req, mode, choice)
+        return reduced_dose(req, mode, choice), mode, ""
     except (NotApplicableError, SolverError) as exc:
-        return heating_reduced.Choice(False, f"the reduced model could not answer ({exc})")
+        return None, mode, f"the reduced model could not answer ({exc})"
 
 
 def dose(planner: Any, req: DoseRequest, validate: bool = False, model: str = "auto"
@@ -527,14 +532,10 @@ def dose(planner: Any, req: DoseRequest, validate: bool = False, model: str = "a
     """The dose under a protocol: the reduced model inside its region (milliseconds), else
     blocking on the planner's full-solver runs (cached); ``model='full'`` always the full
     solver."""
-    mode = mode_for(planner, req)
-    choice = _choice(planner, req, validate, mode, model)
-    if choice.reduced:
-        fast = _try_reduced(req, mode, choice)
-        if isinstance(fast, ProtocolDoseAnswer):
-            return fast
-        choice = fast
-    out = protocol_dose(req, blocking_getter(planner), validate, mode, choice.why)
+    fast, mode, why = _reduced_or_why(planner, req, validate, model)
+    if fast is not None:
+        return fast
+    out = protocol_dose(req, blocking_getter(planner), validate, mode, why)
     assert not isinstance(out, Pending)
     return out
 
@@ -543,15 +544,11 @@ def answer(planner: Any, req: DoseRequest, validate: bool = False, model: str = 
            ) -> ProtocolDoseAnswer | Pending:
     """The dose under a protocol now: the reduced model inside its region, else from the
     cache, else Pending (its full-solver runs queued); ``model='full'`` as :func:`dose`."""
-    mode = mode_for(planner, req)
-    choice = _choice(planner, req, validate, mode, model)
-    if choice.reduced:
-        fast = _try_reduced(req, mode, choice)
-        if isinstance(fast, ProtocolDoseAnswer):
-            return fast
-        choice = fast
+    fast, mode, why = _reduced_or_why(planner, req, validate, model)
+    if fast is not None:
+        return fast
     return protocol_dose(req, queue_getter(planner, req.fraction, req.start_radius),
-                         validate, mode, choice.why)
+                         validate, mode, why)
 
 
 # ----------------------------------------------------------------------------- heater sweeps

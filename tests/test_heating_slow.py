@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -214,9 +215,10 @@ def test_a_reduced_model_failure_falls_back_to_the_full_solver(monkeypatch):
         raise SolverError("the shell levels did not converge", {})
 
     monkeypatch.setattr(pdose, "reduced_dose", boom)
+    monkeypatch.setattr(pdose, "_choice", lambda *a: Choice(True, "inside"))
     req = DoseRequest(**BEAD, protocol=["Heat to 308 K at 5 K/min"], dose_fraction=0.8)
-    out = pdose._try_reduced(req, pdose.Mode(), Choice(True, "inside"))
-    assert isinstance(out, Choice) and not out.reduced and "could not answer" in out.why
+    fast, _, why = pdose._reduced_or_why(SimpleNamespace(solver=None), req, False, "auto")
+    assert fast is None and "could not answer" in why
 
 
 def test_wide_heatings_of_other_gels_answer():
