@@ -611,11 +611,14 @@ class UntilStepOut(_Out):
 
 
 class ProtocolDoseResponse(_Out):
-    """HTTP 200: the time from a heating protocol's start at which the dose is out (the full
-    solver at the truth's settings; docs/heating.md)."""
+    """HTTP 200: the time from a heating protocol's start at which the dose is out (the
+    reduced model for slow heating inside its measured region, else the full solver at the
+    truth's settings; docs/heating.md)."""
 
     status: Literal["answered"] = Field("answered", description="always 'answered'")
-    model: Literal["full"] = Field(description="'full': the PDE solver answers a protocol")
+    model: Literal["full", "front-slow-sharp"] = Field(
+        description="'front-slow-sharp': the reduced model for slow heating (inside its "
+                    "region); 'full': the PDE solver")
     truth: str = Field(description="what the answer is checked against, in words")
     protocol: list[str] = Field(description="the protocol's steps as text")
     protocol_steps: list[dict[str, Any]] = Field(description="the steps, structured")
@@ -648,6 +651,7 @@ class ProtocolDoseResponse(_Out):
     curve: dict[str, list[float]] = Field(
         description="time (tau), seconds, temperature_k and released_fraction on one axis")
     note: str = Field("", description="caveats, in words")
+    model_reason: str = Field("", description="which model answered and why, in words")
 
 
 class ValidationResponse(_Out):

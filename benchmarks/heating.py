@@ -3,6 +3,14 @@
     python -m benchmarks.heating [--gel ANB|HHT|custom] [--dry-radius-um 50]
                                  [--fractions 0.1 0.3 0.5 0.8 0.9] [--rates 0.5 1 5 20 100]
                                  [--baths 1 10 30 100 300] [--mobility constant]
+    python -m benchmarks.heating --section validated [--fraction 0.8]
+
+``--section validated``: a validated ramp dose ("Heat to 308 K at 5 K/min", ANB from
+302 K, a 50 um dry bead) cold: a new process, a fresh cache; its CPU seconds (user +
+system, all threads and children) for the imports, the validated answer (the truth, its
+check on n / 2 cells and the two interfacial-length range runs, each stopped at the dose,
+and the reduced model's gap as the model-form part) and a reduced-model answer of the
+same dose, side by side.
 
 The truth's settings (moving grid, the bead's own interfacial length ell = 4 nm / dry
 radius, 400 cells, rtol 1e-5): for each heating (the jump, ramps in K/min, baths with time
@@ -73,15 +81,64 @@ def run(args: argparse.Namespace) -> None:
         print(f"{name:<18}{row}{wall:8.1f}")
 
 
+COLD = """
+import resource, sys, tempfile, time
+from pathlib import Path
+
+def cpu():
+    r, c = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime + c.ru_utime + c.ru_stime
+
+c0 = cpu()
+from concurrent.futures import ThreadPoolExecutor
+from dosing.planner import Planner
+from dosing.request import DoseRequest
+c1 = cpu()
+req = DoseRequest("ANB", 302.0, protocol=["Heat to 308 K at 5 K/min"],
+                  dose_fraction=float(sys.argv[1]), dry_radius_um=50.0)
+with Planner(cache_path=Path(tempfile.mkdtemp()) / "c.sqlite",
+             executor=ThreadPoolExecutor(1)) as p:
+    w = time.perf_counter()
+    ans = p.dose(req, validate=True)
+    wall = time.perf_counter() - w
+    c2 = cpu()
+    fast = p.dose(req)
+    c3 = cpu()
+    p.dose(req)
+    c4 = cpu()
+unc = ans.uncertainty
+print(f"validated: {ans.model}, {ans.seconds:.2f} s, error parts "
+      f"{unc['numerical']['relative']:.2g} / {unc['interfacial_length_range']['relative']:.2g}"
+      f" / {unc['model_form']['relative']:.2g}")
+print(f"reduced:   {fast.model}, {fast.seconds:.2f} s")
+print(f"cpu s: imports {c1 - c0:.2f}, validated dose {c2 - c1:.2f} (wall {wall:.2f}), "
+      f"reduced answer cold {c3 - c2:.3f}, warm {c4 - c3:.4f}")
+"""
+
+
+def validated_section(fraction: float) -> None:
+    """The cold validated ramp dose in a new process (module doc)."""
+    import subprocess
+    import sys
+
+    subprocess.run([sys.executable, "-c", COLD, str(fraction)], check=True)
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--section", default="table", choices=["table", "validated"])
+    p.add_argument("--fraction", type=float, default=0.8)
     p.add_argument("--gel", default="ANB")
     p.add_argument("--dry-radius-um", type=float, default=50.0)
     p.add_argument("--fractions", type=float, nargs="+", default=[0.1, 0.3, 0.5, 0.8, 0.9])
     p.add_argument("--rates", type=float, nargs="*", default=[0.5, 1.0, 5.0, 20.0, 100.0])
     p.add_argument("--baths", type=float, nargs="*", default=[1.0, 10.0, 30.0, 100.0, 300.0])
     p.add_argument("--mobility", default="constant", choices=["constant", "kT", "water"])
-    run(p.parse_args())
+    args = p.parse_args()
+    if args.section == "validated":
+        validated_section(args.fraction)
+    else:
+        run(args)
 
 
 if __name__ == "__main__":

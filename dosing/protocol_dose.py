@@ -30,8 +30,10 @@ from typing import Any
 import numpy as np
 
 from solver.equilibrium import nearest_stable
-from solver.errors import ParameterError, SolverError
+from solver.errors import NotApplicableError, ParameterError, SolverError
+from solver.front.slow import slow_front_trajectory
 
+from . import heating_reduced
 from .answers import Pending
 from .heating import Piece, Protocol, Until, reference_text
 from .heating_program import MOBILITY_TEXT, STAIR_KELVIN, program_spec, staircase
@@ -92,6 +94,7 @@ class ProtocolDoseAnswer:
     bead_dry_radius_um: float | None
     curve: dict[str, list[float]]
     note: str = ""
+    model_reason: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
@@ -286,11 +289,12 @@ def resolve_untils(req: DoseRequest, get: Getter, mode: Mode = Mode()
     return (prot.with_durations(durations) if durations else prot), done
 
 
-def protocol_dose(req: DoseRequest, get: Getter, ranges: bool = False, mode: Mode = Mode()
-                  ) -> ProtocolDoseAnswer | Pending:
+def protocol_dose(req: DoseRequest, get: Getter, ranges: bool = False, mode: Mode = Mode(),
+                  why: str = "") -> ProtocolDoseAnswer | Pending:
     """The dose under ``req.heating``: its until-steps resolved, then the time from the
     protocol's start at which the truth run reaches the dose radius (with its check run,
-    and with ``ranges`` the interfacial-length range runs)."""
+    and with ``ranges`` the interfacial-length range runs).  ``why``: why the full solver
+    answers (the reduced model's verdict)."""
     resolved = resolve_untils(req, get, mode)
     if isinstance(resolved, Pending):
         return resolved
@@ -304,7 +308,89 @@ def protocol_dose(req: DoseRequest, get: Getter, ranges: bool = False, mode: Mod
         return got
     time, traj, scs, trajs = got
     rep = _report(scs, trajs, req.start_radius, target)
-    return _answer(req, prot, untils, pieces, time, traj, scs, rep, tau_s, mode)
+    unc = rep.uncertainty
+    if unc is not None and mode.continuous:
+        unc = {**unc, "model_form": heating_reduced.model_form_part(
+            req, pieces, mode.mobility, target, float(rep.time or time))}
+    explain = (unc["numerical"]["text"] if unc else
+               "numerical: not measured (the check run failed)")
+    out = Outcome("full", why or "the full solver answers protocol doses", unc, rep.error,
+                  explain, rep.to_dict(), scs[0].key(), _program_text(req, scs, mode))
+    return _answer(req, prot, untils, pieces, time, traj, out, tau_s)
+
+
+@dataclass
+class Outcome:
+    """Which model answered and its error parts (the answer's model-specific fields)."""
+
+    model: str
+    why: str
+    uncertainty: dict[str, Any] | None
+    error: float | None
+    explain: str
+    validation: dict[str, Any] | None
+    key: str
+    program: str
+
+
+def _program_text(req: DoseRequest, scs: list[Scenario], mode: Mode) -> str:
+    if mode.continuous:
+        return (f"continuous T(t) inside the solver's kernels (solver.heating.Program, "
+                f"T_ref = {req.t_end:g} K), {MOBILITY_TEXT[mode.mobility]}; each run stops "
+                "at its target radius (a terminal event)")
+    return (f"ramps, baths and traces run as a staircase of holds, {STAIR_KELVIN:g} K "
+            f"per stair, each at its stair's time-mean temperature "
+            f"({len(scs[0].protocol)} steps with the tail; mobility held at T_ref: the "
+            "stand-in solver takes no continuous program)")
+
+
+def reduced_getter(req: DoseRequest) -> Getter:
+    """Runs of the reduced model (solver.front.slow) in place of truth runs."""
+    def get(scs: list[Scenario], target: float, after: float) -> list[Any]:
+        from .heating_program import solver_program
+
+        prog = solver_program(scs[0].program)
+        res = slow_front_trajectory(req.gel, req.t_start, prog, targets=(target,))
+        hit = res.hits.get(float(target), math.nan)
+        return [heating_reduced.ReducedRun(hit if math.isfinite(hit) else None, res.t,
+                                           res.radius, float(res.t[-1]), res)]
+    return get
+
+
+def reduced_dose(req: DoseRequest, mode: Mode, choice: heating_reduced.Choice
+                 ) -> ProtocolDoseAnswer:
+    """The dose under ``req.heating`` from the reduced model (its until-steps by its own
+    crossings), with its stated error as the model-form part."""
+    get = reduced_getter(req)
+    resolved = resolve_untils(req, get, mode)
+    assert not isinstance(resolved, Pending)
+    prot, untils = resolved
+    tau_s = _tau_seconds(req)
+    pieces = prot.program(tau_s)
+    target = radius_after_dose(req.start_radius, req.fraction)
+    got = _reach(req, get, pieces, target, 0.0, "dose_fraction", False, mode)
+    assert not isinstance(got, Pending)
+    time, traj, scs, _ = got
+    stated = heating_reduced.STATED_ERROR
+    unc = {
+        "numerical": {"relative": heating_reduced.NUMERICAL, "text": (
+            f"numerical: under {heating_reduced.NUMERICAL:.0e}: the compiled Dormand-Prince "
+            "integration at rtol 1e-8 moves by under 1e-6 at rtol 1e-10, the thin-shell "
+            "start and the tables by at most 2.4e-6 (tests/test_heating_slow.py)")},
+        "interfacial_length_range": {"relative": None, "text": (
+            "interfacial length: not separate: the reduced model is the sharp-interface "
+            "limit; the truth's dependence on the bead's own interfacial length is inside "
+            "the model-form part, measured at 50 um")},
+        "model_form": {"relative": stated, "text": (
+            f"model form: {stated:.0%}, the reduced model's largest measured gap to the "
+            f"truth in its region ({heating_reduced.TABLE_TEXT})")},
+    }
+    program = (f"the reduced model's T(t) (solver.heating.Program, T_ref = {req.t_end:g} K), "
+               f"{MOBILITY_TEXT[mode.mobility]}")
+    out = Outcome(heating_reduced.MODEL, choice.why, unc, stated,
+                  f"{stated:.0%}: the reduced model's largest measured gap to the truth in "
+                  "its region", None, scs[0].key(), program)
+    return _answer(req, prot, untils, pieces, time, traj, out, tau_s)
 
 
 def _report(scs: list[Scenario], trajs: list[Any], a0: float, target: float) -> Any:
@@ -339,18 +425,13 @@ def temperature_curve(pieces: list[Piece], t_start: float, times: np.ndarray) ->
 
 
 def _answer(req: DoseRequest, prot: Protocol, untils: list[UntilResult], pieces: list[Piece],
-            time: float, traj: Trajectory, scs: list[Scenario], rep: Any,
-            tau_s: float | None, mode: Mode) -> ProtocolDoseAnswer:
+            time: float, traj: Any, out: Outcome, tau_s: float | None) -> ProtocolDoseAnswer:
     dry = req.bead_dry_radius_um
     a0 = req.start_radius
     target = radius_after_dose(a0, req.fraction)
     ts = timescale(dry, req.t_end, req.constants) if dry is not None else None
     stored = req.jump.stored_volume
     vol = expelled_volume(a0, target)
-    unc = rep.uncertainty
-    err = rep.error
-    explain = (unc["numerical"]["text"] if unc else
-               "numerical: not measured (the check run failed)")
     t = np.asarray(traj.t, dtype=float)
     span = min(max(1.5 * time, sum(p.duration or 0.0 for p in pieces)), float(t[-1]))
     tc = np.union1d(np.linspace(0.0, span, CURVE_POINTS), [time])
@@ -361,32 +442,26 @@ def _answer(req: DoseRequest, prot: Protocol, untils: list[UntilResult], pieces:
              "released_fraction": released.tolist(),
              "seconds": (tc * tau_s).tolist() if tau_s is not None else []}
     t_dose = float(temperature_curve(pieces, prot.t_start, np.array([time]))[0])
-    if mode.continuous:
-        program = (f"continuous T(t) inside the solver's kernels (solver.heating.Program, "
-                   f"T_ref = {req.t_end:g} K), {MOBILITY_TEXT[mode.mobility]}; each run stops "
-                   "at its target radius (a terminal event)")
-    else:
-        program = (f"ramps, baths and traces run as a staircase of holds, {STAIR_KELVIN:g} K "
-                   f"per stair, each at its stair's time-mean temperature "
-                   f"({len(scs[0].protocol)} steps with the tail; mobility held at T_ref: the "
-                   "stand-in solver takes no continuous program)")
+    model_text = (heating_reduced.MODEL_TEXT if out.model == heating_reduced.MODEL
+                  else "the full solver")
     return ProtocolDoseAnswer(
-        model="full", truth=truth_text(req), protocol=prot.texts,
+        model=out.model, truth=truth_text(req), protocol=prot.texts,
         protocol_steps=[s.to_dict() for s in prot.steps], t_start=prot.t_start,
         reference_temperature=req.t_end, reference=reference_text(req.t_end),
         time=float(time), seconds=None if tau_s is None else float(time * tau_s),
         timescale_seconds=tau_s, timescale_formula=None if ts is None else ts.formula,
-        program=program, dose_fraction=req.fraction, start_radius=a0, final_radius=target,
-        final_radius_um=None if dry is None else target * dry, expelled_volume=vol,
-        expelled_volume_ul=None if dry is None else volume_to_ul(vol, dry),
+        program=out.program, dose_fraction=req.fraction, start_radius=a0,
+        final_radius=target, final_radius_um=None if dry is None else target * dry,
+        expelled_volume=vol, expelled_volume_ul=None if dry is None else volume_to_ul(vol, dry),
         stored_volume_ul=None if dry is None else volume_to_ul(stored, dry),
         temperature_at_dose=t_dose, until_steps=untils,
-        error_estimate=err, error_explanation=explain, uncertainty=unc,
-        validation=rep.to_dict(), scenario_key=scs[0].key(),
+        error_estimate=out.error, error_explanation=out.explain, uncertainty=out.uncertainty,
+        validation=out.validation, scenario_key=out.key,
         interfacial_length=req.settings.interfacial_length, bead_dry_radius_um=dry,
         curve=curve,
         note="the time is from the protocol's start; after the last step the bead holds at "
-             "the last temperature")
+             "the last temperature",
+        model_reason=f"{model_text}: {out.why}")
 
 
 # ----------------------------------------------------------------------------- planners
@@ -424,18 +499,56 @@ def queue_getter(planner: Any, fraction: float, start_radius: float) -> Getter:
     return get
 
 
-def dose(planner: Any, req: DoseRequest, validate: bool = False) -> ProtocolDoseAnswer:
-    """The dose under a protocol, blocking on the planner's runs (cached)."""
-    out = protocol_dose(req, blocking_getter(planner), validate, mode_for(planner, req))
+def _choice(planner: Any, req: DoseRequest, validate: bool, mode: Mode, model: str
+            ) -> heating_reduced.Choice:
+    if model not in ("auto", "full"):
+        raise ParameterError("model", model, "'auto' or 'full'")
+    if model == "full":
+        return heating_reduced.Choice(False, "the full solver was asked for")
+    if not mode.continuous:
+        return heating_reduced.Choice(False, "the planner runs a stand-in solver (the "
+                                      "reduced model answers on the real solver only)")
+    pieces = req.heating.program(_tau_seconds(req))
+    return heating_reduced.choose(req, pieces, validate)
+
+
+def _reduced_or_why(planner: Any, req: DoseRequest, validate: bool, model: str
+                    ) -> tuple[ProtocolDoseAnswer | None, Mode, str]:
+    """(the reduced model's answer or None, the run mode, why the full solver answers):
+    the reduced model inside its region; where it cannot answer (no front, a level that
+    does not converge) the full solver, saying why."""
+    mode = mode_for(planner, req)
+    choice = _choice(planner, req, validate, mode, model)
+    if not choice.reduced:
+        return None, mode, choice.why
+    try:
+        return reduced_dose(req, mode, choice), mode, ""
+    except (NotApplicableError, SolverError) as exc:
+        return None, mode, f"the reduced model could not answer ({exc})"
+
+
+def dose(planner: Any, req: DoseRequest, validate: bool = False, model: str = "auto"
+         ) -> ProtocolDoseAnswer:
+    """The dose under a protocol: the reduced model inside its region (milliseconds), else
+    blocking on the planner's full-solver runs (cached); ``model='full'`` always the full
+    solver."""
+    fast, mode, why = _reduced_or_why(planner, req, validate, model)
+    if fast is not None:
+        return fast
+    out = protocol_dose(req, blocking_getter(planner), validate, mode, why)
     assert not isinstance(out, Pending)
     return out
 
 
-def answer(planner: Any, req: DoseRequest, validate: bool = False
+def answer(planner: Any, req: DoseRequest, validate: bool = False, model: str = "auto"
            ) -> ProtocolDoseAnswer | Pending:
-    """The dose under a protocol now from the cache, else Pending (its runs queued)."""
+    """The dose under a protocol now: the reduced model inside its region, else from the
+    cache, else Pending (its full-solver runs queued); ``model='full'`` as :func:`dose`."""
+    fast, mode, why = _reduced_or_why(planner, req, validate, model)
+    if fast is not None:
+        return fast
     return protocol_dose(req, queue_getter(planner, req.fraction, req.start_radius),
-                         validate, mode_for(planner, req))
+                         validate, mode, why)
 
 
 # ----------------------------------------------------------------------------- heater sweeps
@@ -488,3 +601,74 @@ def heater_needed(rows: list[HeaterRow], within_seconds: float) -> HeaterRow | N
         return None
     return min(ok, key=lambda r: r.value) if ok[0].kind == "ramp" else max(
         ok, key=lambda r: r.value)
+
+
+# ----------------------------------------------------------------------------- schedules
+@dataclass
+class ScheduleDose:
+    """One dose of a schedule run as a protocol: its until-step, the cumulative fraction
+    released since the protocol's start when it ends, and when its heating began and ended."""
+
+    dose: int
+    step: int
+    text: str
+    released: float
+    start: float
+    end: float
+    start_seconds: float | None
+    end_seconds: float | None
+
+
+def schedule_steps(doses: list[float], t_start: float, t_end: float, rest: str,
+                   heat: str | None = None) -> list[str]:
+    """A multi-dose schedule as protocol steps: for each dose an optional heating step
+    (``heat``, a rate such as '5 K/min'; None: a jump), 'Hold at T_end until <cumulative> %
+    released', and between doses 'Rest at T_start for <rest>' (e.g. '10 min')."""
+    if not doses:
+        raise ParameterError("doses", doses, "at least one dose fraction")
+    cum = 0.0
+    steps: list[str] = []
+    for k, f in enumerate(doses):
+        try:
+            x = float(f)
+        except (TypeError, ValueError):
+            x = math.nan
+        if not (math.isfinite(x) and x > 0.0) or cum + x >= 1.0:
+            raise ParameterError(f"doses[{k}]", f, f"a fraction > 0 with the doses' sum < 1 "
+                                 f"(the doses before it release {cum:.4g})")
+        cum += x
+        if heat is not None:
+            steps.append(f"Heat to {t_end:g} K at {heat}")
+        steps.append(f"Hold at {t_end:g} K until {100.0 * cum:.10g} % released")
+        if k < len(doses) - 1:
+            steps.append(f"Rest at {t_start:g} K for {rest}")
+    return steps
+
+
+def protocol_schedule(planner: Any, doses: list[float], t_end: float, rest: str,
+                      heat: str | None = None, **fields: Any
+                      ) -> tuple[list[ScheduleDose], ProtocolDoseAnswer]:
+    """A multi-dose schedule run as one protocol (:func:`schedule_steps`) through the
+    protocol dose (every until-step resolved in order on the planner's runs, blocking and
+    cached): each dose's heating start and end, and the last dose's answer.  ``fields`` are
+    the rest of the :class:`DoseRequest` (gel, t_start, the bead size, ...)."""
+    steps = schedule_steps(doses, float(fields["t_start"]), t_end, rest, heat)
+    req = DoseRequest(protocol=steps, dose_fraction=float(np.sum([float(f) for f in doses])),
+                      **fields)
+    ans = planner.dose(req)
+    tau_s = ans.timescale_seconds
+    pieces = req.heating.with_durations(
+        {u.step: u.end - u.start for u in ans.until_steps}).program(tau_s)
+    begins, t = {}, 0.0
+    for piece in pieces:
+        begins.setdefault(piece.step, t)
+        t += piece.duration or 0.0
+    firsts = [i for i, st in enumerate(steps) if not st.startswith("Rest")
+              and (i == 0 or steps[i - 1].startswith("Rest"))]
+    rows, total = [], 0.0
+    for k, (u, f) in enumerate(zip(ans.until_steps, doses, strict=True)):
+        total += float(f)
+        t0 = begins[firsts[k]]
+        rows.append(ScheduleDose(k, u.step, u.text, total, t0, u.end,
+                                 None if tau_s is None else t0 * tau_s, u.end_seconds))
+    return rows, ans

@@ -189,18 +189,22 @@ def test_seconds_need_a_bead_size(planner):
 def test_real_solver_ramp_until_equals_dose(tmp_path):
     """The full solver (moving grid, the bead's own ell): the 30 % dose under a 5 K/min ramp
     is later than the jump's, and the until-hold ends at it to the printed digits."""
-    from dosing.protocol_dose import Mode, blocking_getter, protocol_dose
+    from dosing.protocol_dose import Mode, blocking_getter, dose, protocol_dose
 
     with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(2)) as p:
-        ramp = p.dose(_req(["Heat to 308 K at 5 K/min"], 0.3))
+        ramp = dose(p, _req(["Heat to 308 K at 5 K/min"], 0.3), model="full")
         then = p.dose(_req(["Heat to 308 K at 5 K/min", "Hold at 308 K until 30 % released",
                             "Rest at 302 K for 1 min"], 0.05))
-        jump = p.dose(_req(["Hold at 308 K"], 0.3))
+        jump = dose(p, _req(["Hold at 308 K"], 0.3), model="full")
         stairs = protocol_dose(_req(["Heat to 308 K at 5 K/min"], 0.3), blocking_getter(p),
                                mode=Mode(continuous=False))
     assert f"{then.until_steps[0].end_seconds:.4g}" == f"{ramp.seconds:.4g}"
     assert then.until_steps[0].end == ramp.time
     assert ramp.error_estimate < 0.02 and "continuous T(t)" in ramp.program
+    # the model-form part of a full-solver protocol answer: the reduced model's gap (2.0 %)
+    mf = ramp.uncertainty["model_form"]
+    assert mf["relative"] < 0.05 and "reduced model" in mf["text"]
+    assert "full solver was asked for" in ramp.model_reason
     # measured: 73.75 s against the jump's 13.81 s (issue 24: "about five times later")
     assert ramp.seconds > 4.0 * jump.seconds
     # the old path, a 0.05 K staircase of holds (mobility held at T_ref), 73.79 s: the
@@ -314,6 +318,27 @@ async def test_http_protocol_202_then_answer(tmp_path, fake):
 
 
 @pytest.mark.anyio
+async def test_http_protocol_in_the_reduced_region_answers_at_once(tmp_path):
+    """On the real solver a 5 K/min ramp's 80 % dose is the reduced model's: 200, no 202,
+    no full-solver run; a 10 % dose (outside the region) is queued (202)."""
+    from api_support import asgi
+
+    from api.http import create_app
+
+    body = {"gel": "ANB", "t_start": 302.0, "dose_fraction": 0.8, "dry_radius_um": 50.0,
+            "protocol": ["Heat to 308 K at 5 K/min"]}
+    with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1)) as p:
+        async with asgi(create_app(planner=p, warm=False)) as (_, raw):
+            r = await raw.post("/v1/dose-time", json=body)
+            assert r.status_code == 200, r.text
+            ans = r.json()
+            assert ans["model"] == "front-slow-sharp" and "region" in ans["model_reason"]
+            assert ans["seconds"] == pytest.approx(231.4, rel=0.05)  # the truth's 231.4 s
+            r = await raw.post("/v1/dose-time", json={**body, "dose_fraction": 0.1})
+            assert r.status_code == 202, r.text
+
+
+@pytest.mark.anyio
 @pytest.mark.parametrize("change, where", [
     ({"t_end": 308.0}, "t_end"),
     ({"protocol": ["Heat to 308 K at 5 K/min", "Hold at 308 K for 2 K"]}, "protocol[1].for"),
@@ -356,3 +381,36 @@ def test_heater_sweep_answers_which_heater(planner):
     with pytest.raises(ParameterError) as e:
         heater_sweep(planner, "oven", [1.0], 308.0, **fields)
     assert e.value.field == "kind"
+
+
+# ----------------------------------------------------------------------------- schedules
+def test_a_schedule_runs_as_one_protocol_with_until_steps_and_rests(planner):
+    """Two 30 % doses, a 5 K/min heating each, a 10 min rest at T_start between: one
+    protocol; each dose ends at its until-step, the second heating starts after the rest,
+    and the released fraction at each end is the cumulative dose."""
+    from dosing.protocol_dose import protocol_schedule, schedule_steps
+
+    steps = schedule_steps([0.3, 0.3], 302.0, 308.0, "10 min", "5 K/min")
+    assert steps == ["Heat to 308 K at 5 K/min", "Hold at 308 K until 30 % released",
+                     "Rest at 302 K for 10 min", "Heat to 308 K at 5 K/min",
+                     "Hold at 308 K until 60 % released"]
+    rows, ans = protocol_schedule(planner, [0.3, 0.3], 308.0, "10 min", "5 K/min", **BEAD)
+    assert [r.released for r in rows] == pytest.approx([0.3, 0.6])
+    assert rows[0].start_seconds == 0.0 and rows[0].end_seconds > 72.0
+    assert rows[1].start_seconds == pytest.approx(rows[0].end_seconds + 600.0)
+    assert rows[1].end_seconds > rows[1].start_seconds + 72.0
+    assert ans.seconds == pytest.approx(rows[1].end_seconds, rel=1e-5)  # separate runs
+    c = ans.curve
+    for r in rows:
+        k = int(np.argmin(np.abs(np.asarray(c["seconds"]) - r.end_seconds)))
+        assert c["released_fraction"][k] == pytest.approx(r.released, abs=5e-3)
+
+
+def test_schedule_doses_are_checked():
+    from dosing.protocol_dose import schedule_steps
+
+    with pytest.raises(ParameterError) as e:
+        schedule_steps([0.6, 0.5], 302.0, 308.0, "10 min")
+    assert e.value.field == "doses[1]"
+    with pytest.raises(ParameterError):
+        schedule_steps([], 302.0, 308.0, "10 min")

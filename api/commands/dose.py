@@ -296,9 +296,10 @@ def run_protocol_dose(args: argparse.Namespace, req: Any) -> int:
     """Print the dose under a heating protocol (dosing.protocol_dose)."""
     from dosing import plan_dose
 
-    print(f"running the protocol on the full solver ({req.settings.grid} grid, "
-          f"{req.settings.n} cells and {req.settings.n // 2}): seconds to minutes the first "
-          "time, then cached", file=sys.stderr, flush=True)
+    print(f"planning the protocol dose: the reduced model inside its region, else the full "
+          f"solver ({req.settings.grid} grid, {req.settings.n} cells and "
+          f"{req.settings.n // 2}): seconds to minutes the first time, then cached",
+          file=sys.stderr, flush=True)
     ans = plan_dose(req, validate=args.validate, cache_path=args.cache)
     if args.json:
         print_json(ans.to_dict())
@@ -313,6 +314,7 @@ def run_protocol_dose(args: argparse.Namespace, req: Any) -> int:
     print(wrap(ans.reference))
     if ans.timescale_formula:
         print(wrap(ans.timescale_formula))
+    print(wrap(f"model: {ans.model}, {ans.model_reason}"))
     print(wrap(f"truth: {ans.truth}"))
     print(wrap(f"program: {ans.program}"))
     print(wrap(ans.error_explanation))
