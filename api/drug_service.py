@@ -63,7 +63,8 @@ def to_drug_schedule_request(body: s.ScheduleRequest, to_gel: Any) -> DrugSchedu
 def dose_answer(planner: Any, body: s.DoseTimeRequest, to_gel: Any) -> dict[str, Any]:
     """A drug dose's answer (blocking: a drug run takes seconds; cached)."""
     req = to_drug_dose_request(body, to_gel)
-    return {"status": "answered", "drug": True, **plan_drug_dose(planner, req).to_dict()}
+    ans = plan_drug_dose(planner, req, validate=body.validate_full)
+    return {"status": "answered", "drug": True, **ans.to_dict()}
 
 
 class RunNotCached(LookupError):
@@ -92,7 +93,8 @@ def dose_now(planner: Any, body: s.DoseTimeRequest, to_gel: Any) -> dict[str, An
 
     req = to_drug_dose_request(body, to_gel)
     try:
-        ans = plan_drug_dose(planner, req, runs=CachedRuns(runs_for(planner)))
+        ans = plan_drug_dose(planner, req, runs=CachedRuns(runs_for(planner)),
+                             validate=body.validate_full)
     except RunNotCached:
         return None
     return {"status": "answered", "drug": True, **ans.to_dict()}

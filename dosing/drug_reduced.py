@@ -1,0 +1,159 @@
+"""Drug doses from the reduced drug model, where its measured error holds (issue 23).
+
+The model (``solver.front.solute``): the drug's advection, hindered diffusion, sieving and
+partition, exactly as the full solver's drug (docs/drug.md), on the step-function front
+model's bead (the sharp-interface front model of the fluid answers) instead of the full
+solver's mechanics; a few milliseconds a dose.  Its error is measured against the full
+solver's drug runs (a 50 um bead of ANB 302 -> 308 K and HHT 304 -> 308 K, D0 1e-9 to 1e-5
+cm^2/s, four hindrance laws, doses 10-90 %: ``benchmarks/drug_reduced.py --table``,
+docs/drug_reduced.md), and :data:`MEASURED` keeps the largest |error| of both gels at each
+measured (law, D0 / D_gel, dose).
+
+Where it answers (:func:`stated_error`): a dose at once after the heating starts (no wait at
+T_start), into a perfect sink, on a jump the fluid answer gives to the front model (the
+direct truth: the regularized model at the bead's ell), with a law measured here at most as
+hindering as the measured drug (r_s / xi_dry <= ``MESH_MAX``, r_s / r_f <= ``FIBER_MAX``,
+Y <= ``Y_MAX``), D0 / D_gel and the dose inside the measured range, and every corner of its
+cell (two D0, two doses, both gels, the law's row and the unhindered row) within
+``STATED_LIMIT``.  The answer states that largest corner as its model-form error.
+Elsewhere the full solver answers, as it does when asked to validate.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from typing import Any
+
+from solver.front.solute import CELLS, front_release, time_to_release
+
+STATED_LIMIT = 0.05  # the reduced model answers where its measured error is at most this
+MESH_MAX = 0.25  # the table's drug: r_s = 1 nm in the gel's 4 nm dry mesh
+FIBER_MAX = 1.0  # ... and 1 nm fibres
+Y_MAX = 1.0
+DOSES = (0.1, 0.3, 0.5, 0.7, 0.9)
+MODEL = "front-solute"
+MODEL_NAME = ("the reduced drug model (the drug's advection, hindered diffusion, sieving and "
+              "partition on the sharp-interface front model's bead; docs/drug_reduced.md)")
+# law -> (D0 / D_gel of the measured rows, largest |relative error| of the dose time over
+# ANB and HHT at each of DOSES; None: a dose not reached or not measured), written by
+# `python -m benchmarks.drug_reduced --emit` from benchmarks/drug_reduced_table.json
+MEASURED: dict[str, tuple[tuple[float, ...], tuple[tuple[float | None, ...], ...]]] = {}
+
+
+def _bracket(values: tuple[float, ...], x: float) -> tuple[int, int] | None:
+    """Indices of the two measured values around x (None outside their range)."""
+    if not values or not values[0] * (1 - 1e-9) <= x <= values[-1] * (1 + 1e-9):
+        return None
+    j = min(max(bisect.bisect_right(values, x) - 1, 0), len(values) - 1)
+    return (j, min(j + 1, len(values) - 1)) if values[j] < x else (j, j)
+
+
+def _corners(law: str, d: float, dose: float) -> float | None:
+    row = MEASURED.get(law)
+    if row is None:
+        return None
+    ds, errs = row
+    jd, jf = _bracket(ds, d), _bracket(DOSES, dose)
+    if jd is None or jf is None:
+        return None
+    out = 0.0
+    for i in set(jd):
+        for k in set(jf):
+            e = errs[i][k]
+            if e is None or not math.isfinite(e):
+                return None
+            out = max(out, e)
+    return out
+
+
+def stated_error(solute: Any, dose: float) -> float | None:
+    """The reduced model's stated error for ``solute`` (a ``solver.solute.Solute``) at
+    ``dose`` of the load, or None where it does not answer (module docstring)."""
+    h = solute.hindrance
+    d = solute.diffusivity
+    if d <= 0.0 or solute.release_volume is not None:
+        return None
+    if h.law != "none" and (h.mesh_ratio > MESH_MAX * (1 + 1e-9)
+                            or h.fiber_ratio > FIBER_MAX * (1 + 1e-9) or h.y > Y_MAX):
+        return None
+    errs = [_corners(h.law, d, dose), _corners("none", d, dose)]
+    if any(e is None for e in errs):
+        return None
+    err = max(errs)
+    return err if err <= STATED_LIMIT else None
+
+
+def applies(req: Any, settings: Any) -> float | None:
+    """The stated error if the reduced model answers drug dose ``req`` (a
+    ``DrugDoseRequest``) on the truth ``settings``, else None."""
+    from .model_choice import choose_model
+
+    if req.lead > 0.0 or not settings.direct:
+        return None
+    err = stated_error(req.solute, req.fraction)
+    if err is None:
+        return None
+    model, _ = choose_model(req.gel, req.t_start, req.t_end, req.branch)
+    return err if model == "front" else None
+
+
+def reduced_release(req: Any) -> Any:
+    """The reduced model's release (``solver.solute.ReleaseResult``) for ``req``'s jump."""
+    from .model_choice import front_run
+
+    fr = front_run(req.gel, req.t_start, req.t_end, req.branch, True)
+    return front_release(fr, req.solute)
+
+
+def reduced_answer(req: Any, settings: Any, common: dict[str, Any]) -> Any:
+    """The drug dose from the reduced model where it answers (:func:`applies`), else None.
+    ``common``: the answer fields every drug answer shares (``dosing.drug_dose``)."""
+    err = applies(req, settings)
+    if err is None:
+        return None
+    from .drug_dose import SPLIT, DrugDoseAnswer, _conc, mechanism
+    from .truth import Part, Uncertainty
+
+    rel = reduced_release(req)
+    try:
+        t = time_to_release(rel, req.fraction)
+    except ValueError:
+        return None  # not reached: the full solver says how much is
+    tau = common["timescale_seconds"]
+    squeezed = rel.squeezed_at(t)
+    a3 = float(_interp(t, rel.t, rel.radius**3))
+    fluid = (float(rel.radius[0]) ** 3 - a3) / (req.start_radius**3 - 1.0)
+    pe = rel.peclet(0.0, t)
+    how = ("ask with validate (HTTP validate_full: true, CLI --validate, Python "
+           "plan_drug_dose(..., validate=True)) for the full solver's drug run")
+    unc = Uncertainty(
+        Part(None, f"numerical: below 1 % unhindered, 4 % sieved ({CELLS} graded dry cells "
+                   "against 384: benchmarks/drug_reduced.py --convergence)"),
+        Part(None, f"interfacial length: not measured for the reduced drug model; {how}"),
+        Part(err, f"model form: {err:.1%}, the largest error of the reduced drug model "
+                  "against the full solver's drug runs (50 um ANB and HHT beads) at the "
+                  "measured D0 and doses around this one (docs/drug_reduced.md); " + how))
+    return DrugDoseAnswer(
+        model=MODEL, time=t, seconds=None if tau is None else t * tau,
+        leaked_before_heating=0.0, leaked_before_heating_ug=0.0 if common["load_ug"]
+        is not None else None, squeezed_fraction=squeezed,
+        diffused_fraction=req.fraction - squeezed,
+        mechanism=mechanism(squeezed, req.fraction - squeezed), fluid_fraction=fluid,
+        medium_concentration_ug_per_ul=_conc(req, req.fraction, a3 ** (1.0 / 3.0)),
+        mass_balance_error=rel.mass_balance_error, fluid_answer=None, scenario_key=None,
+        uncertainty=unc, peclet=pe,
+        split=SPLIT + ("" if pe is None else f" Peclet number of the heating {pe:.3g}."),
+        note=(f"{MODEL_NAME[0].upper()}{MODEL_NAME[1:]}: {CELLS} dry cells, the front "
+              f"model's mechanics (sharp-interface front condition), within {err:.1%} of "
+              f"the full solver where measured; {how}."), **common)
+
+
+def _interp(x: float, xs: Any, ys: Any) -> float:
+    import numpy as np
+
+    return float(np.interp(x, xs, ys))
+
+
+__all__ = ["MEASURED", "STATED_LIMIT", "applies", "reduced_answer", "reduced_release",
+           "stated_error"]
