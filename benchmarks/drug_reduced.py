@@ -188,11 +188,62 @@ def markdown(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+MEASURED_LAWS = ("none", "free-volume", "ogston", "amsden")
+
+
+def measured(rows: list[dict]) -> dict:
+    """``dosing.drug_reduced.MEASURED``: law -> (D0 / D_gel, largest |error| of both gels
+    per dose; None where a dose is not reached by both)."""
+    out = {}
+    for law in MEASURED_LAWS:
+        ds, errs = [], []
+        for row in rows:
+            if row["law"] != law:
+                continue
+            ds.append(solute("ANB", law, row["d0"]).diffusivity)
+            es = []
+            for i in range(len(DOSES)):
+                e = [rel_err(row[n]["reduced"][i], row[n]["full"][i]) for n in JUMPS]
+                es.append(None if any(x is None for x in e) else
+                          float(f"{max(abs(x) for x in e):.4f}"))
+            errs.append(tuple(es))
+        out[law] = (tuple(float(f"{d:.6g}") for d in ds), tuple(errs))
+    return out
+
+
+def region(rows: list[dict], limit: float = 0.05) -> str:
+    """Where the reduced model answers (dosing.drug_reduced.stated_error), per law: the
+    doses answered at each measured D0 (a cell needs all its corners within ``limit``)."""
+    import dosing.drug_reduced as dr
+
+    saved = dr.MEASURED
+    dr.MEASURED = measured(rows)
+    try:
+        lines = ["| law | D0 (cm^2/s) | " + " | ".join(f"{int(100 * f)} %" for f in DOSES)
+                 + " |", "|---|---|" + "---|" * len(DOSES)]
+        for law in MEASURED_LAWS:
+            for row in rows:
+                if row["law"] != law:
+                    continue
+                sol = solute("ANB", law, row["d0"])
+                cells = []
+                for f in DOSES:
+                    e = dr.stated_error(sol, f)
+                    cells.append("full" if e is None else f"{100 * e:.1f}")
+                lines.append(f"| {law} | {row['d0']:g} | " + " | ".join(cells) + " |")
+        return "\n".join(lines)
+    finally:
+        dr.MEASURED = saved
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--mechanics", action="store_true", help="only compute the cached runs")
     p.add_argument("--table", action="store_true", help="compute (cached) and print the table")
-    p.add_argument("--print", action="store_true", help="print the stored table")
+    p.add_argument("--emit", action="store_true",
+                   help="print dosing.drug_reduced.MEASURED from the stored table")
+    p.add_argument("--region", action="store_true",
+                   help="print where the reduced model answers and its stated error")
     args = p.parse_args()
     if args.mechanics:
         for name in JUMPS:
@@ -205,7 +256,14 @@ def main() -> None:
         RESULT.write_text(json.dumps(rows, indent=1))
     else:
         rows = json.loads(RESULT.read_text())
-    print(markdown(rows))
+    if args.emit:
+        import pprint
+
+        print("MEASURED = " + pprint.pformat(measured(rows), width=92, compact=True))
+    elif args.region:
+        print(region(rows))
+    else:
+        print(markdown(rows))
 
 
 if __name__ == "__main__":

@@ -155,3 +155,14 @@ def test_stated_error_is_none_outside_measured_ranges():
     assert stated_error(Solute(1e-6, FREE), 0.5) is None  # below the measured D0
     assert stated_error(Solute(1.0, FREE), 0.05) is None  # below the measured doses
     assert stated_error(Solute(1.0, FREE), 0.95) is None
+
+
+@pytest.mark.parametrize("fraction", [0.01, 0.1, 0.5, 0.7])
+def test_leak_time_is_cranks_root(fraction):
+    """dosing.drug.leak_time: the closed root of Crank 6.21 (fraction <= 0.5), else the
+    bisection on 6.20; either way Crank's series there gives the fraction back."""
+    from dosing.drug import leak_time
+
+    sol = Solute(2.0, FREE)
+    t = leak_time(sol, 2.29, fraction)
+    assert crank_sphere(np.array([t]), 2.0, 2.29)[0] == pytest.approx(fraction, abs=1e-12)
