@@ -61,15 +61,22 @@ def mechanics(name: str, cache: Path = CACHE):
 
 DOSES = (0.1, 0.3, 0.5, 0.7, 0.9)
 D0S = (1e-9, 3e-9, 1e-8, 3e-8, 1e-7, 3e-7, 1e-6, 3e-6, 1e-5)  # cm^2/s at 25 degC
-R_S, R_F = 1.0, 1.0  # nm: a small drug (r_s / xi_dry = 0.25) and the fibre radius
+R_S, R_F = 1.0, 1.0  # nm: a drug (r_s / xi_dry = 0.25) and the fibre radius
+R_SMALL = 0.25  # nm: a small molecule (r_s / xi_dry = 1/16)
 LAWS = {  # name -> DrugModel fields besides D0 (docs/drug.md; the mesh is the gel's 4 nm)
     "none": {"hindrance": "none"},
     "free-volume": {"hindrance": "free-volume", "solute_radius_nm": R_S},
     "ogston": {"hindrance": "ogston", "solute_radius_nm": R_S, "fiber_radius_nm": R_F},
     "amsden": {"hindrance": "amsden", "solute_radius_nm": R_S, "fiber_radius_nm": R_F},
     "free-volume, r_s(D0)": {"hindrance": "free-volume"},  # Stokes-Einstein radius
+    "free-volume, small": {"hindrance": "free-volume", "solute_radius_nm": R_SMALL},
+    "ogston, small": {"hindrance": "ogston", "solute_radius_nm": R_SMALL,
+                      "fiber_radius_nm": R_F},
+    "amsden, small": {"hindrance": "amsden", "solute_radius_nm": R_SMALL,
+                      "fiber_radius_nm": R_F},
 }
 HINDERED_D0S = (1e-9, 1e-8, 1e-7, 3e-7, 1e-6, 3e-6, 1e-5)
+SMALL_D0S = (1e-9, 1e-8, 1e-7, 1e-6, 1e-5)
 SE_D0S = (1e-6, 3e-6, 1e-5)  # below ~5e-7 cm^2/s the Stokes-Einstein solute exceeds the mesh
 REF = {"cells": 384, "per_cell": 3, "rtol": 1e-6, "hold": 200}  # the reduced model converged
 
@@ -147,7 +154,7 @@ def reduced_times(name: str, law: str, d0: float, **grid) -> list[float | None]:
 def cases():
     for law in LAWS:
         for d0 in (SE_D0S if law.endswith("r_s(D0)") else D0S if law == "none"
-                   else HINDERED_D0S):
+                   else SMALL_D0S if law.endswith("small") else HINDERED_D0S):
             yield law, d0
 
 
@@ -188,26 +195,31 @@ def markdown(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-MEASURED_LAWS = ("none", "free-volume", "ogston", "amsden")
-
-
 def measured(rows: list[dict]) -> dict:
-    """``dosing.drug_reduced.MEASURED``: law -> (D0 / D_gel, largest |error| of both gels
-    per dose; None where a dose is not reached by both)."""
-    out = {}
-    for law in MEASURED_LAWS:
-        ds, errs = [], []
+    """``dosing.drug_reduced.MEASURED``: law -> [((r_s / xi_dry, r_s / r_f), D0 / D_gel of
+    its rows, the largest |error| of both gels per dose; None where a dose is not reached
+    by both)] (the Stokes-Einstein rows, whose ratios change with D0, are left out)."""
+    out: dict[str, list] = {}
+    for variant in LAWS:
+        if variant.endswith("r_s(D0)"):
+            continue
+        ds, errs, ratios = [], [], None
         for row in rows:
-            if row["law"] != law:
+            if row["law"] != variant:
                 continue
-            ds.append(solute("ANB", law, row["d0"]).diffusivity)
+            sol = solute("ANB", variant, row["d0"])
+            ratios = (float(f"{sol.hindrance.mesh_ratio:.6g}"),
+                      float(f"{sol.hindrance.fiber_ratio:.6g}"))
+            ds.append(float(f"{sol.diffusivity:.6g}"))
             es = []
             for i in range(len(DOSES)):
                 e = [rel_err(row[n]["reduced"][i], row[n]["full"][i]) for n in JUMPS]
                 es.append(None if any(x is None for x in e) else
                           float(f"{max(abs(x) for x in e):.4f}"))
             errs.append(tuple(es))
-        out[law] = (tuple(float(f"{d:.6g}") for d in ds), tuple(errs))
+        if ds:
+            law = LAWS[variant]["hindrance"]
+            out.setdefault(law, []).append((ratios, tuple(ds), tuple(errs)))
     return out
 
 
@@ -221,7 +233,7 @@ def region(rows: list[dict], limit: float = 0.05) -> str:
     try:
         lines = ["| law | D0 (cm^2/s) | " + " | ".join(f"{int(100 * f)} %" for f in DOSES)
                  + " |", "|---|---|" + "---|" * len(DOSES)]
-        for law in MEASURED_LAWS:
+        for law in LAWS:
             for row in rows:
                 if row["law"] != law:
                     continue

@@ -100,9 +100,9 @@ def front_geometry(fr: FrontResult, *, cells: int = CELLS, wait: float = 0.0,
                    hold: int = HOLD_SAMPLES, grading: float = GRADING) -> FrontGeometry:
     """The bead of front trajectory ``fr`` (from the initial equilibrium, to the centre:
     ``solver.front.front_trajectory`` / ``sharp_front_trajectory``) on ``cells`` dry
-    cells: ``wait`` (tau) at T_start, the heating from t = wait, the collapsed bead held
-    to wait + ``horizon``.  Samples: every node crossing of the front, ``per_cell`` between
-    two, geometric in time before and after."""
+    cells: ``wait`` (tau) at T_start, the heating from t = wait to wait + ``horizon``
+    (the collapsed bead held once the front has reached the centre).  Samples: every node
+    crossing of the front, ``per_cell`` between two, geometric in time before and after."""
     curve = fr.curve
     if fr.diagnostics.get("stop") != "centre":
         raise ParameterError("front", fr.diagnostics.get("stop"), "a trajectory run to the "
@@ -121,12 +121,17 @@ def front_geometry(fr: FrontResult, *, cells: int = CELLS, wait: float = 0.0,
     th[0], th[-1] = curve.t_start, curve.t_centre
     keep = np.concatenate(([True], np.diff(th) > 0.0))
     th, xs = th[keep], xs[keep]
-    if not horizon > th[-1] - th[0]:
-        raise ParameterError("horizon", horizon, f"> {th[-1] - th[0]:.6g} tau (the front "
-                             "model's time to the centre)")
-    # after the centre: the collapsed bead, held
-    first = max(th[-1] - th[-2], 1e-6 * horizon) if th.size > 1 else 1e-6 * horizon
-    tail = _hold_times(th[-1], horizon - (th[-1] - th[0]), hold, first)
+    if not horizon > 0.0:
+        raise ParameterError("horizon", horizon, "> 0 (tau)")
+    if horizon < th[-1] - th[0]:  # stop on the way: the front at t0 + horizon last
+        keep = th < th[0] + horizon
+        t_end = th[0] + horizon
+        th = np.append(th[keep], t_end)
+        xs = np.append(xs[keep], float(curve.front_at(np.array([t_end]))[0]))
+        tail = np.zeros(0)
+    else:  # after the centre: the collapsed bead, held
+        first = max(th[-1] - th[-2], 1e-6 * horizon) if th.size > 1 else 1e-6 * horizon
+        tail = _hold_times(th[-1], horizon - (th[-1] - th[0]), hold, first)
     t = np.concatenate((th - th[0], tail - th[0]))
     x = np.concatenate((xs, np.zeros(tail.size)))
     if wait > 0.0:
@@ -145,7 +150,7 @@ def front_release(fr: FrontResult, solute: Solute, *, cells: int = CELLS, wait: 
                   hold: int = HOLD_SAMPLES, grading: float = GRADING) -> ReleaseResult:
     """The drug released from the front model's bead (module docstring): a
     ``solver.solute.ReleaseResult`` with its D0 = 0 twin (``squeezed_fraction``)."""
-    for name, value in (("wait", wait), ("horizon", horizon)):
+    for name, value in (("wait", wait), ("horizon", horizon)):  # horizon > 0: geometry
         if isinstance(value, bool) or not (isinstance(value, (int, float))
                                            and math.isfinite(value) and value >= 0.0):
             raise ParameterError(name, value, "a finite number >= 0 (tau)")
