@@ -210,7 +210,7 @@ def measured(rows: list[dict]) -> dict:
             sol = solute("ANB", variant, row["d0"])
             ratios = (float(f"{sol.hindrance.mesh_ratio:.6g}"),
                       float(f"{sol.hindrance.fiber_ratio:.6g}"))
-            ds.append(float(f"{sol.diffusivity:.6g}"))
+            ds.append(float(f"{sol.diffusivity:.12g}"))
             es = []
             for i in range(len(DOSES)):
                 e = [rel_err(row[n]["reduced"][i], row[n]["full"][i]) for n in JUMPS]
@@ -271,7 +271,9 @@ def main() -> None:
     if args.emit:
         import pprint
 
-        print("MEASURED = " + pprint.pformat(measured(rows), width=92, compact=True))
+        text = pprint.pformat(measured(rows), width=94, compact=True)
+        print("MEASURED: dict[str, list[Row]] = (\n"
+              + "\n".join("    " + line for line in text.splitlines()) + "\n)")
     elif args.region:
         print(region(rows))
     else:
