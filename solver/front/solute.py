@@ -45,14 +45,15 @@ from ..solute.result import ReleaseResult
 from ..solute.transport import Solute, release_on_nodes
 from .result import FrontResult
 
-# the grid and tolerances (benchmarks/drug_reduced.py --convergence, against 384 cells,
-# 3 samples per cell, rtol 1e-6: dose times within 1 % unhindered, 4 % sieved, at 3-6 ms)
+# the grid and tolerances (docs/drug_reduced.md sec. 3, against 384 cells, 3 samples per
+# cell, rtol 1e-6: dose times within 1 % unhindered, 4 % sieved; rtol 3e-3 moves them by
+# 1e-4 against 1e-3, the grid's error being 10-40 times that)
 CELLS = 48  # dry cells
 GRADING = 2.0  # rho_k = 1 - (1 - k / CELLS)^2: finer at the edge
 PER_CELL = 1  # samples per node the front crosses (the node crossings themselves)
 HOLD_SAMPLES = 48  # samples of the collapsed (or waiting) bead, geometric in time
 HORIZON = 32.0  # tau after the heating starts: the longest a drug dose may take
-RTOL = 1e-3
+RTOL = 3e-3
 
 
 @dataclass(frozen=True)
