@@ -179,7 +179,19 @@ RESULT = Path(__file__).resolve().parent / "drug_reduced_table.json"
 
 
 def fmt(e: float | None) -> str:
-    return "n/a" if e is None else f"{100 * e:+.1f}"
+    """A relative error in % (n/a: a dose one of the two does not reach)."""
+    if e is None:
+        return "n/a"
+    return f"{100 * e:+.1f}" if abs(e) < 10.0 else (">+1000" if e > 0 else "<-1000")
+
+
+def label(variant: str) -> str:
+    """The table's name of a drug: its law and radius."""
+    law = LAWS[variant]["hindrance"]
+    if variant.endswith("r_s(D0)"):
+        return f"{law}, r_s(D0)"
+    r = LAWS[variant].get("solute_radius_nm")
+    return law if r is None else f"{law}, r_s {r:g} nm"
 
 
 def markdown(rows: list[dict]) -> str:
@@ -191,7 +203,7 @@ def markdown(rows: list[dict]) -> str:
         for i in range(len(DOSES)):
             cells.append(" / ".join(fmt(rel_err(row[n]["reduced"][i], row[n]["full"][i]))
                                     for n in JUMPS))
-        lines.append(f"| {row['law']} | {row['d0']:g} | " + " | ".join(cells) + " |")
+        lines.append(f"| {label(row['law'])} | {row['d0']:g} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
@@ -242,7 +254,9 @@ def region(rows: list[dict], limit: float = 0.05) -> str:
                 for f in DOSES:
                     e = dr.stated_error(sol, f)
                     cells.append("full" if e is None else f"{100 * e:.1f}")
-                lines.append(f"| {law} | {row['d0']:g} | " + " | ".join(cells) + " |")
+                if any(c != "full" for c in cells):
+                    lines.append(f"| {label(law)} | {row['d0']:g} | " + " | ".join(cells)
+                                 + " |")
         return "\n".join(lines)
     finally:
         dr.MEASURED = saved

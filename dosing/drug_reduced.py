@@ -12,10 +12,10 @@ measured (law, D0 / D_gel, dose).
 Where it answers (:func:`applies`, :func:`stated_error`): a dose at once after the heating
 starts (no wait at T_start), into a perfect sink, from a bead of 25-100 um dry radius
 (``BEAD_UM``) on a jump the fluid answer gives to the front model (the direct truth: the
-regularized model at the bead's own ell), with a law measured here for a drug
-at least as hindered (r_s / xi_dry and r_s / r_f no smaller, Y <= ``Y_MAX``), D0 / D_gel and
-the dose inside the measured range, and every corner of its cell (two D0, two doses, both
-gels, that drug's row and the unhindered row) within ``STATED_LIMIT``.  The answer states
+regularized model at the bead's own ell), with a law measured here, Y <= ``Y_MAX``,
+D0 / D_gel, the dose and the drug's size (r_s / xi_dry, r_s / r_f) inside the measured
+ranges, and every corner of its cell (the measured D0, doses and sizes on either side, both
+gels; the unhindered drug standing for size 0) within ``STATED_LIMIT``.  The answer states
 that largest corner as its model-form error.  Elsewhere the full solver answers, as it
 does when asked to validate.
 """
@@ -138,29 +138,39 @@ def _corners(row: Row, d: float, dose: float) -> float | None:
     return out
 
 
+def _near(a: float, b: float) -> bool:
+    return abs(a - b) <= 1e-9 * max(abs(a), abs(b), 1e-300)
+
+
 def stated_error(solute: Any, dose: float) -> float | None:
     """The reduced model's stated error for ``solute`` (a ``solver.solute.Solute``) at
     ``dose`` of the load, or None where it does not answer (module docstring): the
-    measured drug of the same law that is least hindering among those at least as
-    hindering as this one (r_s / xi_dry and r_s / r_f no smaller), and the unhindered
-    drug, both within STATED_LIMIT at every corner of the cell around (D0 / D_gel, dose)."""
+    largest error at the corners of its measured cell, in D0 / D_gel, in the dose and in
+    the drug's size: the measured drugs of its law just above and just below its
+    r_s / xi_dry and r_s / r_f (below the smallest measured, the unhindered drug)."""
     h = solute.hindrance
     d = solute.diffusivity
-    if d <= 0.0 or solute.release_volume is not None:
+    if d <= 0.0 or solute.release_volume is not None or not MEASURED.get("none"):
         return None
-    none = MEASURED.get("none")
-    if not none:
-        return None
-    errs = [_corners(none[0], d, dose)]
+    rows = [MEASURED["none"][0]]
     if h.law != "none":
         if h.law == "free-volume" and h.y > Y_MAX:
             return None
         mesh = h.mesh_ratio if (h.convective or h.law != "ogston") else 0.0
-        rows = sorted((r for r in MEASURED.get(h.law, ()) if r[0][0] >= mesh * (1 - 1e-9)
-                       and r[0][1] >= h.fiber_ratio * (1 - 1e-9)), key=lambda r: sum(r[0]))
-        if not rows:
+        fiber = h.fiber_ratio
+        own = MEASURED.get(h.law, [])
+        above = [r for r in own if r[0][0] >= mesh * (1 - 1e-9)
+                 and r[0][1] >= fiber * (1 - 1e-9)]
+        if not above:
             return None
-        errs.append(_corners(rows[0], d, dose))
+        up = min(above, key=lambda r: sum(r[0]))
+        below = [r for r in own if r[0][0] <= mesh * (1 + 1e-9)
+                 and r[0][1] <= fiber * (1 + 1e-9)]
+        if _near(up[0][0], mesh) and _near(up[0][1], fiber):
+            rows = [up]
+        else:
+            rows = [up, max(below, key=lambda r: sum(r[0])) if below else rows[0]]
+    errs = [_corners(r, d, dose) for r in rows]
     if any(e is None for e in errs):
         return None
     err = max(errs)

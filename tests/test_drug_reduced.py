@@ -177,3 +177,17 @@ def test_leak_time_is_cranks_root(fraction):
     sol = Solute(2.0, FREE)
     t = leak_time(sol, 2.29, fraction)
     assert crank_sphere(np.array([t]), 2.0, 2.29)[0] == pytest.approx(fraction, abs=1e-12)
+
+
+@needs_table
+def test_a_drug_between_two_measured_sizes_needs_both():
+    """Ogston at D0 = 1e-8 cm^2/s, 90 %: the 1 nm drug is within the stated error, the
+    0.25 nm one is not (the table), so a 0.5 nm drug between them is not answered."""
+    def err(r_s):
+        req = _req(diffusivity_cm2_s=1e-8, hindrance="ogston", solute_radius_nm=r_s,
+                   fiber_radius_nm=1.0, dose_fraction=0.9)
+        return stated_error(req.solute, req.fraction)
+
+    assert err(1.0) is not None and err(1.0) <= STATED_LIMIT
+    assert err(0.25) is None
+    assert err(0.5) is None
