@@ -1,12 +1,17 @@
 """The reduced drug model against the full solver (issue 23): the error table.
 
-Run:  nice -n 10 .venv/bin/python -m benchmarks.drug_reduced [--table] [--speed]
+Run:  nice -n 10 .venv/bin/python -m benchmarks.drug_reduced
+          (the stored error table; --table recomputes it, --region: where it answers,
+           --emit: dosing.drug_reduced.MEASURED, --convergence: its own numerical error)
 
 Full-solver reference: the planner's drug run of a 50 um bead (``dosing.drug``: the mechanics
-on the truth's settings, the moving grid at the bead's own ell, N = 400, rtol 1e-5, 2000
-outputs per tau, then ``solver.solute.release`` on its cells).  The mechanics do not depend
-on the drug, so one mechanical run per gel serves every drug: it is cached on disk in
-``benchmarks/.drug_reduced/`` (``--cache DIR``), and every solute is run on it.
+on the truth's settings, the moving grid at the bead's own ell, N = 400, rtol 1e-5, its
+heating cut at ``CUTS`` so that every decade of time from 1e-5 tau has 200 outputs, then
+the solute on its 400 resampled cells, ``solver.solute.release_on_nodes``), read by the
+same cubic as the reduced model.  The mechanics do not depend on the drug, so one
+mechanical run per gel serves every drug: it and every drug's dose times are cached on disk
+in ``benchmarks/.drug_reduced/`` (not committed); the table is kept in
+``benchmarks/drug_reduced_table.json``.
 """
 
 from __future__ import annotations
@@ -176,6 +181,35 @@ def rel_err(a, b) -> float | None:
 
 
 RESULT = Path(__file__).resolve().parent / "drug_reduced_table.json"
+CONVERGENCE = {"no hindrance, D0 = 1 D_gel": (1.0, {"law": "none", "convective": False}),
+               "no hindrance, D0 = 30 D_gel": (30.0, {"law": "none", "convective": False}),
+               "Ogston r_s/r_f = 1, sieved r_s/xi_dry = 0.3, D0 = 3 D_gel":
+                   (3.0, {"law": "ogston", "fiber": 1.0, "mesh": 0.3})}
+
+
+def convergence() -> None:
+    """``--convergence``: the reduced model's own error (its defaults against 384 cells,
+    three samples per node crossing, rtol 1e-6) and its CPU time per release."""
+    from dosing.model_choice import front_run
+    from solver.front.solute import front_release
+    from solver.solute import Hindrance, Solute
+
+    print("reduced model: max relative error of the 10-90 % dose times, defaults against "
+          f"{REF}; CPU ms per release (median of 5)")
+    for name in JUMPS:
+        gel, t0, t1 = JUMPS[name]
+        fr = front_run(fluid_request(name).gel, t0, t1, "swollen", True)
+        for label_, (d, h) in CONVERGENCE.items():
+            sol = Solute(d, Hindrance(**h))
+            ref = np.array(dose_times(front_release(fr, sol, **REF)), dtype=float)
+            got = np.array(dose_times(front_release(fr, sol)), dtype=float)
+            cpu = []
+            for _ in range(5):
+                c = time.process_time()
+                front_release(fr, sol)
+                cpu.append(time.process_time() - c)
+            print(f"  {name} {label_:<58} {np.nanmax(np.abs(got / ref - 1)):.2%}  "
+                  f"{1e3 * float(np.median(cpu)):.1f} ms")
 
 
 def fmt(e: float | None) -> str:
@@ -266,6 +300,8 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--mechanics", action="store_true", help="only compute the cached runs")
     p.add_argument("--table", action="store_true", help="compute (cached) and print the table")
+    p.add_argument("--convergence", action="store_true",
+                   help="the reduced model's own numerical error and cost")
     p.add_argument("--emit", action="store_true",
                    help="print dosing.drug_reduced.MEASURED from the stored table")
     p.add_argument("--region", action="store_true",
@@ -276,6 +312,9 @@ def main() -> None:
             w = time.process_time()
             res = mechanics(name)
             print(name, res.t.size, res.t[-1], f"{time.process_time() - w:.1f} s", flush=True)
+        return
+    if args.convergence:
+        convergence()
         return
     if args.table:
         rows = table_rows()

@@ -138,6 +138,7 @@ def test_reduced_model_answers_where_measured():
     err = ans.uncertainty.model_form.relative
     assert err is not None and 0.0 <= err <= STATED_LIMIT
     assert "validate" in ans.uncertainty.model_form.text
+    assert ans.uncertainty.numerical.relative == pytest.approx(0.01)  # unsieved (sec. 3)
     assert "reduced drug model" in ans.note
     assert ans.interfacial_length == pytest.approx(8e-5)
     assert ans.mass_balance_error < 1e-10
