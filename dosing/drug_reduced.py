@@ -38,6 +38,7 @@ STAGE_CENTRE = 2.0  # the next run's end, over the front's time to the centre
 # the reduced model's own error (unsieved, sieved drugs): 48 cells against 384, the largest
 # over ANB and HHT (docs/drug_reduced.md sec. 3)
 NUMERICAL = (0.01, 0.043)
+TWIN_RTOL = 1e-2  # the squeezed split only (not the dose time): a coarser twin
 SIEVED = 0.1  # r_s / xi_dry above which the first run is skipped (a sieved drug lags the fluid)
 DOSES = (0.1, 0.3, 0.5, 0.7, 0.9)
 MODEL = "front-solute"
@@ -199,28 +200,38 @@ def applies(req: Any, settings: Any) -> float | None:
     return err if model == "front" else None
 
 
-def reduced_release(req: Any) -> tuple[Any, float]:
-    """The reduced model's release (``solver.solute.ReleaseResult``) for ``req``'s jump and
-    the dose's time on it, run in stages that stop early: to a quarter past the fluid's
-    time for the same fraction (where a drug the shell hardly sieves has its dose:
-    diffusion adds to what the fluid carries out; skipped for r_s / xi_dry > ``SIEVED``),
-    then to twice the front's time to the centre, then to the horizon; ValueError if the
-    dose is never reached."""
+def reduced_release(req: Any) -> tuple[Any, float, float]:
+    """The reduced model's release (``solver.solute.ReleaseResult``) for ``req``'s jump,
+    the dose's time on it and the squeezed part by then (the D0 = 0 twin's release, run
+    only to that time where sieving makes it differ from the expelled fluid).  Run in
+    stages that stop early: to a quarter past the fluid's time for the same fraction
+    (where a drug the shell hardly sieves has its dose: diffusion adds to what the fluid
+    carries out; skipped for r_s / xi_dry > ``SIEVED``), then to twice the front's time to
+    the centre, then to the horizon; ValueError if the dose is never reached."""
+    from solver.solute import Solute
+
     from .model_choice import front_run
 
     fr = front_run(req.gel, req.t_start, req.t_end, req.branch, True)
-    h = req.solute.hindrance
+    sol = req.solute
+    h = sol.hindrance
+    sieved = h.convective and h.mesh_ratio > 0.0
     first = FIRST_REACH * float(fr.time_to_fraction(req.fraction))
     stages = [first, max(STAGE_CENTRE * fr.curve.t_centre, first), HORIZON]
-    if h.convective and h.mesh_ratio > SIEVED:  # retained behind the fluid: skip the first
+    if sieved and h.mesh_ratio > SIEVED:  # retained behind the fluid: skip the first
         stages.pop(0)
     for horizon in stages:
-        rel = front_release(fr, req.solute, horizon=horizon)
+        rel = front_release(fr, sol, horizon=horizon, twin="none" if sieved else "exact")
         try:
-            return rel, time_to_release(rel, req.fraction)
+            t = time_to_release(rel, req.fraction)
         except ValueError:
             if horizon == HORIZON:
                 raise
+            continue
+        if not sieved:
+            return rel, t, rel.squeezed_at(t)
+        twin = front_release(fr, Solute(0.0, h, sol.partition), horizon=t, rtol=TWIN_RTOL)
+        return rel, t, float(twin.released_fraction[-1])
     raise AssertionError("unreachable")
 
 
@@ -234,14 +245,13 @@ def reduced_answer(req: Any, settings: Any, common: dict[str, Any]) -> Any:
     from .truth import Part, Uncertainty
 
     try:
-        rel, t = reduced_release(req)
+        rel, t, squeezed = reduced_release(req)
     except ValueError:
         return None  # not reached: the full solver says how much is
     tau = common["timescale_seconds"]
     h = req.solute.hindrance
     sieved = h.convective and h.mesh_ratio > 0.0
     num = NUMERICAL[1] if sieved else NUMERICAL[0]
-    squeezed = rel.squeezed_at(t)
     a3 = float(_interp(t, rel.t, rel.radius**3))
     fluid = (float(rel.radius[0]) ** 3 - a3) / (req.start_radius**3 - 1.0)
     pe = rel.peclet(0.0, t)

@@ -148,9 +148,11 @@ def front_geometry(fr: FrontResult, *, cells: int = CELLS, wait: float = 0.0,
 
 def front_release(fr: FrontResult, solute: Solute, *, cells: int = CELLS, wait: float = 0.0,
                   horizon: float = HORIZON, rtol: float = RTOL, per_cell: int = PER_CELL,
-                  hold: int = HOLD_SAMPLES, grading: float = GRADING) -> ReleaseResult:
+                  hold: int = HOLD_SAMPLES, grading: float = GRADING,
+                  twin: str = "exact") -> ReleaseResult:
     """The drug released from the front model's bead (module docstring): a
-    ``solver.solute.ReleaseResult`` with its D0 = 0 twin (``squeezed_fraction``)."""
+    ``solver.solute.ReleaseResult`` with its D0 = 0 twin (``squeezed_fraction``; ``twin``
+    as in ``release_on_nodes``: by default the expelled fraction where exact)."""
     for name, value in (("wait", wait), ("horizon", horizon)):  # horizon > 0: geometry
         if isinstance(value, bool) or not (isinstance(value, (int, float))
                                            and math.isfinite(value) and value >= 0.0):
@@ -158,7 +160,7 @@ def front_release(fr: FrontResult, solute: Solute, *, cells: int = CELLS, wait: 
     g = front_geometry(fr, cells=cells, wait=float(wait), horizon=float(horizon),
                        per_cell=per_cell, hold=hold, grading=grading)
     rel = release_on_nodes(g.t, g.s3, solute, radius=g.radius, dry=g.dry, rtol=rtol,
-                           profiles=2, twin=False)
+                           profiles=2, twin=twin)
     rel.diagnostics.update(model="front-solute", front_model=fr.model, cells=int(cells))
     return rel
 

@@ -165,18 +165,21 @@ def release_on_nodes(ts: np.ndarray, s3: np.ndarray, solute: Solute, *,
                      radius: np.ndarray | None = None, temperature: np.ndarray | None = None,
                      dry: np.ndarray | None = None, rtol: float = DEFAULT_RTOL,
                      profiles: int = 51, max_steps: int = MAX_STEPS,
-                     twin: bool = True) -> ReleaseResult:
+                     twin: str = "run") -> ReleaseResult:
     """:func:`release` on given mechanics: node volumes ``s3`` (len(ts), n + 1; r_k^3 at
     the material nodes, s3[:, 0] = 0) sampled at ``ts``, on dry cells ending at rho_k^3 =
     ``dry`` (n + 1 values from 0 to 1; default uniform in rho, rho_k = k / n).  Any
     mechanics that gives r(rho, t) serves: a full-solver run (:func:`release`) or the
-    front model's (``solver.front.solute``).  ``twin=False`` skips the D0 = 0 twin where
-    its release is the expelled fraction exactly (no sieving, a perfect sink: a uniform
-    pore concentration stays uniform under the fluid's motion alone)."""
+    front model's (``solver.front.solute``).  ``twin``: "run" the D0 = 0 twin (default);
+    "exact": take the expelled fraction where that is its release exactly (no sieving, a
+    perfect sink: a uniform pore concentration stays uniform under the fluid's motion
+    alone), else run it; "none": no twin (``squeezed_fraction`` empty)."""
     if not isinstance(solute, Solute):
         raise ParameterError("solute", solute, "a Solute")
     if not (isinstance(rtol, (int, float)) and 1e-12 <= rtol <= 1e-2):
         raise ParameterError("rtol", rtol, "1e-12 <= rtol <= 1e-2")
+    if twin not in ("run", "exact", "none"):
+        raise ParameterError("twin", twin, "'run', 'exact' or 'none'")
     started = time.perf_counter()
     ts = np.ascontiguousarray(ts, dtype=float)
     s3 = np.ascontiguousarray(s3, dtype=float)
@@ -216,7 +219,9 @@ def release_on_nodes(ts: np.ndarray, s3: np.ndarray, solute: Solute, *,
     balance = float(np.max(np.abs(gel + rel - 1.0)))
     exact_twin = not (solute.hindrance.convective and solute.hindrance.mesh_ratio > 0.0) \
         and vol is None
-    if solute.diffusivity > 0.0 and not twin and exact_twin:
+    if solute.diffusivity > 0.0 and twin == "none":
+        squeezed = np.zeros(0)
+    elif solute.diffusivity > 0.0 and twin == "exact" and exact_twin:
         squeezed = np.maximum((a3[0] - a3) / w0, 0.0)
     elif solute.diffusivity > 0.0:  # the D0 = 0 twin: the release of the fluid's motion alone
         squeezed, twin_gel = np.zeros(ts.size), np.zeros(ts.size)
