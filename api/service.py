@@ -338,7 +338,8 @@ def _drug_answer(ans: Any) -> dict[str, Any]:
 
 def _drug_dose_job(planner: Planner, body: s.DoseTimeRequest) -> dict[str, Any]:
     """A stored drug-dose job's run: the answer, computing its drug runs (blocking)."""
-    return _drug_answer(plan_drug_dose(planner, to_drug_dose_request(body)))
+    return _drug_answer(plan_drug_dose(planner, to_drug_dose_request(body),
+                                       validate=body.validate_full))
 
 
 def dose_time(planner: Planner, body: s.DoseTimeRequest,
@@ -354,7 +355,7 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest,
     if body.drug is not None and body.protocol is None:
         if state is None:
             return _drug_dose_job(planner, body)
-        now = drug_dose_now(planner, to_drug_dose_request(body))
+        now = drug_dose_now(planner, to_drug_dose_request(body), validate=body.validate_full)
         if now is not None:
             return _drug_answer(now)
         return Accepted(stored_jobs.submit(state, "drug-dose", body), DRUG_PENDING_NOTE)

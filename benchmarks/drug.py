@@ -2,6 +2,8 @@
 
 Run:  .venv/bin/python benchmarks/drug.py [--repeats 3] [--quick]
       .venv/bin/python benchmarks/drug.py --truth   (one truth: drug vs fluid answers)
+      .venv/bin/python -m benchmarks.drug --section reduced [--repeats 20]
+                     (issue 23: the reduced drug model's answers, CPU ms per answer)
 
 For each case (ANB 302->308 K and HHT 304->308 K for t = 0.3, and ANB heat 0.05 / rest 0.5 /
 heat 0.1; Lagrangian N = 400, ell = 0.01, rtol 1e-5) and drug (D0 = 0; the protein of the
@@ -101,14 +103,63 @@ def one_truth() -> None:
           f"{w_drug:.1f} s): gap {abs(drug.time / truth - 1):.3%}")
 
 
+REDUCED_CASES = (("ANB", 302.0, {"diffusivity_cm2_s": 1e-7, "hindrance": "none"}, 0.5),
+                 ("ANB", 302.0, {"diffusivity_cm2_s": 1e-7, "hindrance": "ogston",
+                                 "solute_radius_nm": 1.0, "fiber_radius_nm": 1.0}, 0.7),
+                 ("HHT", 304.0, {"diffusivity_cm2_s": 1e-7, "hindrance": "amsden",
+                                 "solute_radius_nm": 1.0, "fiber_radius_nm": 1.0}, 0.5),
+                 ("HHT", 304.0, {"diffusivity_cm2_s": 1e-8, "hindrance": "free-volume",
+                                 "solute_radius_nm": 0.25}, 0.5),
+                 ("HHT", 304.0, {"diffusivity_cm2_s": 1e-5, "hindrance": "none"}, 0.9))
+
+
+def reduced_section(repeats: int) -> None:
+    """``--section reduced``: CPU ms of a drug dose answered by the reduced drug model
+    (``plan_drug_dose`` without validate; a 50 um bead), the first call of a jump (its
+    front trajectory computed, then memoised) and warm (median of ``repeats``), with the
+    model, its stated error and the dose time; the target is under 10 ms."""
+    from dosing.drug import DrugModel, drug_settings
+    from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
+    from dosing.drug_reduced import applies
+
+    print(f"reduced drug model: CPU ms per answer (plan_drug_dose; warm: median of {repeats})")
+    print(f"  {'case':<58} {'model':<13} {'first':>7} {'warm':>7} {'error':>6} {'time':>10}")
+    for gel, t0, drug, dose in REDUCED_CASES:
+        req = DrugDoseRequest(gel, t0, 308.0, DrugModel(**drug), dose_fraction=dose,
+                              dry_radius_um=50.0)
+        if applies(req, drug_settings(req.settings)) is None:
+            print(f"  {gel} {dose:.0%} {drug}: outside the reduced model's region (full)")
+            continue
+        c = time.process_time()
+        ans = plan_drug_dose(None, req)
+        first = time.process_time() - c
+        warm = []
+        for _ in range(repeats):
+            c = time.process_time()
+            ans = plan_drug_dose(None, req)
+            warm.append(time.process_time() - c)
+        err = ans.uncertainty.model_form.relative
+        name = f"{gel} {t0:g}->308 K, {dose:.0%}, " + ", ".join(
+            f"{k.replace('_cm2_s', '').replace('_nm', '')}={v:g}" if isinstance(v, float)
+            else f"{v}" for k, v in drug.items())
+        print(f"  {name:<58} {ans.model:<13} {1e3 * first:>7.2f} "
+              f"{1e3 * float(np.median(warm)):>7.2f} {err:>6.1%} {ans.time:>10.6g}")
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--quick", action="store_true", help="the first case only")
     p.add_argument("--truth", action="store_true", help="drug vs fluid answer of one bead")
+    p.add_argument("--section", choices=("cost", "truth", "reduced"), default="cost",
+                   help="cost: the drug's cost and accuracy (default); truth: as --truth; "
+                        "reduced: the reduced drug model's answers (issue 23)")
     args = p.parse_args()
-    if args.truth:
+    if args.truth or args.section == "truth":
         one_truth()
+        return
+    if args.section == "reduced":
+        reduced_section(max(args.repeats, 1))
         return
     print(f"Lagrangian N = {N}, ell = {ELL}, rtol {RTOL}; times in s (warm, median of "
           f"{args.repeats})")

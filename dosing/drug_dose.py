@@ -5,9 +5,10 @@ T_start for ``wait`` before heating (it leaks by diffusion meanwhile), then is h
 T_end until the drug released during the heating reaches the dose.  Without diffusion
 (D0 = 0) a single heating of a uniformly loaded bead releases drug in proportion to
 fluid, exactly (every expelled parcel carries the loaded concentration), so the planner's
-fluid answer is the drug answer (the reduced model, milliseconds).  With diffusion the full
-solver answers (a drug run, cached): no reduced model of hindered diffusion through the
-front model's shell is offered.
+fluid answer is the drug answer (the reduced model, milliseconds).  With diffusion the
+reduced drug model answers where its measured error holds (``dosing.drug_reduced``:
+the drug on the front model's bead, milliseconds), else, or when asked to ``validate``,
+the full solver (a drug run, cached).
 """
 
 from __future__ import annotations
@@ -241,9 +242,10 @@ def mechanism(squeezed: float, diffused: float) -> str:
             else f"diffused ({1 - share:.0%} by diffusion through the edge)")
 
 
-def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = None
-                   ) -> DrugDoseAnswer:
-    """The actuation time for a drug dose (see the module docstring)."""
+def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = None,
+                   validate: bool = False) -> DrugDoseAnswer:
+    """The actuation time for a drug dose (see the module docstring); ``validate`` asks
+    for the full solver's drug run where the reduced drug model would answer."""
     solute = req.solute
     settings = drug_settings(req.settings)  # the fluid answers' truth (issue 12)
     c = req.constants
@@ -284,6 +286,12 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
                   "to fluid on one heating, exactly, so this is the fluid answer "
                   f"({fluid.model}) for the same fraction; nothing leaks while it waits at "
                   "T_start. " + fluid.note), **common)
+    if not validate:  # the reduced drug model, where its measured error holds (issue 23)
+        from .drug_reduced import reduced_answer
+
+        reduced = reduced_answer(req, settings, common)
+        if reduced is not None:
+            return reduced
     runs = runs or runs_for(planner)
     heat = DrugHeatings(req, runs, [req.fraction], settings)
     got = read_off(heat, [], 0, FIRST_HEATING / 2.0)
@@ -352,11 +360,14 @@ class CachedRuns:
         return hit
 
 
-def drug_dose_now(planner: Any, req: DrugDoseRequest) -> DrugDoseAnswer | None:
-    """The drug dose's answer when nothing needs a new run (no diffusion, or every drug run
-    cached), else None: the service then queues it as a job (no HTTP thread waits)."""
+def drug_dose_now(planner: Any, req: DrugDoseRequest,
+                  validate: bool = False) -> DrugDoseAnswer | None:
+    """The drug dose's answer when nothing needs a new run (no diffusion, the reduced drug
+    model, or every drug run cached), else None: the service then queues it as a job (no
+    HTTP thread waits).  ``validate`` as in :func:`plan_drug_dose`."""
     try:
-        return plan_drug_dose(planner, req, runs=CachedRuns(runs_for(planner)))
+        return plan_drug_dose(planner, req, runs=CachedRuns(runs_for(planner)),
+                              validate=validate)
     except RunNotCached:
         return None
 

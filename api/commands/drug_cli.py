@@ -43,7 +43,7 @@ def run_drug_dose(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any]) -
                           wait=args.wait, wait_seconds=args.wait_seconds, **kwargs)
     planner = _planner(args)
     try:
-        ans = plan_drug_dose(planner, req)
+        ans = plan_drug_dose(planner, req, validate=bool(getattr(args, "validate", False)))
     finally:
         planner.close()
     if args.json:

@@ -154,14 +154,42 @@ def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
     """
     if not isinstance(solute, Solute):
         raise ParameterError("solute", solute, "a Solute")
+    s3 = node_volumes(res)
+    return release_on_nodes(np.asarray(res.t, dtype=float), s3, solute,
+                            radius=np.asarray(res.radius, dtype=float),
+                            temperature=np.asarray(res.temperature, dtype=float),
+                            rtol=rtol, profiles=profiles, max_steps=max_steps)
+
+
+def release_on_nodes(ts: np.ndarray, s3: np.ndarray, solute: Solute, *,
+                     radius: np.ndarray | None = None, temperature: np.ndarray | None = None,
+                     dry: np.ndarray | None = None, rtol: float = DEFAULT_RTOL,
+                     profiles: int = 51, max_steps: int = MAX_STEPS,
+                     twin: str = "run") -> ReleaseResult:
+    """:func:`release` on given mechanics: node volumes ``s3`` (len(ts), n + 1; r_k^3 at
+    the material nodes, s3[:, 0] = 0) sampled at ``ts``, on dry cells ending at rho_k^3 =
+    ``dry`` (n + 1 values from 0 to 1; default uniform in rho, rho_k = k / n).  Any
+    mechanics that gives r(rho, t) serves: a full-solver run (:func:`release`) or the
+    front model's (``solver.front.solute``).  ``twin``: "run" the D0 = 0 twin (default);
+    "exact": take the expelled fraction where that is its release exactly (no sieving, a
+    perfect sink: a uniform pore concentration stays uniform under the fluid's motion
+    alone), else run it; "none": no twin (``squeezed_fraction`` empty)."""
+    if not isinstance(solute, Solute):
+        raise ParameterError("solute", solute, "a Solute")
     if not (isinstance(rtol, (int, float)) and 1e-12 <= rtol <= 1e-2):
         raise ParameterError("rtol", rtol, "1e-12 <= rtol <= 1e-2")
+    if twin not in ("run", "exact", "none"):
+        raise ParameterError("twin", twin, "'run', 'exact' or 'none'")
     started = time.perf_counter()
-    s3 = node_volumes(res)
-    ts = np.asarray(res.t, dtype=float)
+    ts = np.ascontiguousarray(ts, dtype=float)
+    s3 = np.ascontiguousarray(s3, dtype=float)
     n = s3.shape[1] - 1
-    dw = np.diff((np.arange(n + 1) / n) ** 3)
+    dw = np.diff((np.arange(n + 1) / n) ** 3 if dry is None else np.asarray(dry, dtype=float))
     a3 = s3[:, n]
+    if radius is None:
+        radius = np.cbrt(a3)
+    if temperature is None:
+        temperature = np.full(ts.size, np.nan)
     w0 = a3[0] - 1.0
     vol = solute.release_volume
     if vol is not None and vol <= a3[0]:
@@ -189,7 +217,13 @@ def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
     _check(release_run(ts, s3, dw, vmed, par, m, rel, adv, gel, out_prof, prof_idx,
                        float(rtol), int(max_steps), counters), max_steps, counters)
     balance = float(np.max(np.abs(gel + rel - 1.0)))
-    if solute.diffusivity > 0.0:  # the D0 = 0 twin: the release of the fluid's motion alone
+    exact_twin = not (solute.hindrance.convective and solute.hindrance.mesh_ratio > 0.0) \
+        and vol is None
+    if solute.diffusivity > 0.0 and twin == "none":
+        squeezed = np.zeros(0)
+    elif solute.diffusivity > 0.0 and twin == "exact" and exact_twin:
+        squeezed = np.maximum((a3[0] - a3) / w0, 0.0)
+    elif solute.diffusivity > 0.0:  # the D0 = 0 twin: the release of the fluid's motion alone
         squeezed, twin_gel = np.zeros(ts.size), np.zeros(ts.size)
         twin_counters = np.zeros(2, dtype=np.int64)
         _check(release_run(ts, s3, dw, vmed, solute.params(0.0), m_start, squeezed,
@@ -210,10 +244,10 @@ def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
             "samples": int(ts.size), "n": n, "solute": solute.to_dict(),
             "wall_time": time.perf_counter() - started}
     return ReleaseResult(
-        t=ts.copy(), radius=np.asarray(res.radius, dtype=float).copy(),
+        t=ts.copy(), radius=np.asarray(radius, dtype=float).copy(),
         released_fraction=rel, advected_fraction=adv,
         expelled_fraction=(a3[0] - a3) / w0, in_gel_fraction=gel,
-        medium_concentration=conc, temperature=np.asarray(res.temperature, dtype=float).copy(),
+        medium_concentration=conc, temperature=np.asarray(temperature, dtype=float).copy(),
         profile_t=ts[picks].copy(), profiles=out_prof * w0, profile_radii=radii,
         mass_balance_error=balance, effective_diffusivity=d_eff, diagnostics=diag,
         squeezed_fraction=squeezed, start_partition=float(solute.partition_at(phi0)))
