@@ -123,10 +123,10 @@ class DrugDoseResponse(_StatedTruthOut):
 
     status: Literal["answered"] = Field("answered", description="always 'answered'")
     drug: Literal[True] = Field(True, description="always true: a drug answer")
-    model: str = Field(description="what answered: the fluid answer's model (D0 = 0) or "
-                                   "'front-solute' (the reduced drug model: the solute on the front model's bead, "
-                                   "docs/drug_reduced.md) or 'full+solute' (the full solver with "
-                                   "the drug)")
+    model: str = Field(description="what answered: the fluid answer's model (D0 = 0), "
+                                   "'front-solute' (the reduced drug model, the solute on "
+                                   "the front model's bead: docs/drug_reduced.md) or "
+                                   "'full+solute' (the full solver with the drug)")
     time: float = Field(description="actuation time for the drug dose, units of tau, >= 0")
     seconds: float | None = Field(None, description="the actuation time in s (bead size)")
     dose_fraction: float = Field(description="the dose as a fraction of the loaded drug")
