@@ -34,8 +34,10 @@ def _curve(seed: int, noise: float = 0.01, n: int = 25):
 def test_f2_follows_the_fda_definition() -> None:
     """FDA 1997 (Dissolution Testing of IR Solid Oral Dosage Forms): f2 = 100 for identical
     profiles, and an average difference of 10% at every point gives f2 ~ 50 (the guidance's
-    similarity limit: 50 log10(100 / sqrt(101)) = 49.89).  The worked numbers below are by
-    hand: differences 3, 3, 4, 2 -> mean square 9.5 -> 50 log10(100 / sqrt(10.5)) = 74.47."""
+    similarity limit: 50 log10(100 / sqrt(101)) = 49.89).  The numbers below are by hand:
+    differences 3, 3, 4, 2 -> mean square 9.5 -> 50 log10(100 / sqrt(10.5)) = 74.47 (a
+    calculator page found online prints 67.32 for the same profiles, which the formula does
+    not give; the printed example checked is Shah et al. 1998, below)."""
     r = np.array([42.0, 67.0, 84.0, 91.0])
     assert f2(r, r) == pytest.approx(100.0)
     assert f2(r, r - 10.0) == pytest.approx(50 * math.log10(100 / math.sqrt(101)))
@@ -47,6 +49,34 @@ def test_f2_follows_the_fda_definition() -> None:
         50 * math.log10(100 / math.sqrt(1 + (9 + 9 + 16) / 3)))
     with pytest.raises(ParameterError):
         f2([1, 2], [1, 2, 3])
+
+
+# Shah VP, Tsong Y, Sathe P, Liu JP, "In vitro dissolution profile comparison - statistics
+# and analysis of the similarity factor, f2", Pharm Res 15(6):889-896 (1998): 12 tablets of a
+# reference and five test batches at 30, 60, 90 and 180 min.  The per-tablet data and the
+# printed f2 values are as reproduced by the bootf2 R package (zhengguoxu/bootf2,
+# data/shah1998.rda and tests/testthat/test_calcf2.R); the means below are of its 12 units
+# (4 decimals).
+SHAH_REF = [34.9167, 59.5, 79.2667, 95.075]
+SHAH_TESTS = {  # batch: (12-unit mean % dissolved, f2 printed)
+    1: ([40.3392, 67.1458, 87.0075, 97.725], 60.03),
+    2: ([49.3333, 65.3333, 86.75, 102.8333], 51.08),
+    3: ([25.7917, 50.6417, 66.9917, 88.6], 51.19),
+    4: ([15.0833, 59.5, 79.2667, 95.075], 50.07),
+    5: ([43.3917, 77.9583, 86.325, 98.575], 48.05),
+}
+
+
+@pytest.mark.parametrize("batch", sorted(SHAH_TESTS))
+def test_f2_reproduces_the_printed_worked_example(batch: int) -> None:
+    """A printed worked example (Shah et al. 1998, above): f2 of each test batch's mean
+    profile against the reference's, to the printed two decimals; the FDA rule (one point
+    after 85% of the reference) keeps all four times here (the reference passes 85% only
+    at 180 min), and batch 5 (48.05) falls below the similarity limit 50."""
+    mean, printed = SHAH_TESTS[batch]
+    assert round(f2(SHAH_REF, mean, fda_85_rule=True), 2) == printed
+    assert round(f2(SHAH_REF, mean), 2) == printed
+    assert (printed >= 50.0) == (batch != 5)
 
 
 def test_crank_curve_is_fitted_back_within_3_percent() -> None:
