@@ -81,11 +81,13 @@ def kinetics_data(time_s: Any, size: Any, kind: str = "radius",
 def fit_swelling(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma: float = 0.01,
                  fixed: Mapping[str, float] | None = None, n_starts: int = 6,
                  objective: str = "orthogonal", dry_size: float | None = None,
-                 below_dry_sigmas: float = 2.0, profile: tuple[str, ...] = ()) -> FitResult:
+                 below_dry_sigmas: float = 2.0, profile: tuple[str, ...] = (),
+                 start: Mapping[str, float] | None = None) -> FitResult:
     """Fit Omega, A0, B0, A1, B1 and the size scale (``solver.fit.fit_equilibrium``) under
     ``objective`` ('orthogonal' or the paper's 'temperature'); ``dry_size`` fixes the scale
     (the dry size in the data's unit); ``profile`` names parameters to give profile-likelihood
-    intervals beside the linearised ones.  The result's ``extra`` carries the fitted gel and
+    intervals beside the linearised ones; ``start`` a warm start (all six parameters: one
+    local fit, no global search).  The result's ``extra`` carries the fitted gel and
     ``not_pinned``, what the data do not determine."""
     fixed = dict(fixed or {})
     if dry_size is not None:
@@ -93,7 +95,7 @@ def fit_swelling(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma: f
     try:
         res = fit_equilibrium(data, sigma_t=sigma_t, size_rel_sigma=size_rel_sigma,
                               fixed=fixed, n_starts=n_starts, objective=objective,
-                              below_dry_sigmas=below_dry_sigmas)
+                              below_dry_sigmas=below_dry_sigmas, start=start)
     except (np.linalg.LinAlgError, ArithmeticError) as exc:
         raise SolverError(f"the swelling fit failed numerically: {exc}") from exc
     try:
