@@ -135,7 +135,7 @@ def dose_under_objectives(data: SwellingData, t_start: float, t_end: float, frac
                           *, sigma_t: float = 0.05, size_rel_sigma: float = 0.01,
                           fixed: Mapping[str, float] | None = None,
                           fits: Mapping[str, FitResult] | None = None,
-                          sharp: bool = True) -> dict[str, Any]:
+                          sharp: bool = True, n_starts: int = 6) -> dict[str, Any]:
     """The dimensionless dose time of one jump under both objectives: the front model's,
     with its delta-method 95% interval; where the front model does not apply (a smooth
     jump) the full solver's time without an interval; 'never' where the gel's final
@@ -150,7 +150,7 @@ def dose_under_objectives(data: SwellingData, t_start: float, t_end: float, frac
     for obj in ("orthogonal", "temperature"):
         res = fits.get(obj) or fit_swelling(data, sigma_t=sigma_t,
                                             size_rel_sigma=size_rel_sigma, fixed=fixed,
-                                            objective=obj)
+                                            objective=obj, n_starts=n_starts)
         row: dict[str, Any] = {"parameters": res.parameters, "chi2": res.extra.get("chi2"),
                                "rms_temperature_residual_K": res.extra.get(
                                    "rms_temperature_residual_K")}

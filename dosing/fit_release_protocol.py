@@ -82,7 +82,8 @@ def protocol_mechanics(gel: Any, prot: Protocol, dry_radius_um: float, horizon_s
     spec = program_spec(prot.program(tau), mobility, t_ref)
     horizon = HORIZON_MARGIN * horizon_s / tau
     key = json.dumps({"gel": gel.to_dict(), "t_start": prot.t_start, "program": spec,
-                      "horizon": horizon, "settings": repr(s), "samples": SAMPLES}, sort_keys=True, default=str)
+                      "horizon": horizon, "settings": repr(s), "samples": SAMPLES},
+                     sort_keys=True, default=str)
     with _LOCK:
         hit = _MEMO.get(key)
         if hit is not None:

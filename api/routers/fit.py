@@ -60,7 +60,7 @@ def _swelling(_: Any, body: SwellingFitRequest) -> dict[str, Any]:
         report["dose_time_by_objective"] = json_safe(dose_under_objectives(
             data, body.dose_jump[0], body.dose_jump[1], body.dose_fraction,
             sigma_t=body.sigma_t, size_rel_sigma=body.size_rel_sigma, fixed=body.fixed,
-            fits={body.objective: res}))
+            fits={body.objective: res}, n_starts=body.n_starts))
     if body.save:
         GelStore().save(body.save, fit_gel(res, body.save),
                         swelling={"data": data_dict(data), "fit": report})
