@@ -165,6 +165,8 @@ class ReleaseFitRequest(RequestModel):
                     "t_start": 300.0,
                     "protocol": ["Heat to 308 K at 5 K/min"],
                     "dry_radius_um": 50.0,
+                    "solver_n": 100,
+                    "solver_rtol": 1e-4,
                 },
             ]
         },

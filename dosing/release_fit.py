@@ -100,7 +100,8 @@ def release_data(time_s: Any, released: Any, unit: str = "fraction",
         if loaded_ug is None:
             raise ParameterError("loaded_ug", None, "a finite number > 0 (ug per bead or per "
                                  "sample) to turn a released mass into a fraction")
-        y = y / require_finite_positive("loaded_ug", loaded_ug)
+        with np.errstate(over="ignore"):  # an overflow is refused just below as non-finite
+            y = y / require_finite_positive("loaded_ug", loaded_ug)
     if np.any(~np.isfinite(t)) or np.any(~np.isfinite(y)):
         raise ParameterError("released", "NaN", "finite times and releases")
     if np.any(t < 0):
