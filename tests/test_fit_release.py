@@ -116,9 +116,11 @@ def test_cli_fit_release(tmp_path, capsys) -> None:
     p = tmp_path / "rel.csv"
     p.write_text("time_min;released (%)\n" + "".join(
         f"{a / 60:.5f};{100 * b:.4f}\n".replace(".", ",") for a, b in zip(t, y, strict=True)))
+    png = tmp_path / "rel.png"
     assert main(["fit", "release", str(p), "--gel", "ANB", "--t-start", "300", "--t-end",
-                 "300", "--dry-radius-um", "50", "--json"]) == 0
+                 "300", "--dry-radius-um", "50", "--json", "--plot", str(png)]) == 0
     rep = json.loads(capsys.readouterr().out)
+    assert rep["plots"] == [str(png)] and png.stat().st_size > 10_000  # data, fit and band
     assert rep["parameters"]["drug_diffusivity_cm2_s"] == pytest.approx(D0, rel=0.03)
     assert rep["f2"] > 80 and rep["intervals"]["drug_diffusivity_cm2_s"]
 
