@@ -204,10 +204,10 @@ class ReleaseFitRequest(RequestModel):
 class ReleaseBand(BaseModel):
     """The fitted curve and its 95% band (D0 at its interval's ends)."""
 
-    time_s: list[float]
-    released: list[float]
-    lower: list[float]
-    upper: list[float]
+    time_s: list[float] = Field(description="times, s")
+    released: list[float] = Field(description="the fitted released fraction")
+    lower: list[float] = Field(description="released fraction at one end of D0's interval")
+    upper: list[float] = Field(description="released fraction at its other end")
 
 
 class ReleaseFitReport(BaseModel):
@@ -218,19 +218,19 @@ class ReleaseFitReport(BaseModel):
     names: list[str] = Field(description="the fitted parameters")
     parameters: dict[str, float] = Field(description="drug_diffusivity_cm2_s: the free D0")
     intervals: dict[str, list[float]] = Field(description="95% intervals")
-    stderr: dict[str, float]
+    stderr: dict[str, float] = Field(description="standard errors")
     interval_kind: str = Field(description="how the intervals are made")
     f2: float = Field(description="FDA similarity factor, fit against data (>= 50: similar)")
-    f2_meaning: str
+    f2_meaning: str = Field(description="f2 in words")
     rms_residual: float = Field(description="rms misfit, fraction of the load")
-    chi2_reduced: float
-    n_points: int
-    success: bool
+    chi2_reduced: float = Field(description="residual variance per degree of freedom")
+    n_points: int = Field(description="points fitted")
+    success: bool = Field(description="whether the least-squares fit converged")
     effective_diffusivity_cm2_s: float = Field(description="D0 H(phi0) in the swollen start")
-    hindrance_factor: float
-    hindrance: str
-    swollen_radius_um: float
-    porosity: float
+    hindrance_factor: float = Field(description="H(phi0) of the hindrance law")
+    hindrance: str = Field(description="the hindrance law")
+    swollen_radius_um: float = Field(description="the bead's radius at t_start, um")
+    porosity: float = Field(description="phi0 at t_start")
     drug_diffusivity_temperature_K: float = Field(description="where D0 is D0 in water")
     model: str = Field(description="the release model, its settings and scale")
     protocol: dict[str, Any] | None = Field(None, description="the protocol, when given")
@@ -238,13 +238,13 @@ class ReleaseFitReport(BaseModel):
         None, description="under a protocol: the release of the fluid's motion alone")
     cost: dict[str, Any] | None = Field(None, description="under a protocol: CPU seconds of "
                                         "the mechanics run and of the solute runs")
-    fitted: list[float]
-    time_s: list[float]
-    released: list[float]
-    band: ReleaseBand
-    warnings: list[str]
-    not_pinned: list[str]
-    confidence: float
+    fitted: list[float] = Field(description="the fit at the measured times")
+    time_s: list[float] = Field(description="the measured times, s")
+    released: list[float] = Field(description="the measured released fraction")
+    band: ReleaseBand = Field(description="the fitted curve and its 95% band")
+    warnings: list[str] = Field(description="what to watch")
+    not_pinned: list[str] = Field(description="what the data do not determine")
+    confidence: float = Field(description="the intervals' level")
 
 
 class FitJobResponse(BaseModel):
