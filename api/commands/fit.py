@@ -232,7 +232,9 @@ def run_swelling(args: argparse.Namespace) -> int:
             o = dj[obj]
             print(f"  dose {dj['dose_fraction']:.0%} {dj['t_start']:g} -> {dj['t_end']:g} K "
                   f"({obj}): " + (f"none ({o['note']})" if o["time"] is None else
-                                  f"t = {o['time']:.4g}  95% {_interval(o['interval'])}"))
+                                  f"t = {o['time']:.4g}  " + (
+                                      f"95% {_interval(o['interval'])}" if o["interval"]
+                                      else f"({o.get('model')}, no interval)")))
         print(f"  {'DISAGREE: ' if dj.get('disagree') else ''}{dj['note']}")
     for w in res.extra.get("not_pinned", []):
         print(f"  not pinned: {w}")
