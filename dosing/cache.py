@@ -180,7 +180,8 @@ class ValidationCache:
         try:
             changed = con.execute(sql, params).rowcount
         except BaseException:
-            con.execute("ROLLBACK")
+            if con.in_transaction:  # SQLITE_FULL (a full disk) has rolled it back already
+                con.execute("ROLLBACK")
             raise
         con.execute("COMMIT")
         return changed
@@ -214,7 +215,8 @@ class ValidationCache:
                             (key, text, sqlite3.Binary(blob), time.time(),
                              row_checksum(text, blob)))
         except BaseException:
-            con.execute("ROLLBACK")
+            if con.in_transaction:  # SQLITE_FULL (a full disk) has rolled it back already
+                con.execute("ROLLBACK")
             raise
         con.execute("COMMIT")
         return write
@@ -338,7 +340,8 @@ class ValidationCache:
                 con.execute("INSERT OR REPLACE INTO leases (key, owner, expires) "
                             "VALUES (?, ?, ?)", (key, owner, now + seconds))
         except BaseException:
-            con.execute("ROLLBACK")
+            if con.in_transaction:  # SQLITE_FULL (a full disk) has rolled it back already
+                con.execute("ROLLBACK")
             raise
         con.execute("COMMIT")
         return free
@@ -351,7 +354,8 @@ class ValidationCache:
             con.executemany("UPDATE leases SET expires = ? WHERE key = ? AND owner = ?",
                             [(time.time() + seconds, k, owner) for k in keys])
         except BaseException:
-            con.execute("ROLLBACK")
+            if con.in_transaction:  # SQLITE_FULL (a full disk) has rolled it back already
+                con.execute("ROLLBACK")
             raise
         con.execute("COMMIT")
 

@@ -124,8 +124,10 @@ def run(args: argparse.Namespace) -> int:
     from api.auth import is_loopback
 
     if not is_loopback(args.host) and not (args.token or os.environ.get("THERMOGEL_API_TOKEN")):
-        raise ParameterError("--token", None, "a token (or $THERMOGEL_API_TOKEN) when --host "
-                             f"{args.host} is reachable beyond this machine")
+        raise ParameterError("--token", None, "a token (--token or $THERMOGEL_API_TOKEN)",
+                             f"--host {args.host} is reachable beyond this machine, so the "
+                             "service needs a token: clients then send 'Authorization: "
+                             "Bearer <token>'; refusing to start without one")
     if not 0.1 <= args.timeout_keep_alive <= 600:
         raise ParameterError("--timeout-keep-alive", args.timeout_keep_alive, "0.1-600 s")
     if args.limit_concurrency is not None and args.limit_concurrency < 8:
