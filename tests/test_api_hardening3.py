@@ -171,3 +171,36 @@ def test_serve_beyond_loopback_without_a_token_refuses_to_start() -> None:
     assert "beyond this machine" in out.stderr
     with pytest.raises(httpx.TransportError):
         httpx.get(f"http://127.0.0.1:{port}/health", timeout=2)
+
+
+def test_a_corrupted_row_is_recomputed_on_a_live_server(tmp_path: Path) -> None:
+    """A validated dose's runs are cached; with the server stopped, bytes of one stored
+    trajectory are flipped; the restarted server detects it (checksum), computes that run
+    again (202, then done) and answers the same time as before."""
+    import sqlite3
+
+    cache, log = tmp_path / "c.sqlite", tmp_path / "calls.log"
+    body = {**SMOOTH, "validation_method": "direct"}
+    with fake_server(cache, 0.0, 60.0, "--calls", str(log)) as (url, _), \
+            httpx.Client(base_url=url, timeout=60) as c:
+        r = c.post("/v1/dose-time", json=body)
+        assert r.status_code == 202, r.text
+        assert _wait_done(c, r.json()["validation_url"])["status"] == "done"
+        first = c.post("/v1/dose-time", json=body).json()
+        assert first["model"] == "full"
+    runs = len(log.read_text().splitlines())
+    with sqlite3.connect(cache) as con:
+        key, blob = con.execute("SELECT key, data FROM trajectories LIMIT 1").fetchone()
+        bad = bytearray(blob)
+        bad[len(bad) // 2] ^= 0xFF
+        con.execute("UPDATE trajectories SET data = ? WHERE key = ?", (bytes(bad), key))
+    with fake_server(cache, 0.0, 60.0, "--calls", str(log)) as (url, _), \
+            httpx.Client(base_url=url, timeout=60) as c:
+        r = c.post("/v1/dose-time", json=body)
+        if r.status_code == 202:
+            assert _wait_done(c, r.json()["validation_url"])["status"] == "done"
+            r = c.post("/v1/dose-time", json=body)
+        assert r.status_code == 200, r.text
+        again = r.json()
+    assert len(log.read_text().splitlines()) > runs  # the damaged run was computed again
+    assert again["model"] == "full" and again["time"] == first["time"]
