@@ -122,8 +122,10 @@ ERRORS: dict[type[Exception], Rule] = {
     UnknownValidationError: Rule(
         404, "not_found", loc=lambda e: ["path", e.args[1] if len(e.args) > 1
                                          else _ID_PARAM[job_kind(e.args[0])]],
-        msg=lambda e: f"no {job_kind(e.args[0])} job with id {e.args[0]!r}"
-        if job_kind(e.args[0]) != "validation" else f"no validation with id {e.args[0]!r}"),
+        msg=lambda e: (f"no {job_kind(e.args[0])} job with id {e.args[0]!r}"
+                       if job_kind(e.args[0]) != "validation"
+                       else f"no validation with id {e.args[0]!r}")
+        + (f" here: {e.args[2]}" if len(e.args) > 2 else "")),
     ServiceUnavailable: Rule(503, "unavailable", plain=True,
                              headers=lambda e: {"Retry-After": str(RETRY_AFTER_SECONDS)}),
     CacheFault: Rule(503, "cache_unavailable", loc=lambda e: ["cache"],

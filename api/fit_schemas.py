@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from api.outputs import FitReport
 from api.schemas import GelSpec, RequestModel
 from dosing.gel_store import check_name
 from solver.limits import T_MAX, T_MIN, TRUTH_N_RANGE
@@ -256,7 +257,7 @@ class FitJobResponse(BaseModel):
     kind: Literal["swelling", "kinetics", "release"] = Field(description="which fit")
     status: Literal["pending", "running", "done", "failed"] = Field(description="job state")
     status_url: str = Field(description="where to poll")
-    result: dict[str, Any] | None = Field(
+    result: FitReport | None = Field(
         None,
         description="the fit report: parameters, intervals (95%), chi2, aic, bic, "
         "rms_orthogonal_K, rms_temperature_residual_K, not_pinned, warnings, ...",

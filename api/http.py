@@ -22,16 +22,13 @@ from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from dosing.jobs import exit_with_parent
 
-from . import errors, guard
-from . import schemas as s
+from . import errors, guard, openapi_spec
 from .auth import TokenAuth
 from .routers import dosing, fit, jobs, page, physics, service, sweep, validations
 from .routers import sensitivity as sensitivity_routes
 from .service import ServiceState
 from .version import package_version
 
-RETRY_HEADER = {"description": "seconds to wait before asking again",
-                "schema": {"type": "integer"}}
 DEFAULT_MAX_BODY = 1 << 20  # bytes: the largest valid request is a few kB
 SUPERVISOR_ENV = "THERMOGEL_SUPERVISOR_PID"
 
@@ -75,14 +72,7 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
         description="Plan drug release from thermo-responsive gel beads (Butler & "
                     "Montenegro-Johnson). Temperatures in K; dimensionless lengths in dry "
                     "radii and times in units of tau (eq. timescale).",
-        responses={400: {"model": s.ErrorResponse, "description": "unreadable body"},
-                   413: {"model": s.ErrorResponse, "description": "body over the limit"},
-                   422: {"model": s.ErrorResponse, "description": "bad input; loc names it"},
-                   500: {"model": s.ErrorResponse,
-                         "description": "internal error (type 'internal_error'; logged)"},
-                   503: {"model": s.ErrorResponse, "headers": {"Retry-After": RETRY_HEADER},
-                         "description": "starting, or the validation cache failed (type "
-                                        "'cache_unavailable'; /health says degraded)"}})
+        responses=openapi_spec.APP_RESPONSES)
     app.state.service = state
     errors.install(app)
     guard.add(app)

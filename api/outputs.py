@@ -45,3 +45,30 @@ class UncertaintyOut(Out):
         None, description="the delayed-transition time at each N")
     delayed_transition_spread: float | None = Field(
         None, description="(max - min) / finest of those times: its N-independence")
+
+
+class FitReport(Out):
+    """A fit job's report (solver.fit.result.FitResult.to_dict, plus what the fit adds:
+    transition temperatures, tau, the saved name, ...; non-finite numbers as null)."""
+
+    names: list[str] | None = Field(None, description="the fitted parameters' names")
+    parameters: dict[str, float | None] | None = Field(None, description="the estimates")
+    intervals: dict[str, list[float | None] | None] | None = Field(
+        None, description="95% interval of each parameter (null: fixed)")
+    stderr: dict[str, float | None] | None = Field(None, description="standard errors")
+    covariance: list[list[float | None]] | None = Field(None, description="covariance "
+                                                                         "matrix")
+    correlation: list[list[float | None]] | None = Field(None, description="correlation "
+                                                                           "matrix")
+    fixed: dict[str, float | None] | None = Field(None, description="parameters held fixed")
+    success: bool | None = Field(None, description="the optimiser converged")
+    status: int | None = Field(None, description="the optimiser's status code")
+    message: str | None = Field(None, description="the optimiser's message")
+    nfev: int | None = Field(None, description="function evaluations")
+    n_points: int | None = Field(None, description="data points fitted")
+    rms_residual: float | None = Field(None, description="root-mean-square residual")
+    chi2_reduced: float | None = Field(None, description="reduced chi^2")
+    confidence: float | None = Field(None, description="the intervals' confidence (0.95)")
+    warnings: list[str] = Field(default_factory=list, description="what the fit could not "
+                                                                  "pin, in words")
+    saved: str | None = Field(None, description="the stored gel's name, with save")

@@ -180,7 +180,8 @@ class ValidationCache:
         try:
             changed = con.execute(sql, params).rowcount
         except BaseException:
-            con.execute("ROLLBACK")
+            if con.in_transaction:  # SQLITE_FULL (a full disk) has rolled it back already
+                con.execute("ROLLBACK")
             raise
         con.execute("COMMIT")
         return changed
@@ -214,7 +215,8 @@ class ValidationCache:
                             (key, text, sqlite3.Binary(blob), time.time(),
                              row_checksum(text, blob)))
         except BaseException:
-            con.execute("ROLLBACK")
+            if con.in_transaction:  # SQLITE_FULL (a full disk) has rolled it back already
+                con.execute("ROLLBACK")
             raise
         con.execute("COMMIT")
         return write
@@ -262,7 +264,8 @@ class ValidationCache:
     def get_many(self, keys: list[str] | tuple[str, ...]
                  ) -> dict[str, tuple[dict[str, Any], bytes]]:
         """(metadata, npz blob) of every stored key among ``keys``, in one query (absent
-        keys are left out; no decoding: the caller decodes what it keeps).
+        keys are left out, and damaged rows, which are dropped: checksums verified; no
+        decoding: the caller decodes what it keeps).
 
         Keys found absent are remembered with the file's version (``PRAGMA data_version``,
         which changes when another connection, thread or process commits, and this
@@ -282,9 +285,13 @@ class ValidationCache:
         for i in range(0, len(uniq), 500):  # SQLite's bound-parameter limit
             part = uniq[i:i + 500]
             marks = ",".join("?" * len(part))
-            for key, meta, data in con.execute(
-                    f"SELECT key, meta, data FROM trajectories WHERE key IN ({marks})", part):
-                out[key] = (json.loads(meta), bytes(data))
+            for key, meta, data, digest in con.execute(
+                    f"SELECT key, meta, data, sha256 FROM trajectories WHERE key IN ({marks})",
+                    part):
+                if _sound(meta, bytes(data), digest):
+                    out[key] = (json.loads(meta), bytes(data))
+                else:  # damaged: dropped (and so absent: computed again)
+                    self._drop_corrupt(key, digest)
         absent[1].update(k for k in uniq if k not in out)
         if len(absent[1]) > 4096:
             absent = (version, {k for k in uniq if k not in out})
@@ -338,7 +345,8 @@ class ValidationCache:
                 con.execute("INSERT OR REPLACE INTO leases (key, owner, expires) "
                             "VALUES (?, ?, ?)", (key, owner, now + seconds))
         except BaseException:
-            con.execute("ROLLBACK")
+            if con.in_transaction:  # SQLITE_FULL (a full disk) has rolled it back already
+                con.execute("ROLLBACK")
             raise
         con.execute("COMMIT")
         return free
@@ -351,7 +359,8 @@ class ValidationCache:
             con.executemany("UPDATE leases SET expires = ? WHERE key = ? AND owner = ?",
                             [(time.time() + seconds, k, owner) for k in keys])
         except BaseException:
-            con.execute("ROLLBACK")
+            if con.in_transaction:  # SQLITE_FULL (a full disk) has rolled it back already
+                con.execute("ROLLBACK")
             raise
         con.execute("COMMIT")
 

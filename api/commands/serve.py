@@ -9,6 +9,8 @@ from __future__ import annotations
 import argparse
 import os
 
+from .. import connection_limits as limits
+
 H11_MAX_HEADER_BYTES = 64 * 1024  # request line and headers (uvicorn's h11 limit)
 
 
@@ -41,8 +43,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "$THERMOGEL_ALLOWED_HOSTS)")
     p.add_argument("--timeout-keep-alive", type=float, default=5.0,
                    help="close a keep-alive connection idle this long, s (default 5)")
-    p.add_argument("--limit-concurrency", type=int, default=256,
-                   help="connections and requests at once before 503 (default 256)")
+    p.add_argument("--limit-concurrency", type=int, default=None,
+                   help="open connections in all before 503 as JSON (default "
+                        f"{limits.TOTAL})")
+    p.add_argument("--max-connections-per-client", type=int, default=None,
+                   help="open connections per client address before 429 as JSON with "
+                        f"Retry-After (default {limits.PER_CLIENT})")
+    p.add_argument("--read-timeout", type=float, default=None,
+                   help="a request (line, headers and body) must arrive whole within this "
+                        f"many seconds, else 408 and the connection is closed (default "
+                        f"{limits.READ_TIMEOUT_S:g})")
     p.add_argument("--log-level", default="info",
                    choices=["critical", "error", "warning", "info", "debug"])
     p.add_argument("--no-warmup", action="store_true",
@@ -70,6 +80,13 @@ def configure_env(args: argparse.Namespace) -> None:
     if args.workers > 1:  # its worker processes end themselves if this one is killed
         os.environ["THERMOGEL_SUPERVISOR_PID"] = str(os.getpid())
     os.environ["THERMOGEL_WARMUP"] = "0" if args.no_warmup else "1"
+
+
+def connection_limits(args: argparse.Namespace) -> limits.ConnectionLimits:
+    """The connection guards' limits (api.connections) from the options."""
+    given = {"total": args.limit_concurrency, "per_client": args.max_connections_per_client,
+             "read_timeout": args.read_timeout}
+    return limits.ConnectionLimits(**{k: v for k, v in given.items() if v is not None})
 
 
 def warm_only() -> int:
@@ -107,21 +124,30 @@ def run(args: argparse.Namespace) -> int:
     from api.auth import is_loopback
 
     if not is_loopback(args.host) and not (args.token or os.environ.get("THERMOGEL_API_TOKEN")):
-        raise ParameterError("--token", None, "a token (or $THERMOGEL_API_TOKEN) when --host "
-                             f"{args.host} is reachable beyond this machine")
+        raise ParameterError("--token", None, "a token (--token or $THERMOGEL_API_TOKEN)",
+                             f"--host {args.host} is reachable beyond this machine, so the "
+                             "service needs a token: clients then send 'Authorization: "
+                             "Bearer <token>'; refusing to start without one")
     if not 0.1 <= args.timeout_keep_alive <= 600:
         raise ParameterError("--timeout-keep-alive", args.timeout_keep_alive, "0.1-600 s")
-    if args.limit_concurrency < 8:
+    if args.limit_concurrency is not None and args.limit_concurrency < 8:
         raise ParameterError("--limit-concurrency", args.limit_concurrency, "an integer >= 8")
+    if args.max_connections_per_client is not None and args.max_connections_per_client < 1:
+        raise ParameterError("--max-connections-per-client", args.max_connections_per_client,
+                             "an integer >= 1")
+    if args.read_timeout is not None and not 0.1 <= args.read_timeout <= 3600:
+        raise ParameterError("--read-timeout", args.read_timeout, "0.1-3600 s")
     from .common import checked_cache
 
     checked_cache(args.cache)
     configure_env(args)
     import uvicorn
 
+    from api.connections import uvicorn_options
+
     uvicorn.run("api.http:app_from_env", factory=True, host=args.host, port=args.port,
                 workers=args.workers, log_level=args.log_level, timeout_graceful_shutdown=10,
                 timeout_keep_alive=args.timeout_keep_alive,
-                limit_concurrency=args.limit_concurrency,
-                h11_max_incomplete_event_size=H11_MAX_HEADER_BYTES)
+                h11_max_incomplete_event_size=H11_MAX_HEADER_BYTES,
+                **uvicorn_options(connection_limits(args)))
     return 0

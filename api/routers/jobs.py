@@ -8,10 +8,10 @@ which stay), and an unknown id is a 404 naming the kind the id claims.
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 from fastapi import APIRouter, Request
+from fastapi.responses import Response
 
 from dosing import UnknownValidationError
 
@@ -19,6 +19,7 @@ from .. import schemas as s
 from ..deps import PlannerDep, StateDep
 from ..errors import job_kind
 from ..fit_schemas import FitJobResponse
+from ..job_schemas import ValidationJob
 from ..safe_route import SafeRoute
 from ..service import validation
 from .compute import compute
@@ -28,8 +29,8 @@ from .sweep import SweepStatus, _render
 router = APIRouter(tags=["jobs"], route_class=SafeRoute)
 
 
-@router.get("/v1/jobs/{job_id}", response_model=s.ValidationResponse | FitJobResponse
-            | SweepStatus, responses={
+@router.get("/v1/jobs/{job_id}", response_model=ValidationJob | FitJobResponse | SweepStatus,
+            responses={
                 404: {"model": s.ErrorResponse, "description": "no job of that kind with "
                                                                "that id"},
                 429: {"model": s.ErrorResponse,
@@ -40,9 +41,9 @@ async def job_route(job_id: str, request: Request, state: StateDep,
     (the same body as the kind's own poll route)."""
     kind = job_kind(job_id)
     try:
-        if kind == "sweep":
-            body, _media = await compute(_render, request, job_id, "json")
-            return json.loads(body)
+        if kind == "sweep":  # the rendered bytes (a big table is not parsed again here)
+            body, media = await compute(_render, request, job_id, "json")
+            return Response(body, media_type=media)
         if kind == "fit":
             return await compute(fit_status, state, job_id)
         return await compute(validation, state, job_id)

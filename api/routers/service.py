@@ -16,7 +16,7 @@ from ..version import package_version
 router = APIRouter(tags=["service"], route_class=SafeRoute)
 
 
-PROBE_WAIT_S = 0.5  # how long /health waits for its look at the cache file
+PROBE_WAIT_S = 0.1  # how long /health waits for its look at the cache file (else the last count)
 
 
 @router.get("/health", response_model=s.HealthResponse)
@@ -24,7 +24,7 @@ async def health(state: StateDep) -> dict[str, Any]:
     """Liveness: 'ok' once the kernels are warm; 'degraded' after a server fault (a full
     disk, a malformed cache), with why.  Answered on the event loop with no lock the
     compute threads hold; its look at the cache file runs on a thread of its own and is
-    waited for at most half a second."""
+    waited for at most 0.1 s (else the last count is shown)."""
     rep = state.warmup
     probe = state.probe()
     if probe is not None:

@@ -22,7 +22,7 @@ from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Request
 from fastapi.responses import JSONResponse, Response
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, create_model, field_validator, model_validator
 
 from dosing import JobRunner, SolverSettings, UnknownValidationError
 from dosing.sweep import COLUMNS, SweepGrid, SweepResult, fill_validations, run_sweep
@@ -114,6 +114,17 @@ class SweepColumn(BaseModel):
     description: str = Field(description="what the column holds")
 
 
+def _row_field(name: str, unit: str, description: str) -> tuple[Any, Any]:
+    kind: Any = int if name in ("index", "gel_index") else str if unit == "" else float
+    return kind | None, Field(None, description=f"{description} [{unit or 'text'}]")
+
+
+# one row of the table: a field per column of dosing.sweep.COLUMNS (the one definition)
+SweepRow = create_model("SweepRow", __config__=ConfigDict(extra="allow"),
+                        __doc__="One point of the sweep (a row of the table).",
+                        **{name: _row_field(name, *spec) for name, spec in COLUMNS.items()})
+
+
 class SweepTable(BaseModel):
     """The table: the grid's axes, the columns with units, one row per point."""
 
@@ -122,7 +133,7 @@ class SweepTable(BaseModel):
     grid: dict[str, Any] = Field(description="the axes, with shape [gels, t_ends, radii, "
                                              "doses]")
     columns: list[SweepColumn] = Field(description="every column with its unit")
-    rows: list[dict[str, Any]] = Field(description="one object per point, keys as columns")
+    rows: list[SweepRow] = Field(description="one object per point, keys as columns")  # type: ignore[valid-type]
     counts: dict[str, int] = Field(description="points per status")
     seconds: float = Field(description="wall time of the front-model sweep, s")
 
@@ -273,18 +284,32 @@ async def sweep(body: SweepRequest, request: Request) -> JSONResponse:
 
 
 @router.get("/v1/sweeps/{sweep_id}", response_model=SweepStatus,
-            responses={200: {"content": {"text/csv": {}},
-                             "description": "the job's state; with format=csv and done, the "
-                                            "table as CSV (headers 'name [unit]')"},
-                       404: {"model": ErrorResponse, "description": "unknown id"}})
+            responses={404: {"model": ErrorResponse, "description": "unknown id"}})
 async def sweep_status(
         sweep_id: str, request: Request,
-        format: Annotated[Literal["json", "csv"],
-                          Query(description="'csv': the finished table as CSV")] = "json",
+        format: Annotated[Literal["json", "csv"], Query(include_in_schema=False)] = "json",
 ) -> Any:
-    """A sweep's progress; when done, its table (JSON with units, or CSV).  Serialised off
-    the event loop; a final table (every validation settled) is serialised once."""
+    """A sweep's progress; when done, its table (JSON with units; as CSV at
+    ``/v1/sweeps/{id}/table.csv``).  Serialised off the event loop; a final table (every
+    validation settled) is serialised once.  (``?format=csv``, undocumented, is the CSV
+    route's older spelling.)"""
     body, media = await compute(_render, request, sweep_id, format)
+    return Response(body, media_type=media)
+
+
+@router.get("/v1/sweeps/{sweep_id}/table.csv", response_class=Response, responses={
+    200: {"content": {"text/csv": {"schema": {"type": "string"}}},
+          "description": "the finished table as CSV (headers 'name [unit]')"},
+    404: {"model": ErrorResponse, "description": "unknown id"},
+    409: {"model": ErrorResponse, "description": "not done yet (poll the sweep)"}})
+async def sweep_csv(sweep_id: str, request: Request) -> Response:
+    """The finished sweep's table as CSV, one row per point (a 409 while it runs)."""
+    body, media = await compute(_render, request, sweep_id, "csv")
+    if media != _MEDIA["csv"]:
+        state = json.loads(body).get("status")
+        return JSONResponse({"detail": [{"loc": ["path", "sweep_id"], "type": "not_done",
+                                         "msg": f"sweep {sweep_id} is {state}: poll "
+                                                f"/v1/sweeps/{sweep_id}"}]}, status_code=409)
     return Response(body, media_type=media)
 
 
@@ -311,7 +336,8 @@ _MEDIA = {"json": "application/json", "csv": "text/csv", "svg": "image/svg+xml"}
 
 
 @router.get("/v1/sweeps/{sweep_id}/plot.svg", response_class=Response,
-            responses={200: {"content": {"image/svg+xml": {}}},
+            responses={200: {"content": {"image/svg+xml": {"schema": {
+                "type": "string", "format": "binary"}}}, "description": "the heat maps"},
                        404: {"model": ErrorResponse, "description": "unknown id"},
                        409: {"model": ErrorResponse, "description": "not done yet"}})
 async def sweep_plot(
@@ -330,8 +356,9 @@ def _plot(request: Request, sweep_id: str, gel: int) -> Response:
         return Response(hit, media_type=_MEDIA["svg"])
     out = _status(request, sweep_id)
     if out["status"] != "done":
-        return JSONResponse({"detail": f"sweep {sweep_id} is {out['status']}"},
-                            status_code=409)
+        return JSONResponse({"detail": [{"loc": ["path", "sweep_id"], "type": "not_done",
+                                         "msg": f"sweep {sweep_id} is {out['status']}: poll "
+                                                f"/v1/sweeps/{sweep_id}"}]}, status_code=409)
     if gel >= out["result"]["grid"]["shape"][0]:
         return JSONResponse({"detail": [{"loc": ["query", "gel"], "type": "value_error",
                                          "msg": "gel index beyond the grid's gels"}]},

@@ -569,7 +569,7 @@ async function sweep(ev) {
     if (s.status !== "done") { setTimeout(step, 300); return; }
     const counts = Object.entries(s.result.counts).map(([k, v]) => `${v} ${k}`).join(", ");
     $("sweep-status").textContent = `done: ${counts} in ${fmt(s.result.seconds, 3)} s`;
-    $("sweep-links").innerHTML = `Table: <a href="${url}?format=csv" download="sweep.csv">CSV</a> · ` +
+    $("sweep-links").innerHTML = `Table: <a href="${url}/table.csv" download="sweep.csv">CSV</a> · ` +
       `<a href="${url}" target="_blank">JSON with units</a>`;
     const img = $("sweep-plot");
     img.src = `${url}/plot.svg`;

@@ -1,0 +1,55 @@
+"""What a job poll answers, typed by the job's kind (a generated client gets each result
+as its own model, not as an untyped object).
+
+``GET /v1/validations/{id}`` answers one of :data:`ValidationJob` (tagged by ``kind``): a
+dose validation's result is a :class:`~api.schemas.ValidationReport`, a schedule job's a
+schedule answer (fluid or drug), a drug-dose job's the drug dose.  ``GET /v1/jobs/{id}``
+answers any job: these, a fit job or a sweep.  (The Python client keeps the looser
+:class:`~api.schemas.ValidationResponse`, whose result is a dict.)
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field
+
+from .drug_schemas import DrugDoseResponse, DrugScheduleResponse
+from .outputs import Out
+from .schemas import ScheduleResponse, ValidationReport
+
+JobStatus = Literal["pending", "running", "done", "failed"]
+
+
+class _Job(Out):
+    id: str = Field(description="the job's id (poll /v1/validations/{id} or /v1/jobs/{id})")
+    status: JobStatus = Field(description="its state")
+    error: str | None = Field(None, description="when failed: why")
+
+
+class DoseValidationJob(_Job):
+    """A dose's full-solver validation; when done, the truth for the dose."""
+
+    kind: Literal["dose"] = Field(description="a dose validation")
+    result: ValidationReport | None = Field(
+        None, description="when done: the truth's time for the dose, every run behind it "
+                          "and the front model's errors")
+
+
+class ScheduleJob(_Job):
+    """A schedule's protocol check and correction; when done, the schedule."""
+
+    kind: Literal["schedule"] = Field(description="a schedule job")
+    result: ScheduleResponse | DrugScheduleResponse | None = Field(
+        None, description="when done: the schedule (a drug schedule with a drug)")
+
+
+class DrugDoseJob(_Job):
+    """A drug dose whose drug runs were not cached; when done, the drug dose."""
+
+    kind: Literal["drug-dose"] = Field(description="a drug dose's runs")
+    result: DrugDoseResponse | None = Field(None, description="when done: the drug dose")
+
+
+ValidationJob = Annotated[DoseValidationJob | ScheduleJob | DrugDoseJob,
+                          Field(discriminator="kind")]
