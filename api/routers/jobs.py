@@ -18,7 +18,7 @@ from dosing import UnknownValidationError
 from .. import schemas as s
 from ..deps import PlannerDep, StateDep
 from ..errors import job_kind
-from ..fit_schemas import FitJobResponse
+from ..fit_schemas import FitJobResponse, ReleaseFitJobResponse
 from ..job_schemas import ValidationJob
 from ..safe_route import SafeRoute
 from ..service import validation
@@ -29,7 +29,10 @@ from .sweep import SweepStatus, _render
 router = APIRouter(tags=["jobs"], route_class=SafeRoute)
 
 
-@router.get("/v1/jobs/{job_id}", response_model=ValidationJob | FitJobResponse | SweepStatus,
+JobResponse = ValidationJob | ReleaseFitJobResponse | FitJobResponse | SweepStatus
+
+
+@router.get("/v1/jobs/{job_id}", response_model=JobResponse,
             responses={
                 404: {"model": s.ErrorResponse, "description": "no job of that kind with "
                                                                "that id"},
