@@ -23,8 +23,8 @@ Time: fixed-step TR-BDF2 (the kernel's scheme) on the union of the classes' mech
 sample times (t = rho_k s_j: no step crosses a kink of any class's piecewise-linear
 geometry), each interval cut into ``sub`` steps, or on even intervals; the node fluxes are
 each step's mean and the conductances frozen at each class's sample interval's midpoint, as
-the kernel does (at the step's midpoint when a step spans several).  Each implicit stage is an arrowhead system solved
-by its Schur complement: two tridiagonal solves per class, then one scalar equation for P.
+the kernel does (at the step's midpoint when a step spans several).  Each implicit stage is
+an arrowhead system solved by its Schur complement: two tridiagonal solves per class, then one scalar equation for P.
 Every flux enters two rows with opposite signs (in load units), so the batch's mass is
 conserved to round-off by the scheme.
 """
