@@ -25,8 +25,8 @@ geometry), each interval cut into ``sub`` steps, or on even intervals; the node 
 each step's mean and the conductances frozen at each class's sample interval's midpoint, as
 the kernel does (at the step's midpoint when a step spans several).  Each implicit stage is
 an arrowhead system solved by its Schur complement: two tridiagonal solves per class, then
-one scalar equation for P.  Every flux enters two rows with opposite signs (in load units), so the batch's mass is
-conserved to round-off by the scheme.
+one scalar equation for P.  Every flux enters two rows with opposite signs (in load
+units), so the batch's mass is conserved to round-off by the scheme.
 """
 
 from __future__ import annotations
