@@ -26,12 +26,13 @@ from solver.errors import ParameterError
 from solver.limits import BEAD_COUNT_RANGE, MEDIUM_VOLUME_ML_RANGE
 
 from .batch_medium import MediumRelease, coupled_release
-from .quantity import to_unit
-from .size_distribution import DrySizes, as_distribution
+from .quantity import micrometres, to_unit
+from .size_distribution import DrySizes, SizeDistribution, as_distribution
 from .units import UM3_PER_UL, timescale
 
 CLASSES = (8, 16)  # Gauss-Legendre size classes: the answer's and its check
-POINTS = 400  # even steps of the coupled solve over the horizon (x SUB)
+POINTS = 400  # steps of the coupled solve (x SUB), geometric from START x the horizon
+START = 1e-5
 SUB = (1, 2)  # steps per interval: the answer's and its check (their gap: numerical error)
 HORIZON = 0.5  # tau of the reference bead's mechanics run (every class rests after its end)
 
@@ -40,6 +41,11 @@ def medium_volume_ml(value: Any, field: str = "medium_volume_ml") -> float | Non
     """A medium volume in mL (a number in mL, or a quantity: "250 uL"), None: a sink."""
     if value is None:
         return None
+    if isinstance(value, str):
+        try:
+            value = float(value)  # a bare number is in mL
+        except ValueError:
+            pass
     ul = to_unit(value if not isinstance(value, (int, float)) or isinstance(value, bool)
                  else value * 1e3, "volume", field)
     ml = ul * 1e-3
@@ -109,6 +115,32 @@ class DrugBatchAnswer:
         return asdict(self)
 
 
+def reference_bead(req: Any, size_distribution: Any) -> tuple[Any, SizeDistribution]:
+    """(the request at the batch's number-weighted mean bead, the spec with its mean): a
+    spread without a size takes the request's bead size as its mean (as ``DoseRequest``)."""
+    from dataclasses import replace
+
+    d = as_distribution(size_distribution)
+    own = "dry_radius_um" if d.state == "dry" else "swollen_radius_um"
+    other = "swollen_radius_um" if d.state == "dry" else "dry_radius_um"
+    if getattr(req, other) is not None:
+        raise ParameterError(other, getattr(req, other), f"None with a {d.state} "
+                             f"size_distribution (its number-weighted mean goes in {own})")
+    size = getattr(req, own)
+    if not d.has_size:
+        if size is None:
+            raise ParameterError("size_distribution.mean_um", None, f"a size > 0 (um), or "
+                                 f"{own} as the batch's number-weighted mean")
+        return req, d.with_mean(micrometres(size, own))
+    mean = d.number_mean_um()
+    if size is None:
+        return replace(req, **{own: mean}), d
+    if not math.isclose(micrometres(size, own), mean, rel_tol=1e-9):
+        raise ParameterError(own, size, f"None or the size_distribution's number-weighted "
+                             f"mean {mean:.6g} um")
+    return req, d
+
+
 def batch_classes(sizes: DrySizes, n: int) -> tuple[np.ndarray, np.ndarray]:
     """(rho_k = (R_k / R_ref)^2, load shares nu_k) of ``n`` classes (a table: its rows)."""
     r, v = sizes.nodes(0 if sizes.exact else n)
@@ -117,11 +149,12 @@ def batch_classes(sizes: DrySizes, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 def coupled(s: np.ndarray, s3: np.ndarray, solute: Any, sizes: DrySizes, n: int,
             v0: float | None, sub: int) -> MediumRelease:
-    """The coupled release of ``n`` classes up to the largest class's horizon."""
+    """The coupled release of ``n`` classes up to the largest class's horizon, on steps
+    even in ln t (a release is fast at first: the outputs are the steps)."""
     rho, nu = batch_classes(sizes, n)
     t_max = float(s[-1]) * float(rho.max())
-    times = np.linspace(0.0, t_max, 2 * POINTS + 1)
-    return coupled_release(s, s3, solute, rho, nu, v0, times, sub=sub, points=POINTS)
+    times = np.concatenate(([0.0], np.geomspace(t_max * START, t_max, POINTS)))
+    return coupled_release(s, s3, solute, rho, nu, v0, times, sub=sub, points=0)
 
 
 def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
@@ -141,7 +174,8 @@ def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
         raise ParameterError("wait", req.wait if req.wait is not None else req.wait_seconds,
                              "0 or None for a batch (a wait at T_start is not planned for "
                              "batches yet)")
-    sizes = as_distribution(size_distribution).resolve(req.start_radius)
+    req, spec = reference_bead(req, size_distribution)
+    sizes = spec.resolve(req.start_radius)
     ml = medium_volume_ml(medium_volume)
     v0 = None
     n_beads = None

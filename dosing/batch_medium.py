@@ -176,12 +176,12 @@ START_FLOOR = 1e-10  # the first step, a fraction of the grid's first interval
 def time_grid(s: np.ndarray, rho: np.ndarray, t_end: float, times: np.ndarray,
               sub: int, points: int | None = None) -> np.ndarray:
     """The union of the classes' sample times rho_k s_j (or, given ``points``, that many
-    even intervals) and the output times up to ``t_end``, each interval cut into ``sub``
+    even intervals; 0: none) and the output times up to ``t_end``, each interval cut into ``sub``
     equal steps, the start graded."""
     pts = [times[times <= t_end], np.array([0.0, t_end])]
     if points is None:
         pts += [r * s[r * s < t_end] for r in rho]
-    else:
+    elif points > 0:
         pts.append(np.linspace(0.0, t_end, points + 1))
     base = np.unique(np.concatenate(pts))
     base = base[np.concatenate(([True], np.diff(base) > 1e-14 * max(t_end, 1.0)))]
@@ -210,7 +210,8 @@ def coupled_release(s: Any, s3: Any, solute: Solute, rho: Any, nu: Any,
     over the reference tau, ``nu`` their shares of the load (normalised here);
     ``medium_volume`` v0 in units of the batch's dry volume (None: a perfect sink);
     ``times`` the outputs (units of tau_ref, from 0); ``sub`` steps per grid interval;
-    ``points``: even grid intervals (None: the classes' own sample times)."""
+    ``points``: even grid intervals (None: the classes' own sample times; 0: the outputs
+    alone)."""
     s = np.asarray(s, dtype=float)
     s3 = np.ascontiguousarray(s3, dtype=float)
     rho = np.atleast_1d(np.asarray(rho, dtype=float))
