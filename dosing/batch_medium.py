@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from solver.errors import ParameterError, SolverError
 from solver.solute import Solute
@@ -80,80 +81,161 @@ class MediumRelease:
         return float(t0 + (fraction - r0) * (t1 - t0) / (r1 - r0))
 
 
-class _Class:
-    """One size class: the shared trajectory's node volumes in its own time, its work
-    arrays and its state (solute mass per cell, units of its own load)."""
+@njit(cache=True)
+def _volumes(s, s3, x, out):
+    """r^3 at the nodes at own time x (linear between samples; the final state after the
+    trajectory's end: the bead rests there)."""
+    last = s.size - 1
+    if x >= s[last]:
+        out[:] = s3[last]
+        return
+    j = np.searchsorted(s, x, side="right") - 1
+    th = (x - s[j]) / (s[j + 1] - s[j])
+    for i in range(out.size):
+        out[i] = (1.0 - th) * s3[j, i] + th * s3[j + 1, i]
 
-    def __init__(self, s: np.ndarray, s3: np.ndarray, dw: np.ndarray, rho_dry: np.ndarray,
-                 par: Any, rho: float, m0: np.ndarray) -> None:
-        self.s, self.s3, self.dw, self.rd, self.par, self.rho = s, s3, dw, rho_dry, par, rho
-        n = dw.size
-        self.n = n
-        self.m = m0.copy()
-        z = np.zeros
-        self.lo, self.di, self.up = z(n + 1), z(n + 1), z(n + 1)
-        self.r3, self.q, self.g, self.fw, self.fl = z(n + 1), z(n), z(n), z(n), z(4)
-        self.phi, self.lam, self.kc, self.wc = z(n), z(n), z(n), z(n)
-        self.cp, self.out = z(n + 1), z(n)
-        self.s3a, self.s3b = s3[0].copy(), s3[0].copy()
-        self.frozen = -1  # the sample interval whose conductances g holds (-1: none)
 
-    def _volumes(self, s: float) -> np.ndarray:
-        """r^3 at the nodes at own time s (linear between samples; the final state after
-        the trajectory's end: the bead rests there)."""
-        if s >= self.s[-1]:
-            return self.s3[-1]
-        j = int(np.searchsorted(self.s, s, side="right")) - 1
-        th = (s - self.s[j]) / (self.s[j + 1] - self.s[j])
-        return (1.0 - th) * self.s3[j] + th * self.s3[j + 1]
+@njit(cache=True)
+def _march(grid, s, s3, dw, rd, par, rho, nu, v0, m, out_at, out_cls, out_p, out_c):
+    """TR-BDF2 over ``grid`` for every class (state ``m``, classes x cells, updated) and
+    the medium (module doc); ``v0`` <= 0 a perfect sink.  Writes the classes' released
+    fractions, the medium's drug and concentration at the grid points flagged in
+    ``out_at`` (>= 0: the output's index).  Returns (steps, max |mass - 1|, status)."""
+    kk, n = m.shape
+    last = s.size - 1
+    sink = v0 <= 0.0
+    lo = np.zeros((kk, n + 1))
+    di = np.zeros((kk, n + 1))
+    up = np.zeros((kk, n + 1))
+    g = np.zeros((kk, n))
+    frozen = np.full(kk, -1)
+    s3a = np.zeros((kk, n + 1))
+    s3b = np.zeros((kk, n + 1))
+    q = np.zeros((kk, n))
+    al = np.zeros(kk)
+    be = np.zeros(kk)
+    r3 = np.zeros(n + 1)
+    mid = np.zeros(n + 1)
+    fw, fl = np.zeros(n), np.zeros(4)
+    phi, lam, kc, wc = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+    cp = np.zeros(n + 1)
+    f0 = np.zeros((kk, n))
+    u = np.zeros((kk, n))
+    av = np.zeros((kk, n))
+    bv = np.zeros((kk, n))
+    rhs = np.zeros(n)
+    e = np.zeros(n)
+    a3_0 = s3[0, n]
+    p = 0.0
+    balance = 0.0
+    steps = 0
 
-    def step(self, ta: float, tb: float) -> None:
-        """Prepare the step [ta, tb] (units of tau_ref): the node volumes at its ends, the
-        node flux rates (own time; the mean over the step, so the fluid volumes change
-        exactly by the trajectory's) and the conductances at its midpoint geometry."""
-        sa, sb = ta / self.rho, tb / self.rho
-        self.s3a, self.s3b = self._volumes(sa), self._volumes(sb)
-        self.q[:] = -(self.s3b[1:] - self.s3a[1:]) / (sb - sa)
-        if self.par.d0 <= 0.0:
-            return
-        sm, last = 0.5 * (sa + sb), self.s.size - 1
-        j = int(np.searchsorted(self.s, sm, side="right")) - 1
-        tol = 1e-12 * max(1.0, sb)
-        if j < last and sa >= self.s[j] - tol and sb <= self.s[j + 1] + tol:
-            key = j  # inside one sample interval: frozen at its midpoint, as the kernel
-            geo = 0.5 * (self.s3[j] + self.s3[j + 1])
-        else:
-            key, geo = -1, 0.5 * (self.s3a + self.s3b)
-        if key < 0 or key != self.frozen:
-            conductances(np.ascontiguousarray(geo), self.dw, self.rd, self.par, self.g,
-                         self.phi, self.lam, self.kc, self.wc)
-        self.frozen = key
-
-    def at(self, theta: float) -> tuple[float, float, float]:
-        """Assemble the operator at the fraction ``theta`` of the step: (alpha, beta, a^3),
-        rates per unit own time."""
-        self.r3[:] = (1.0 - theta) * self.s3a + theta * self.s3b
-        if not operator(self.r3, self.dw, self.rd, self.par, self.q, self.g, 1.0, self.lo,
-                        self.di, self.up, self.fw, self.fl, self.phi, self.lam, self.kc,
-                        self.wc):
-            raise SolverError("batch medium: a cell without fluid", {"theta": theta})
-        n = self.n
-        return float(self.up[n - 1]), float(self.lo[n - 1]), float(self.r3[n])
-
-    def apply(self, m: np.ndarray) -> np.ndarray:
-        """A m over the cells (own time), without the medium's column."""
-        n = self.n
-        out = self.di[:n] * m
-        out[1:] += self.lo[: n - 1] * m[:-1]
-        out[:-1] += self.up[: n - 1] * m[1:]
-        return out
-
-    def solve(self, dh: float, rhs: np.ndarray) -> np.ndarray:
-        """(I - dh A / rho)^-1 rhs over the cells."""
-        n = self.n
-        _solve(self.lo[: n - 1], self.di[:n], self.up[: n - 1], dh / self.rho,
-               np.ascontiguousarray(rhs), self.out, self.cp)
-        return self.out.copy()
+    up_p = 0.0
+    fp0 = 0.0
+    o = out_at[0]
+    if o >= 0:
+        for k in range(kk):
+            out_cls[k, o] = 1.0 - np.sum(m[k])
+        out_c[o] = 0.0
+    for i in range(grid.size - 1):
+        ta, tb = grid[i], grid[i + 1]
+        h = tb - ta
+        if not h > 0.0:
+            continue
+        dh = D_COEF * h
+        for k in range(kk):  # the step's geometry, node fluxes and conductances per class
+            sa, sb = ta / rho[k], tb / rho[k]
+            _volumes(s, s3, sa, s3a[k])
+            _volumes(s, s3, sb, s3b[k])
+            for j in range(n):
+                q[k, j] = -(s3b[k, j + 1] - s3a[k, j + 1]) / (sb - sa)
+            if par.d0 > 0.0:
+                sm = 0.5 * (sa + sb)
+                j = np.searchsorted(s, sm, side="right") - 1
+                tol = 1e-12 * max(1.0, sb)
+                key = -1
+                if j < last and sa >= s[j] - tol and sb <= s[j + 1] + tol:
+                    key = j  # inside one sample interval: frozen at its midpoint (kernel)
+                    for c in range(n + 1):
+                        mid[c] = 0.5 * (s3[j, c] + s3[j + 1, c])
+                else:
+                    for c in range(n + 1):
+                        mid[c] = 0.5 * (s3a[k, c] + s3b[k, c])
+                if key < 0 or key != frozen[k]:
+                    conductances(mid, dw, rd, par, g[k], phi, lam, kc, wc)
+                frozen[k] = key
+        for stage in range(3):
+            theta = 0.0 if stage == 0 else (GAMMA if stage == 1 else 1.0)
+            vol = v0
+            for k in range(kk):
+                for c in range(n + 1):
+                    r3[c] = (1.0 - theta) * s3a[k, c] + theta * s3b[k, c]
+                if not operator(r3, dw, rd, par, q[k], g[k], 1.0, lo[k], di[k], up[k], fw,
+                                fl, phi, lam, kc, wc):
+                    return steps, balance, 2
+                al[k] = up[k, n - 1]
+                be[k] = lo[k, n - 1]
+                vol += nu[k] * (a3_0 - r3[n])
+            inv_v = 0.0 if sink else 1.0 / vol
+            if stage == 0:  # f0 = B y at the step's start
+                conc = p * inv_v
+                fp0 = 0.0
+                for k in range(kk):
+                    for c in range(n):
+                        x = di[k, c] * m[k, c]
+                        if c > 0:
+                            x += lo[k, c - 1] * m[k, c - 1]
+                        if c < n - 1:
+                            x += up[k, c] * m[k, c + 1]
+                        f0[k, c] = x
+                    f0[k, n - 1] += al[k] * conc
+                    for c in range(n):
+                        f0[k, c] /= rho[k]
+                    fp0 += nu[k] * (be[k] * m[k, n - 1] - al[k] * conc) / rho[k]
+                continue
+            # (I - dh B) (y, P) = (rhs, rp) by the Schur complement on P
+            den = 1.0
+            num = p + dh * fp0 if stage == 1 else A_U * up_p + A_N * p
+            for k in range(kk):
+                for c in range(n):
+                    rhs[c] = m[k, c] + dh * f0[k, c] if stage == 1 else \
+                        A_U * u[k, c] + A_N * m[k, c]
+                _solve(lo[k, : n - 1], di[k, :n], up[k, : n - 1], dh / rho[k], rhs, av[k], cp)
+                if inv_v > 0.0:
+                    e[:] = 0.0
+                    e[n - 1] = dh * al[k] * inv_v / rho[k]
+                    _solve(lo[k, : n - 1], di[k, :n], up[k, : n - 1], dh / rho[k], e, bv[k],
+                           cp)
+                else:
+                    bv[k, :] = 0.0
+                w = nu[k] * dh * be[k] / rho[k]
+                den += nu[k] * dh * al[k] * inv_v / rho[k] - w * bv[k, n - 1]
+                num += w * av[k, n - 1]
+            pp = num / den
+            if stage == 1:
+                for k in range(kk):
+                    for c in range(n):
+                        u[k, c] = av[k, c] + pp * bv[k, c]
+                up_p = pp
+            else:
+                for k in range(kk):
+                    for c in range(n):
+                        m[k, c] = av[k, c] + pp * bv[k, c]
+                p = pp
+                total = p
+                for k in range(kk):
+                    total += nu[k] * np.sum(m[k])
+                if not np.isfinite(total):
+                    return steps, balance, 2
+                balance = max(balance, abs(total - 1.0))
+                steps += 1
+                o = out_at[i + 1]
+                if o >= 0:
+                    for k in range(kk):
+                        out_cls[k, o] = 1.0 - np.sum(m[k])
+                    out_p[o] = p
+                    out_c[o] = p * inv_v
+    return steps, balance, 0
 
 
 def _start(s3: np.ndarray, dw: np.ndarray, par: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -228,101 +310,33 @@ def coupled_release(s: Any, s3: Any, solute: Solute, rho: Any, nu: Any,
     if isinstance(sub, bool) or not isinstance(sub, int) or not 1 <= sub <= 64:
         raise ParameterError("sub", sub, "an integer 1-64")
     n = s3.shape[1] - 1
-    a3_0 = float(s3[0, n])
     if medium_volume is not None and not medium_volume > 0.0:
         raise ParameterError("medium_volume", medium_volume, "None (a perfect sink) or > 0")
     dw = np.diff((np.arange(n + 1) / n) ** 3)
     par = solute.params()
     rd, m0 = _start(s3, dw, par)
-    classes = [_Class(s, s3, dw, rd, par, float(r), m0) for r in rho]
     grid = time_grid(s, rho, float(times[-1]), times, sub, points)
-    sink = medium_volume is None
-    v0 = 0.0 if sink else float(medium_volume)
-    p = 0.0  # the medium's drug, a fraction of the batch's load
-
-    def assemble(theta: float) -> tuple[list[tuple[float, float]], float]:
-        ab, vol = [], v0
-        for c in classes:
-            alpha, beta, a3 = c.at(theta)
-            ab.append((alpha, beta))
-            vol += nu_of[id(c)] * (a3_0 - a3)
-        return ab, (0.0 if sink else 1.0 / vol)
-
-    nu_of = {id(c): float(w) for c, w in zip(classes, nu, strict=True)}
-
-    def rates(ab: list[tuple[float, float]], inv_v: float, ms: list[np.ndarray],
-              pp: float) -> tuple[list[np.ndarray], float]:
-        conc = pp * inv_v
-        fs, fp = [], 0.0
-        for c, (alpha, beta), m in zip(classes, ab, ms, strict=True):
-            f = c.apply(m)
-            f[-1] += alpha * conc
-            fs.append(f / c.rho)
-            fp += nu_of[id(c)] * (beta * m[-1] - alpha * conc) / c.rho
-        return fs, fp
-
-    def implicit(ab: list[tuple[float, float]], inv_v: float, dh: float,
-                 rhs: list[np.ndarray], rp: float) -> tuple[list[np.ndarray], float]:
-        """(I - dh B) (m, P) = (rhs, rp) by the Schur complement on P."""
-        av, bv = [], []
-        den, num = 1.0, rp
-        e = np.zeros(classes[0].n)
-        for c, (alpha, beta), r in zip(classes, ab, rhs, strict=True):
-            a = c.solve(dh, r)
-            e[-1] = dh * alpha * inv_v / c.rho
-            b = c.solve(dh, e) if inv_v > 0.0 else np.zeros_like(a)
-            w = nu_of[id(c)] * dh * beta / c.rho
-            den += nu_of[id(c)] * dh * alpha * inv_v / c.rho - w * b[-1]
-            num += w * a[-1]
-            av.append(a)
-            bv.append(b)
-        pp = num / den
-        return [a + pp * b for a, b in zip(av, bv, strict=True)], pp
-
+    at = np.searchsorted(grid, times)
+    at = np.minimum(at, grid.size - 1)
+    if not np.allclose(grid[at], times, rtol=1e-12, atol=1e-300):
+        raise SolverError("batch medium: an output time off the grid", {})
+    out_at = np.full(grid.size, -1, dtype=np.int64)
+    out_at[at] = np.arange(times.size)  # repeated output times: the last takes it
     out_rel = np.zeros((rho.size, times.size))
     out_p = np.zeros(times.size)
     out_c = np.zeros(times.size)
-    # per class: the net drug it has released (the medium's share that came from it)
-    gone = np.zeros(rho.size)
-    balance = 0.0
-    k_out = 0
-
-    def record(t: float, inv_v: float) -> None:
-        nonlocal k_out
-        while k_out < times.size and times[k_out] <= t + 1e-12 * max(1.0, t):
-            out_rel[:, k_out] = [1.0 - c.m.sum() for c in classes]
-            out_p[k_out] = p
-            out_c[k_out] = p * inv_v
-            k_out += 1
-
-    record(0.0, 0.0 if sink else 1.0 / v0)
-    steps = 0
-    for ta, tb in zip(grid[:-1], grid[1:], strict=True):
-        h = tb - ta
-        if h <= 0.0:
-            continue
-        dh = D_COEF * h
-        for c in classes:
-            c.step(ta, tb)
-        ab0, iv0 = assemble(0.0)
-        ms = [c.m for c in classes]
-        f0, fp0 = rates(ab0, iv0, ms, p)
-        abg, ivg = assemble(GAMMA)
-        u, up = implicit(abg, ivg, dh, [m + dh * f for m, f in zip(ms, f0, strict=True)],
-                         p + dh * fp0)
-        ab1, iv1 = assemble(1.0)
-        y, p = implicit(ab1, iv1, dh, [A_U * a + A_N * m for a, m in zip(u, ms, strict=True)],
-                        A_U * up + A_N * p)
-        for c, m in zip(classes, y, strict=True):
-            c.m = m
-        steps += 1
-        total = sum(nu_of[id(c)] * c.m.sum() for c in classes) + p
-        balance = max(balance, abs(total - 1.0))
-        if not math.isfinite(total):
-            raise SolverError("batch medium: a non-finite state", {"t": tb})
-        record(tb, iv1)
-    gone = out_rel
+    m = np.ascontiguousarray(np.tile(m0, (rho.size, 1)))
+    sink = medium_volume is None
+    v0 = -1.0 if sink else float(medium_volume)
+    steps, balance, status = _march(grid, s, s3, dw, rd, par, rho, nu, v0, m, out_at,
+                                    out_rel, out_p, out_c)
+    if status != 0:
+        raise SolverError("batch medium: a cell without fluid or a non-finite state",
+                          {"steps": int(steps)})
+    dup = np.nonzero(np.diff(times) == 0.0)[0]
+    for j in dup[::-1]:  # a repeated output time copies its twin
+        out_rel[:, j], out_p[j], out_c[j] = out_rel[:, j + 1], out_p[j + 1], out_c[j + 1]
     return MediumRelease(
-        t=times.copy(), released=out_p, class_released=gone, concentration=out_c,
-        nu=nu, rho=rho, medium_volume=None if sink else v0, mass_balance_error=balance,
-        steps=steps, diagnostics={"grid_points": int(grid.size), "sub": sub, "n": n})
+        t=times.copy(), released=out_p, class_released=out_rel, concentration=out_c,
+        nu=nu, rho=rho, medium_volume=None if sink else v0, mass_balance_error=float(balance),
+        steps=int(steps), diagnostics={"grid_points": int(grid.size), "sub": sub, "n": n})
