@@ -30,7 +30,7 @@ from .quantity import micrometres, to_unit
 from .size_distribution import DrySizes, SizeDistribution, as_distribution
 from .units import UM3_PER_UL, timescale
 
-CLASSES = (8, 16)  # Gauss-Legendre size classes: the answer's and its check
+CLASSES = (32, 64)  # Gauss-Legendre size classes (one panel): the answer's and its check
 POINTS = 400  # steps of the coupled solve (x SUB), geometric from START x the horizon
 START = 1e-5
 SUB = (1, 2)  # steps per interval: the answer's and its check (their gap: numerical error)
@@ -149,10 +149,11 @@ def batch_classes(sizes: DrySizes, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 def coupled(s: np.ndarray, s3: np.ndarray, solute: Any, sizes: DrySizes, n: int,
             v0: float | None, sub: int) -> MediumRelease:
-    """The coupled release of ``n`` classes up to the largest class's horizon, on steps
-    even in ln t (a release is fast at first: the outputs are the steps)."""
+    """The coupled release of ``n`` classes up to the largest class's horizon (of the
+    finest quadrature: every run on the same outputs), on steps even in ln t (a release
+    is fast at first: the outputs are the steps)."""
     rho, nu = batch_classes(sizes, n)
-    t_max = float(s[-1]) * float(rho.max())
+    t_max = float(s[-1]) * float(batch_classes(sizes, CLASSES[-1])[0].max())
     times = np.concatenate(([0.0], np.geomspace(t_max * START, t_max, POINTS)))
     return coupled_release(s, s3, solute, rho, nu, v0, times, sub=sub, points=0)
 
