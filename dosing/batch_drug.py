@@ -75,15 +75,12 @@ def batch_dry_volume_ul(sizes: DrySizes, count: float) -> float:
 
 
 @functools.lru_cache(maxsize=8)
-def _mechanics(gel: Any, t_start: float, t_end: float, branch: str | None,
-               settings: Any) -> tuple[np.ndarray, np.ndarray]:
-    """(s, r^3 at the dry cells' nodes) of the reference bead's run (memoised)."""
-    from solver.solute import node_volumes
-
+def mechanics(gel: Any, t_start: float, t_end: float, branch: str | None,
+              settings: Any) -> Any:
+    """The reference bead's full-solver run to HORIZON (memoised; a FullResult)."""
     from .drug import simulate_protocol
 
-    res = simulate_protocol(gel, t_start, [(HORIZON, t_end)], branch or "swollen", settings)
-    return np.asarray(res.t, dtype=float), node_volumes(res)
+    return simulate_protocol(gel, t_start, [(HORIZON, t_end)], branch or "swollen", settings)
 
 
 @dataclass
@@ -187,7 +184,10 @@ def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
         n_beads = bead_count(count)
         v0 = ml * 1e3 / batch_dry_volume_ul(sizes, n_beads)
     settings = drug_settings(req.settings)
-    s, s3 = _mechanics(req.gel, req.t_start, req.t_end, req.branch, settings)
+    from solver.solute import node_volumes
+
+    res = mechanics(req.gel, req.t_start, req.t_end, req.branch, settings)
+    s, s3 = np.asarray(res.t, dtype=float), node_volumes(res)
     solute = req.solute
     f = req.fraction
     runs = {(n, sub): coupled(s, s3, solute, sizes, n, v0, sub)
@@ -238,3 +238,25 @@ def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
         classes=int(best.rho.size), reference_dry_radius_um=sizes.mean_um,
         interfacial_length=float(settings.interfacial_length or 0.0),
         description=sizes.spec.describe(), note=note)
+
+
+def check_batch_body(body: Any) -> None:
+    """A request's batch-medium fields, checked before any run (a ParameterError names the
+    field): ``medium_volume_ml`` and ``bead_count`` go together, with a drug and a
+    size_distribution; a batch's drug dose is a fraction of its load."""
+    ml, count = getattr(body, "medium_volume_ml", None), getattr(body, "bead_count", None)
+    batch = getattr(body, "drug", None) is not None and getattr(
+        body, "size_distribution", None) is not None
+    for name, value in (("medium_volume_ml", ml), ("bead_count", count)):
+        if value is not None and not batch:
+            raise ParameterError(name, value, "null without a drug and a size_distribution "
+                                 "(the medium a drug batch shares)")
+    if (ml is None) != (count is None):
+        name = "bead_count" if count is None else "medium_volume_ml"
+        raise ParameterError(name, None, "given with " + ("medium_volume_ml" if
+                             name == "bead_count" else "bead_count") + " (both or neither)")
+    if ml is not None:
+        medium_volume_ml(ml)
+        bead_count(count)
+    if batch and getattr(body, "dose_fraction", None) is None:
+        raise ParameterError("dose_fraction", None, "a fraction of the batch's load (0-1)")
