@@ -260,3 +260,12 @@ def check_batch_body(body: Any) -> None:
         bead_count(count)
     if batch and getattr(body, "dose_fraction", None) is None:
         raise ParameterError("dose_fraction", None, "a fraction of the batch's load (0-1)")
+    if batch:
+        drug = body.drug
+        if getattr(drug, "release_volume_ul", None) is not None:
+            raise ParameterError("drug.release_volume_ul", drug.release_volume_ul,
+                                 "null for a batch (give medium_volume_ml and bead_count)")
+        for name in ("wait", "wait_seconds"):
+            if getattr(drug, name, None):
+                raise ParameterError(f"drug.{name}", getattr(drug, name), "0 or null for a "
+                                     "batch (a wait at T_start is not planned for batches)")
