@@ -211,10 +211,9 @@ def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
                                                                    ** 3))
                                          * (req.start_radius**3 - 1.0))
     conc = None
-    if v0 is not None and req.load_ug is not None:
-        total_ug = req.load_ug * (batch_dry_volume_ul(sizes, n_beads)
-                                  / (4.0 * math.pi / 3.0 * sizes.mean_um**3 / UM3_PER_UL))
-        conc = f * total_ug / (ml * 1e3)  # the medium's growth by fluid is below 1e-3 here
+    if v0 is not None and req.load_ug is not None:  # per load and batch dry volume -> ug/uL
+        ref_ul = 4.0 * math.pi / 3.0 * sizes.mean_um**3 / UM3_PER_UL
+        conc = float(np.interp(t, best.t, best.concentration)) * req.load_ug / ref_ul
     medium = ("a perfect sink" if v0 is None else
               f"one well-mixed medium of {ml:.4g} mL shared by {n_beads:.4g} beads "
               f"({pore:.3g}x their partition-weighted pore volume)")

@@ -32,8 +32,10 @@ def test_equal_beads_match_one_bead_in_its_share_of_the_medium() -> None:
     A slow drug (D0 1e-8 cm^2/s, the gel's own D): its dose comes late enough (~0.05 tau)
     for the kernel's dose time, linear between samples 5e-4 tau apart, to be within 1e-3
     (measured 2.1e-4; the batch's numerical error 5e-5)."""
-    req = _req({"diffusivity_cm2_s": 1e-8, "hindrance": "none"})
+    req = _req({"diffusivity_cm2_s": 1e-8, "hindrance": "none", "load_ug": 1e-4})
     ans = drug_batch_dose(req, {"cv": 0.0}, 20.0, 1e6)
+    # half of 1e6 x 1e-4 ug in 20 mL grown by the fluid expelled by then (< the stored 5.8 mL)
+    assert 50.0 / (20e3 + 5.8e3) < ans.medium_concentration_ug_per_ul < 50.0 / 20e3
     sizes = as_distribution({"cv": 0.0, "mean_um": 50.0}).resolve(req.start_radius)
     v0 = 20.0e3 / batch_dry_volume_ul(sizes, 1e6)
     assert ans.medium_over_pore_volume == pytest.approx(v0 / (req.start_radius**3 - 1))
