@@ -361,17 +361,14 @@ def tolerated_cv(req: DoseRequest, tolerance: float, cv_max: float = 1.0) -> flo
 
 def check_cvs(values: Any) -> tuple[float, ...]:
     """A sweep's CV axis: a non-empty list of CVs 0-2 (ParameterError names the entry)."""
-    from .size_distribution import MAX_CV
+    from .size_distribution import _cv
 
     out = []
     for i, v in enumerate(values):
         try:
-            x = float(v)
-        except (TypeError, ValueError):
-            x = math.nan
-        if isinstance(v, bool) or not (math.isfinite(x) and 0.0 <= x <= MAX_CV):
-            raise ParameterError(f"size_cvs[{i}]", v, f"a CV 0-{MAX_CV:g}")
-        out.append(x)
+            out.append(_cv("cv", v))
+        except ParameterError as exc:
+            raise ParameterError(f"size_cvs[{i}]", v, exc.valid) from None
     if not out:
         raise ParameterError("size_cvs", list(values), "a non-empty list of CVs 0-2")
     return tuple(out)

@@ -20,6 +20,7 @@ from solver.solute import Solute, release
 
 DRUG = {"diffusivity_cm2_s": 1e-6, "hindrance": "none"}
 SETTINGS = {"grid": "lagrangian", "n": 40, "interfacial_length": 0.0}
+TABLE = {"kind": "table", "sizes_um": [40.0, 60.0]}
 
 
 def _req(drug: dict | None = None, **kw) -> DrugDoseRequest:
@@ -100,3 +101,26 @@ async def test_http_refuses_bad_batch_medium_fields(tmp_path) -> None:
     finally:
         planner.close()
         planner.jobs.executor.shutdown(wait=True)
+
+
+def test_http_job_answers_the_python_batch(tmp_path) -> None:
+    """The stored drug-dose job's run (api.service, state None: blocking) is drug_batch_dose
+    at the request's default settings (the truth's mechanics)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from api.schemas import DoseTimeRequest
+    from api.service import dose_time
+    from dosing import Planner
+
+    body = {"gel": "ANB", "t_start": 302, "t_end": 308, "dose_fraction": 0.5,
+            "drug": DRUG, "size_distribution": TABLE, "medium_volume_ml": "20 mL",
+            "bead_count": 1e6}
+    planner = Planner(cache_path=str(tmp_path / "c.sqlite"), executor=ThreadPoolExecutor(1))
+    try:
+        out = dose_time(planner, DoseTimeRequest(**body))
+    finally:
+        planner.close()
+        planner.jobs.executor.shutdown(wait=True)
+    ref = drug_batch_dose(DrugDoseRequest("ANB", 302, 308, DRUG, dose_fraction=0.5),
+                          TABLE, 20.0, 1e6)
+    assert out["batch"]["time"] == ref.time and out["batch"]["medium_volume_ml"] == 20.0
