@@ -60,6 +60,13 @@ def test_cli_and_http_match_python(capsys) -> None:
     assert 0.0 < out["sink_overestimate"] < 1.0
 
 
+def test_cli_refuses_a_medium_without_a_drug_batch(capsys) -> None:
+    argv = ["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction", "0.5",
+            "--dry-radius-um", "50", "--medium-volume-ml", "5", "--bead-count", "10"]
+    assert main(argv) == 2
+    assert "--medium-volume-ml" in capsys.readouterr().err
+
+
 def test_bad_batch_medium_input_is_refused_naming_the_field() -> None:
     with pytest.raises(ParameterError) as exc:
         drug_batch_dose(_req(), {"cv": 0.2}, 5.0, None)

@@ -210,6 +210,12 @@ def run(args: argparse.Namespace) -> int:
         "concentration_ug_per_ul": args.concentration_ug_per_ul})
     checked_cache(args.cache)
     drug = drug_from_args(args)
+    for flag, value in (("--medium-volume-ml", args.medium_volume_ml),
+                        ("--bead-count", args.bead_count)):
+        if value is not None and (drug is None or (args.size_cv is None
+                                                   and args.sizes is None)):
+            raise ParameterError(flag, value, "with a drug option and --size-cv or --sizes "
+                                 "(the medium a drug batch shares)")
     if drug is not None and steps is not None:
         raise ParameterError("protocol", steps, "absent with a drug option (a drug dose under "
                              "a protocol is not planned yet)")
