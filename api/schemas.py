@@ -27,7 +27,14 @@ from pydantic import (
 from dosing.quantity import from_edge
 from dosing.request import ScheduleRequest as PlannerSchedule
 from dosing.scenario import DEFAULT_INTERFACIAL_LENGTH
-from solver.limits import T_MAX, T_MIN, TRUTH_DIRECT_ELL_RANGE, TRUTH_LADDER_START_RANGE
+from solver.limits import (
+    BEAD_COUNT_RANGE,
+    MEDIUM_VOLUME_ML_RANGE,
+    T_MAX,
+    T_MIN,
+    TRUTH_DIRECT_ELL_RANGE,
+    TRUTH_LADDER_START_RANGE,
+)
 
 from .drug_schemas import DrugIn  # the optional drug of the dose and schedule requests
 from .outputs import Out as _Out
@@ -428,7 +435,16 @@ class DoseTimeRequest(RequestModel):
     size_distribution: SizeDistributionIn | None = Field(
         None, description="a batch of beads: the answer adds 'batch' (its dose time, the "
                           "fraction of beads delivered, the 10th-90th percentile bead; "
-                          "docs/batch.md); dose_fraction only")
+                          "docs/batch.md); dose_fraction only. With a drug: the batch's "
+                          "drug dose into medium_volume_ml shared by bead_count beads "
+                          "(a perfect sink without them; a stored job)")
+    medium_volume_ml: float | str | None = Field(
+        None, examples=[10.0], description="with a drug and a size_distribution: the release "
+        f"medium the batch shares, mL ({MEDIUM_VOLUME_ML_RANGE[0]:g}-"
+        f"{MEDIUM_VOLUME_ML_RANGE[1]:g}; or with a unit, '250 uL'); null: a perfect sink")
+    bead_count: float | None = Field(
+        None, ge=BEAD_COUNT_RANGE[0], le=BEAD_COUNT_RANGE[1], examples=[1e6],
+        description="with medium_volume_ml: the number of beads in the batch")
     validate_full: bool = Field(
         False, alias="validate",
         description="also queue a full-solver validation of this dose (poll "

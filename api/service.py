@@ -337,9 +337,16 @@ def _drug_answer(ans: Any) -> dict[str, Any]:
 
 
 def _drug_dose_job(planner: Planner, body: s.DoseTimeRequest) -> dict[str, Any]:
-    """A stored drug-dose job's run: the answer, computing its drug runs (blocking)."""
-    return _drug_answer(plan_drug_dose(planner, to_drug_dose_request(body),
-                                       validate=body.validate_full))
+    """A stored drug-dose job's run: the answer, computing its drug runs (blocking); a
+    batch's (a size_distribution) from dosing.batch_drug."""
+    req = to_drug_dose_request(body)
+    if body.size_distribution is not None:
+        from dosing.batch_drug import drug_batch_dose
+
+        ans = drug_batch_dose(req, body.size_distribution.model_dump(exclude_none=True),
+                              body.medium_volume_ml, body.bead_count)
+        return {"status": "answered", "drug": True, "batch": ans.to_dict()}
+    return _drug_answer(plan_drug_dose(planner, req, validate=body.validate_full))
 
 
 def dose_time(planner: Planner, body: s.DoseTimeRequest,
@@ -348,10 +355,16 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest,
     one planner call (:meth:`dosing.Planner.answer`).  A dose with a drug is answered at
     once when its runs are cached (:func:`dosing.drug_dose.drug_dose_now`), else (given
     ``state``) as a stored 'drug-dose' job, so that no HTTP worker thread waits on a run."""
-    if body.size_distribution is not None and (body.drug is not None
-                                               or body.protocol is not None):
-        raise ParameterError("size_distribution", "a batch", "null with a drug or a protocol "
-                             "(a batch's drug dose or protocol dose is not built yet)")
+    if body.size_distribution is not None and body.protocol is not None:
+        raise ParameterError("size_distribution", "a batch", "null with a protocol (a "
+                             "batch's protocol dose is not built yet)")
+    from dosing.batch_drug import check_batch_body
+
+    check_batch_body(body)
+    if body.drug is not None and body.size_distribution is not None:  # issue 26
+        if state is None:
+            return _drug_dose_job(planner, body)
+        return Accepted(stored_jobs.submit(state, "drug-dose", body), DRUG_PENDING_NOTE)
     if body.drug is not None and body.protocol is None:
         if state is None:
             return _drug_dose_job(planner, body)

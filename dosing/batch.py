@@ -357,3 +357,26 @@ def tolerated_cv(req: DoseRequest, tolerance: float, cv_max: float = 1.0) -> flo
     if excess(cv_max) <= 0.0:
         return cv_max
     return float(brentq(excess, 0.0, cv_max, xtol=1e-6))
+
+
+def check_cvs(values: Any) -> tuple[float, ...]:
+    """A sweep's CV axis: a non-empty list of CVs 0-2 (ParameterError names the entry)."""
+    from .size_distribution import _cv
+
+    out = []
+    for i, v in enumerate(values):
+        try:
+            out.append(_cv("cv", v))
+        except ParameterError as exc:
+            raise ParameterError(f"size_cvs[{i}]", v, exc.valid) from None
+    if not out:
+        raise ParameterError("size_cvs", list(values), "a non-empty list of CVs 0-2")
+    return tuple(out)
+
+
+def batch_row(req: DoseRequest, cv: float) -> dict[str, Any]:
+    """A sweep row's batch columns for the single-bead request ``req`` as the mean of a
+    number-weighted lognormal of CV ``cv`` (CV 0: the bead's own answer exactly)."""
+    b = batch_answer(with_cv(req, cv))
+    return {"time": b.time, "seconds": b.seconds, "size_cv": cv, "batch_delay": b.delay,
+            "fraction_delivered": b.fraction_delivered}

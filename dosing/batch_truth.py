@@ -123,11 +123,15 @@ class BandRelease:
 
 
 def validated_batch(planner: Any, req: DoseRequest, n_bands: int = BANDS,
-                    every_band: bool = False) -> BatchAnswer:
+                    every_band: bool = False, lean: bool = True) -> BatchAnswer:
     """The batch's answer from the truth per interfacial-length band, with the three-part
     uncertainty and the quadrature error (blocking: runs what the cache lacks).
     ``every_band``: the check and interfacial-length runs in every band (else in the
-    central band, its relative change carried to the others: fewer runs)."""
+    central band, its relative change carried to the others: fewer runs).  ``lean``
+    (default): a run whose need lies past its dose is not stopped at the dose (a stopped
+    run is run again to its need), and the model-form lattice runs its finest rung alone
+    (the batch uses no other); ``lean=False`` is the former way (benchmarks/batch_validation.py
+    compares them)."""
     ans = batch_answer(req)
     sizes = batch_sizes(req)
     edges, reps = band_edges(sizes, n_bands)
@@ -146,7 +150,7 @@ def validated_batch(planner: Any, req: DoseRequest, n_bands: int = BANDS,
     needs = REACH * guess / rho_lower
     for _ in range(4):  # until every band's run covers its smallest central bead
         runs, delayed = _band_runs(planner, breqs, target, needs, a0, every_band,
-                                   req.fraction)
+                                   req.fraction, lean)
         t_of = {}
         for k, curves in runs.items():
             rel = BandRelease(sizes, edges, curves, kink)
@@ -238,8 +242,8 @@ def _roles(breq: DoseRequest, scs: list[Any], trajs: list[Any]) -> tuple[dict[st
 
 
 def _band_runs(planner: Any, breqs: list[DoseRequest], target: float, needs: np.ndarray,
-               a0: float, every_band: bool,
-               fraction: float) -> tuple[dict[str, list[Any]], Any]:
+               a0: float, every_band: bool, fraction: float,
+               lean: bool = True) -> tuple[dict[str, list[Any]], Any]:
     """Per role, every band's release curve; and the finest model-form run (shared, run to
     the smallest beads' need).  Without ``every_band`` only the central band runs the check
     and interfacial-length runs; the other bands take its relative change of the dose time
@@ -254,8 +258,11 @@ def _band_runs(planner: Any, breqs: list[DoseRequest], target: float, needs: np.
         own = [sc for sc in scs if sc.settings.regularized]
         if not (every_band or b == c):
             own = own[:1]  # the truth run alone
-        by, _ = _roles(breq, own, planner._trajectories(own, target, float(need)))
+        by, _ = _roles(breq, own, _runs(planner, own, target, float(need), a0, fraction,
+                                        lean and need >= PAST_DOSE * _front_time(breq)))
         if b == c and mf:
+            if lean:
+                mf = mf[-1:]  # the finest lattice: the only one the batch uses
             _, delayed = _roles(breq, mf, planner._trajectories(mf, target,
                                                                float(max(needs))))
         curves.append({k: _release(t, a0) for k, t in by.items()})
@@ -274,6 +281,33 @@ def _band_runs(planner: Any, breqs: list[DoseRequest], target: float, needs: np.
                 s_, f_ = cur["truth"]
                 runs[k].append((s_ * ratio, f_))
     return runs, delayed
+
+
+PAST_DOSE = 1.2  # a run whose need is this far past the front model's dose is not stopped
+
+
+def _front_time(req: DoseRequest) -> float:
+    from .model_choice import model_answer
+
+    t = model_answer(req).front_time
+    return math.inf if t is None else float(t)
+
+
+def _runs(planner: Any, scs: list[Any], target: float, need: float, a0: float,
+          fraction: float, past: bool) -> list[Any]:
+    """The band's runs to ``need``.  ``past`` (the need lies past the dose): run without
+    the stop at the dose radius, which would end the run there and run it again from the
+    start to its need; a run that still falls short of the dose is then extended to it."""
+    if not past:
+        return planner._trajectories(scs, target, need)
+    out = planner._trajectories(scs, None, need)
+    short = [i for i, t in enumerate(out) if not isinstance(t, BaseException)
+             and _release(t, a0)[1][-1] < fraction]
+    if short:
+        again = planner._trajectories([scs[i] for i in short], target, need)
+        for i, t in zip(short, again, strict=True):
+            out[i] = t
+    return out
 
 
 def _kink_time(req: DoseRequest) -> float:

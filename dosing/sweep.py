@@ -67,6 +67,11 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "validation_status": ("", "pending, running, done or failed"),
     "truth_time": ("tau", "the full solver's time for this dose, once validated"),
     "front_time_error": ("1", "the front model's relative time error against it"),
+    "size_cv": ("1", "with a CV axis: the batch's CV of size (a number-weighted lognormal "
+                     "whose mean is dry_radius_um; time and seconds are the batch's)"),
+    "batch_delay": ("1", "the batch's dose time over its mean bead's, minus 1"),
+    "fraction_delivered": ("1", "the fraction of the batch's beads that have delivered "
+                                "their own dose by the batch's time"),
 }
 
 
@@ -96,6 +101,7 @@ class SweepGrid:
     branch: str | None = None
     constants: PhysicalConstants | dict[str, Any] | None = None
     settings: SolverSettings | dict[str, Any] | None = None
+    size_cvs: Sequence[float] | None = None  # a fifth axis: batches (dosing.batch)
     _gels: tuple[Gel, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -114,6 +120,10 @@ class SweepGrid:
                                      "parameters") from exc
         object.__setattr__(self, "_gels", tuple(resolved))
         object.__setattr__(self, "t_start", float(self.t_start))
+        if self.size_cvs is not None:
+            from .batch import check_cvs
+
+            object.__setattr__(self, "size_cvs", check_cvs(self.size_cvs))
         if self.size > MAX_POINTS:
             raise ParameterError("grid", self.shape, f"at most {MAX_POINTS} points (this grid "
                                  f"has {self.size}): split it into several sweeps")
@@ -123,9 +133,10 @@ class SweepGrid:
             object.__setattr__(self, "settings", self.settings.request_dict())
 
     @property
-    def shape(self) -> tuple[int, int, int, int]:
-        """(gels, t_ends, dry radii, doses)."""
-        return (len(self._gels), len(self.t_ends), len(self.dry_radii_um), len(self.doses))
+    def shape(self) -> tuple[int, ...]:
+        """(gels, t_ends, dry radii, doses), and CVs when the grid has that axis."""
+        four = (len(self._gels), len(self.t_ends), len(self.dry_radii_um), len(self.doses))
+        return four if self.size_cvs is None else (*four, len(self.size_cvs))
 
     @property
     def size(self) -> int:
@@ -135,12 +146,13 @@ class SweepGrid:
     def points(self) -> list[dict[str, Any]]:
         """Every point as plain data (picklable, JSON-ready), in C order of :attr:`shape`."""
         out = []
-        axes = product(enumerate(self._gels), self.t_ends, self.dry_radii_um, self.doses)
-        for i, ((g, gel), t_end, r, f) in enumerate(axes):
+        cvs = (None,) if self.size_cvs is None else self.size_cvs
+        axes = product(enumerate(self._gels), self.t_ends, self.dry_radii_um, self.doses, cvs)
+        for i, ((g, gel), t_end, r, f, cv) in enumerate(axes):
             out.append({"index": i, "gel_index": g, "gel": gel.to_dict(), "t_start": self.t_start,
                         "t_end": t_end, "dry_radius_um": r, "dose_fraction": f,
                         "branch": self.branch, "constants": self.constants,
-                        "settings": self.settings})
+                        "settings": self.settings, "size_cv": cv})
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -149,7 +161,8 @@ class SweepGrid:
                 "t_ends": list(self.t_ends), "dry_radii_um": list(self.dry_radii_um),
                 "doses": list(self.doses), "branch": self.branch,
                 "constants": self.constants, "settings": self.settings,
-                "shape": list(self.shape)}
+                "shape": list(self.shape),
+                **({} if self.size_cvs is None else {"size_cvs": list(self.size_cvs)})}
 
 
 GEL_PARAMETERS = ("omega", "a0", "b0", "a1", "b1")
@@ -184,7 +197,7 @@ def point_request(point: dict[str, Any]) -> DoseRequest:
 
 def _row(point: dict[str, Any]) -> dict[str, Any]:
     row = dict.fromkeys(COLUMNS)
-    row.update(index=point["index"], gel_index=point["gel_index"],
+    row.update(index=point["index"], gel_index=point["gel_index"], size_cv=point.get("size_cv"),
                gel=point["gel"].get("name", "custom"),
                t_start=point["t_start"], t_end=point["t_end"],
                dry_radius_um=point["dry_radius_um"], dose_fraction=point["dose_fraction"])
@@ -213,6 +226,10 @@ def answer_point(point: dict[str, Any]) -> dict[str, Any]:
                timescale_seconds=ans.timescale_seconds, final_radius_um=ans.final_radius_um,
                expelled_volume_ul=ans.expelled_volume_ul, stored_volume_ul=ans.stored_volume_ul,
                error_estimate=ans.error_estimate)
+    if point.get("size_cv") is not None:  # a batch of that CV (issue 26)
+        from .batch import batch_row
+
+        row.update(batch_row(req, point["size_cv"]))
     return row
 
 
@@ -320,6 +337,10 @@ def _queue_validations(planner: Planner, rows: list[dict[str, Any]],
     for i in indices:
         row = rows[i]
         if row["status"] == "error":
+            continue
+        if row.get("size_cv") is not None:  # a batch: dosing.batch_truth validates it
+            note = "validation not queued: a batch's (validate_full on its dose request)"
+            row["message"] = f"{row['message']}; {note}" if row["message"] else note
             continue
         try:
             row["validation_id"] = planner.submit_validation(point_request(points[i]))

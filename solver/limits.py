@@ -29,3 +29,7 @@ TRUTH_DIRECT_ELL_RANGE = (2e-5, 0.02)
 # while they are not: ANB from 0.02 misses the limit by 1 %)
 LADDER_RUNGS = 3
 TRUTH_LADDER_START_RANGE = (TRUTH_LADDER_ELL_RANGE[0] * (1 << (LADDER_RUNGS - 1)), 0.01)
+
+# a drug batch's shared release medium (mL) and its number of beads (dosing.batch_drug)
+MEDIUM_VOLUME_ML_RANGE = (1e-6, 1e4)
+BEAD_COUNT_RANGE = (1.0, 1e15)

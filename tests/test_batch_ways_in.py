@@ -71,12 +71,13 @@ def test_cli_refuses_an_empty_or_negative_table(capsys, tmp_path) -> None:
         assert "--sizes" in capsys.readouterr().err
 
 
-def test_cli_refuses_a_batch_with_a_drug(capsys, tmp_path) -> None:
-    # a batch's shared finite medium is not built: refused, not answered as one bead
+def test_cli_refuses_a_drug_batch_with_a_per_bead_medium(capsys, tmp_path) -> None:
+    # a batch's drug dose shares one medium (tests/test_batch_drug.py): a per-bead release
+    # volume is refused, naming it, before any run
     assert main([*ARGS, "--dry-radius-um", "50", "--size-cv", "0.2",
-                 "--drug-diffusivity-cm2-s", "1e-7", "--cache",
+                 "--drug-diffusivity-cm2-s", "1e-7", "--release-volume-ul", "1", "--cache",
                  str(tmp_path / "c.sqlite")]) == 2
-    assert "--size-cv" in capsys.readouterr().err
+    assert "release_volume_ul" in capsys.readouterr().err
 
 
 @pytest.fixture
@@ -112,8 +113,8 @@ async def test_http_size_distribution_matches_python(tmp_path) -> None:
                 "kind": "table", "sizes_um": [50.0, -1.0]}})
             assert r.status_code == 422 and "sizes_um" in r.text
             r = await raw.post("/v1/dose-time", json={**body, "drug": {
-                "diffusivity_cm2_s": 1e-7}})
-            assert r.status_code == 422 and "size_distribution" in r.text
+                "diffusivity_cm2_s": 1e-7, "release_volume_ul": 1.0}})
+            assert r.status_code == 422 and "release_volume_ul" in r.text
     finally:
         planner.close()
         planner.jobs.executor.shutdown(wait=True)

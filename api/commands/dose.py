@@ -153,6 +153,11 @@ def add_batch_options(p: argparse.ArgumentParser) -> None:
     b.add_argument("--size-weighting", choices=["number", "volume"], default="number",
                    help="the sizes are number- (default) or volume-weighted (--sizes; with "
                         "--size-cv the mean is always by number)")
+    b.add_argument("--medium-volume-ml", default=None, metavar="ML",
+                   help="with a drug: the release medium the batch shares, in mL (or with a "
+                        "unit, '250 uL'); default a perfect sink")
+    b.add_argument("--bead-count", type=float, default=None, metavar="N",
+                   help="with --medium-volume-ml: the number of beads in the batch")
 
 
 def batch_distribution(args: argparse.Namespace) -> Any:
@@ -205,14 +210,20 @@ def run(args: argparse.Namespace) -> int:
         "concentration_ug_per_ul": args.concentration_ug_per_ul})
     checked_cache(args.cache)
     drug = drug_from_args(args)
+    for flag, value in (("--medium-volume-ml", args.medium_volume_ml),
+                        ("--bead-count", args.bead_count)):
+        if value is not None and (drug is None or (args.size_cv is None
+                                                   and args.sizes is None)):
+            raise ParameterError(flag, value, "with a drug option and --size-cv or --sizes "
+                                 "(the medium a drug batch shares)")
     if drug is not None and steps is not None:
         raise ParameterError("protocol", steps, "absent with a drug option (a drug dose under "
                              "a protocol is not planned yet)")
     if drug is not None:
-        if args.size_cv is not None or args.sizes is not None:
-            raise ParameterError("--size-cv" if args.sizes is None else "--sizes",
-                                 args.size_cv or args.sizes, "not with a drug option (a "
-                                 "batch's drug dose is not built yet)")
+        if args.size_cv is not None or args.sizes is not None:  # a batch (issue 26)
+            from .batch_cli import run_drug_batch
+
+            return run_drug_batch(args, drug, planning_kwargs(args), batch_distribution(args))
         return run_drug_dose(args, drug, planning_kwargs(args))
     dist = batch_distribution(args)
     req = DoseRequest(dose_fraction=args.fraction, dose_volume_ul=args.volume_ul,

@@ -99,6 +99,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--t-end", required=True, help="heating temperatures in K: list or range")
     p.add_argument("--dry-radius-um", required=True, help="dry bead radii in um: list or range")
     p.add_argument("--dose", required=True, help="doses, fractions of the stored fluid")
+    p.add_argument("--size-cv", default=None, metavar="AXIS",
+                   help="a fifth axis: batches of beads, the CV of a number-weighted lognormal "
+                        "whose mean is each dry radius (list or range, 0-2); time and seconds "
+                        "are the batch's, --plot draws the CV x dose map (docs/batch.md)")
     p.add_argument("--branch", choices=["swollen", "shrunken"], default=None)
     p.add_argument("--interfacial-length", type=float, default=None, metavar="L",
                    help="truth's interfacial length (default: each point's bead's own, "
@@ -194,7 +198,12 @@ def run(args: argparse.Namespace) -> int:
                      dry_radii_um=parse_axis("--dry-radius-um", args.dry_radius_um),
                      doses=parse_axis("--dose", args.dose),
                      gels=gels_from_args(args.gel, args.vary),
-                     t_start=args.t_start, branch=args.branch, settings=settings)
+                     t_start=args.t_start, branch=args.branch, settings=settings,
+                     size_cvs=None if args.size_cv is None
+                     else parse_axis("--size-cv", args.size_cv))
+    if grid.size_cvs is not None and args.out:
+        raise ParameterError("--out", args.out, "absent with --size-cv (the netCDF export "
+                             "has the four single-bead axes; use --csv or --json)")
     validate = _validate_arg(args.validate)
     with ExitStack() as stack:
         executor = _executor(args, stack)
@@ -225,9 +234,12 @@ def run(args: argparse.Namespace) -> int:
 
         if not 0 <= args.plot_gel < grid.shape[0]:
             raise ParameterError("--plot-gel", args.plot_gel, f"0-{grid.shape[0] - 1}")
+        if grid.size_cvs is not None:  # the CV x dose map (issue 26)
+            from api.plots.batch import draw_cv_map as draw_sweep
         print(f"wrote {draw_sweep(table, figure_path(args.plot, args.format), args.plot_gel)}",
               file=sys.stderr)
     counts = ", ".join(f"{v} {k}" for k, v in result.counts.items())
     print(f"{grid.size} points ({' x '.join(map(str, grid.shape))} gels x T_end x radius x "
-          f"dose) in {result.seconds:.3f} s: {counts}", file=sys.stderr)
+          f"dose{'' if grid.size_cvs is None else ' x CV'}) in {result.seconds:.3f} s: "
+          f"{counts}", file=sys.stderr)
     return 0

@@ -1,0 +1,133 @@
+"""A batch's drug dose into a shared medium through every way in (issue 26):
+dosing.batch_drug, `thermogel dose` with a drug and --size-cv, POST /v1/dose-time with a drug
+and a size_distribution.  Coarse mechanics (Lagrangian, n = 40, ell = 0) keep it quick."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from api_support import asgi
+
+from api.cli import main
+from api.http import create_app
+from dosing.batch_drug import batch_dry_volume_ul, drug_batch_dose, mechanics
+from dosing.drug import drug_settings
+from dosing.drug_dose import DrugDoseRequest
+from dosing.size_distribution import as_distribution
+from solver.errors import ParameterError
+from solver.solute import Solute, release
+
+DRUG = {"diffusivity_cm2_s": 1e-6, "hindrance": "none"}
+SETTINGS = {"grid": "lagrangian", "n": 40, "interfacial_length": 0.0}
+TABLE = {"kind": "table", "sizes_um": [40.0, 60.0]}
+
+
+def _req(drug: dict | None = None, **kw) -> DrugDoseRequest:
+    return DrugDoseRequest("ANB", 302, 308, drug or DRUG, dose_fraction=0.5,
+                           dry_radius_um=50.0, settings=SETTINGS, **kw)
+
+
+def test_equal_beads_match_one_bead_in_its_share_of_the_medium() -> None:
+    """CV 0 with a medium: the full solute solver's own finite medium (one bead in V / N).
+    A slow drug (D0 1e-8 cm^2/s, the gel's own D): its dose comes late enough (~0.05 tau)
+    for the kernel's dose time, linear between samples 5e-4 tau apart, to be within 1e-3
+    (measured 2.1e-4; the batch's numerical error 5e-5)."""
+    req = _req({"diffusivity_cm2_s": 1e-8, "hindrance": "none", "load_ug": 1e-4})
+    ans = drug_batch_dose(req, {"cv": 0.0}, 20.0, 1e6)
+    # half of 1e6 x 1e-4 ug in 20 mL grown by the fluid expelled by then (< the stored 5.8 mL)
+    assert 50.0 / (20e3 + 5.8e3) < ans.medium_concentration_ug_per_ul < 50.0 / 20e3
+    sizes = as_distribution({"cv": 0.0, "mean_um": 50.0}).resolve(req.start_radius)
+    v0 = 20.0e3 / batch_dry_volume_ul(sizes, 1e6)
+    assert ans.medium_over_pore_volume == pytest.approx(v0 / (req.start_radius**3 - 1))
+    res = mechanics(req.gel, req.t_start, req.t_end, req.branch, drug_settings(req.settings))
+    rel = release(res, Solute(diffusivity=req.solute.diffusivity,
+                              hindrance=req.solute.hindrance, release_volume=v0), rtol=1e-10)
+    assert ans.time == pytest.approx(rel.time_to_release(0.5), rel=1e-3)  # numerical 2e-4
+    assert ans.mass_balance_error < 1e-10
+    assert ans.sink_overestimate > 0.0 and ans.quadrature_error == 0.0
+
+
+def test_cli_and_http_match_python(capsys) -> None:
+    ref = drug_batch_dose(_req(), {"cv": 0.2}, 5.0, 1e6).to_dict()
+    argv = ["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction", "0.5",
+            "--dry-radius-um", "50", "--size-cv", "0.2", "--drug-diffusivity-cm2-s", "1e-6",
+            "--hindrance", "none", "--medium-volume-ml", "5", "--bead-count", "1e6",
+            "--grid", "lagrangian", "--n", "40", "--interfacial-length", "0", "--json"]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["time"] == ref["time"] and out["sink_time"] == ref["sink_time"]
+    assert 0.0 < out["sink_overestimate"] < 1.0
+
+
+def test_cli_refuses_a_medium_without_a_drug_batch(capsys) -> None:
+    argv = ["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction", "0.5",
+            "--dry-radius-um", "50", "--medium-volume-ml", "5", "--bead-count", "10"]
+    assert main(argv) == 2
+    assert "--medium-volume-ml" in capsys.readouterr().err
+
+
+def test_bad_batch_medium_input_is_refused_naming_the_field() -> None:
+    with pytest.raises(ParameterError) as exc:
+        drug_batch_dose(_req(), {"cv": 0.2}, 5.0, None)
+    assert exc.value.field == "bead_count"
+    with pytest.raises(ParameterError) as exc:
+        drug_batch_dose(_req(), {"cv": 0.2}, "5 K", 1e6)
+    assert exc.value.field == "medium_volume_ml"
+    with pytest.raises(ParameterError) as exc:
+        drug_batch_dose(_req(wait=0.1), {"cv": 0.2})
+    assert exc.value.field == "wait"
+
+
+@pytest.fixture
+def anyio_backend() -> str:
+    return "asyncio"
+
+
+@pytest.mark.anyio
+async def test_http_refuses_bad_batch_medium_fields(tmp_path) -> None:
+    from concurrent.futures import ThreadPoolExecutor
+
+    from dosing import Planner
+
+    body = {"gel": "ANB", "t_start": 302, "t_end": 308, "dose_fraction": 0.5,
+            "dry_radius_um": 50, "drug": DRUG, "size_distribution": {"cv": 0.2}}
+    planner = Planner(cache_path=str(tmp_path / "c.sqlite"), executor=ThreadPoolExecutor(1))
+    try:
+        async with asgi(create_app(planner=planner, warm=False)) as (_, raw):
+            for extra, field in (({"medium_volume_ml": 5}, "bead_count"),
+                                 ({"medium_volume_ml": 1e9, "bead_count": 10},
+                                  "medium_volume_ml"),
+                                 ({"bead_count": 0.5, "medium_volume_ml": 1}, "bead_count")):
+                r = await raw.post("/v1/dose-time", json={**body, **extra})
+                assert r.status_code == 422, r.text
+                assert field in r.text
+            r = await raw.post("/v1/dose-time", json={**body, "drug": None,
+                                                      "medium_volume_ml": 5, "bead_count": 10})
+            assert r.status_code == 422 and "medium_volume_ml" in r.text
+    finally:
+        planner.close()
+        planner.jobs.executor.shutdown(wait=True)
+
+
+def test_http_job_answers_the_python_batch(tmp_path) -> None:
+    """The stored drug-dose job's run (api.service, state None: blocking) is drug_batch_dose
+    at the request's default settings (the truth's mechanics)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from api.schemas import DoseTimeRequest
+    from api.service import dose_time
+    from dosing import Planner
+
+    body = {"gel": "ANB", "t_start": 302, "t_end": 308, "dose_fraction": 0.5,
+            "drug": DRUG, "size_distribution": TABLE, "medium_volume_ml": "20 mL",
+            "bead_count": 1e6}
+    planner = Planner(cache_path=str(tmp_path / "c.sqlite"), executor=ThreadPoolExecutor(1))
+    try:
+        out = dose_time(planner, DoseTimeRequest(**body))
+    finally:
+        planner.close()
+        planner.jobs.executor.shutdown(wait=True)
+    ref = drug_batch_dose(DrugDoseRequest("ANB", 302, 308, DRUG, dose_fraction=0.5),
+                          TABLE, 20.0, 1e6)
+    assert out["batch"]["time"] == ref.time and out["batch"]["medium_volume_ml"] == 20.0
