@@ -120,8 +120,7 @@ def _latencies(url: str, stop: threading.Event, out: list[float]) -> None:
             out.append(time.perf_counter() - t0)
             assert r.status_code == 200
             time.sleep(0.005)
-
-
+@pytest.mark.serial  # latency under load: runs alone (.ci/run's second pass)
 def test_body_limit_is_413_before_parsing_and_others_are_not_held_up(tmp_path: Path) -> None:
     """D2: a 10 MB body (with a Content-Length, and chunked) is refused with 413 while a
     concurrent client's p99 latency stays under 100 ms."""
@@ -241,6 +240,7 @@ def _wait(c: Client, vid: str, timeout: float) -> Any:
     return c.wait_validation(vid, timeout=timeout, interval=0.1)
 
 
+@pytest.mark.serial  # latency under load: runs alone (.ci/run's second pass)
 @pytest.mark.slow
 def test_two_servers_on_one_cache_compute_each_run_once(tmp_path: Path) -> None:
     """D5: two servers on one cache file asked for the same validation run each of its
