@@ -242,6 +242,25 @@ def mechanism(squeezed: float, diffused: float) -> str:
             else f"diffused ({1 - share:.0%} by diffusion through the edge)")
 
 
+def _reduced_answer(req: DrugDoseRequest, red: Any, model: str,
+                    common: dict[str, Any]) -> DrugDoseAnswer:
+    """The drug answer of the reduced drug model's dose (``dosing.drug_reduced.ReducedDose``)."""
+    tau = common["timescale_seconds"]
+    pe = red.peclet
+    return DrugDoseAnswer(
+        model=model, time=red.time, seconds=None if tau is None else red.time * tau,
+        leaked_before_heating=0.0, leaked_before_heating_ug=0.0 if common["load_ug"]
+        is not None else None, squeezed_fraction=red.squeezed,
+        diffused_fraction=req.fraction - red.squeezed,
+        mechanism=mechanism(red.squeezed, req.fraction - red.squeezed),
+        fluid_fraction=red.fluid_fraction,
+        medium_concentration_ug_per_ul=_conc(req, req.fraction, red.radius),
+        mass_balance_error=red.mass_balance_error, fluid_answer=None, scenario_key=None,
+        uncertainty=red.uncertainty, peclet=pe,
+        split=SPLIT + ("" if pe is None else f" Peclet number of the heating {pe:.3g}."),
+        note=red.note, **common)
+
+
 def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = None,
                    validate: bool = False) -> DrugDoseAnswer:
     """The actuation time for a drug dose (see the module docstring); ``validate`` asks
@@ -287,11 +306,11 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
                   f"({fluid.model}) for the same fraction; nothing leaks while it waits at "
                   "T_start. " + fluid.note), **common)
     if not validate:  # the reduced drug model, where its measured error holds (issue 23)
-        from .drug_reduced import reduced_answer
+        from .drug_reduced import MODEL, reduced_dose
 
-        reduced = reduced_answer(req, settings, common)
-        if reduced is not None:
-            return reduced
+        red = reduced_dose(req, settings)
+        if red is not None:
+            return _reduced_answer(req, red, MODEL, common)
     runs = runs or runs_for(planner)
     heat = DrugHeatings(req, runs, [req.fraction], settings)
     got = read_off(heat, [], 0, FIRST_HEATING / 2.0)

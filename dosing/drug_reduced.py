@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import bisect
 import math
+from dataclasses import dataclass
 from typing import Any
 
 from solver.front.solute import CELLS, HORIZON, front_release, time_to_release
@@ -235,26 +236,39 @@ def reduced_release(req: Any) -> tuple[Any, float, float]:
     raise AssertionError("unreachable")
 
 
-def reduced_answer(req: Any, settings: Any, common: dict[str, Any]) -> Any:
-    """The drug dose from the reduced model where it answers (:func:`applies`), else None.
-    ``common``: the answer fields every drug answer shares (``dosing.drug_dose``)."""
+@dataclass(frozen=True)
+class ReducedDose:
+    """The reduced drug model's dose (:func:`reduced_dose`): its time (tau), the squeezed
+    share, the fluid fraction expelled and the bead's radius by then, the heating's Peclet
+    number, the solute's mass balance, the three-part uncertainty and the answer's note;
+    ``dosing.drug_dose`` makes the drug answer of it."""
+
+    time: float
+    squeezed: float
+    fluid_fraction: float
+    radius: float
+    peclet: float | None
+    mass_balance_error: float
+    uncertainty: Any
+    note: str
+
+
+def reduced_dose(req: Any, settings: Any) -> ReducedDose | None:
+    """The drug dose from the reduced model where it answers (:func:`applies`), else None."""
     err = applies(req, settings)
     if err is None:
         return None
-    from .drug_dose import SPLIT, DrugDoseAnswer, _conc, mechanism
     from .truth import Part, Uncertainty
 
     try:
         rel, t, squeezed = reduced_release(req)
     except ValueError:
         return None  # not reached: the full solver says how much is
-    tau = common["timescale_seconds"]
     h = req.solute.hindrance
     sieved = h.convective and h.mesh_ratio > 0.0
     num = NUMERICAL[1] if sieved else NUMERICAL[0]
     a3 = float(_interp(t, rel.t, rel.radius**3))
     fluid = (float(rel.radius[0]) ** 3 - a3) / (req.start_radius**3 - 1.0)
-    pe = rel.peclet(0.0, t)
     how = ("ask with validate (HTTP validate_full: true, CLI --validate, Python "
            "plan_drug_dose(..., validate=True)) for the full solver's drug run")
     unc = Uncertainty(
@@ -265,19 +279,12 @@ def reduced_answer(req: Any, settings: Any, common: dict[str, Any]) -> Any:
         Part(err, f"model form: {err:.1%}, the largest error of the reduced drug model "
                   "against the full solver's drug runs (50 um ANB and HHT beads) at the "
                   "measured D0 and doses around this one (docs/drug_reduced.md); " + how))
-    return DrugDoseAnswer(
-        model=MODEL, time=t, seconds=None if tau is None else t * tau,
-        leaked_before_heating=0.0, leaked_before_heating_ug=0.0 if common["load_ug"]
-        is not None else None, squeezed_fraction=squeezed,
-        diffused_fraction=req.fraction - squeezed,
-        mechanism=mechanism(squeezed, req.fraction - squeezed), fluid_fraction=fluid,
-        medium_concentration_ug_per_ul=_conc(req, req.fraction, a3 ** (1.0 / 3.0)),
-        mass_balance_error=rel.mass_balance_error, fluid_answer=None, scenario_key=None,
-        uncertainty=unc, peclet=pe,
-        split=SPLIT + ("" if pe is None else f" Peclet number of the heating {pe:.3g}."),
-        note=(f"{MODEL_NAME[0].upper()}{MODEL_NAME[1:]}: {CELLS} dry cells, the front "
-              f"model's mechanics (sharp-interface front condition), within {err:.1%} of "
-              f"the full solver where measured; {how}."), **common)
+    note = (f"{MODEL_NAME[0].upper()}{MODEL_NAME[1:]}: {CELLS} dry cells, the front "
+            f"model's mechanics (sharp-interface front condition), within {err:.1%} of "
+            f"the full solver where measured; {how}.")
+    return ReducedDose(time=t, squeezed=squeezed, fluid_fraction=fluid,
+                       radius=a3 ** (1.0 / 3.0), peclet=rel.peclet(0.0, t),
+                       mass_balance_error=rel.mass_balance_error, uncertainty=unc, note=note)
 
 
 def _interp(x: float, xs: Any, ys: Any) -> float:
@@ -286,5 +293,5 @@ def _interp(x: float, xs: Any, ys: Any) -> float:
     return float(np.interp(x, xs, ys))
 
 
-__all__ = ["MEASURED", "STATED_LIMIT", "applies", "reduced_answer", "reduced_release",
+__all__ = ["MEASURED", "STATED_LIMIT", "applies", "ReducedDose", "reduced_dose", "reduced_release",
            "stated_error"]

@@ -147,8 +147,12 @@ def test_page_in_headless_chromium(tmp_path: Path) -> None:
         page.wait_for_selector("body[data-sweep=done]", timeout=120_000)
         page.wait_for_function("document.getElementById('sweep-plot').complete && "
                                "document.getElementById('sweep-plot').naturalWidth > 0")
-        csv_url = page.get_attribute("#sweep-links a", "href")
-        table = httpx.get(url + csv_url.split("?")[0], timeout=60).json()["result"]
+        csv_url = page.get_attribute("#sweep-links a", "href")  # /v1/sweeps/{id}/table.csv
+        assert csv_url.endswith("/table.csv")
+        csv = httpx.get(url + csv_url, timeout=60)
+        assert csv.headers["content-type"].startswith("text/csv")
+        assert len(csv.text.strip().splitlines()) == 1 + 9 * 9 * 4  # a header and the rows
+        table = httpx.get(url + csv_url.removesuffix("/table.csv"), timeout=60).json()["result"]
         assert len(table["rows"]) == 9 * 9 * 4 and table["grid"]["t_ends"][0] == 307.5
         assert "324 answered" in page.inner_text("#sweep-status")
         sent.clear()
