@@ -1,6 +1,6 @@
 """Fitting a user's gel (issue 14): error against run time.
 
-Run:  .venv/bin/python benchmarks/fit.py [--seeds 5] [--no-full]
+Run:  .venv/bin/python benchmarks/fit.py [--seeds 5] [--no-full] [--coverage N]
 
 Prints
   * equilibrium fits with the multi-start global search (synthetic data from the presets:
@@ -14,6 +14,8 @@ Prints
     the front model itself): wall time per fit and tau's relative error and interval;
   * the dose-time interval of a fitted HHT gel: the delta method's time and half-width
     against 300 parameter draws.
+With --coverage N only: the 95 % dose-time intervals' coverage of the true dose time over N
+noise seeds (HHT 304 -> 308 K, 80 %; tests/test_fit_objectives.py runs 50 of them).
 Targets: an equilibrium fit < 10 s, a kinetics fit with the front model < 30 s.
 """
 
@@ -119,11 +121,37 @@ def dose_interval() -> None:
               f"front answer); width ratio {ratio:.3f}")
 
 
+def coverage(seeds: int) -> None:
+    """The dose-time intervals' coverage over ``seeds`` noise seeds (module doc): the test's
+    synthetic HHT data (35 points, scale 41.27), one local fit warm-started at the truth."""
+    from dosing.fit_uncertainty import dose_time
+
+    true_t = dose_time(HHT, 304.0, 308.0, "swollen", 0.8, True)
+    truth = {"omega": HHT.omega, "a0": HHT.a0, "b0": HHT.b0, "a1": HHT.a1, "b1": HHT.b1,
+             "scale": 41.27}
+    hits, z = 0, []
+    for seed in range(seeds):
+        d = synthetic_swelling(HHT, n=35, scale=41.27, seed=100 + seed)
+        res = fit_swelling(d, start=truth)
+        iv = dose_time_interval({"swelling": {"fit": res.to_dict()}}, fit_gel(res), 304.0,
+                                308.0, "swollen", 0.8, True)
+        if iv.get("time") is not None:
+            lo, hi = iv["time"]
+            hits += lo <= true_t <= hi
+            z.append((true_t - 0.5 * (lo + hi)) / ((hi - lo) / (2 * 1.96)))  # in sigmas
+    print(f"dose-time interval coverage (HHT 304 -> 308 K, 80 %): {hits}/{seeds} = "
+          f"{hits / seeds:.3f}; z-scores mean {np.mean(z):+.2f}, sd {np.std(z):.2f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--no-full", action="store_true")
+    ap.add_argument("--coverage", type=int, default=0, metavar="N")
     args = ap.parse_args()
+    if args.coverage:
+        coverage(args.coverage)
+        return
     equilibrium(args.seeds)
     kinetics(not args.no_full)
     dose_interval()
