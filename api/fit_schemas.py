@@ -8,7 +8,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from api.schemas import GelSpec, RequestModel
 from dosing.gel_store import check_name
-from solver.limits import T_MAX, T_MIN
+from solver.limits import T_MAX, T_MIN, TRUTH_N_RANGE
 
 SIZE_FIELDS = ("radius", "diameter", "volume_ratio")
 FixedName = Literal["omega", "a0", "b0", "a1", "b1", "scale"]  # solver.fit.equilibrium.PARAMS
@@ -143,13 +143,117 @@ class KineticsFitRequest(_In):
         return self
 
 
+class ReleaseFitRequest(RequestModel):
+    """A cumulative release curve to fit the drug's free diffusivity D0 to: isothermal at
+    ``t_start`` or under a heating ``protocol`` from it (dosing.release_fit)."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {
+                    "time_s": [30, 60, 120, 240, 480, 960],
+                    "released": [0.21, 0.30, 0.42, 0.57, 0.74, 0.90],
+                    "gel": "ANB",
+                    "t_start": 300.0,
+                    "dry_radius_um": 50.0,
+                },
+                {
+                    "time_s": [30, 60, 120, 240, 360, 480, 600],
+                    "released": [0.25, 0.35, 0.52, 0.75, 0.88, 0.94, 0.97],
+                    "gel": "ANB",
+                    "t_start": 300.0,
+                    "protocol": ["Heat to 308 K at 5 K/min"],
+                    "dry_radius_um": 50.0,
+                    "solver_n": 100,
+                    "solver_rtol": 1e-4,
+                },
+            ]
+        },
+    )
+
+    time_s: list[float] = Field(max_length=MAX_POINTS, description="times from the start, s")
+    released: list[float] = Field(max_length=MAX_POINTS,
+                                  description="cumulative release, in released_unit")
+    released_unit: Literal["fraction", "percent", "ug"] = Field(
+        "fraction", description="'fraction' of the load, 'percent', or 'ug' (with loaded_ug)")
+    loaded_ug: float | None = Field(None, gt=0, description="the load, for released_unit ug")
+    gel: GelSpec = "ANB"
+    t_start: Temperature = Field(description="release temperature (or the protocol's start), "
+                                             "K, 273.15-373.15")
+    t_end: Temperature | None = Field(None, description="equal to t_start (isothermal); or "
+                                                        "give protocol")
+    protocol: list[str] | None = Field(
+        None, min_length=1, max_length=100, description="the heating the release ran under, "
+        "from t_start ('Heat to 308 K at 5 K/min', 'Hold at 308 K for 10 min', 'Bath at "
+        "308 K'; docs/heating.md): one full-solver run of its mechanics, one solute run per "
+        "trial D0")
+    dry_radius_um: float = Field(gt=0, description="dry bead radius, um")
+    hindrance: Literal["none", "free-volume", "ogston"] = Field(
+        "none", description="hindrance of the drug by the gel")
+    mesh_size_nm: float | None = Field(None, gt=0, description="swollen mesh size, nm "
+                                                               "(free-volume sieve)")
+    fiber_radius_nm: float | None = Field(None, gt=0, description="fibre radius, nm (Ogston)")
+    solver_n: int | None = Field(None, ge=TRUTH_N_RANGE[0], le=TRUTH_N_RANGE[1],
+                                 description="full solver's cells under a protocol (default "
+                                             "the truth's)")
+    solver_rtol: float | None = Field(None, gt=0, le=1e-2, description="full solver's rtol "
+                                      "under a protocol (default the truth's)")
+
+
+class ReleaseBand(BaseModel):
+    """The fitted curve and its 95% band (D0 at its interval's ends)."""
+
+    time_s: list[float] = Field(description="times, s")
+    released: list[float] = Field(description="the fitted released fraction")
+    lower: list[float] = Field(description="released fraction at one end of D0's interval")
+    upper: list[float] = Field(description="released fraction at its other end")
+
+
+class ReleaseFitReport(BaseModel):
+    """A release fit's report (dosing.release_fit.fit_release)."""
+
+    model_config = ConfigDict(extra="allow")
+
+    names: list[str] = Field(description="the fitted parameters")
+    parameters: dict[str, float] = Field(description="drug_diffusivity_cm2_s: the free D0")
+    intervals: dict[str, list[float]] = Field(description="95% intervals")
+    stderr: dict[str, float] = Field(description="standard errors")
+    interval_kind: str = Field(description="how the intervals are made")
+    f2: float = Field(description="FDA similarity factor, fit against data (>= 50: similar)")
+    f2_meaning: str = Field(description="f2 in words")
+    rms_residual: float = Field(description="rms misfit, fraction of the load")
+    chi2_reduced: float = Field(description="residual variance per degree of freedom")
+    n_points: int = Field(description="points fitted")
+    success: bool = Field(description="whether the least-squares fit converged")
+    effective_diffusivity_cm2_s: float = Field(description="D0 H(phi0) in the swollen start")
+    hindrance_factor: float = Field(description="H(phi0) of the hindrance law")
+    hindrance: str = Field(description="the hindrance law")
+    swollen_radius_um: float = Field(description="the bead's radius at t_start, um")
+    porosity: float = Field(description="phi0 at t_start")
+    drug_diffusivity_temperature_K: float = Field(description="where D0 is D0 in water")
+    model: str = Field(description="the release model, its settings and scale")
+    protocol: dict[str, Any] | None = Field(None, description="the protocol, when given")
+    squeezed_released: list[float] | None = Field(
+        None, description="under a protocol: the release of the fluid's motion alone")
+    cost: dict[str, Any] | None = Field(None, description="under a protocol: CPU seconds of "
+                                        "the mechanics run and of the solute runs")
+    fitted: list[float] = Field(description="the fit at the measured times")
+    time_s: list[float] = Field(description="the measured times, s")
+    released: list[float] = Field(description="the measured released fraction")
+    band: ReleaseBand = Field(description="the fitted curve and its 95% band")
+    warnings: list[str] = Field(description="what to watch")
+    not_pinned: list[str] = Field(description="what the data do not determine")
+    confidence: float = Field(description="the intervals' level")
+
+
 class FitJobResponse(BaseModel):
     """A fit job: poll ``status_url`` until ``status`` is done (``result``) or failed."""
 
     model_config = ConfigDict(extra="allow")
 
     id: str = Field(description="the job id")
-    kind: Literal["swelling", "kinetics"] = Field(description="which fit")
+    kind: Literal["swelling", "kinetics", "release"] = Field(description="which fit")
     status: Literal["pending", "running", "done", "failed"] = Field(description="job state")
     status_url: str = Field(description="where to poll")
     result: dict[str, Any] | None = Field(
@@ -158,3 +262,10 @@ class FitJobResponse(BaseModel):
         "rms_orthogonal_K, rms_temperature_residual_K, not_pinned, warnings, ...",
     )
     error: str | None = Field(None, description="why a failed fit failed")
+
+
+class ReleaseFitJobResponse(FitJobResponse):
+    """A release-fit job: ``result`` is the typed report when done."""
+
+    kind: Literal["release"] = Field(description="which fit")
+    result: ReleaseFitReport | None = Field(None, description="the release fit's report")

@@ -81,11 +81,13 @@ def kinetics_data(time_s: Any, size: Any, kind: str = "radius",
 def fit_swelling(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma: float = 0.01,
                  fixed: Mapping[str, float] | None = None, n_starts: int = 6,
                  objective: str = "orthogonal", dry_size: float | None = None,
-                 below_dry_sigmas: float = 2.0, profile: tuple[str, ...] = ()) -> FitResult:
+                 below_dry_sigmas: float = 2.0, profile: tuple[str, ...] = (),
+                 start: Mapping[str, float] | None = None) -> FitResult:
     """Fit Omega, A0, B0, A1, B1 and the size scale (``solver.fit.fit_equilibrium``) under
     ``objective`` ('orthogonal' or the paper's 'temperature'); ``dry_size`` fixes the scale
     (the dry size in the data's unit); ``profile`` names parameters to give profile-likelihood
-    intervals beside the linearised ones.  The result's ``extra`` carries the fitted gel and
+    intervals beside the linearised ones; ``start`` a warm start (all six parameters: one
+    local fit, no global search).  The result's ``extra`` carries the fitted gel and
     ``not_pinned``, what the data do not determine."""
     fixed = dict(fixed or {})
     if dry_size is not None:
@@ -93,7 +95,7 @@ def fit_swelling(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma: f
     try:
         res = fit_equilibrium(data, sigma_t=sigma_t, size_rel_sigma=size_rel_sigma,
                               fixed=fixed, n_starts=n_starts, objective=objective,
-                              below_dry_sigmas=below_dry_sigmas)
+                              below_dry_sigmas=below_dry_sigmas, start=start)
     except (np.linalg.LinAlgError, ArithmeticError) as exc:
         raise SolverError(f"the swelling fit failed numerically: {exc}") from exc
     try:
@@ -133,11 +135,14 @@ def dose_under_objectives(data: SwellingData, t_start: float, t_end: float, frac
                           *, sigma_t: float = 0.05, size_rel_sigma: float = 0.01,
                           fixed: Mapping[str, float] | None = None,
                           fits: Mapping[str, FitResult] | None = None,
-                          sharp: bool = True) -> dict[str, Any]:
-    """The dimensionless dose time (front model) of one jump under both objectives, each with
-    its delta-method 95% interval, flagged when the intervals do not overlap (the choice of
-    objective then matters more than the stated noise)."""
-    from .fit_uncertainty import dose_time_interval
+                          sharp: bool = True, n_starts: int = 6) -> dict[str, Any]:
+    """The dimensionless dose time of one jump under both objectives: the front model's,
+    with its delta-method 95% interval; where the front model does not apply (a smooth
+    jump) the full solver's time without an interval; 'never' where the gel's final
+    equilibrium holds more than the dose.  Flagged (``disagree``) when the intervals do not
+    overlap, one time lies outside the other's interval, or one objective never reaches the
+    dose (the choice of objective then matters more than the stated noise)."""
+    from .fit_uncertainty import dose_time_interval, full_dose_time
 
     out: dict[str, Any] = {"t_start": t_start, "t_end": t_end, "dose_fraction": fraction,
                            "model": "front-sharp" if sharp else "front"}
@@ -145,31 +150,72 @@ def dose_under_objectives(data: SwellingData, t_start: float, t_end: float, frac
     for obj in ("orthogonal", "temperature"):
         res = fits.get(obj) or fit_swelling(data, sigma_t=sigma_t,
                                             size_rel_sigma=size_rel_sigma, fixed=fixed,
-                                            objective=obj)
+                                            objective=obj, n_starts=n_starts)
+        row: dict[str, Any] = {"parameters": res.parameters, "chi2": res.extra.get("chi2"),
+                               "rms_temperature_residual_K": res.extra.get(
+                                   "rms_temperature_residual_K")}
         try:
             gel = fit_gel(res)
             jump = resolve_jump(gel, t_start, t_end, None)
+        except (ParameterError, NotApplicableError, SolverError) as exc:
+            out[obj] = {**row, "time": None, "interval": None, "note": str(exc)}
+            continue
+        if fraction >= jump.max_fraction:  # this gel never releases the dose on this jump
+            out[obj] = {**row, "time": None, "interval": None, "reached": False,
+                        "max_fraction": jump.max_fraction,
+                        "note": f"never: under this objective's gel the jump releases at most "
+                                f"{jump.max_fraction:.3g} of the stored fluid (its final "
+                                f"equilibrium at {jump.t_end:g} K)"}
+            continue
+        try:
             iv = dose_time_interval({"swelling": {"fit": res.to_dict()}}, gel,
                                     jump.t_start, jump.t_end, jump.branch, fraction, sharp)
-            out[obj] = {"time": iv.get("time_center"), "interval": iv.get("time"),
-                        "parameters": res.parameters, "chi2": res.extra.get("chi2"),
-                        "rms_temperature_residual_K": res.extra.get(
-                            "rms_temperature_residual_K"), "note": iv.get("note")}
-        except (ParameterError, NotApplicableError, SolverError) as exc:
-            out[obj] = {"time": None, "interval": None, "note": str(exc)}
-    a, b = out["orthogonal"].get("interval"), out["temperature"].get("interval")
-    if a and b:
-        out["disagree"] = bool(a[1] < b[0] or b[1] < a[0])
-        out["ratio"] = out["orthogonal"]["time"] / out["temperature"]["time"]
-        out["note"] = ("the two objectives' dose times disagree beyond their 95% intervals: "
-                       "the data do not decide the dose time; the parameter interval is "
-                       "understated; measure the dry size or points across the transition"
-                       if out["disagree"] else "the two objectives agree within their "
-                       "intervals")
-    else:
-        out["disagree"] = None
-        out["note"] = "no interval under one objective: compare the times themselves"
+            out[obj] = {**row, "time": iv.get("time_center"), "interval": iv.get("time"),
+                        "model": out["model"], "note": iv.get("note")}
+        except NotApplicableError as exc:  # a smooth jump under this gel: the full solver
+            try:
+                t = full_dose_time(gel, jump.t_start, jump.t_end, jump.branch, fraction)
+            except (ParameterError, SolverError) as exc2:
+                out[obj] = {**row, "time": None, "interval": None, "note": f"{exc}; {exc2}"}
+                continue
+            out[obj] = {**row, "time": t, "interval": None, "model": "full",
+                        "note": f"the front model does not apply ({exc}): the full solver's "
+                                "time (the paper's model, Lagrangian N = 100, one run; no "
+                                "interval: the delta method would need a run per parameter)"}
+        except (ParameterError, SolverError) as exc:
+            out[obj] = {**row, "time": None, "interval": None, "note": str(exc)}
+    out.update(_disagreement(out["orthogonal"], out["temperature"]))
     return out
+
+
+def _disagreement(a: dict[str, Any], b: dict[str, Any]) -> dict[str, Any]:
+    """Whether two objectives' dose times disagree beyond their 95% intervals: the intervals
+    do not overlap, or (one has no interval) the other's time lies outside the one given."""
+    ia, ib, ta, tb = a.get("interval"), b.get("interval"), a.get("time"), b.get("time")
+    never = [r for r in (a, b) if r.get("reached") is False]
+    if never and len(never) < 2 and (ta is not None or tb is not None):
+        return {"disagree": True, "ratio": None,
+                "note": "the two objectives' dose times disagree: under one the dose is "
+                        f"reached, under the other never (at most {never[0]['max_fraction']:.3g}"
+                        " of the fluid): the data do not decide the dose time; measure the "
+                        "dry size or points across the transition"}
+    if ta is None or tb is None:
+        return {"disagree": None, "ratio": None,
+                "note": "no dose time under one objective: see its note"}
+    if ia and ib:
+        dis, how = bool(ia[1] < ib[0] or ib[1] < ia[0]), "their 95% intervals do not overlap"
+    elif ia or ib:
+        iv, t = (ia, tb) if ia else (ib, ta)
+        dis, how = bool(not iv[0] <= t <= iv[1]), ("one time lies outside the other's 95% "
+                                                   "interval (one-sided: it has none)")
+    else:
+        return {"disagree": None, "ratio": ta / tb,
+                "note": "no interval under either objective: compare the times themselves"}
+    note = (f"the two objectives' dose times disagree ({how}; ratio {ta / tb:.3g}): the data "
+            "do not decide the dose time; the parameter interval is understated; measure "
+            "the dry size or points across the transition" if dis else
+            "the two objectives agree within their intervals")
+    return {"disagree": dis, "ratio": ta / tb, "note": note}
 
 
 def compare_chi_models(data: SwellingData, *, sigma_t: float = 0.05,

@@ -46,6 +46,30 @@ def dose_time(gel: Gel, t_start: float, t_end: float, branch: str, fraction: flo
     return float(fr.time_to_radius(radius_after_dose(a0, fraction)))
 
 
+SMOOTH_N = 100  # Lagrangian cells of a smooth jump's full run (no interface to resolve)
+
+
+def full_dose_time(gel: Gel, t_start: float, t_end: float, branch: str,
+                   fraction: float) -> float:
+    """The full solver's dimensionless dose time where the front model does not apply (a
+    smooth jump: no coexistence on the path, so no interface and no interfacial length
+    matters): the paper's model on SMOOTH_N Lagrangian cells, stopped at the dose radius
+    (eqs. PDE_Dimless to Boundary_Dimless); the horizon grows x4 up to 64 tau."""
+    from solver.full import simulate
+
+    target = radius_after_dose(equilibrium(gel, t_start, branch).stretch, fraction)
+    until = 1.0
+    while True:
+        res = simulate(gel, t_start, t_end, until=until, stop=target, branch=branch,
+                       grid="lagrangian", n=SMOOTH_N, integrator="implicit")
+        if res.status == "stopped" and res.terminal_time is not None:
+            return float(res.terminal_time)
+        if until >= 64.0:
+            raise SolverError(f"a(t) does not reach the dose radius {target:.6g} by t = 64",
+                              {"gel": gel.name})
+        until *= 4.0
+
+
 def _time_at(q: np.ndarray, t_ref: float, base: Gel, args: tuple) -> float:
     g = gel_from_internal(q, t_ref, name=base.name).with_permeability(
         base.permeability.law, base.permeability.beta)

@@ -5,9 +5,13 @@ The bead sits at its equilibrium stretch a0 at T (eq. EqlEqn), porosity phi0 = 1
 drug diffuses through the pore fluid with D_eff = D0 H(phi0) (the hindrance law of
 ``solver.solute.hindrance``: free-volume with the sieve r_s / xi from Stokes-Einstein, Ogston,
 or none) out of a sphere of radius a0 R_dry into a perfect sink: Crank's series
-(``solver.solute.crank.crank_sphere``, Crank eq. 6.20).  Not built: release under a heating
-jump or protocol (the bead shrinks while the drug diffuses), which needs the full solver
-with the solute per trial D0; such a request is refused (ParameterError naming ``t_end``).
+(``solver.solute.crank.crank_sphere``, Crank eq. 6.20).  Under a heating ``protocol`` (the
+grammar of ``dosing.heating``: "Heat to 308 K at 5 K/min"; an instant jump is "Bath at
+308 K") the bead shrinks while the drug diffuses: the model is the solute transport on the
+full solver's mechanics of the protocol (``dosing.fit_release_protocol``: one mechanics
+run, memoised, serves every trial D0; each trial is one solute run).  D0 is the drug's
+diffusivity in water at the release temperature (isothermal) or the protocol's hottest
+(``drug_diffusivity_temperature_K``).
 
 Residuals are absolute differences in released fraction, the noise estimated from them;
 D0 is fitted in log form (95% interval exp(q +- t sd)), as in ``solver.fit.result``.
@@ -20,6 +24,8 @@ R, T in percent released at the same times.
 from __future__ import annotations
 
 import math
+import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -34,8 +40,12 @@ from solver.solute.crank import crank_sphere
 
 from .drug import DrugModel
 from .fit_csv import read_table
+from .gel_store import calibrated_constants
 from .request import resolve_gel
+from .scenario import SolverSettings
 from .units import PhysicalConstants
+
+D_BOUNDS = (1e-12, 1e-3)  # cm^2/s: the fit's bounds on D0
 
 
 def f2(reference: Any, test: Any, *, fda_85_rule: bool = False) -> float:
@@ -58,6 +68,9 @@ def f2(reference: Any, test: Any, *, fda_85_rule: bool = False) -> float:
     return float(50.0 * math.log10(100.0 / math.sqrt(1.0 + float(np.mean(d * d)))))
 
 
+RELEASE_UNITS = ("fraction", "percent", "ug")
+
+
 def read_release_csv(source: str | Path, loaded_ug: float | None = None,
                      info: dict[str, Any] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(time in s, released fraction) from a lab's CSV (``dosing.fit_csv``: time_s/min/h;
@@ -66,12 +79,29 @@ def read_release_csv(source: str | Path, loaded_ug: float | None = None,
     tab = read_table(source, "time", ("released",))
     if info is not None:
         info.update(tab.to_dict())
-    t, y = tab.columns["time"], tab.columns["released"]
-    if "ug" in tab.units["released"]:
+    unit = "ug" if "ug" in tab.units["released"] else "fraction"  # percent: read as a fraction
+    return release_data(tab.columns["time"], tab.columns["released"], unit, loaded_ug)
+
+
+def release_data(time_s: Any, released: Any, unit: str = "fraction",
+                 loaded_ug: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(time in s, released fraction), checked: ``unit`` 'fraction', 'percent' or 'ug' (a
+    mass, with ``loaded_ug``); every way in (CSV, HTTP, Python) reads its data here."""
+    t = np.asarray(time_s, dtype=float)
+    y = np.asarray(released, dtype=float)
+    if unit not in RELEASE_UNITS:
+        raise ParameterError("released_unit", unit, " or ".join(map(repr, RELEASE_UNITS)))
+    if t.shape != y.shape or t.ndim != 1:
+        raise ParameterError("released", f"{y.size} values for {t.size} times",
+                             "one release per time")
+    if unit == "percent":
+        y = y / 100.0
+    elif unit == "ug":
         if loaded_ug is None:
             raise ParameterError("loaded_ug", None, "a finite number > 0 (ug per bead or per "
                                  "sample) to turn a released mass into a fraction")
-        y = y / require_finite_positive("loaded_ug", loaded_ug)
+        with np.errstate(over="ignore"):  # an overflow is refused just below as non-finite
+            y = y / require_finite_positive("loaded_ug", loaded_ug)
     if np.any(~np.isfinite(t)) or np.any(~np.isfinite(y)):
         raise ParameterError("released", "NaN", "finite times and releases")
     if np.any(t < 0):
@@ -83,81 +113,157 @@ def read_release_csv(source: str | Path, loaded_ug: float | None = None,
 
 
 def fit_release(time_s: Any, released: Any, gel: Any, t_start: float, t_end: float | None,
-                dry_radius_um: float, *, hindrance: str = "none",
+                dry_radius_um: float, *, protocol: Any = None, hindrance: str = "none",
                 mesh_size_nm: float | None = None, fiber_radius_nm: float | None = None,
                 constants: PhysicalConstants | None = None,
-                d0_start_cm2_s: float = 1e-6) -> dict[str, Any]:
-    """Fit D0 (cm^2/s) to a cumulative isothermal release curve (module doc); the report has
-    ``parameters``/``intervals``/``stderr`` with ``drug_diffusivity_cm2_s``, the effective
-    D, ``f2`` of the fit against the data, the fitted curve and a 95% band."""
+                settings: SolverSettings | None = None) -> dict[str, Any]:
+    """Fit D0 (cm^2/s) to a cumulative release curve, isothermal (``t_end`` None or
+    ``t_start``) or under a heating ``protocol`` (step texts from ``t_start``; module doc);
+    the report has ``parameters``/``intervals``/``stderr`` with ``drug_diffusivity_cm2_s``,
+    the effective D, ``f2`` of the fit against the data, the fitted curve and a 95% band.
+    ``settings``: the full solver's, under a protocol (default the truth's)."""
     t = np.asarray(time_s, dtype=float)
     y = np.asarray(released, dtype=float)
     g = resolve_gel(gel)
     t0 = check_temperature(t_start, "t_start")
+    if protocol is not None and t_end is not None:
+        raise ParameterError("t_end", t_end, "None when a protocol is given (give one of "
+                             "--t-end or --protocol)")
     if t_end is not None and abs(check_temperature(t_end, "t_end") - t0) > 1e-9:
         raise ParameterError("t_end", t_end, f"equal to t_start = {t0:g} K (isothermal "
-                             "release)", "fits under a heating jump or protocol are not "
-                             "built: the bead shrinks while the drug diffuses")
+                             "release)", "a release under heating is fitted with a protocol "
+                             "('Heat to 308 K at 5 K/min'; an instant jump: 'Bath at 308 K')")
     r_um = require_finite_positive("dry_radius_um", dry_radius_um)
-    c = constants or PhysicalConstants()
-    a0 = equilibrium(g, t0, "swollen").stretch
-    phi0 = 1.0 - a0**-3
-    radius_um = a0 * r_um
+    c = calibrated_constants(g, constants or PhysicalConstants())
     n = t.size
     if n < 3:
         raise ParameterError("data", f"{n} points", "at least 3 points")
+    drug = DrugModel(diffusivity_cm2_s=1e-6, hindrance=hindrance, mesh_size_nm=mesh_size_nm,
+                     fiber_radius_nm=fiber_radius_nm)
+    extra: dict[str, Any] = {}
+    if protocol is None:
+        a0 = equilibrium(g, t0, "swollen").stretch
+        model_fn, t_ref = _isothermal(drug, a0, t0, r_um, c), t0
+        extra["model"] = ("isothermal release from the swollen bead into a perfect sink: "
+                          "Crank's sphere series (eq. 6.20) with D_eff = D0 H(phi0)")
+    else:
+        from . import fit_release_protocol as fp
 
-    def d_eff(d0: float) -> float:
-        drug = DrugModel(diffusivity_cm2_s=d0, hindrance=hindrance, mesh_size_nm=mesh_size_nm,
-                         fiber_radius_nm=fiber_radius_nm)
-        return d0 * float(drug.hindrance_law(a0, t0, c).factor(phi0))
+        prot = fp.parse_protocol(t0, protocol)
+        mech = fp.protocol_mechanics(g, prot, r_um, float(t.max()), c, settings)
+        a0, t_ref = mech.start_radius, mech.t_ref
+        spent = [0, 0.0]
 
-    def model(q: float, tt: np.ndarray = t) -> np.ndarray:
-        return crank_sphere(tt, d_eff(math.exp(q)) * 1e8, radius_um)  # um^2/s
+        def model_fn(d0: float, tt: np.ndarray) -> np.ndarray:
+            started = time.process_time()
+            out = fp.released_under(mech, drug, d0, c, r_um, tt)
+            spent[0] += 1
+            spent[1] += time.process_time() - started
+            return out
+
+        extra.update(model=fp.model_text(mech), protocol=prot.to_dict(),
+                     squeezed_released=fp.squeezed_under(mech, t).tolist(),
+                     _cost=(mech, spent))
+    phi0 = 1.0 - a0**-3
+    rep = _fit_log_d0(t, y, model_fn, start_d0(t, y, a0 * r_um))
+    d0 = rep["parameters"]["drug_diffusivity_cm2_s"]
+    factor = _factor(drug, d0, a0, t_ref, c)
+    cost_of = extra.pop("_cost", None)
+    if cost_of is not None:
+        from .fit_release_protocol import cost
+
+        extra["cost"] = cost(cost_of[0], cost_of[1][0], cost_of[1][1])
+    not_pinned = ["the partition coefficient and a finite release volume (not fitted: "
+                  "perfect sink, K = 1)"]
+    if protocol is not None:
+        not_pinned.append("the gel's timescale tau (taken as the gel's, calibrated by a "
+                          "kinetics fit or the paper's constants): the squeezing's pace "
+                          "under the protocol")
+    return {**rep, "effective_diffusivity_cm2_s": d0 * factor, "hindrance_factor": factor,
+            "hindrance": hindrance, "swollen_radius_um": a0 * r_um, "porosity": phi0,
+            "drug_diffusivity_temperature_K": t_ref, **extra,
+            "f2_meaning": "FDA similarity factor of the fitted prediction against the "
+                          "measured curve at the measured times (>= 50: similar)",
+            "confidence": 0.95, "not_pinned": not_pinned}
+
+
+def _factor(drug: DrugModel, d0: float, a0: float, t_ref: float,
+            c: PhysicalConstants) -> float:
+    """H(phi0) of the swollen start for a drug of free diffusivity ``d0`` at ``t_ref`` (its
+    Stokes-Einstein radius, hence the sieve, follows D0)."""
+    trial = replace(drug, diffusivity_cm2_s=d0, reference_temperature_k=t_ref)
+    return float(trial.hindrance_law(a0, t_ref, c).factor(1.0 - a0**-3))
+
+
+def _isothermal(drug: DrugModel, a0: float, t0: float, r_um: float,
+                c: PhysicalConstants) -> Any:
+    """Crank's series for the swollen bead: released fraction at ``tt`` for D0."""
+    def model_fn(d0: float, tt: np.ndarray) -> np.ndarray:
+        return crank_sphere(tt, d0 * _factor(drug, d0, a0, t0, c) * 1e8, a0 * r_um)  # um^2/s
+
+    return model_fn
+
+
+def start_d0(t: np.ndarray, y: np.ndarray, radius_um: float) -> float:
+    """A start for D0 (cm^2/s) from the curve: Crank's half-release time t_1/2 = 0.0305
+    a^2 / D, or with less than half released the early law M = 6 sqrt(D t / (pi a^2))."""
+    order = np.argsort(t)
+    ts, ys = t[order], y[order]
+    if ys.max() >= 0.5:
+        t_half = float(ts[np.argmax(ys >= 0.5)])
+        d = 0.0305 * radius_um**2 / max(t_half, 1e-9)
+    else:
+        d = math.pi * radius_um**2 * (max(float(ys[-1]), 1e-3) / 6.0) ** 2 / max(ts[-1], 1e-9)
+    return float(np.clip(d * 1e-8, 10 * D_BOUNDS[0], 0.1 * D_BOUNDS[1]))  # um^2/s -> cm^2/s
+
+
+def _fit_log_d0(t: np.ndarray, y: np.ndarray, model_fn: Any, guess: float
+                ) -> dict[str, Any]:
+    """Least squares of ``model_fn(D0, t) - y`` in q = log D0 from the curve's own start
+    ``guess`` (then decades around it, if that fit is poor); the linearised 95% interval
+    exp(q +- t sd), f2, the fitted curve and its band."""
+    n = t.size
 
     def fun(x: np.ndarray) -> np.ndarray:
-        return model(float(x[0])) - y
+        return model_fn(math.exp(float(x[0])), t) - y
 
-    # start: the half-release time, Crank's t_1/2 = 0.0305 a^2 / D
     best = None
-    for d0 in (d0_start_cm2_s, 1e-7, 1e-5, 1e-8):
-        res = least_squares(fun, [math.log(d0)], bounds=([math.log(1e-12)], [math.log(1e-3)]),
-                            x_scale="jac", xtol=1e-12, ftol=1e-12, max_nfev=200)
+    for d0 in (guess, 10 * guess, 0.1 * guess, 100 * guess, 0.01 * guess):
+        d0 = float(np.clip(d0, 10 * D_BOUNDS[0], 0.1 * D_BOUNDS[1]))
+        res = least_squares(fun, [math.log(d0)], bounds=([math.log(D_BOUNDS[0])],
+                                                         [math.log(D_BOUNDS[1])]),
+                            x_scale="jac", xtol=1e-8, ftol=1e-10, max_nfev=60)
         if best is None or res.cost < best.cost:
             best = res
+        if best.success and best.cost < 0.5 * n * 0.05**2:  # a fit within 5%: no more starts
+            break
     assert best is not None
     cov, chi2 = covariance_from_jacobian(best.jac, best.fun, 1)
     q = float(best.x[0])
     sd = math.sqrt(max(cov[0, 0], 0.0))
     tq = t_quantile(n - 1)
     d0 = math.exp(q)
-    iv = [math.exp(q - tq * sd), math.exp(q + tq * sd)]
-    fitted = model(q)
+    fitted = model_fn(d0, t)
     tt = np.linspace(0.0, float(t.max()), 200)
-    curve = model(q, tt)
-    lo, hi = model(q - tq * sd, tt), model(q + tq * sd, tt)
     warns = []
     if not best.success:
         warns.append(f"the fit did not converge ({best.message})")
     if y.max() < 0.3:
         warns.append("less than 30% released: D0 rests on the early t^1/2 part only")
+    if min(abs(q - math.log(b)) for b in D_BOUNDS) < 1e-6:
+        warns.append(f"D0 at its bound {D_BOUNDS}: the curve does not pin it")
     return {
         "names": ["drug_diffusivity_cm2_s"],
         "parameters": {"drug_diffusivity_cm2_s": d0},
-        "intervals": {"drug_diffusivity_cm2_s": iv},
+        "intervals": {"drug_diffusivity_cm2_s": [math.exp(q - tq * sd),
+                                                 math.exp(q + tq * sd)]},
         "stderr": {"drug_diffusivity_cm2_s": d0 * sd},
-        "effective_diffusivity_cm2_s": d_eff(d0), "hindrance_factor": d_eff(d0) / d0,
-        "hindrance": hindrance, "swollen_radius_um": radius_um, "porosity": phi0,
-        "model": "isothermal release from the swollen bead into a perfect sink: Crank's "
-                 "sphere series (eq. 6.20) with D_eff = D0 H(phi0)",
+        "interval_kind": "linearised (Jacobian of log D0, Student t)",
         "f2": f2(100.0 * y, 100.0 * fitted),
-        "f2_meaning": "FDA similarity factor of the fitted prediction against the measured "
-                      "curve at the measured times (>= 50: similar)",
         "rms_residual": float(np.sqrt(np.mean((fitted - y) ** 2))),
         "chi2_reduced": chi2, "n_points": n, "success": bool(best.success),
         "fitted": fitted.tolist(), "time_s": t.tolist(), "released": y.tolist(),
-        "band": {"time_s": tt.tolist(), "released": curve.tolist(), "lower": lo.tolist(),
-                 "upper": hi.tolist()},
-        "warnings": warns, "confidence": 0.95,
-        "not_pinned": ["the partition coefficient and a finite release volume (not fitted: "
-                       "perfect sink, K = 1)"]}
+        "band": {"time_s": tt.tolist(), "released": model_fn(d0, tt).tolist(),
+                 "lower": model_fn(math.exp(q - tq * sd), tt).tolist(),
+                 "upper": model_fn(math.exp(q + tq * sd), tt).tolist()},
+        "warnings": warns}

@@ -86,6 +86,10 @@ def test_a_generated_client_calls_every_route(tmp_path: Path) -> None:
                         "radius": [2.87, 2.69, 2.44, 2.19, 1.95, 1.13, 1.12, 1.11, 1.10],
                         "fixed": {"omega": 100.0}}))
         call("fit", "fit_job_v1_fit_jobs_job_id_get", fit.parsed.id)
+        call("fit", "fit_release_route_v1_fit_release_post", want=(202,),
+             body=models.ReleaseFitRequest.from_dict(
+                 {"time_s": [30, 60, 120, 240, 480], "released": [0.21, 0.3, 0.42, 0.57, 0.74],
+                  "gel": "ANB", "t_start": 300.0, "dry_radius_um": 50.0}))
         call("fit", "fit_kinetics_route_v1_fit_kinetics_post", want=(202,),
              body=models.KineticsFitRequest.from_dict(
                  {"time_s": [0, 50, 100, 200, 400, 800],
@@ -116,4 +120,4 @@ def test_a_generated_client_calls_every_route(tmp_path: Path) -> None:
                   "vary": [{"name": "dry_radius_um", "low": 20.0, "high": 80.0}],
                   "method": "morris", "samples": 4}))
     ops = sum(len(o) for o in create_app(warm=False).openapi()["paths"].values())
-    assert len(called) == ops == 17, sorted(called)
+    assert len(called) == ops == 18, sorted(called)

@@ -1,10 +1,16 @@
 """Swelling fits with a stated objective and noise model (issue 27, item 3).
 
-The Hirotsu et al. 1987 points (the paper's fig. 3b) are not recoverable from
-/work/shared/paper (the figure's data file Figs/Fig3b_Eql_Hirotsu is not shipped), so the
-acceptance checks run on synthetic data from the paper's HHT gel (35 points, 1% size noise,
-0.05 K temperature noise, dry radius 41.27 in the data's unit), which has the same trouble:
-the collapsed branch sits at lambda = 1.0007-1.003, so 1% noise puts points below the dry size.
+SYNTHETIC STAND-IN, NOT THE PUBLISHED DATA: the Hirotsu et al. 1987 points (the paper's
+fig. 3b) are not recoverable from /work/shared/paper (the figure's data file
+Figs/Fig3b_Eql_Hirotsu is not shipped) and this machine has no network beyond package
+registries, so no test here uses them and none claims to.  Every Hirotsu acceptance check
+runs on synthetic data from the paper's HHT gel (35 points, 1% size noise, 0.05 K
+temperature noise, dry radius 41.27 in an arbitrary unit), which has the same trouble: the
+collapsed branch sits at lambda = 1.0007-1.003, so 1% noise puts points below the dry size.
+The checks: the 2 % dry-size rule (test_default_fit_keeps_every_point_within_two_noise_
+widths_of_dry), the temperature objective's rms within 1.05x of the generating parameters'
+(test_temperature_objective_reaches_its_minimum), the 304 -> 308 K, 80 % dose time under
+both objectives with the disagreement flagged (test_dose_time_under_both_objectives).
 """
 
 from __future__ import annotations
@@ -68,14 +74,50 @@ def test_temperature_objective_reaches_its_minimum(data, temp) -> None:
 
 
 def test_dose_time_under_both_objectives(data, orth, temp) -> None:
+    """Hirotsu acceptance, on the synthetic stand-in: the HHT 304 -> 308 K, 80 % dose time is
+    reported under both objectives and their disagreement is flagged.  The orthogonal fit's
+    interval covers the true dose time; the paper's objective leaves the collapsed branch
+    to a gel whose 308 K equilibrium holds 45 % of the fluid, so under it the dose is never
+    reached: a disagreement no interval of either fit states."""
     out = dose_under_objectives(data, 304.0, 308.0, 0.8,
                                 fits={"orthogonal": orth, "temperature": temp})
     true_t = dose_time(HHT, 304.0, 308.0, "swollen", 0.8, True)
     lo, hi = out["orthogonal"]["interval"]
-    assert lo < true_t < hi
-    assert "temperature" in out and "disagree" in out and out["note"]
-    if out["temperature"]["time"] is not None and out["disagree"]:
-        assert "disagree" in out["note"]
+    assert lo < true_t < hi and out["orthogonal"]["model"] == "front-sharp"
+    t = out["temperature"]
+    assert t["reached"] is False and t["time"] is None and 0.3 < t["max_fraction"] < 0.8
+    assert str(round(t["max_fraction"], 3))[:4] in t["note"]
+    assert out["disagree"] is True and "disagree" in out["note"] and "never" in out["note"]
+
+
+def test_a_smooth_jump_gets_the_full_solvers_time_and_a_one_sided_flag(data, orth,
+                                                                        temp) -> None:
+    """Where the front model does not apply (the temperature objective's gel crosses no
+    coexistence on 304 -> 308 K), a reachable dose (30 %) gets the full solver's time,
+    without an interval; the flag compares it with the orthogonal fit's interval."""
+    out = dose_under_objectives(data, 304.0, 308.0, 0.3,
+                                fits={"orthogonal": orth, "temperature": temp})
+    t, o = out["temperature"], out["orthogonal"]
+    assert t["model"] == "full" and t["time"] > 0 and t["interval"] is None
+    assert "front model does not apply" in t["note"]
+    lo, hi = o["interval"]
+    assert out["disagree"] is (not lo <= t["time"] <= hi)
+    assert out["ratio"] == pytest.approx(o["time"] / t["time"])
+
+
+@pytest.mark.parametrize(("a", "b", "flag"), [
+    ((1.0, [0.9, 1.1]), (1.3, [1.2, 1.4]), True),    # intervals apart
+    ((1.0, [0.9, 1.1]), (1.05, [1.0, 1.2]), False),  # overlapping
+    ((1.0, [0.9, 1.1]), (1.3, None), True),          # one-sided: outside
+    ((1.0, [0.9, 1.1]), (1.05, None), False),        # one-sided: inside
+    ((1.0, None), (1.3, None), None),                # no interval: not decided
+])
+def test_disagreement_rule(a, b, flag) -> None:
+    from dosing.fit import _disagreement
+
+    out = _disagreement({"time": a[0], "interval": a[1]}, {"time": b[0], "interval": b[1]})
+    assert out["disagree"] is flag
+    assert ("disagree (" in out["note"]) == bool(flag)
 
 
 def test_not_pinned_names_the_timescale_and_a_dry_size_at_its_bound(orth) -> None:
@@ -104,15 +146,23 @@ def test_aic_bic_of_nested_chi_models(data) -> None:
 @pytest.mark.slow
 def test_dose_time_interval_coverage_over_50_seeds() -> None:
     """95% dose-time intervals (delta method from the orthogonal fit, front-sharp model) of
-    HHT 304 -> 308 K, 80%, cover the true dose time in 90-99% of 50 noise seeds."""
+    HHT 304 -> 308 K, 80%, cover the true dose time in 90-99% of 50 noise seeds.  Each seed
+    is one local fit warm-started at the generating parameters (the global search's optimum,
+    checked on seed 0; a tenth of its cost); all 50 seeds kept (binomial argument in
+    tests/test_fit_equilibrium.py)."""
     from dosing.fit_uncertainty import dose_time_interval
     from solver.fit import fit_gel
 
     true_t = dose_time(HHT, 304.0, 308.0, "swollen", 0.8, True)
+    truth = {"omega": HHT.omega, "a0": HHT.a0, "b0": HHT.b0, "a1": HHT.a1, "b1": HHT.b1,
+             "scale": SCALE}
     hits, n = 0, 0
     for seed in range(50):
         d = synthetic_swelling(HHT, n=35, scale=SCALE, seed=100 + seed)
-        res = fit_swelling(d, n_starts=3)
+        res = fit_swelling(d, start=truth)  # warm: one local fit (the scale clipped to
+        if seed == 0:                       # its data bound), the global search's optimum
+            glob = fit_swelling(d, n_starts=3)
+            assert glob.extra["chi2"] == pytest.approx(res.extra["chi2"], rel=1e-6)
         iv = dose_time_interval({"swelling": {"fit": res.to_dict()}}, fit_gel(res), 304.0,
                                 308.0, "swollen", 0.8, True)
         n += 1
@@ -133,7 +183,7 @@ def test_http_swelling_fit_states_the_dose_under_both_objectives(data, tmp_path,
     monkeypatch.setenv("THERMOGEL_GELS", str(tmp_path / "gels"))
     body = SwellingFitRequest(temperature_K=data.temperature.tolist(),
                               radius=data.size.tolist(), dose_jump=[304.0, 308.0],
-                              objective="orthogonal")
+                              objective="orthogonal", n_starts=2)  # both objectives' fits
     rep = _swelling(None, body)
     dj = rep["dose_time_by_objective"]
     assert dj["orthogonal"]["time"] > 0 and "temperature" in dj and "disagree" in dj

@@ -128,3 +128,53 @@ async def test_http_fit_is_a_job(env) -> None:
             again = (await c.get(url)).json()
             assert again["status"] == "done" and again["kind"] == "swelling"
             assert again["result"]["parameters"] == j["result"]["parameters"]
+
+
+@pytest.mark.anyio
+async def test_release_fit_same_numbers_every_way_in(env, capsys) -> None:
+    """A release curve under a ramp (tests/test_fit_release.py) through Python, the CLI and
+    POST /v1/fit/release (a stored job: 202 + Location, polled at /v1/jobs/{id}): the same
+    D0, interval and f2; the job's result is typed in the OpenAPI document."""
+    from dosing.release_fit import fit_release
+    from tests.test_fit_release import COARSE, RAMP, ramp_curve
+
+    t, y = ramp_curve(seed=5)
+    py = fit_release(t, y, "ANB", 300.0, None, 50.0, protocol=RAMP, settings=COARSE)
+    csv = env / "rel.csv"
+    csv.write_text("time_s;released (%)\n" + "".join(
+        f"{float(a)!r};{float(100 * b)!r}\n" for a, b in zip(t, y, strict=True)))
+    assert main(["fit", "release", str(csv), "--gel", "ANB", "--t-start", "300", "--protocol",
+                 RAMP, "--dry-radius-um", "50", "--n", "100", "--rtol", "1e-4", "--json"]) == 0
+    cli = json.loads(capsys.readouterr().out)
+    body = {"time_s": t.tolist(), "released": (100 * y).tolist(), "released_unit": "percent",
+            "gel": "ANB", "t_start": 300.0, "protocol": [RAMP], "dry_radius_um": 50.0,
+            "solver_n": 100, "solver_rtol": 1e-4}
+    app = create_app(warm=False, cache_path=str(env / "v.sqlite"))
+    async with app.router.lifespan_context(app):
+        transport = httpx.ASGITransport(app=app)
+        async with httpx.AsyncClient(base_url="http://t", transport=transport) as c:
+            r = await c.post("/v1/fit/release", json=body)
+            assert r.status_code == 202 and r.json()["kind"] == "release"
+            url = "/v1/jobs/" + r.json()["id"]
+            assert r.headers["location"] == r.json()["status_url"]
+            deadline = time.monotonic() + 120
+            while (j := (await c.get(url)).json())["status"] not in ("done", "failed"):
+                assert time.monotonic() < deadline
+                await asyncio.sleep(0.1)
+            assert j["status"] == "done", j
+            assert (await c.get(r.headers["location"])).json()["result"] == j["result"]
+            bad = await c.post("/v1/fit/release", json={**body, "released": [1.0, 2.0]})
+            assert bad.status_code == 422 and "released" in bad.text
+            bad = await c.post("/v1/fit/release", json={**body, "t_end": 308.0})
+            assert bad.status_code == 422 and "t_end" in bad.text
+            bad = await c.post("/v1/fit/release", json={**body, "protocol": ["Heat to 2 K"]})
+            assert bad.status_code == 422 and "protocol" in bad.text
+            schema = (await c.get("/openapi.json")).json()["components"]["schemas"]
+            assert "f2" in schema["ReleaseFitReport"]["properties"]
+    http = j["result"]
+    for rep in (cli, http):
+        assert rep["parameters"]["drug_diffusivity_cm2_s"] == pytest.approx(
+            py["parameters"]["drug_diffusivity_cm2_s"], rel=1e-9)
+        assert rep["intervals"]["drug_diffusivity_cm2_s"] == pytest.approx(
+            py["intervals"]["drug_diffusivity_cm2_s"], rel=1e-9)
+        assert rep["f2"] == pytest.approx(py["f2"], rel=1e-9)

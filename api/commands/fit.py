@@ -107,7 +107,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--gel", default="ANB", help="preset or stored fitted gel (default ANB)")
     r.add_argument("--t-start", type=float, required=True, help="temperature in K")
     r.add_argument("--t-end", type=float, default=None,
-                   help="equal to --t-start (isothermal; jumps are not built yet)")
+                   help="equal to --t-start (isothermal; or give --protocol)")
+    r.add_argument("--protocol", action="append", default=None, metavar="STEP",
+                   help="the heating the release ran under, from --t-start, repeatable or "
+                        "joined by ';' ('Heat to 308 K at 5 K/min', 'Hold at 308 K for 10 "
+                        "min', 'Bath at 308 K'; docs/heating.md): one full-solver run of "
+                        "the protocol's mechanics, one solute run per trial D0")
+    r.add_argument("--n", type=int, default=None,
+                   help="full solver's cells under a protocol (default the truth's, 400)")
+    r.add_argument("--rtol", type=float, default=None,
+                   help="full solver's rtol under a protocol (default the truth's, 1e-5)")
     r.add_argument("--dry-radius-um", type=float, required=True, help="dry bead radius, um")
     r.add_argument("--hindrance", choices=["none", "free-volume", "ogston"], default="none",
                    help="hindrance of the drug by the gel (default none)")
@@ -223,7 +232,9 @@ def run_swelling(args: argparse.Namespace) -> int:
             o = dj[obj]
             print(f"  dose {dj['dose_fraction']:.0%} {dj['t_start']:g} -> {dj['t_end']:g} K "
                   f"({obj}): " + (f"none ({o['note']})" if o["time"] is None else
-                                  f"t = {o['time']:.4g}  95% {_interval(o['interval'])}"))
+                                  f"t = {o['time']:.4g}  " + (
+                                      f"95% {_interval(o['interval'])}" if o["interval"]
+                                      else f"({o.get('model')}, no interval)")))
         print(f"  {'DISAGREE: ' if dj.get('disagree') else ''}{dj['note']}")
     for w in res.extra.get("not_pinned", []):
         print(f"  not pinned: {w}")
@@ -340,13 +351,18 @@ def run_kinetics(args: argparse.Namespace) -> int:
 
 def run_release(args: argparse.Namespace) -> int:
     """Fit D0 to a release curve, print (or JSON), plot."""
+    from dosing import SolverSettings
     from dosing.release_fit import fit_release, read_release_csv
 
     read: dict[str, Any] = {}
     t, y = read_release_csv(args.file, args.loaded_ug, read)
+    steps = None if args.protocol is None else [
+        s.strip() for arg in args.protocol for s in arg.split(";") if s.strip()]
     rep = fit_release(t, y, args.gel, args.t_start, args.t_end, args.dry_radius_um,
-                      hindrance=args.hindrance, mesh_size_nm=args.mesh_size_nm,
-                      fiber_radius_nm=args.fiber_radius_nm)
+                      protocol=steps, hindrance=args.hindrance,
+                      mesh_size_nm=args.mesh_size_nm, fiber_radius_nm=args.fiber_radius_nm,
+                      settings=None if args.n is None and args.rtol is None else
+                      SolverSettings(n=args.n, rtol=args.rtol))
     rep["read"] = read
     if args.plot:
         rep["plots"] = [_plot_release(rep, args.plot)]

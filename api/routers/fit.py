@@ -1,4 +1,5 @@
-"""``POST /v1/fit/swelling`` and ``/v1/fit/kinetics``: gel fits as stored jobs (202 + poll).
+"""``POST /v1/fit/swelling``, ``/v1/fit/kinetics`` and ``/v1/fit/release``: fits as stored
+jobs (202 + poll at ``/v1/fit/jobs/{id}`` or ``/v1/jobs/{id}``).
 
 The data are checked at once (a bad column, NaN, a negative size or too few points is a 422
 naming it); the fit runs as a stored job (:mod:`api.stored_jobs`: kept in the cache, so it
@@ -23,13 +24,19 @@ from solver.json_safe import json_safe
 
 from .. import stored_jobs
 from ..deps import StateDep
-from ..fit_schemas import FitJobResponse, KineticsFitRequest, SwellingFitRequest
+from ..fit_schemas import (
+    FitJobResponse,
+    KineticsFitRequest,
+    ReleaseFitJobResponse,
+    ReleaseFitRequest,
+    SwellingFitRequest,
+)
 from ..safe_route import SafeRoute
 from ..service import to_gel
 from .compute import compute
 
 router = APIRouter(tags=["fit"], route_class=SafeRoute)
-KINDS = {"swelling": "fit-swelling", "kinetics": "fit-kinetics"}
+KINDS = {"swelling": "fit-swelling", "kinetics": "fit-kinetics", "release": "fit-release"}
 
 
 def _swelling_data(body: SwellingFitRequest) -> Any:
@@ -53,7 +60,7 @@ def _swelling(_: Any, body: SwellingFitRequest) -> dict[str, Any]:
         report["dose_time_by_objective"] = json_safe(dose_under_objectives(
             data, body.dose_jump[0], body.dose_jump[1], body.dose_fraction,
             sigma_t=body.sigma_t, size_rel_sigma=body.size_rel_sigma, fixed=body.fixed,
-            fits={body.objective: res}))
+            fits={body.objective: res}, n_starts=body.n_starts))
     if body.save:
         GelStore().save(body.save, fit_gel(res, body.save),
                         swelling={"data": data_dict(data), "fit": report})
@@ -88,12 +95,50 @@ def _kinetics(planner: Any, body: KineticsFitRequest) -> dict[str, Any]:
     return report
 
 
+def _release_data(body: ReleaseFitRequest) -> tuple[Any, Any]:
+    from dosing.release_fit import release_data
+
+    return release_data(body.time_s, body.released, body.released_unit, body.loaded_ug)
+
+
+def _release_settings(body: ReleaseFitRequest) -> SolverSettings | None:
+    if body.solver_n is None and body.solver_rtol is None:
+        return None
+    return SolverSettings(n=body.solver_n, rtol=body.solver_rtol)
+
+
+def _release(_: Any, body: ReleaseFitRequest) -> dict[str, Any]:
+    """The release fit's report (a stored job's run; dosing.release_fit, f2)."""
+    from dosing.release_fit import fit_release
+
+    t, y = _release_data(body)
+    return json_safe(fit_release(
+        t, y, to_gel(body.gel), body.t_start, body.t_end, body.dry_radius_um,
+        protocol=body.protocol, hindrance=body.hindrance, mesh_size_nm=body.mesh_size_nm,
+        fiber_radius_nm=body.fiber_radius_nm, settings=_release_settings(body)))
+
+
 stored_jobs.register(stored_jobs.JobKind(KINDS["swelling"], SwellingFitRequest, _swelling))
+stored_jobs.register(stored_jobs.JobKind(KINDS["release"], ReleaseFitRequest, _release))
 stored_jobs.register(stored_jobs.JobKind(KINDS["kinetics"], KineticsFitRequest, _kinetics))
 
 
-def _check(body: SwellingFitRequest | KineticsFitRequest) -> None:
+def _check(body: SwellingFitRequest | KineticsFitRequest | ReleaseFitRequest) -> None:
     """What can be refused before the job: the name, the data, the gel (422 naming it)."""
+    if isinstance(body, ReleaseFitRequest):
+        _release_data(body)
+        _release_settings(body)
+        to_gel(body.gel)
+        if body.protocol is not None:
+            from dosing.fit_release_protocol import parse_protocol
+
+            if body.t_end is not None:
+                raise ParameterError("t_end", body.t_end, "null when a protocol is given")
+            parse_protocol(body.t_start, body.protocol)
+        elif body.t_end is not None and body.t_end != body.t_start:
+            raise ParameterError("t_end", body.t_end, f"equal to t_start = {body.t_start:g} "
+                                 "K (isothermal), or give a protocol")
+        return
     if body.save:
         check_name(body.save)
     if isinstance(body, SwellingFitRequest):
@@ -129,6 +174,15 @@ async def fit_kinetics_route(body: KineticsFitRequest, state: StateDep) -> Any:
     return await compute(_submit, state, "kinetics", body)
 
 
+@router.post("/v1/fit/release", status_code=202, response_model=ReleaseFitJobResponse,
+             responses={202: {"model": ReleaseFitJobResponse},
+                        429: {"description": "too many jobs queued; retry later"}})
+async def fit_release_route(body: ReleaseFitRequest, state: StateDep) -> Any:
+    """Fit a drug's free diffusivity D0 to a cumulative release curve, isothermal or under a
+    heating protocol, with f2 (dosing.release_fit): a job, poll status_url."""
+    return await compute(_submit, state, "release", body)
+
+
 def _status(state: Any, job_id: str) -> dict[str, Any]:
     if not job_id.startswith(tuple(k + "-" for k in KINDS.values())):
         raise UnknownValidationError(job_id)
@@ -137,7 +191,7 @@ def _status(state: Any, job_id: str) -> dict[str, Any]:
     return {**out, "kind": kind, "status_url": f"/v1/fit/jobs/{job_id}"}
 
 
-@router.get("/v1/fit/jobs/{job_id}", response_model=FitJobResponse,
+@router.get("/v1/fit/jobs/{job_id}", response_model=ReleaseFitJobResponse | FitJobResponse,
             responses={404: {"description": "no such fit job"}})
 async def fit_job(job_id: str, state: StateDep) -> Any:
     """A fit job's state, with the report when done or the error when failed (kept in the

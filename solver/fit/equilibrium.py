@@ -302,8 +302,12 @@ def fit_equilibrium(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma
                     fixed: Mapping[str, float] | None = None, n_starts: int = 6,
                     absolute_sigma: bool = False, max_nfev: int = 400,
                     objective: str = "orthogonal",
-                    below_dry_sigmas: float = BELOW_DRY_SIGMAS) -> FitResult:
+                    below_dry_sigmas: float = BELOW_DRY_SIGMAS,
+                    start: Mapping[str, float] | None = None) -> FitResult:
     """Fit eq. EqlEqn to equilibrium swelling data (module doc).
+
+    ``start`` (all six reported parameters): a warm start, one local fit from there in
+    place of the global search (e.g. refits of similar data in a coverage study).
 
     ``objective``: 'orthogonal' (default; errors in both variables, judged by chi-square
     under the stated noise) or 'temperature' (the paper's residual T(lambda_i) - T_i at the
@@ -346,9 +350,15 @@ def fit_equilibrium(data: SwellingData, *, sigma_t: float = 0.05, size_rel_sigma
         if i in (0, 5) and not (lb[i] <= val <= ub[i]):
             raise ParameterError(f"fixed.{PARAMS[i]}", math.exp(val),
                                  f"{math.exp(lb[i]):.4g}-{math.exp(ub[i]):.4g}")
-    starts = [(c, q) for c, q in global_starts(data, t_ref, sigma_t, sigma_y,
-                                               objective=objective)
-              if lo_s <= q[5] <= hi_s]
+    if start is not None:
+        if set(start) != set(PARAMS):
+            raise ParameterError("start", sorted(start), "all of " + ", ".join(PARAMS))
+        warm = _fixed_internal(start, t_ref)
+        starts = [(0.0, np.array([warm[i] for i in range(6)]))]
+    else:
+        starts = [(c, q) for c, q in global_starts(data, t_ref, sigma_t, sigma_y,
+                                                   objective=objective)
+                  if lo_s <= q[5] <= hi_s]
     if not starts:
         raise ParameterError("data", "no start", "data for which some gel has a finite "
                              "equilibrium temperature at every point")
