@@ -258,9 +258,6 @@ def _protocol(body: s.DoseTimeRequest) -> Any:
     if body.t_end is not None:
         raise ParameterError("t_end", body.t_end, "absent when a protocol is given (the "
                              "protocol's steps set the heating)")
-    if body.drug is not None:
-        raise ParameterError("drug", "given", "absent with a protocol (a drug dose under a "
-                             "protocol is not planned yet)")
     return Protocol(body.t_start, body.protocol, files=False)
 
 
@@ -307,7 +304,9 @@ def to_drug_dose_request(body: s.DoseTimeRequest) -> DrugDoseRequest:
         if getattr(body, name) is not None:
             raise ParameterError(name, getattr(body, name), "null with a drug (give "
                                  "dose_fraction of the load or drug_mass_ug)")
-    return DrugDoseRequest(**_case(body), t_end=body.t_end, **_drug(body),
+    protocol = _protocol(body)
+    return DrugDoseRequest(**_case(body), t_end=None if protocol is not None else body.t_end,
+                           protocol=protocol, **_drug(body),
                            dose_fraction=body.dose_fraction, drug_mass_ug=body.drug_mass_ug)
 
 
@@ -352,7 +351,7 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest,
                                                or body.protocol is not None):
         raise ParameterError("size_distribution", "a batch", "null with a drug or a protocol "
                              "(a batch's drug dose or protocol dose is not built yet)")
-    if body.drug is not None and body.protocol is None:
+    if body.drug is not None:  # under a protocol too (dosing.drug_protocol): always a job
         if state is None:
             return _drug_dose_job(planner, body)
         now = drug_dose_now(planner, to_drug_dose_request(body), validate=body.validate_full)

@@ -205,15 +205,12 @@ def run(args: argparse.Namespace) -> int:
         "concentration_ug_per_ul": args.concentration_ug_per_ul})
     checked_cache(args.cache)
     drug = drug_from_args(args)
-    if drug is not None and steps is not None:
-        raise ParameterError("protocol", steps, "absent with a drug option (a drug dose under "
-                             "a protocol is not planned yet)")
     if drug is not None:
         if args.size_cv is not None or args.sizes is not None:
             raise ParameterError("--size-cv" if args.sizes is None else "--sizes",
                                  args.size_cv or args.sizes, "not with a drug option (a "
                                  "batch's drug dose is not built yet)")
-        return run_drug_dose(args, drug, planning_kwargs(args))
+        return run_drug_dose(args, drug, {**planning_kwargs(args), "protocol": steps})
     dist = batch_distribution(args)
     req = DoseRequest(dose_fraction=args.fraction, dose_volume_ul=args.volume_ul,
                       drug_mass_ug=args.drug_mass_ug,
