@@ -347,10 +347,9 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest,
     one planner call (:meth:`dosing.Planner.answer`).  A dose with a drug is answered at
     once when its runs are cached (:func:`dosing.drug_dose.drug_dose_now`), else (given
     ``state``) as a stored 'drug-dose' job, so that no HTTP worker thread waits on a run."""
-    if body.size_distribution is not None and (body.drug is not None
-                                               or body.protocol is not None):
-        raise ParameterError("size_distribution", "a batch", "null with a drug or a protocol "
-                             "(a batch's drug dose or protocol dose is not built yet)")
+    if body.size_distribution is not None and body.drug is not None:
+        raise ParameterError("size_distribution", "a batch", "null with a drug (a batch's "
+                             "drug dose is not built yet)")
     if body.drug is not None:  # under a protocol too (dosing.drug_protocol): always a job
         if state is None:
             return _drug_dose_job(planner, body)
@@ -364,10 +363,12 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest,
         return Accepted(out.validation_id, DOSE_PENDING_NOTE if body.protocol is None
                         else PROTOCOL_PENDING_NOTE)
     answer = {"status": "answered", **out.answer.to_dict()}
-    if req.size_distribution is not None:  # a batch (issue 26)
+    if req.size_distribution is not None:  # a batch (issue 26), under a protocol (24)
         from dosing.batch import batch_answer
+        from dosing.batch_protocol import batch_protocol_answer
 
-        answer["batch"] = batch_answer(req).to_dict()
+        answer["batch"] = (batch_answer(req) if req.heating is None else
+                           batch_protocol_answer(req, validate=body.validate_full)).to_dict()
     if out.validation_id is not None:
         answer.update(validation_id=out.validation_id,
                       validation_url=validation_url(out.validation_id))

@@ -218,10 +218,6 @@ def run(args: argparse.Namespace) -> int:
                       **{**planning_kwargs(args), "protocol": steps},
                       **({} if dist is None else {"size_distribution": dist}))
     if steps is not None:
-        if dist is not None:
-            raise ParameterError("--size-cv" if args.sizes is None else "--sizes",
-                                 args.size_cv or args.sizes, "not with --protocol (a batch "
-                                 "under a heating protocol is not planned yet)")
         return run_protocol_dose(args, req)
     if args.plot and not args.validate:
         raise ParameterError("plot", args.plot, "used with --validate")
@@ -298,8 +294,14 @@ def run_protocol_dose(args: argparse.Namespace, req: Any) -> int:
           f"{req.settings.n // 2}): seconds to minutes the first time, then cached",
           file=sys.stderr, flush=True)
     ans = plan_dose(req, validate=args.validate, cache_path=args.cache)
+    batch = None
+    if req.size_distribution is not None:  # a batch under the protocol (reduced model)
+        from dosing.batch_protocol import batch_protocol_answer
+
+        batch = batch_protocol_answer(req, validate=args.validate)
     if args.json:
-        print_json(ans.to_dict())
+        print_json(ans.to_dict() if batch is None else {**ans.to_dict(),
+                                                        "batch": batch.to_dict()})
         return 0
     print(f"{req.gel.name} from {req.t_start:g} K: " + "; ".join(ans.protocol))
     secs = "" if ans.seconds is None else f" = {ans.seconds:.4g} s"
@@ -317,4 +319,6 @@ def run_protocol_dose(args: argparse.Namespace, req: Any) -> int:
     print(wrap(ans.error_explanation))
     if ans.uncertainty and ans.uncertainty["interfacial_length_range"]["relative"] is not None:
         print(wrap(ans.uncertainty["interfacial_length_range"]["text"]))
+    if batch is not None:
+        print_batch(batch)
     return 0
