@@ -258,9 +258,6 @@ def _protocol(body: s.DoseTimeRequest) -> Any:
     if body.t_end is not None:
         raise ParameterError("t_end", body.t_end, "absent when a protocol is given (the "
                              "protocol's steps set the heating)")
-    if body.drug is not None:
-        raise ParameterError("drug", "given", "absent with a protocol (a drug dose under a "
-                             "protocol is not planned yet)")
     return Protocol(body.t_start, body.protocol, files=False)
 
 
@@ -307,7 +304,9 @@ def to_drug_dose_request(body: s.DoseTimeRequest) -> DrugDoseRequest:
         if getattr(body, name) is not None:
             raise ParameterError(name, getattr(body, name), "null with a drug (give "
                                  "dose_fraction of the load or drug_mass_ug)")
-    return DrugDoseRequest(**_case(body), t_end=body.t_end, **_drug(body),
+    protocol = _protocol(body)
+    return DrugDoseRequest(**_case(body), t_end=None if protocol is not None else body.t_end,
+                           protocol=protocol, **_drug(body),
                            dose_fraction=body.dose_fraction, drug_mass_ug=body.drug_mass_ug)
 
 
@@ -355,9 +354,10 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest,
     one planner call (:meth:`dosing.Planner.answer`).  A dose with a drug is answered at
     once when its runs are cached (:func:`dosing.drug_dose.drug_dose_now`), else (given
     ``state``) as a stored 'drug-dose' job, so that no HTTP worker thread waits on a run."""
-    if body.size_distribution is not None and body.protocol is not None:
-        raise ParameterError("size_distribution", "a batch", "null with a protocol (a "
-                             "batch's protocol dose is not built yet)")
+    if body.size_distribution is not None and body.drug is not None and (
+            body.protocol is not None):
+        raise ParameterError("size_distribution", "a batch", "null with a drug under a "
+                             "protocol (a batch's drug dose under a protocol is not built yet)")
     from dosing.batch_drug import check_batch_body
 
     check_batch_body(body)
@@ -365,7 +365,7 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest,
         if state is None:
             return _drug_dose_job(planner, body)
         return Accepted(stored_jobs.submit(state, "drug-dose", body), DRUG_PENDING_NOTE)
-    if body.drug is not None and body.protocol is None:
+    if body.drug is not None:  # under a protocol too (dosing.drug_protocol): always a job
         if state is None:
             return _drug_dose_job(planner, body)
         now = drug_dose_now(planner, to_drug_dose_request(body), validate=body.validate_full)
@@ -378,10 +378,12 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest,
         return Accepted(out.validation_id, DOSE_PENDING_NOTE if body.protocol is None
                         else PROTOCOL_PENDING_NOTE)
     answer = {"status": "answered", **out.answer.to_dict()}
-    if req.size_distribution is not None:  # a batch (issue 26)
+    if req.size_distribution is not None:  # a batch (issue 26), under a protocol (24)
         from dosing.batch import batch_answer
+        from dosing.batch_protocol import batch_protocol_answer
 
-        answer["batch"] = batch_answer(req).to_dict()
+        answer["batch"] = (batch_answer(req) if req.heating is None else
+                           batch_protocol_answer(req, validate=body.validate_full)).to_dict()
     if out.validation_id is not None:
         answer.update(validation_id=out.validation_id,
                       validation_url=validation_url(out.validation_id))

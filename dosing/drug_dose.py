@@ -33,7 +33,7 @@ from .drug import (
     runs_for,
 )
 from .protocol import Reach, Short, heat_cool_protocol, read_off, windows
-from .request import Case, resolve_case
+from .request import Case, _resolve_protocol, resolve_case
 from .scenario import SolverSettings, Step
 from .truth import Part, Uncertainty, truth_text
 from .units import PhysicalConstants, timescale, volume_to_ul
@@ -109,9 +109,17 @@ class DrugDoseRequest(DrugCase):
     dose_fraction: float | None = None
     drug_mass_ug: float | None = None
     fraction: float = field(init=False, repr=False, compare=False)
+    # a heating protocol in place of t_end (dosing.heating; the dose: dosing.drug_protocol)
+    protocol: Any = field(default=None, kw_only=True)
+    heating: Any = field(init=False, repr=False, compare=False, default=None)
 
     def __post_init__(self) -> None:
+        _resolve_protocol(self)
         self.resolve_drug()
+        if self.heating is not None:  # refused at once, naming the field (no job for it)
+            from .drug_protocol import check_protocol
+
+            check_protocol(self)
         object.__setattr__(self, "fraction", resolve_drug_amount(
             "dose_fraction", self.dose_fraction, "drug_mass_ug", self.drug_mass_ug,
             self.load_ug))
@@ -226,6 +234,7 @@ class DrugDoseAnswer(StatedTruth):
     split: str = ""
     mesh: str = ""
     permeability_law: str = "none: k0 independent of temperature at fixed porosity"
+    protocol: Any = None  # under a heating protocol: dosing.drug_protocol.ProtocolDrugDose
 
 
 def mechanism(squeezed: float, diffused: float) -> str:
@@ -264,7 +273,15 @@ def _reduced_answer(req: DrugDoseRequest, red: Any, model: str,
 def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = None,
                    validate: bool = False) -> DrugDoseAnswer:
     """The actuation time for a drug dose (see the module docstring); ``validate`` asks
-    for the full solver's drug run where the reduced drug model would answer."""
+    for the full solver's drug run where the reduced drug model would answer.  Under a
+    heating protocol (``req.heating``) the full solver's mechanics of the protocol with the
+    drug on them answer (:mod:`dosing.drug_protocol`, model 'full+solute')."""
+    if req.heating is not None:  # the drug dose's model choice: under a protocol
+        from .drug_protocol import answer_fields
+
+        got = answer_fields(req)  # the truth's whatever ``validate`` says
+        return DrugDoseAnswer(**got, split=SPLIT, mechanism=mechanism(
+            got["squeezed_fraction"], got["diffused_fraction"]))
     solute = req.solute
     settings = drug_settings(req.settings)  # the fluid answers' truth (issue 12)
     c = req.constants
@@ -383,7 +400,10 @@ def drug_dose_now(planner: Any, req: DrugDoseRequest,
                   validate: bool = False) -> DrugDoseAnswer | None:
     """The drug dose's answer when nothing needs a new run (no diffusion, the reduced drug
     model, or every drug run cached), else None: the service then queues it as a job (no
-    HTTP thread waits).  ``validate`` as in :func:`plan_drug_dose`."""
+    HTTP thread waits).  ``validate`` as in :func:`plan_drug_dose`.  Under a protocol:
+    None (its mechanics are memoised in the process, not cached: always a job)."""
+    if req.heating is not None:
+        return None
     try:
         return plan_drug_dose(planner, req, runs=CachedRuns(runs_for(planner)),
                               validate=validate)

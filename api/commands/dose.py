@@ -216,15 +216,15 @@ def run(args: argparse.Namespace) -> int:
                                                    and args.sizes is None)):
             raise ParameterError(flag, value, "with a drug option and --size-cv or --sizes "
                                  "(the medium a drug batch shares)")
-    if drug is not None and steps is not None:
-        raise ParameterError("protocol", steps, "absent with a drug option (a drug dose under "
-                             "a protocol is not planned yet)")
     if drug is not None:
         if args.size_cv is not None or args.sizes is not None:  # a batch (issue 26)
+            if steps is not None:
+                raise ParameterError("protocol", steps, "absent with a drug batch (a batch's "
+                                     "drug dose under a protocol is not built yet)")
             from .batch_cli import run_drug_batch
 
             return run_drug_batch(args, drug, planning_kwargs(args), batch_distribution(args))
-        return run_drug_dose(args, drug, planning_kwargs(args))
+        return run_drug_dose(args, drug, {**planning_kwargs(args), "protocol": steps})
     dist = batch_distribution(args)
     req = DoseRequest(dose_fraction=args.fraction, dose_volume_ul=args.volume_ul,
                       drug_mass_ug=args.drug_mass_ug,
@@ -232,10 +232,6 @@ def run(args: argparse.Namespace) -> int:
                       **{**planning_kwargs(args), "protocol": steps},
                       **({} if dist is None else {"size_distribution": dist}))
     if steps is not None:
-        if dist is not None:
-            raise ParameterError("--size-cv" if args.sizes is None else "--sizes",
-                                 args.size_cv or args.sizes, "not with --protocol (a batch "
-                                 "under a heating protocol is not planned yet)")
         return run_protocol_dose(args, req)
     if args.plot and not args.validate:
         raise ParameterError("plot", args.plot, "used with --validate")
@@ -312,8 +308,14 @@ def run_protocol_dose(args: argparse.Namespace, req: Any) -> int:
           f"{req.settings.n // 2}): seconds to minutes the first time, then cached",
           file=sys.stderr, flush=True)
     ans = plan_dose(req, validate=args.validate, cache_path=args.cache)
+    batch = None
+    if req.size_distribution is not None:  # a batch under the protocol (reduced model)
+        from dosing.batch_protocol import batch_protocol_answer
+
+        batch = batch_protocol_answer(req, validate=args.validate)
     if args.json:
-        print_json(ans.to_dict())
+        print_json(ans.to_dict() if batch is None else {**ans.to_dict(),
+                                                        "batch": batch.to_dict()})
         return 0
     print(f"{req.gel.name} from {req.t_start:g} K: " + "; ".join(ans.protocol))
     secs = "" if ans.seconds is None else f" = {ans.seconds:.4g} s"
@@ -331,4 +333,6 @@ def run_protocol_dose(args: argparse.Namespace, req: Any) -> int:
     print(wrap(ans.error_explanation))
     if ans.uncertainty and ans.uncertainty["interfacial_length_range"]["relative"] is not None:
         print(wrap(ans.uncertainty["interfacial_length_range"]["text"]))
+    if batch is not None:
+        print_batch(batch)
     return 0

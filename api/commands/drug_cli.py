@@ -51,10 +51,14 @@ def run_drug_dose(args: argparse.Namespace, drug: Any, kwargs: dict[str, Any]) -
         return 0
     mass = "" if ans.dose_ug is None else f" = {ans.dose_ug:.4g} ug"
     secs = "" if ans.seconds is None else f" = {ans.seconds:.4g} s"
-    print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K: release "
-          f"{ans.dose_fraction:.1%} of the loaded drug{mass}")
-    print(f"  {ans.model}: heat for t = {ans.time:.4g} (dimensionless){secs}, after waiting "
-          f"{ans.wait:.4g} at T_start")
+    heat = (f"from {req.t_start:g} K under {'; '.join(ans.protocol.steps)}"
+            if ans.protocol is not None else f"{req.t_start:g} K -> {req.t_end:g} K")
+    print(f"{req.gel.name} {heat}: release {ans.dose_fraction:.1%} of the loaded drug{mass}")
+    print(f"  {ans.model}: " + (f"t = {ans.time:.4g} tau{secs} from the protocol's start "
+                                 f"(at {ans.protocol.temperature_at_dose:.4g} K)"
+                                 if ans.protocol is not None else
+                                 f"heat for t = {ans.time:.4g} (dimensionless){secs}, after "
+                                 f"waiting {ans.wait:.4g} at T_start"))
     print(f"  leaked before heating: {ans.leaked_before_heating:.4g} of the load; at T_start "
           f"the bead leaks 10% in {ans.leak_time_10pct:.4g} tau"
           + ("" if ans.leak_time_10pct_seconds is None
