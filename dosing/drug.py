@@ -403,14 +403,16 @@ def drug_code_version() -> str:
 
 
 def step_outputs(duration: float, k: int) -> np.ndarray:
-    """A protocol step's output times: k uniform intervals, and geometric ones (EARLY_OUTPUT
-    to the first uniform output, EARLY_PER_DECADE a decade) where the step's jump is fast."""
+    """A protocol step's output times: k uniform intervals, and geometric ones
+    (EARLY_PER_DECADE a decade from EARLY_OUTPUT) until their spacing reaches the uniform
+    one, so that no interval is longer than either (the step's jump is fast at first)."""
     uniform = np.linspace(0.0, duration, k + 1)
-    first = uniform[1]
-    if first <= EARLY_OUTPUT:
+    ratio = 10.0 ** (1.0 / EARLY_PER_DECADE)
+    end = min(duration, uniform[1] / (ratio - 1.0))  # where t (ratio - 1) = the uniform dt
+    if end <= EARLY_OUTPUT:
         return uniform
-    m = int(math.ceil(EARLY_PER_DECADE * math.log10(first / EARLY_OUTPUT)))
-    return np.union1d(uniform, np.geomspace(EARLY_OUTPUT, first, m + 1))
+    m = int(math.ceil(EARLY_PER_DECADE * math.log10(end / EARLY_OUTPUT)))
+    return np.union1d(uniform, np.geomspace(EARLY_OUTPUT, end, m + 1))
 
 
 def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
