@@ -240,6 +240,10 @@ def test_protocol_editor_in_headless_chromium(tmp_path: Path) -> None:
             want = want.json()
             assert float(page.get_attribute("#protocol-seconds", "data-value")) == want["seconds"]
             assert page.inner_text("#protocol-seconds") == f"{want['seconds']:.4g} s"
+            # which model answered, and why (the JSON's model and model_reason)
+            assert page.get_attribute("#protocol-model", "data-value") == want["model"]
+            assert want["model_reason"] and want["model_reason"] in page.inner_text(
+                "#protocol-model")
             assert page.locator("#protocol-temperature").count() == 1
             assert page.locator("#protocol-release").count() == 1
             assert page.locator(".protocol-dose-mark").count() == 1

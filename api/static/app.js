@@ -823,6 +823,9 @@ function showProtocolAnswer(a) {
   s.dataset.value = a.seconds === null || a.seconds === undefined ? "" : String(a.seconds);
   $("protocol-time").textContent = `(t = ${fmt(a.time)} in units of τ at ${fmt(a.reference_temperature, 5)} K; ${pct(a.dose_fraction)} of the stored fluid)`;
   $("protocol-time").dataset.value = String(a.time);
+  // which model answered and why (the slow-heating front model inside its measured region)
+  $("protocol-model").textContent = a.model_reason ? `${a.model}: ${a.model_reason}` : a.model;
+  $("protocol-model").dataset.value = a.model;
   $("protocol-text").textContent = a.protocol.join("; ");
   $("protocol-untils").textContent = a.until_steps.length ? a.until_steps.map((u) =>
     `step ${u.step} ends at ${u.end_seconds !== null ? fmt(u.end_seconds) + " s" : fmt(u.end) + " τ"}`).join("; ") : "none";
