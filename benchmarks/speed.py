@@ -30,9 +30,11 @@ The first call of each tree compiles or loads its numba kernels and is not count
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import resource
+import signal
 import statistics
 import subprocess
 import sys
@@ -142,15 +144,23 @@ def cpu_children() -> float:
 
 def run(tree: Path, argv: list[str], env: dict[str, str] | None = None,
         timeout: float = 900.0) -> tuple[float, str]:
-    """(CPU seconds, stdout) of one child process in ``tree``."""
+    """(CPU seconds, stdout) of one child process in ``tree``.  The child runs in a session
+    of its own, which is killed afterwards: an older tree's server may leave its pool's
+    workers behind (4aa7d90's did), and none may outlive the measurement."""
     e = dict(os.environ, PYTHONPATH=str(tree), **(env or {}))
     t0 = cpu_children()
-    done = subprocess.run(argv, cwd=tree, env=e, capture_output=True, text=True,
-                          timeout=timeout)
+    proc = subprocess.Popen(argv, cwd=tree, env=e, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)  # the child's leftovers, if any
+        proc.wait()
     took = cpu_children() - t0
-    if done.returncode != 0:
-        raise RuntimeError(f"{tree}: {' '.join(argv[:4])}... failed:\n{done.stderr[-2000:]}")
-    return took, done.stdout
+    if proc.returncode != 0:
+        raise RuntimeError(f"{tree}: {' '.join(argv[:4])}... failed:\n{err[-2000:]}")
+    return took, out
 
 
 def _json(out: str) -> dict:
