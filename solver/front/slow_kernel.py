@@ -16,6 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..full.kernels import permeability
 from ..heating import mobility_factor, temperature_rate
 from ..thermo import osmotic_dp
 from .evolve import _clenshaw
@@ -38,13 +39,6 @@ A = np.array([
 B5 = np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0.0])
 B4 = np.array([5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100,
                1 / 40])
-
-
-@njit(cache=True)
-def _perm(par, phi):
-    if par[5] == 0.0:
-        return 1.0
-    return phi / (1.0 - phi) ** par[6]
 
 
 @njit(cache=True)
@@ -77,7 +71,7 @@ def rhs(kind, t, y, heat, par, cheb, tab):
         chi1 = par[3] + par[4] * temp
         phi = 1.0 - 1.0 / v
         stiff = 1.0 + 1.0 / (a * a) - par[0] * osmotic_dp(phi, chi0, chi1) / (a * a)
-        diff = _perm(par, phi) * max(stiff, 1e-9) / a
+        diff = permeability(phi, int(par[5]), par[6]) * max(stiff, 1e-9) / a
         veq = np.interp(temp, tab[0], tab[1])
         return -mob * (v - veq) * LAG_MODES * diff / (a * a)
     sm = par[9]
@@ -92,7 +86,7 @@ def rhs(kind, t, y, heat, par, cheb, tab):
     h = (2.0 * fa - fa**4 / (2.0 * sp)) - (2.0 * fm - fm**4 / (2.0 * sp))
     numer = front - edge - h
     integ = a * a / 2.0 - 1.5 * rf * rf + rf**3 / a
-    core = sp * mob * _perm(par, 1.0 - sp) * numer + dsp * rate * integ / 3.0
+    core = sp * mob * permeability(1.0 - sp, int(par[5]), par[6]) * numer + dsp * rate * integ / 3.0
     if core > 0.0:
         core = 0.0
     return 3.0 * rf * a * core / (jump * max(a - rf, 1e-300))
