@@ -15,6 +15,7 @@ from test_page_browser import (
     _artifacts,
     _fill,
     browser_page,
+    refused_in_the_page,
 )
 
 from api.http import create_app
@@ -48,13 +49,8 @@ def test_batch_in_headless_chromium(tmp_path: Path) -> None:
         assert float(page.get_attribute("#answer-seconds", "data-value")) == want["seconds"]
         assert "of the beads have delivered" in page.inner_text("#answer-batch")
         page.screenshot(path=str(_artifacts() / "page-batch.png"), full_page=True)
-        sent.clear()
-        _fill(page, size_cv="2.5")
-        page.click("#plan")
-        page.wait_for_selector("body[data-state=invalid]")
-        assert "size CV" in page.inner_text("#err-size_cv")
-        page.wait_for_timeout(300)
-        assert sent == []
+        assert "size CV" in refused_in_the_page(page, sent, "#plan", "data-state",
+                                                size_cv="2.5")
         _fill(page, size_cv="")  # one bead again: no batch shown
         page.click("#plan")
         page.wait_for_selector("body[data-state=answered]", timeout=120_000)

@@ -103,6 +103,20 @@ def _fill(page, **fields: str) -> None:
         page.fill(f"#{name}", value)
 
 
+def refused_in_the_page(page, sent: list[str], button: str, state: str,
+                        **fields: str) -> str:
+    """Fill ``fields``, click ``button``: the page marks ``state`` invalid without sending a
+    request; returns the first field's message (``#err-<field>``)."""
+    sent.clear()
+    _fill(page, **fields)
+    page.click(button)
+    page.wait_for_selector(f"body[{state}=invalid]")
+    msg = page.inner_text(f"#err-{next(iter(fields))}")
+    page.wait_for_timeout(500)
+    assert sent == []
+    return msg
+
+
 @pytest.mark.slow  # a real server, a browser, and one coarse full-solver validation
 def test_page_in_headless_chromium(tmp_path: Path) -> None:
     with browser_page(tmp_path) as (url, page, errors, sent):
@@ -125,14 +139,8 @@ def test_page_in_headless_chromium(tmp_path: Path) -> None:
         page.screenshot(path=str(_artifacts() / "page.png"), full_page=True)
 
         # out of range: a message naming the field, and no request at all
-        sent.clear()
-        _fill(page, t_end="400")
-        page.click("#plan")
-        page.wait_for_selector("body[data-state=invalid]")
-        msg = page.inner_text("#err-t_end")
+        msg = refused_in_the_page(page, sent, "#plan", "data-state", t_end="400")
         assert "T_end" in msg and "373.15" in msg
-        page.wait_for_timeout(500)
-        assert sent == []
 
         # within the page's bounds but refused by the server: shown at the field
         _fill(page, t_end="308", interfacial_length="0.00001")  # below the direct range
@@ -155,13 +163,8 @@ def test_page_in_headless_chromium(tmp_path: Path) -> None:
         table = httpx.get(url + csv_url.removesuffix("/table.csv"), timeout=60).json()["result"]
         assert len(table["rows"]) == 9 * 9 * 4 and table["grid"]["t_ends"][0] == 307.5
         assert "324 answered" in page.inner_text("#sweep-status")
-        sent.clear()
-        _fill(page, sweep_t_end="300, 380, 5")
-        page.click("#sweep")
-        page.wait_for_selector("body[data-sweep=invalid]")
-        assert "373.15" in page.inner_text("#err-sweep_t_end")
-        page.wait_for_timeout(300)
-        assert sent == []
+        assert "373.15" in refused_in_the_page(page, sent, "#sweep", "data-sweep",
+                                               sweep_t_end="300, 380, 5")
         _fill(page, sweep_t_end="307.5, 311.5, 9")
 
         # a saved custom gel: checked in the page, kept in the browser, sent as parameters
