@@ -2,7 +2,7 @@
 
 Run:  nice -n 10 .venv/bin/python -m benchmarks.drug_reduced
           (the stored error table; --table recomputes it, --region: where it answers,
-           --emit: dosing.drug_reduced.MEASURED, --convergence: its own numerical error)
+           --emit: dosing.drug_reduced.MEASURED's JSON, --convergence: its own numerical error)
 
 Full-solver reference: the planner's drug run of a 50 um bead (``dosing.drug``: the mechanics
 on the truth's settings, the moving grid at the bead's own ell, N = 400, rtol 1e-5, its
@@ -181,6 +181,7 @@ def rel_err(a, b) -> float | None:
 
 
 RESULT = Path(__file__).resolve().parent / "drug_reduced_table.json"
+ERRORS = Path(__file__).resolve().parent.parent / "dosing" / "data" / "drug_reduced_errors.json"
 CONVERGENCE = {"no hindrance, D0 = 1 D_gel": (1.0, {"law": "none", "convective": False}),
                "no hindrance, D0 = 30 D_gel": (30.0, {"law": "none", "convective": False}),
                "Ogston r_s/r_f = 1, sieved r_s/xi_dry = 0.3, D0 = 3 D_gel":
@@ -274,26 +275,22 @@ def region(rows: list[dict], limit: float = 0.05) -> str:
     doses answered at each measured D0 (a cell needs all its corners within ``limit``)."""
     import dosing.drug_reduced as dr
 
-    saved = dr.MEASURED
-    dr.MEASURED = measured(rows)
-    try:
-        lines = ["| law | D0 (cm^2/s) | " + " | ".join(f"{int(100 * f)} %" for f in DOSES)
-                 + " |", "|---|---|" + "---|" * len(DOSES)]
-        for law in LAWS:
-            for row in rows:
-                if row["law"] != law:
-                    continue
-                sol = solute("ANB", law, row["d0"])
-                cells = []
-                for f in DOSES:
-                    e = dr.stated_error(sol, f)
-                    cells.append("full" if e is None else f"{100 * e:.1f}")
-                if any(c != "full" for c in cells):
-                    lines.append(f"| {label(law)} | {row['d0']:g} | " + " | ".join(cells)
-                                 + " |")
-        return "\n".join(lines)
-    finally:
-        dr.MEASURED = saved
+    table = measured(rows)
+    lines = ["| law | D0 (cm^2/s) | " + " | ".join(f"{int(100 * f)} %" for f in DOSES)
+             + " |", "|---|---|" + "---|" * len(DOSES)]
+    for law in LAWS:
+        for row in rows:
+            if row["law"] != law:
+                continue
+            sol = solute("ANB", law, row["d0"])
+            cells = []
+            for f in DOSES:
+                e = dr.stated_error(sol, f, table)
+                cells.append("full" if e is None else f"{100 * e:.1f}")
+            if any(c != "full" for c in cells):
+                lines.append(f"| {label(law)} | {row['d0']:g} | " + " | ".join(cells)
+                             + " |")
+    return "\n".join(lines)
 
 
 def main() -> None:
@@ -303,7 +300,7 @@ def main() -> None:
     p.add_argument("--convergence", action="store_true",
                    help="the reduced model's own numerical error and cost")
     p.add_argument("--emit", action="store_true",
-                   help="print dosing.drug_reduced.MEASURED from the stored table")
+                   help="write dosing.drug_reduced.MEASURED (its JSON) from the stored table")
     p.add_argument("--region", action="store_true",
                    help="print where the reduced model answers and its stated error")
     args = p.parse_args()
@@ -322,11 +319,8 @@ def main() -> None:
     else:
         rows = json.loads(RESULT.read_text())
     if args.emit:
-        import pprint
-
-        text = pprint.pformat(measured(rows), width=94, compact=True)
-        print("MEASURED: dict[str, list[Row]] = (\n"
-              + "\n".join("    " + line for line in text.splitlines()) + "\n)")
+        ERRORS.write_text(json.dumps(measured(rows), indent=1))
+        print(f"wrote {ERRORS}")
     elif args.region:
         print(region(rows))
     else:

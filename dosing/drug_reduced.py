@@ -23,8 +23,10 @@ does when asked to validate.
 from __future__ import annotations
 
 import bisect
+import json
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from solver.front.solute import CELLS, HORIZON, front_release, time_to_release
@@ -48,70 +50,10 @@ MODEL_NAME = ("the reduced drug model (the drug's advection, hindered diffusion,
 Row = tuple[tuple[float, float], tuple[float, ...], tuple[tuple[float | None, ...], ...]]
 # law -> measured drugs: ((r_s / xi_dry, r_s / r_f), D0 / D_gel of the measured rows, the
 # largest |relative error| of the dose time over ANB and HHT at each of DOSES; None: a dose
-# not reached), written by `python -m benchmarks.drug_reduced --emit` from
-# benchmarks/drug_reduced_table.json
-MEASURED: dict[str, list[Row]] = (
-    {'amsden': [((0.25, 1.0),
-                 (0.112558959519, 1.12558959519, 11.2558959519, 33.7676878557, 112.558959519,
-                  337.676878557, 1125.58959519),
-                 ((0.5676, 0.5643, 0.848, None, None), (0.1023, 0.0939, 0.0511, 0.041, 0.0315),
-                  (1.1804, 0.1221, 0.0138, 0.0393, 0.0354),
-                  (5.295, 0.2768, 0.0794, 0.0161, 0.0366),
-                  (3.5145, 0.6181, 0.1892, 0.0747, 0.0526),
-                  (1.768, 1.6841, 0.3818, 0.1536, 0.0657),
-                  (0.7442, 1.0384, 0.9189, 0.322, 0.1296))),
-                ((0.0625, 0.25),
-                 (0.112558959519, 1.12558959519, 11.2558959519, 112.558959519, 1125.58959519),
-                 ((0.2237, 0.0462, 0.035, 0.0489, 0.0579),
-                  (0.2467, 0.0977, 0.0836, 0.0813, 0.0932),
-                  (0.1832, 0.0536, 0.0396, 0.035, 0.0335),
-                  (0.0806, 0.037, 0.0227, 0.0184, 0.0165),
-                  (0.0334, 0.0181, 0.0122, 0.0116, 0.01)))],
-     'free-volume': [((0.25, 0.0),
-                      (0.112558959519, 1.12558959519, 11.2558959519, 33.7676878557, 112.558959519,
-                       337.676878557, 1125.58959519),
-                      ((0.0941, 0.1025, 0.2116, 0.2904, None),
-                       (0.3183, 0.4111, 0.7508, None, None),
-                       (2.0506, 0.3274, 0.2582, 0.2079, 0.1655),
-                       (21.5936, 0.3732, 0.3156, 0.2595, 0.2114),
-                       (2020.1777, 0.5428, 0.4004, 0.3585, 0.2954),
-                       (5826.4281, 1.81, 0.5397, 0.4278, 0.3899),
-                       (18968.2115, 1928.1379, 0.7325, 0.5907, 0.4628))),
-                     ((0.0625, 0.0),
-                      (0.112558959519, 1.12558959519, 11.2558959519, 112.558959519,
-                       1125.58959519),
-                      ((0.2212, 0.025, 0.0173, 0.0249, 0.0287),
-                       (0.2192, 0.0335, 0.0244, 0.0279, 0.0361),
-                       (0.107, 0.0313, 0.025, 0.0237, 0.0247),
-                       (0.1541, 0.1171, 0.1292, 0.1471, 0.1846),
-                       (0.1806, 0.0626, 0.0561, 0.0578, 0.072)))],
-     'none': [((0.0, 0.0),
-               (0.112558959519, 0.337676878557, 1.12558959519, 3.37676878557, 11.2558959519,
-                33.7676878557, 112.558959519, 337.676878557, 1125.58959519),
-               ((0.2457, 0.04, 0.0269, 0.0264, 0.0289), (0.2476, 0.0405, 0.0271, 0.0265, 0.0289),
-                (0.2564, 0.0422, 0.0276, 0.0265, 0.0283),
-                (0.2856, 0.0459, 0.0255, 0.0224, 0.0224),
-                (0.3396, 0.0585, 0.0252, 0.0169, 0.0144),
-                (0.3863, 0.0787, 0.0302, 0.0165, 0.0117),
-                (0.2407, 0.1086, 0.0418, 0.0203, 0.0114),
-                (0.1497, 0.1399, 0.0567, 0.0275, 0.0138),
-                (0.0878, 0.0829, 0.0784, 0.0399, 0.0221)))],
-     'ogston': [((0.25, 1.0),
-                 (0.112558959519, 1.12558959519, 11.2558959519, 33.7676878557, 112.558959519,
-                  337.676878557, 1125.58959519),
-                 ((0.5612, 0.5614, None, None, None), (0.1255, 0.216, 0.0795, 0.0572, 0.0392),
-                  (0.6823, 0.0949, 0.0347, 0.0323, 0.0282),
-                  (1.9582, 0.2035, 0.0726, 0.0199, 0.033),
-                  (2.7018, 0.3832, 0.1359, 0.0956, 0.0112), (1.4458, 0.825, 0.238, 0.1011, 0.097),
-                  (0.6514, 0.8841, 0.4912, 0.1952, 0.0791))),
-                ((0.0625, 0.25),
-                 (0.112558959519, 1.12558959519, 11.2558959519, 112.558959519, 1125.58959519),
-                 ((0.225, 0.0417, 0.0309, 0.0467, 0.0562),
-                  (0.2491, 0.107, 0.1018, 0.1072, 0.1292),
-                  (0.1594, 0.0559, 0.0454, 0.0434, 0.0433),
-                  (0.0533, 0.0222, 0.0172, 0.0159, 0.0145),
-                  (0.0206, 0.0042, 0.0063, 0.007, 0.0093)))]}
-)
+# not reached), written to dosing/data/drug_reduced_errors.json by
+# `python -m benchmarks.drug_reduced --emit` from benchmarks/drug_reduced_table.json
+MEASURED: dict[str, list[Row]] = json.loads(
+    (Path(__file__).parent / "data" / "drug_reduced_errors.json").read_text())
 
 
 def _bracket(values: tuple[float, ...], x: float) -> tuple[int, ...] | None:
@@ -147,23 +89,26 @@ def _near(a: float, b: float) -> bool:
     return abs(a - b) <= 1e-9 * max(abs(a), abs(b), 1e-300)
 
 
-def stated_error(solute: Any, dose: float) -> float | None:
+def stated_error(solute: Any, dose: float,
+                 measured: dict[str, list[Row]] | None = None) -> float | None:
     """The reduced model's stated error for ``solute`` (a ``solver.solute.Solute``) at
     ``dose`` of the load, or None where it does not answer (module docstring): the
     largest error at the corners of its measured cell, in D0 / D_gel, in the dose and in
     the drug's size: the measured drugs of its law just above and just below its
-    r_s / xi_dry and r_s / r_f (below the smallest measured, the unhindered drug)."""
+    r_s / xi_dry and r_s / r_f (below the smallest measured, the unhindered drug).
+    ``measured``: the error table (default :data:`MEASURED`)."""
+    table = MEASURED if measured is None else measured
     h = solute.hindrance
     d = solute.diffusivity
-    if d <= 0.0 or solute.release_volume is not None or not MEASURED.get("none"):
+    if d <= 0.0 or solute.release_volume is not None or not table.get("none"):
         return None
-    rows = [MEASURED["none"][0]]
+    rows = [table["none"][0]]
     if h.law != "none":
         if h.law == "free-volume" and h.y > Y_MAX:
             return None
         mesh = h.mesh_ratio if (h.convective or h.law != "ogston") else 0.0
         fiber = h.fiber_ratio
-        own = MEASURED.get(h.law, [])
+        own = table.get(h.law, [])
         above = [r for r in own if r[0][0] >= mesh * (1 - 1e-9)
                  and r[0][1] >= fiber * (1 - 1e-9)]
         if not above:
