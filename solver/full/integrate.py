@@ -111,7 +111,9 @@ class Stats:
 
 
 class Workspace:
-    """Preallocated arrays for one grid and size (band, border, stage and work buffers)."""
+    """Preallocated arrays for one grid and size: the kernels' bundles ``band``
+    (rosenbrock.Band: Jacobian and its factorization) and ``buf`` (rosenbrock.Buffers:
+    stage and work buffers)."""
 
     def __init__(self, grid: int, geo: np.ndarray, interfacial: bool = False) -> None:
         mod = MODULES[grid]
@@ -122,26 +124,23 @@ class Workspace:
         self.lower, self.upper, p = mod.structure(interfacial)
         m = self.n - p
         kv = self.lower + self.upper
-        self.work = np.zeros((mod.WORK_ROWS, self.n + 1))
-        self.jband = np.zeros((kv + 1, m))
-        self.jc = np.zeros((m, p))
-        self.jd = np.zeros((p, m))
-        self.je = np.zeros((p, p))
-        self.lu = np.zeros((2 * self.lower + self.upper + 1, m))
-        self.ipiv = np.zeros(m, dtype=np.int64)
-        self.cm = np.zeros((m, p))
-        self.dm = np.zeros((p, m))
-        self.xm = np.zeros((m, p))
-        self.em = np.zeros((p, p))
-        self.spiv = np.zeros(p, dtype=np.int64)
-        self.zbuf = np.zeros(p)
-        self.u = np.zeros((ros.RODASP.m.size + 1, self.n))  # stages and df/dt
-        self.ytmp = np.zeros(self.n)
-        self.ftmp = np.zeros(self.n)
-        self.ynew = np.zeros(self.n)
-        self.fnew = np.zeros(self.n)
-        self.errv = np.zeros(self.n)
-        self.scale = np.zeros(self.n)
+        self.band = ros.Band(
+            int(self.lower), int(self.upper), np.zeros((kv + 1, m)), np.zeros((m, p)),
+            np.zeros((p, m)), np.zeros((p, p)), np.zeros((2 * self.lower + self.upper + 1, m)),
+            np.zeros(m, dtype=np.int64), np.zeros((m, p)), np.zeros((p, m)), np.zeros((m, p)),
+            np.zeros((p, p)), np.zeros(p, dtype=np.int64), np.zeros(p))
+        n = self.n
+        self.buf = ros.Buffers(
+            np.zeros((mod.WORK_ROWS, n + 1)),
+            np.zeros((ros.RODASP.m.size + 1, n)),  # stages and df/dt
+            np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n))
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        """The bundles' arrays read as attributes (``ws.jband``, ``ws.work``)."""
+        for part in (self.__dict__.get("band"), self.__dict__.get("buf")):
+            if part is not None and name in part._fields:
+                return getattr(part, name)
+        raise AttributeError(name)
 
     def rhs(self, y: np.ndarray, par: KernelParams) -> np.ndarray | None:
         """f(y) as a new array, or None for an unphysical state."""
@@ -274,6 +273,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
     h0 = 1e-7 * max(1.0, total)
     ctrl = np.zeros(ros.CTRL_SIZE)
     ctrl[0] = h0
+    control = ros.Control(float(rtol), float(atol), int(jac_mode), counters, ctrl, rec)
     y = y.copy()
     yold, fold = np.zeros_like(y), np.zeros_like(y)
     ia = ws.ia
@@ -286,6 +286,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
         f = ws.rhs(y, seg.par_at(seg.t0))
         if f is None:
             raise _failure("unphysical state at the start of a protocol step", stats, seg.t0)
+        state = ros.State(y, f, yold, fold, tt)
         tt[0] = seg.t0
         if not stats.t or stats.t[-1] != seg.t0:
             stats.record(seg.t0, y[ia], f[ia], edge_porosity(ws.grid, y, ws.geo))
@@ -320,12 +321,8 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
                 # differences across a thin cell are not well interpolated over a long step
                 if k_out < out_times.size and out_times[k_out] > tt[0]:
                     t_land = min(t_land, float(out_times[k_out]))
-            status = ros.rodas_run(
-                ws.grid, y, f, yold, fold, tt, t_stop, t_land, seg.par, ws.geo, ws.work,
-                ws.lower, ws.upper, ws.jband, ws.jc, ws.jd, ws.je, ws.lu, ws.ipiv, ws.cm,
-                ws.dm, ws.xm, ws.em, ws.spiv, ws.zbuf, ws.u, ws.ytmp, ws.ftmp, ws.ynew,
-                ws.fnew, ws.errv, ws.scale, rtol, atol, method.tableau, method.a, method.c,
-                method.m, method.e, counters, ctrl, rec, budget, jac_mode, seg.heat)
+            status = ros.rodas_run(ws.grid, state, t_stop, t_land, budget, seg.par, seg.heat,
+                                   ws.geo, ws.band, ws.buf, method, control)
             _flush(stats, rec, counters)
             check = status == ros.RUN_BUDGET and budget < max_steps
             if check:
@@ -387,11 +384,12 @@ def _euler_steps(grid, y, par, heat, t0, geo, work, f, dt, nsteps):
 
 
 @njit(cache=True)
-def _stability_step(grid, y, f0, par, geo, work, lower, upper, jband, jc, jd, je,
-                    ytmp, ftmp, scale):
+def _stability_step(grid, y, f0, par, geo, band, buf):
     """Largest stable forward Euler step 2 / rho(J), rho bounded by Gershgorin row sums."""
-    if fd_jacobian(grid, y, f0, par, geo, work, lower, upper, jband, jc, jd, je,
-                   ytmp, ftmp, scale) < 0:
+    lower, upper = band.lower, band.upper
+    jband, jc, jd, je = band.jband, band.jc, band.jd, band.je
+    if fd_jacobian(grid, y, f0, par, geo, buf.work, lower, upper, jband, jc, jd, je,
+                   buf.ytmp, buf.ftmp, buf.scale) < 0:
         return -1.0
     m = jband.shape[1]
     p = je.shape[0]
@@ -417,8 +415,7 @@ def stable_step(ws: Workspace, y: np.ndarray, par: KernelParams) -> float:
     f = ws.rhs(y, par)
     if f is None:
         return -1.0
-    return float(_stability_step(ws.grid, y, f, par, ws.geo, ws.work, ws.lower, ws.upper,
-                                 ws.jband, ws.jc, ws.jd, ws.je, ws.ytmp, ws.ftmp, ws.scale))
+    return float(_stability_step(ws.grid, y, f, par, ws.geo, ws.band, ws.buf))
 
 
 _RESTEP = 64

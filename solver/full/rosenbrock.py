@@ -89,6 +89,71 @@ RODASP = Method(np.concatenate([[GAMMA, 0.25], ALPHA_SUM, GAMMA_SUM]), A_COEF, C
                 M_COEF, E_COEF)
 
 
+# The kernels' arguments come in typed bundles (numba NamedTuples), built once per run by
+# integrate.Workspace / run_implicit and passed through, so no kernel has a long signature.
+class Band(NamedTuple):
+    """The bordered band Jacobian J = [[jband, jc], [jd, je]] (half-widths ``lower``,
+    ``upper``; banded.py) and the factorization of I/(h gamma) - J: band LU ``lu`` with
+    pivots ``ipiv``, border blocks ``cm``, ``dm``, ``xm``, Schur complement ``em`` with
+    pivots ``spiv``, and the border solve's buffer ``zbuf``."""
+
+    lower: int
+    upper: int
+    jband: np.ndarray
+    jc: np.ndarray
+    jd: np.ndarray
+    je: np.ndarray
+    lu: np.ndarray
+    ipiv: np.ndarray
+    cm: np.ndarray
+    dm: np.ndarray
+    xm: np.ndarray
+    em: np.ndarray
+    spiv: np.ndarray
+    zbuf: np.ndarray
+
+
+class Buffers(NamedTuple):
+    """Scratch of one step: the grid kernels' ``work`` rows, the stages ``u`` (row
+    ``stages``: df/dt), a trial state and its f (``ytmp``, ``ftmp``), the new state and its
+    f (``ynew``, ``fnew``), the local error ``errv`` and the finite-difference increments
+    ``scale``."""
+
+    work: np.ndarray
+    u: np.ndarray
+    ytmp: np.ndarray
+    ftmp: np.ndarray
+    ynew: np.ndarray
+    fnew: np.ndarray
+    errv: np.ndarray
+    scale: np.ndarray
+
+
+class State(NamedTuple):
+    """What the steps advance in place: y and f = f(t, y), the last accepted step's start
+    ``yold``, ``fold`` (dense output), and tt = [t, t of yold]."""
+
+    y: np.ndarray
+    f: np.ndarray
+    yold: np.ndarray
+    fold: np.ndarray
+    tt: np.ndarray
+
+
+class Control(NamedTuple):
+    """The step controller: tolerances, Jacobian mode (system.JAC_*), ``counters`` (C_*;
+    [5] the record's fill), ``ctrl`` (CTRL_SIZE: step sizes, error, Jacobian flag, event
+    targets) and ``rec`` (4, capacity), the per-step record of (t, a, da/dt, edge
+    porosity)."""
+
+    rtol: float
+    atol: float
+    jac_mode: int
+    counters: np.ndarray
+    ctrl: np.ndarray
+    rec: np.ndarray
+
+
 
 @njit(cache=True)
 def _combine(base, coef, row, scale, u, out):
@@ -105,15 +170,23 @@ def _combine(base, coef, row, scale, u, out):
 
 
 @njit(cache=True)
-def rodas_try(grid, y, f0, h, par, geo, work, lower, upper, jband, jc, jd, je, lu, ipiv,
-              cm, dm, xm, em, spiv, zbuf, u, ytmp, ftmp, ynew, errv, rtol, atol,
-              gamma, acoef, ccoef, mcoef, ecoef, t, heat, tableau):
-    """One RODASP step of size h from (t, y, f0 = f(t, y)) with Jacobian J; with a
-    temperature program ``heat``, stage times t + alpha_i h and u[stages] = df/dt.
+def rodas_try(grid, y, f0, t, h, par, heat, geo, band, buf, method, control):
+    """One RODASP step of size h from (t, y, f0 = f(t, y)) with the Jacobian in ``band``
+    into ``buf.ynew`` (its error estimate in ``buf.errv``); with a temperature program
+    ``heat``, stage times t + alpha_i h and buf.u[stages] = df/dt.
 
     Returns (status, error norm): status 0 done, 1 singular iteration matrix,
     2 an unphysical stage state (the caller shrinks the step).
     """
+    lower, upper = band.lower, band.upper
+    jband, jc, jd, je = band.jband, band.jc, band.jd, band.je
+    lu, ipiv, cm, dm, xm, em = band.lu, band.ipiv, band.cm, band.dm, band.xm, band.em
+    spiv, zbuf = band.spiv, band.zbuf
+    work, u, ytmp, ftmp = buf.work, buf.u, buf.ytmp, buf.ftmp
+    ynew, errv = buf.ynew, buf.errv
+    tableau, acoef, ccoef = method.tableau, method.a, method.c
+    mcoef, ecoef = method.m, method.e
+    gamma = tableau[0]
     m = jband.shape[1]
     p = je.shape[0]
     n = y.size
@@ -161,7 +234,7 @@ def rodas_try(grid, y, f0, h, par, geo, work, lower, upper, jband, jc, jd, je, l
         for i in range(n):
             ynew[i] += ms * us[i]
             errv[i] += es * us[i]
-    return 0, error_norm(grid, y, ynew, errv, geo, rtol, atol, work)
+    return 0, error_norm(grid, y, ynew, errv, geo, control.rtol, control.atol, work)
 
 
 # counters: rhs calls, Jacobians, accepted steps, rejected steps, merge events
@@ -180,29 +253,39 @@ def crossed(ctrl, a):
         if d != 0.0 and (a - ctrl[k]) * d >= 0.0:
             return True
     return False
+
+
 SAFETY, FAC_MIN, FAC_MAX = 0.9, 0.2, 6.0
 
 
 @njit(cache=True)
-def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, upper,
-              jband, jc, jd, je, lu, ipiv, cm, dm, xm, em, spiv, zbuf, u, ytmp, ftmp, ynew,
-              fnew, errv, scale, rtol, atol, tableau, acoef, ccoef, mcoef, ecoef, counters,
-              ctrl, rec, max_steps, jac_mode, heat):
+def rodas_run(grid, state, t_stop, t_seg, budget, par, heat, geo, band, buf, method,
+              control):
     """Adaptive RODASP steps from tt[0] until tt[0] >= t_stop (never past t_seg), or until
-    an accepted step reaches an event target (RUN_EVENT; ``crossed``).
+    an accepted step reaches an event target (RUN_EVENT; ``crossed``), or ``budget``
+    accepted steps in all.
 
-    y and f = f(y) advance in place; yold, fold and tt[1] keep the last step's start for
-    dense output.  ctrl = [h, h of the last accepted step, its error, Jacobian valid flag]
-    (Gustafsson's predictive controller, Hairer & Wanner IV.8), then the event targets.
-    ``heat``: the segment's temperature program row (empty: constant ``par``).  An accepted step is
-    linearized at once (f and J at the new state; an unphysical new state rejects it).
-    rec = (4, capacity) record of (t, a, da/dt, edge-cell porosity) per accepted step, its
-    count in counters[5].  Returns a RUN_* status.
+    ``state`` (y, f = f(y), yold, fold, tt) advances in place; yold, fold and tt[1] keep
+    the last step's start for dense output.  control.ctrl = [h, h of the last accepted
+    step, its error, Jacobian valid flag] (Gustafsson's predictive controller, Hairer &
+    Wanner IV.8), then the event targets.  ``heat``: the segment's temperature program row
+    (empty: constant ``par``).  An accepted step is linearized at once (f and J at the new
+    state; an unphysical new state rejects it).  control.rec = (4, capacity) record of
+    (t, a, da/dt, edge-cell porosity) per accepted step, its count in counters[5].
+    Returns a RUN_* status.
     """
+    y, f, yold, fold, tt = state.y, state.f, state.yold, state.fold, state.tt
+    lower, upper = band.lower, band.upper
+    jband, jc, jd, je = band.jband, band.jc, band.jd, band.je
+    work, u, ytmp, ftmp = buf.work, buf.u, buf.ytmp, buf.ftmp
+    ynew, fnew, scale = buf.ynew, buf.fnew, buf.scale
+    tableau, mcoef = method.tableau, method.m
+    counters, ctrl, rec = control.counters, control.ctrl, control.rec
+    jac_mode, max_steps = control.jac_mode, budget
     n = y.size
     ia = radius_index(grid, n)
     floor = underflow(grid)
-    gamma, expo = tableau[0], tableau[1]
+    expo = tableau[1]
     while tt[0] < t_stop:
         if counters[C_STEPS] >= max_steps:
             return RUN_BUDGET
@@ -225,10 +308,8 @@ def rodas_run(grid, y, f, yold, fold, tt, t_stop, t_seg, par, geo, work, lower, 
             last = True
         if h < floor * max(1.0, abs(t)):
             return RUN_UNDERFLOW
-        status, err = rodas_try(grid, y, f, h, par, geo, work, lower, upper, jband, jc, jd,
-                                je, lu, ipiv, cm, dm, xm, em, spiv, zbuf, u, ytmp, ftmp, ynew,
-                                errv, rtol, atol, gamma, acoef, ccoef, mcoef, ecoef, t, heat,
-                                tableau)
+        status, err = rodas_try(grid, y, f, t, h, par, heat, geo, band, buf, method,
+                                control)
         counters[C_RHS] += mcoef.size - 1
         ok = status == 0 and err <= 1.0
         t_new = t_seg if last else t + h
