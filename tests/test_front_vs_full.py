@@ -77,6 +77,10 @@ def test_80_percent_doses_from_the_full_start(runs: dict, name: str, paper: floa
 @pytest.mark.parametrize("grid", ["eulerian", "lagrangian"])
 @pytest.mark.parametrize("name", ["ANB", "HHT"])
 def test_dose_times_against_both_grids(runs: dict, name: str, grid: str) -> None:
+    """Grid-specific: the paper's model (ell = 0) on the two fixed grids, each with its own
+    measured front-model errors (MEASURED; the model is ill-posed, so each grid selects its
+    own front speed).  The moving grid runs only the regularized model; the front models
+    against it are in benchmarks/work_precision.py (its front cases' reference)."""
     gel, t0, t1, ts, _ = CASES[name]
     full = runs[name, grid]
     radii = fraction_radius(float(full.radius[0]), FRACTIONS)

@@ -9,10 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from grid_support import every_grid, fixed_grids
 from jacobian_support import dense_jacobian
 
 from solver.equilibrium import equilibrium
-from solver.full import eulerian, lagrangian
+from solver.full.grids import GRIDS
 from solver.full.integrate import Segment, Stats, StepControl, Workspace, run_implicit
 from solver.full.kernels import KernelParams
 from solver.full.system import JAC_ANALYTIC, JAC_FD, linearize
@@ -22,9 +23,12 @@ N = 40
 
 
 @pytest.mark.parametrize("code", [0, 1])
-@pytest.mark.parametrize("mod", [eulerian, lagrangian])
-def test_analytic_jacobian_matches_finite_differences(mod: object, code: int) -> None:
-    grid = 0 if mod is eulerian else 1
+@pytest.mark.parametrize("name", fixed_grids())
+def test_analytic_jacobian_matches_finite_differences(name: str, code: int) -> None:
+    """Grid-specific setup (uniform geometry, no time column): the moving grid's Jacobian,
+    with its node velocities and time column, is
+    tests/test_moving_mesh.py::test_moving_jacobian_matches_central_differences."""
+    mod, grid = GRIDS[name].module, GRIDS[name].code
     eq = equilibrium(ANB, 302, "swollen")
     geo = mod.geometry(N)
     par = KernelParams(ANB.omega, ANB.chi0(308), ANB.chi1(308), code, 1.5 * code, 0.0)
@@ -51,10 +55,11 @@ def test_analytic_jacobian_matches_finite_differences(mod: object, code: int) ->
     assert np.max(np.abs(mats[JAC_FD] - central) / scale) < 5e-4
 
 
-@pytest.mark.parametrize("grid", ["eulerian", "lagrangian"])
-def test_fd_jacobian_option_gives_the_same_run(grid: str) -> None:
+@pytest.mark.parametrize(("grid", "settings"), every_grid())
+def test_fd_jacobian_option_gives_the_same_run(grid: str, settings: dict) -> None:
     from solver.full import simulate
 
-    a = simulate(ANB, 302, 308, until=0.01, n=40, grid=grid, every=0.01)
-    b = simulate(ANB, 302, 308, until=0.01, n=40, grid=grid, every=0.01, jacobian="fd")
+    a = simulate(ANB, 302, 308, until=0.01, n=40, grid=grid, every=0.01, **settings)
+    b = simulate(ANB, 302, 308, until=0.01, n=40, grid=grid, every=0.01, jacobian="fd",
+                 **settings)
     assert a.radius[-1] == pytest.approx(b.radius[-1], rel=1e-5)

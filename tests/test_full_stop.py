@@ -5,15 +5,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from grid_support import every_grid
 
 from solver.errors import ParameterError
 from solver.full import simulate
 
 RUN = {"n": 40, "rtol": 1e-8, "atol": 1e-11}
-GRIDS = [("eulerian", {}), ("lagrangian", {}), ("moving", {"interfacial_length": 0.02})]
 
 
-@pytest.mark.parametrize(("grid", "extra"), GRIDS)
+@pytest.mark.parametrize(("grid", "extra"), every_grid())
 def test_stop_ends_at_the_crossing_of_the_uninterrupted_run(grid: str, extra: dict) -> None:
     """The terminal time is the whole run's dense crossing time (same steps up to it, so
     equal to rounding), the last output is the target radius, and the record says so."""
