@@ -49,8 +49,7 @@ def _is_kernel(node: Fn) -> bool:
     return any("jit" in ast.unparse(d) for d in node.decorator_list)
 
 
-def _too_long(functions: list[tuple[str, Fn]]
-              ) -> list[tuple[str, int, bool]]:
+def _too_long(functions: list[tuple[str, Fn]]) -> list[tuple[str, int, bool]]:
     """(where, parameters, is a kernel) of the functions over their limit:
     MAX_KERNEL_PARAMETERS for numba kernels, else MAX_PARAMETERS."""
     return [(where, _count(node), _is_kernel(node)) for where, node in functions
