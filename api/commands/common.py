@@ -111,12 +111,14 @@ def wrap(text: str) -> str:
 
 
 def print_uncertainty(u: Any, what: str = "the truth") -> None:
-    """The three parts of an answer's uncertainty (dosing.truth.Uncertainty), in words."""
+    """The three parts of an answer's uncertainty (dosing.truth.Uncertainty, or its dict),
+    in words."""
     if u is None:
         return
     print(f"  uncertainty of {what}, in three parts:")
-    for part in (u.numerical, u.interfacial_length_range, u.model_form):
-        print(wrap(f"- {part.text}"))
+    for name in ("numerical", "interfacial_length_range", "model_form"):
+        part = u[name] if isinstance(u, dict) else getattr(u, name)
+        print(wrap(f"- {part['text'] if isinstance(part, dict) else part.text}"))
 
 
 def table_row(label: str, values: list[float], fmt: str = "{:.4g}") -> str:
