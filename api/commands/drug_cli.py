@@ -8,14 +8,13 @@ from typing import Any
 
 from solver.errors import ParameterError
 
+from .common import add_at_start_options
+
 
 def add_wait_options(p: argparse.ArgumentParser) -> None:
     """Time in the medium at T_start before the first heating (drug doses)."""
-    w = p.add_mutually_exclusive_group()
-    w.add_argument("--wait", type=float, default=None,
-                   help="with a drug: time at T_start before heating, dimensionless (default 0)")
-    w.add_argument("--wait-seconds", type=float, default=None,
-                   help="with a drug: the wait in seconds (needs a bead size)")
+    add_at_start_options(p, "wait", "with a drug: time at T_start before heating (default 0)",
+                         drug_only=True)
 
 
 def _planner(args: argparse.Namespace) -> Any:
