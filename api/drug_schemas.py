@@ -10,7 +10,7 @@ from typing import Any, Literal
 from pydantic import Field
 
 from .outputs import Out
-from .schemas import DoseOut, ScheduleOut
+from .schemas import DoseOut, ScheduleOut, StatedOut
 
 
 class DrugOut(Out):
@@ -63,7 +63,7 @@ class DrugDoseResponse(DrugOut, DoseOut):
                                                       "(none: k0 as given)")
 
 
-class DrugScheduleResponse(DrugOut, ScheduleOut):
+class DrugScheduleResponse(DrugOut, ScheduleOut, StatedOut):
     """HTTP 200 for a schedule with a ``drug``: each reading in drug, leakage, warnings."""
 
     doses_ug: list[float] | None = Field(None, description="the doses in ug (with a load)")

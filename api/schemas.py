@@ -630,9 +630,8 @@ class PendingResponse(_Out):
 
 
 class AnswerOut(_Out):
-    """What every dose and schedule answer states, fluid or drug (dosing.drug.StatedTruth):
-    the truth behind it (its runs' model, interfacial length and bead size), tau, the
-    uncertainty where measured, and caveats."""
+    """What every dose and schedule answer states, fluid or drug: the truth behind it (its
+    runs' model and interfacial length, in words and in numbers), tau and caveats."""
 
     status: Literal["answered"] = Field("answered", description="always 'answered'")
     truth: str = Field(description="what the answer is checked against (the model of its "
@@ -641,12 +640,19 @@ class AnswerOut(_Out):
     interfacial_length: float = Field(
         description="interfacial length ell of the truth's runs, dry radii (0: the paper's "
                     "model; by default the bead's own xi_dry / a_d)")
-    bead_dry_radius_um: float | None = Field(
-        None, description="the dry bead radius the truth's ell = xi_dry / a_d assumes, um "
-                          "(null: no bead size, ell stands for the limit ell -> 0)")
     timescale_seconds: float | None = Field(
         None, description="tau in s (eq. timescale; under a protocol at its hottest "
                           "temperature)")
+    note: str = Field(description="caveats, in words")
+
+
+class StatedOut(AnswerOut):
+    """An answer that states the bead size its truth assumes and the truth's uncertainty
+    (every dose; a drug schedule)."""
+
+    bead_dry_radius_um: float | None = Field(
+        None, description="the dry bead radius the truth's ell = xi_dry / a_d assumes, um "
+                          "(null: no bead size, ell stands for the limit ell -> 0)")
     uncertainty: UncertaintyOut | None = Field(
         None, description="the truth's uncertainty in three parts (numerical, interfacial "
                           "length range, model form) where measured: a validated direct "
@@ -654,10 +660,9 @@ class AnswerOut(_Out):
                           "simulated drug schedule (numerical: the largest change of a "
                           "delivered dose on n / 2 cells; the other parts null, saying how "
                           "to measure them)")
-    note: str = Field(description="caveats, in words")
 
 
-class DoseOut(AnswerOut):
+class DoseOut(StatedOut):
     """A dose's answer, fluid or drug: when the dose is out."""
 
     time: float = Field(description="actuation time, dimensionless (units of tau), >= 0 "

@@ -401,20 +401,6 @@ def at_start(name: str, value: Any, seconds: Any, dry: float | None, t_end: floa
     return one(field_name, given)
 
 
-def resolve_rests(rests: Sequence[float] | None, rests_seconds: Sequence[float] | None,
-                  n_doses: int, dry: float | None, t_end: float,
-                  constants: PhysicalConstants, top: float = REST_RANGE[1]
-                  ) -> tuple[float, ...]:
-    """The rests between ``n_doses`` doses in tau units (:func:`at_start`): one fewer
-    than the doses."""
-    out = at_start("rests", rests, rests_seconds, dry, t_end, constants, top)
-    if not isinstance(out, tuple) or len(out) != n_doses - 1:
-        name = "rests" if rests_seconds is None else "rests_seconds"
-        raise ParameterError(name, rests if rests_seconds is None else rests_seconds,
-                             f"{n_doses - 1} values (one rest between consecutive doses)")
-    return out
-
-
 @dataclass(frozen=True)
 class ScheduleCase(Case):
     """What every schedule shares (fluid or drug): ``rests`` between consecutive doses
@@ -430,13 +416,17 @@ class ScheduleCase(Case):
     rest_max: ClassVar[float] = REST_RANGE[1]  # tau: the longest rest (a drug case: shorter)
 
     def resolve_schedule(self, n_doses: int, dry: float | None) -> None:
-        """Rests in tau (zeros when none are given) and the tolerance (0 < tol <= 0.2)."""
-        rests = self.rests
-        if rests is None and self.rests_seconds is None:
+        """Rests in tau (:func:`at_start`; zeros when none are given), one fewer than the
+        doses, and the tolerance (0 < tol <= 0.2)."""
+        rests, given = self.rests, self.rests_seconds
+        if rests is None and given is None:
             rests = (0.0,) * max(n_doses - 1, 0)
-        object.__setattr__(self, "rests", resolve_rests(rests, self.rests_seconds, n_doses,
-                                                        dry, self.t_end, self.constants,
-                                                        self.rest_max))
+        out = at_start("rests", rests, given, dry, self.t_end, self.constants, self.rest_max)
+        if not isinstance(out, tuple) or len(out) != n_doses - 1:
+            raise ParameterError(*(("rests", rests) if given is None else ("rests_seconds",
+                                   given)), f"{n_doses - 1} values (one rest between "
+                                 "consecutive doses)")
+        object.__setattr__(self, "rests", out)
         tol = require_finite_positive("tolerance", self.tolerance)
         if tol > 0.2:
             raise ParameterError("tolerance", self.tolerance, "0 < tolerance <= 0.2")
