@@ -396,9 +396,13 @@ def at_start(name: str, value: Any, seconds: Any, dry: float | None, t_end: floa
             raise ParameterError(where, v, f"a finite number {span}")
         return x
 
-    if isinstance(given, Sequence) and not isinstance(given, str):
-        return tuple(one(f"{field_name}[{i}]", v) for i, v in enumerate(given))
-    return one(field_name, given)
+    try:  # a list (or any iterable: a numpy array), else one number
+        items = None if isinstance(given, str) else list(given)
+    except TypeError:
+        items = None
+    if items is None:
+        return one(field_name, given)
+    return tuple(one(f"{field_name}[{i}]", v) for i, v in enumerate(items))
 
 
 @dataclass(frozen=True)
