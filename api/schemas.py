@@ -24,19 +24,21 @@ from pydantic import (
     model_validator,
 )
 
+from dosing.drug import REFERENCE_TEMPERATURE_K
 from dosing.quantity import from_edge
 from dosing.request import ScheduleRequest as PlannerSchedule
 from dosing.scenario import DEFAULT_INTERFACIAL_LENGTH
 from solver.limits import (
     BEAD_COUNT_RANGE,
+    DRUG_STEP_MAX,
     MEDIUM_VOLUME_ML_RANGE,
+    REST_RANGE,
     T_MAX,
     T_MIN,
     TRUTH_DIRECT_ELL_RANGE,
     TRUTH_LADDER_START_RANGE,
 )
 
-from .drug_schemas import DrugIn  # the optional drug of the dose and schedule requests
 from .outputs import Out as _Out
 from .outputs import UncertaintyOut
 
@@ -390,6 +392,77 @@ class BatchOut(_Out):
     note: str = Field(description="the batch's answer in words")
 
 
+class DrugIn(RequestModel):
+    """A drug dissolved in the pore fluid: diffusion D0 f(phi), partition, release medium,
+    load.  Give ``diffusivity_cm2_s`` or ``solute_radius_nm`` (Stokes-Einstein); neither
+    means D0 = 0 (carried by the fluid only)."""
+
+    model_config = ConfigDict(json_schema_extra={
+        "examples": [{"diffusivity_cm2_s": 1e-7, "mesh_size_nm": 23.0, "load_ug": 1.0}]})
+
+    diffusivity_cm2_s: float | None = Field(
+        None, ge=0.0, le=1e-3, examples=[1e-7],
+        description="the drug's diffusivity in water D0 in cm^2/s, 0 <= D0 <= 1e-3 (0: no "
+                    "diffusion, the drug leaves with the fluid only)")
+    solute_radius_nm: float | None = Field(
+        None, gt=0.0, le=1e4, description="Stokes-Einstein radius in nm, 0 < r <= 1e4 (gives "
+                                          "D0 when diffusivity_cm2_s is not set)")
+    hindrance: Literal["free-volume", "ogston", "amsden", "none"] = Field(
+        "free-volume", description="hindrance law D = D0 f: 'free-volume' (Lustig & "
+        "Peppas 1988: (1 - r_s/xi) exp(-Y v/(1-v)), v the polymer fraction), 'ogston' "
+        "(Ogston, Preston & Wells 1973: exp(-sqrt(v) (1 + r_s/r_f))), 'amsden' (1998: "
+        "exp(-pi ((r_s + r_f)/(xi + 2 r_f))^2)) or 'none' (no hindrance, no sieving)")
+    mesh_size_nm: float | None = Field(
+        None, gt=0.0, le=1e4, description="mesh size xi of the swollen gel at t_start in nm, "
+        "overriding for the drug the gel's dry mesh (constants.mesh_length_nm, the "
+        "interfacial length's); unset: the gel's mesh, affine in the local stretch")
+    reference_temperature_k: float = Field(
+        REFERENCE_TEMPERATURE_K, ge=T_MIN, le=T_MAX,
+        description="temperature at which diffusivity_cm2_s is "
+        "given, K (default 25 degC); carried to t_end by Stokes-Einstein with water's "
+        "viscosity")
+    sieving: bool = Field(True, description="convective sieving of the expelled fluid's "
+                                            "solute by the local mesh (Dechadilok & Deen 2006)")
+    partition_law: Literal["constant", "ogston"] | None = Field(
+        None, description="steric partition K_s(phi) multiplying partition: Ogston 1958 "
+        "exp(-v (1 + r_s/r_f)^2) or constant; unset: Ogston's with a fibre radius")
+    mesh_stretch: Literal["smallest", "volume"] = Field(
+        "smallest", description="which stretch sets the local mesh: the smallest principal "
+        "stretch (default) or J^(1/3)")
+    fiber_radius_nm: float | None = Field(
+        None, gt=0.0, le=1e3, description="polymer fibre radius r_f in nm (Ogston's law)")
+    free_volume_y: float = Field(1.0, gt=0.0, le=100.0,
+                                 description="Y of the free-volume law, 0 < Y <= 100 (1)")
+    partition: float = Field(1.0, ge=1e-6, le=1e6, description=(
+        "equilibrium partition K = c_pore / c_medium, 1e-6 <= K <= 1e6 (> 0; default 1)"))
+    release_volume_ul: float | None = Field(
+        None, gt=0.0, le=1e9, description="volume of a well-mixed release medium in uL, larger "
+        "than the swollen bead (needs a bead size); unset: a perfect sink")
+    load_ug: float | None = Field(None, gt=0.0, le=1e9,
+                                  description="drug loaded per bead in ug, 0 < m <= 1e9")
+    loading_concentration_ug_per_ul: float | None = Field(
+        None, gt=0.0, le=1e6, description="drug concentration of the loading solution in "
+        "ug/uL (the pore fluid holds partition x it; needs a bead size)")
+    wait: float | None = Field(None, ge=REST_RANGE[0], le=DRUG_STEP_MAX, description=(
+        "time in the medium at t_start before the first heating, dimensionless (units of tau; "
+        f"default 0; {REST_RANGE[0]:g}-{DRUG_STEP_MAX:g}, a drug run's longest step): the "
+        "bead leaks by diffusion meanwhile"))
+    wait_seconds: float | None = Field(None, ge=REST_RANGE[0], description=(
+        "the wait in seconds (needs a bead size), within the wait's range once in tau"))
+
+    @model_validator(mode="after")
+    def _one_load(self) -> DrugIn:
+        if self.load_ug is not None and self.loading_concentration_ug_per_ul is not None:
+            raise ValueError("give load_ug or loading_concentration_ug_per_ul, not both")
+        if self.wait is not None and self.wait_seconds is not None:
+            raise ValueError("give wait or wait_seconds, not both")
+        return self
+
+    def model_kwargs(self) -> dict[str, Any]:
+        """The fields of dosing.drug.DrugModel (the wait excluded)."""
+        return self.model_dump(exclude={"wait", "wait_seconds"}, exclude_none=True)
+
+
 class DoseTimeRequest(RequestModel):
     """How long to hold a bead at T_end to release a dose.
 
@@ -556,32 +629,76 @@ class PendingResponse(_Out):
                           "reading (one continuous heating, doses read off cumulatively)")
 
 
-class DoseTimeResponse(_Out):
-    """HTTP 200: the actuation time for a dose (the front model, or the full solver's
-    cached runs).  A dose needing a new full-solver run is a :class:`PendingResponse`."""
+class AnswerOut(_Out):
+    """What every dose and schedule answer states, fluid or drug: the truth behind it (its
+    runs' model and interfacial length, in words and in numbers), tau and caveats."""
 
     status: Literal["answered"] = Field("answered", description="always 'answered'")
-    model: Literal["front-sharp", "front", "full"] = Field(
-        description="'front-sharp' (reduced front model with the sharp-interface front "
-                    "condition, milliseconds), 'front' (the paper's reduced model, with "
-                    "interfacial_length 0) or 'full' (PDE solver)")
+    truth: str = Field(description="what the answer is checked against (the model of its "
+                                   "full-solver runs, their interfacial length and bead "
+                                   "size), in words")
     interfacial_length: float = Field(
-        description="interfacial length of the truth, dry radii (0: the paper's model)")
-    method: Literal["direct", "ladder", "paper"] = Field(
-        "direct", description="how the truth is computed: 'direct' (the regularized model "
-                              "at this ell on the moving grid), 'ladder' or 'paper'")
+        description="interfacial length ell of the truth's runs, dry radii (0: the paper's "
+                    "model; by default the bead's own xi_dry / a_d)")
+    timescale_seconds: float | None = Field(
+        None, description="tau in s (eq. timescale; under a protocol at its hottest "
+                          "temperature)")
+    note: str = Field(description="caveats, in words")
+
+
+class StatedOut(AnswerOut):
+    """An answer that states the bead size its truth assumes and the truth's uncertainty
+    (every dose; a drug schedule)."""
+
     bead_dry_radius_um: float | None = Field(
         None, description="the dry bead radius the truth's ell = xi_dry / a_d assumes, um "
                           "(null: no bead size, ell stands for the limit ell -> 0)")
     uncertainty: UncertaintyOut | None = Field(
-        None, description="validated direct answers: the truth's uncertainty in three parts "
-                          "(numerical, interfacial length range, model form)")
-    truth: str = Field(description="what the answer is checked against, in words")
+        None, description="the truth's uncertainty in three parts (numerical, interfacial "
+                          "length range, model form) where measured: a validated direct "
+                          "dose; a drug dose (numerical: its drug run at n / 2 cells); a "
+                          "simulated drug schedule (numerical: the largest change of a "
+                          "delivered dose on n / 2 cells; the other parts null, saying how "
+                          "to measure them)")
+
+
+class DoseOut(StatedOut):
+    """A dose's answer, fluid or drug: when the dose is out."""
+
+    time: float = Field(description="actuation time, dimensionless (units of tau), >= 0 "
+                                    "(under a protocol: from its start)")
+    seconds: float | None = Field(None, description="the time in s (with a bead size)")
+    dose_fraction: float = Field(description="the dose, 0-1: a fraction of the stored fluid "
+                                             "(a drug answer: of the loaded drug)")
+
+
+class FluidDoseOut(DoseOut):
+    """A fluid dose's bead: its radii, the volumes expelled and stored, the run's key."""
+
+    start_radius: float = Field(description="radius at T_start, dry radii")
+    final_radius: float = Field(description="radius after the dose, dry radii")
+    final_radius_um: float | None = Field(None, description="radius after the dose in um")
+    expelled_volume: float = Field(
+        description="the dose: expelled fluid volume in dry-radius^3 units")
+    expelled_volume_ul: float | None = Field(None, description="expelled volume in uL")
+    stored_volume_ul: float | None = Field(None, description="stored fluid in uL")
+    error_explanation: str = Field(description="the error estimate in words")
+    scenario_key: str = Field(description="key of the (truth run's) dimensionless scenario")
+
+
+class DoseTimeResponse(FluidDoseOut):
+    """HTTP 200: the actuation time for a dose (the front model, or the full solver's
+    cached runs).  A dose needing a new full-solver run is a :class:`PendingResponse`."""
+
+    model: Literal["front-sharp", "front", "full"] = Field(
+        description="'front-sharp' (reduced front model with the sharp-interface front "
+                    "condition, milliseconds), 'front' (the paper's reduced model, with "
+                    "interfacial_length 0) or 'full' (PDE solver)")
+    method: Literal["direct", "ladder", "paper"] = Field(
+        "direct", description="how the truth is computed: 'direct' (the regularized model "
+                              "at this ell on the moving grid), 'ladder' or 'paper'")
     behaviour: str = Field(
         description="the jump's class: 'front', 'delayed_front', 'smooth', 'spinodal'")
-    time: float = Field(description="actuation time, dimensionless (units of tau), >= 0")
-    seconds: float | None = Field(None, description="actuation time in s (with a bead size)")
-    timescale_seconds: float | None = Field(None, description="tau in s (eq. timescale)")
     timescale_formula: str = Field(description="how tau was computed")
     timescale_uncertainty: dict[str, Any] | None = Field(
         None, description="the seconds' uncertainty: uncalibrated, the range over the "
@@ -589,23 +706,12 @@ class DoseTimeResponse(_Out):
                           "pin it (a kinetics fit); calibrated, the kinetics fit's interval")
     parameter_interval: dict[str, Any] | None = Field(
         None, description="a stored fitted gel's 95% interval of the time from its fit")
-    start_radius: float = Field(description="radius at T_start, dry radii")
-    final_radius: float = Field(description="radius after the dose, dry radii")
-    final_radius_um: float | None = Field(None, description="radius after the dose in um")
-    expelled_volume: float = Field(
-        description="expelled fluid volume in dry-radius^3 units")
-    expelled_volume_ul: float | None = Field(None, description="expelled volume in uL")
     stored_volume: float = Field(
         description="stored fluid (4 pi/3)(a0^3 - 1) in dry-radius^3 units")
-    stored_volume_ul: float | None = Field(None, description="stored fluid in uL")
-    dose_fraction: float = Field(description="dose / stored fluid, 0-1")
     error_estimate: float = Field(
         description="estimated relative error of the time, dimensionless")
-    error_explanation: str = Field(description="the error estimate in words")
     validation: ValidationReport | None = Field(
         None, description="the full solver's verdict when already known")
-    scenario_key: str = Field(description="key of the dimensionless scenario")
-    note: str = Field(description="caveats, in words")
     validation_id: str | None = Field(
         None, description="with validate: id of the queued validation, poll "
                           "/v1/validations/{id}")
@@ -626,47 +732,29 @@ class UntilStepOut(_Out):
     end_seconds: float | None = Field(None, description="end in s")
 
 
-class ProtocolDoseResponse(_Out):
+class ProtocolDoseResponse(FluidDoseOut):
     """HTTP 200: the time from a heating protocol's start at which the dose is out (the
     reduced model for slow heating inside its measured region, else the full solver at the
     truth's settings; docs/heating.md)."""
 
-    status: Literal["answered"] = Field("answered", description="always 'answered'")
     model: Literal["full", "front-slow-sharp"] = Field(
         description="'front-slow-sharp': the reduced model for slow heating (inside its "
                     "region); 'full': the PDE solver")
-    truth: str = Field(description="what the answer is checked against, in words")
     protocol: list[str] = Field(description="the protocol's steps as text")
     protocol_steps: list[dict[str, Any]] = Field(description="the steps, structured")
     t_start: float = Field(description="start temperature, K")
     reference_temperature: float = Field(
         description="tau's reference temperature: the protocol's hottest, K")
     reference: str = Field(description="how seconds become tau, in words")
-    time: float = Field(description="time from the protocol's start to the dose, tau")
-    seconds: float | None = Field(None, description="the same in s (with a bead size)")
-    timescale_seconds: float | None = Field(None, description="tau in s at the reference")
     timescale_formula: str | None = Field(None, description="how tau was computed")
     program: str = Field(description="how the protocol ran in the solver, in words")
-    dose_fraction: float = Field(description="dose / stored fluid, 0-1")
-    start_radius: float = Field(description="radius at T_start, dry radii")
-    final_radius: float = Field(description="radius after the dose, dry radii")
-    final_radius_um: float | None = Field(None, description="radius after the dose in um")
-    expelled_volume: float = Field(description="the dose in dry-radius^3 units")
-    expelled_volume_ul: float | None = Field(None, description="the dose in uL")
-    stored_volume_ul: float | None = Field(None, description="stored fluid in uL")
     temperature_at_dose: float = Field(description="the protocol's temperature then, K")
     until_steps: list[UntilStepOut] = Field(description="when each until-step ended")
     error_estimate: float | None = Field(
         None, description="relative numerical error (truth vs its n/2 check run)")
-    error_explanation: str = Field(description="the error in words")
-    uncertainty: UncertaintyOut | None = Field(None, description="the truth's parts")
     validation: dict[str, Any] | None = Field(None, description="the runs' report")
-    scenario_key: str = Field(description="key of the truth run's scenario")
-    interfacial_length: float = Field(description="ell of the truth, dry radii")
-    bead_dry_radius_um: float | None = Field(None, description="dry bead radius, um")
     curve: dict[str, list[float]] = Field(
         description="time (tau), seconds, temperature_k and released_fraction on one axis")
-    note: str = Field("", description="caveats, in words")
     model_reason: str = Field("", description="which model answered and why, in words")
 
 
@@ -685,8 +773,10 @@ class ValidationResponse(_Out):
 
 
 Fraction = Annotated[float, Field(gt=0.0, le=1.0)]
-Rest = Annotated[float, Field(ge=0.0, le=1.0e3)]
-RestSeconds = Annotated[float, Field(ge=0.0, le=1.0e7)]
+# a time at T_start (solver.limits.REST_RANGE, tau; in seconds bounded after the conversion
+# by dosing.request.at_start, the one parser, which names the field and the range in s)
+Rest = Annotated[float, Field(ge=REST_RANGE[0], le=REST_RANGE[1])]
+RestSeconds = Annotated[float, Field(ge=REST_RANGE[0])]
 
 
 # the planner's defaults, written once (dosing.request.ScheduleRequest): every way in agrees
@@ -712,10 +802,11 @@ class ScheduleRequest(RequestModel):
     rests: list[Rest] | None = Field(
         None, max_length=19, examples=[[0.5, 0.5]],
         description="rests at T_start between consecutive doses (one fewer than doses), "
-                    "dimensionless (units of tau), 0-1000 each")
+                    f"dimensionless (units of tau), {REST_RANGE[0]:g}-{REST_RANGE[1]:g} each "
+                    f"(with a drug: up to {DRUG_STEP_MAX:g})")
     rests_seconds: list[RestSeconds] | None = Field(
         None, max_length=19, description="the rests in seconds instead (needs a bead size), "
-                                         "0-1e7 s each")
+                                         "each within the rests' range once in tau")
     dry_radius_um: float | None = Field(
         None, ge=MIN_RADIUS_UM, le=1.0e5, examples=[50.0],
         description="dry bead radius in micrometres, 1e-3 <= r <= 1e5")
@@ -745,34 +836,36 @@ class ScheduleRequest(RequestModel):
          "doses": [0.3, 0.3, 0.3], "rests": [0.5, 0.5]}]})
 
 
-class ScheduleResponse(_Out):
+class ScheduleOut(AnswerOut):
+    """A schedule's answer, fluid or drug: its actuation times under each reading."""
+
+    model: str = Field(description="which model(s) gave the hold times (a drug schedule: "
+                                   "what answered)")
+    doses: list[float] = Field(description="the doses, fractions of the stored fluid (a drug "
+                                           "schedule: of the loaded drug)")
+    rests: list[float] = Field(description="rests at T_start between doses, dimensionless "
+                                           "(units of tau)")
+    hold: list[dict[str, Any]] = Field(
+        description="per dose under the hold assumption (one continuous heating, doses read "
+                    "off cumulatively): start, end and actuation_time (dimensionless), "
+                    "actuation_seconds, error_estimate (a drug schedule: null, and dose_ug)")
+    protocol_check: dict[str, Any] | None = Field(
+        None, description="the hold times simulated as heat/rest steps: delivered_fractions, "
+                          "relative_errors, rest_uptake_fractions (a drug schedule: the drug "
+                          "per dose and how it came out, the leak per rest)")
+    corrected: dict[str, Any] | None = Field(
+        None, description="actuation times meeting every dose within the tolerance")
+
+
+class ScheduleResponse(ScheduleOut):
     """HTTP 200: a schedule's actuation times under each reading, with the delivered
     volumes.  A schedule needing the full solver is a :class:`PendingResponse` (a job)."""
 
-    status: Literal["answered"] = Field("answered", description="always 'answered'")
-    model: str = Field(description="which model(s) gave the hold times")
-    doses: list[float] = Field(description="the doses, fractions of stored fluid")
-    rests: list[float] = Field(description="the rests, dimensionless")
-    hold: list[dict[str, Any]] = Field(
-        description="per dose under the hold assumption: start, end and actuation_time "
-                    "(dimensionless), actuation_seconds, error_estimate")
-    protocol_check: dict[str, Any] | None = Field(
-        None, description="the hold times simulated as heat/rest steps: delivered_fractions, "
-                          "relative_errors, rest_uptake_fractions")
-    corrected: dict[str, Any] | None = Field(
-        None, description="actuation times meeting every dose within the tolerance")
     start_radius: float = Field(description="radius at T_start, dry radii")
     stored_volume: float = Field(description="stored fluid, dry-radius^3 units")
     stored_volume_ul: float | None = Field(None, description="stored fluid in uL")
-    timescale_seconds: float | None = Field(None, description="tau in s")
     timescale_formula: str = Field(description="how tau was computed")
     scenario_key: str = Field(description="key of the dimensionless scenario")
-    note: str = Field(description="caveats, in words")
-    truth: str = Field("", description="the protocol runs' model, interfacial length and "
-                                       "bead size, in words")
-    interfacial_length: float = Field(
-        0.0, description="interfacial length of the protocol runs, dry radii (0: the paper's "
-                         "model)")
     method: Literal["direct", "ladder", "paper"] = Field(
         "direct", description="how the truth is computed: 'direct', 'ladder' or 'paper'")
 

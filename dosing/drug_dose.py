@@ -16,11 +16,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from solver.errors import ParameterError, require_finite_positive
+from solver.limits import DRUG_STEP_MAX
 
 from .drug import (
     DrugModel,
@@ -33,12 +34,12 @@ from .drug import (
     runs_for,
 )
 from .protocol import Reach, Short, heat_cool_protocol, read_off, windows
-from .request import Case, _resolve_protocol, resolve_case
+from .request import Case, _resolve_protocol, at_start, resolve_case
 from .scenario import SolverSettings, Step
 from .truth import Part, Uncertainty, truth_text
-from .units import PhysicalConstants, timescale, volume_to_ul
+from .units import timescale, volume_to_ul
 
-MAX_HORIZON = 32.0  # tau: one simulate step holds at most 100000 samples (2000 per tau)
+MAX_HORIZON = DRUG_STEP_MAX  # tau: one simulate step holds at most 100000 samples
 FIRST_HEATING = 0.5  # tau: the first drug run's heating (read_off grows it x GROWTH)
 SPLIT = ("Squeezed out: the release of the same mechanics with D0 = 0 (the fluid's motion "
          "alone, sieved by the mesh); diffused: the rest (the extra release diffusion makes).")
@@ -79,6 +80,7 @@ class DrugCase(Case):
     wait_seconds: float | None = field(default=None, kw_only=True)
     load_ug: float | None = field(init=False, repr=False, compare=False)
     lead: float = field(init=False, repr=False, compare=False)
+    rest_max: ClassVar[float] = DRUG_STEP_MAX  # tau: a drug run's step (solver.limits)
 
     def resolve_drug(self) -> float | None:
         """Resolve the case, the drug, its load and the wait (in place); the dry radius."""
@@ -90,8 +92,9 @@ class DrugCase(Case):
         stored_ul = None if dry is None else volume_to_ul(jump.stored_volume, dry)
         object.__setattr__(self, "load_ug", drug.load(stored_ul, jump.start_radius,
                                                       self.constants))
-        object.__setattr__(self, "lead", resolve_wait(self.wait, self.wait_seconds, dry,
-                                                      self.t_end, self.constants))
+        object.__setattr__(self, "lead", at_start("wait", self.wait, self.wait_seconds, dry,
+                                                  self.t_end, self.constants,
+                                                  self.rest_max) or 0.0)
         return dry
 
     @property
@@ -178,28 +181,6 @@ class DrugHeatings:
             end = float(rel.released_fraction[-1])
             return Reach(None, end - rel.released_at(start),
                          end - rel.released_at(start + durations[k] / 2.0))
-
-
-def resolve_wait(wait: float | None, wait_seconds: float | None, dry: float | None,
-                 t_end: float, constants: PhysicalConstants) -> float:
-    """The time at T_start before the first heating, in tau (0 by default)."""
-    if wait is not None and wait_seconds is not None:
-        raise ParameterError("wait_seconds", wait_seconds, "None when wait is given")
-    name, value = ("wait", wait) if wait_seconds is None else ("wait_seconds", wait_seconds)
-    if value is None:
-        return 0.0
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        x = math.nan
-    if isinstance(value, bool) or not (math.isfinite(x) and 0.0 <= x <= 1e4):
-        raise ParameterError(name, value, "a finite number 0-1e4")
-    if name == "wait_seconds":
-        if dry is None:
-            raise ParameterError("dry_radius_um", None, "a finite number > 0 (um) to turn "
-                                 "wait_seconds into tau units")
-        x /= timescale(dry, t_end, constants).seconds
-    return x
 
 
 @dataclass

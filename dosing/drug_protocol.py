@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from solver.errors import ParameterError, SolverError
+from solver.limits import DRUG_STEP_MAX
 
 from .drug import drug_settings, leak_time
 from .fit_release_protocol import parse_protocol, protocol_mechanics, squeezed_under
@@ -41,7 +42,7 @@ from .units import timescale, volume_to_ul
 MODEL = "full+solute"
 FIRST_HORIZON = 1e-3  # tau: the first run's horizon, x GROWTH while the dose is short, so
 GROWTH = 4.0  # the dose falls in the last 3/4 of its run's SAMPLES (>= 150 samples before it)
-MAX_HORIZON = 32.0  # tau past the protocol's end (dosing.drug_dose.MAX_HORIZON)
+MAX_HORIZON = DRUG_STEP_MAX  # tau past the protocol's end (solver.limits)
 
 
 @dataclass

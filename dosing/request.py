@@ -11,11 +11,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 from solver.equilibrium import equilibrium, nearest_stable
 from solver.errors import ParameterError, require_finite_positive
 from solver.gel import Gel, Permeability, check_temperature
+from solver.limits import REST_RANGE
 
 from .gel_store import calibrated_constants, lookup
 from .scenario import DIRECT_ELL_RANGE, TRUTH, SolverSettings
@@ -362,36 +363,46 @@ def _resolve_protocol(req: Any) -> None:
     object.__setattr__(req, "t_end", prot.hottest)
 
 
-def resolve_rests(rests: Sequence[float] | None, rests_seconds: Sequence[float] | None,
-                  n_doses: int, dry: float | None, t_end: float,
-                  constants: PhysicalConstants) -> tuple[float, ...]:
-    """The rests between ``n_doses`` doses in tau units: ``rests`` as given, or
-    ``rests_seconds`` over tau (eq. timescale; needs the bead's dry radius ``dry``)."""
-    if rests is not None and rests_seconds is not None:
-        raise ParameterError("rests_seconds", rests_seconds,
-                             "None when rests is given (give one of them)")
-    name = "rests" if rests_seconds is None else "rests_seconds"
-    given = rests if rests_seconds is None else rests_seconds
-    values = tuple(given or ())
-    if len(values) != n_doses - 1:
-        raise ParameterError(name, given,
-                             f"{n_doses - 1} values (one rest between consecutive doses)")
-    out = []
-    for i, v in enumerate(values):
+def at_start(name: str, value: Any, seconds: Any, dry: float | None, t_end: float,
+             constants: PhysicalConstants, top: float = REST_RANGE[1]) -> Any:
+    """The one parser of a time at T_start before or between heatings (a schedule's
+    ``rests``, a drug's ``wait``), in tau: ``value`` (a number or a list) in tau, or
+    ``seconds`` (``name``_seconds) over the bead's tau (eq. timescale; needs the dry radius
+    ``dry``); each finite and within REST_RANGE (solver.limits), up to ``top`` tau.  None
+    when neither is given."""
+    if value is not None and seconds is not None:
+        raise ParameterError(f"{name}_seconds", seconds,
+                             f"None when {name} is given (give one of them)")
+    field_name, given = (name, value) if seconds is None else (f"{name}_seconds", seconds)
+    if given is None:
+        return None
+    tau = None
+    if seconds is not None:
+        if dry is None:
+            raise ParameterError("dry_radius_um", None, "a finite number > 0 (um; or "
+                                 f"swollen_radius_um) to turn {field_name} into tau units")
+        tau = timescale(dry, t_end, constants).seconds
+    lo = REST_RANGE[0]
+    span = f"{lo:g}-{top:g} tau" + ("" if tau is None else
+                                    f" = {lo:g}-{top * tau:.4g} s (tau = {tau:.4g} s)")
+
+    def one(where: str, v: Any) -> float:
         try:
             x = float(v)
         except (TypeError, ValueError):
             x = math.nan
-        if not math.isfinite(x) or x < 0.0:
-            raise ParameterError(f"{name}[{i}]", v, "a finite number >= 0")
-        out.append(x)
-    if name == "rests_seconds":
-        if dry is None:
-            raise ParameterError("dry_radius_um", None, "a finite number > 0 (um; or "
-                                 "swollen_radius_um) to turn rests_seconds into tau units")
-        tau = timescale(dry, t_end, constants).seconds
-        out = [x / tau for x in out]
-    return tuple(out)
+        x = x if tau is None else x / tau
+        if isinstance(v, bool) or not (math.isfinite(x) and lo <= x <= top):
+            raise ParameterError(where, v, f"a finite number {span}")
+        return x
+
+    try:  # a list (or any iterable: a numpy array), else one number
+        items = None if isinstance(given, str) else list(given)
+    except TypeError:
+        items = None
+    if items is None:
+        return one(field_name, given)
+    return tuple(one(f"{field_name}[{i}]", v) for i, v in enumerate(items))
 
 
 @dataclass(frozen=True)
@@ -406,14 +417,20 @@ class ScheduleCase(Case):
     check_protocol: bool = field(default=True, kw_only=True)
     correct: bool = field(default=True, kw_only=True)
     tolerance: float = field(default=0.01, kw_only=True)
+    rest_max: ClassVar[float] = REST_RANGE[1]  # tau: the longest rest (a drug case: shorter)
 
     def resolve_schedule(self, n_doses: int, dry: float | None) -> None:
-        """Rests in tau (zeros when none are given) and the tolerance (0 < tol <= 0.2)."""
-        rests = self.rests
-        if rests is None and self.rests_seconds is None:
+        """Rests in tau (:func:`at_start`; zeros when none are given), one fewer than the
+        doses, and the tolerance (0 < tol <= 0.2)."""
+        rests, given = self.rests, self.rests_seconds
+        if rests is None and given is None:
             rests = (0.0,) * max(n_doses - 1, 0)
-        object.__setattr__(self, "rests", resolve_rests(rests, self.rests_seconds, n_doses,
-                                                        dry, self.t_end, self.constants))
+        out = at_start("rests", rests, given, dry, self.t_end, self.constants, self.rest_max)
+        if not isinstance(out, tuple) or len(out) != n_doses - 1:
+            raise ParameterError(*(("rests", rests) if given is None else ("rests_seconds",
+                                   given)), f"{n_doses - 1} values (one rest between "
+                                 "consecutive doses)")
+        object.__setattr__(self, "rests", out)
         tol = require_finite_positive("tolerance", self.tolerance)
         if tol > 0.2:
             raise ParameterError("tolerance", self.tolerance, "0 < tolerance <= 0.2")

@@ -30,6 +30,13 @@ TRUTH_DIRECT_ELL_RANGE = (2e-5, 0.02)
 LADDER_RUNGS = 3
 TRUTH_LADDER_START_RANGE = (TRUTH_LADDER_ELL_RANGE[0] * (1 << (LADDER_RUNGS - 1)), 0.01)
 
+# a time at T_start before or between heatings (a schedule's rest, a drug's wait), tau; given
+# in seconds it is bounded after the conversion with the bead's tau (dosing.request.at_start)
+REST_RANGE = (0.0, 1e3)
+# a drug run holds each protocol step (its wait and rests too) in one simulate call of at
+# most 100000 outputs, 2000 per tau (dosing.drug): a step of a drug run is at most this, tau
+DRUG_STEP_MAX = 32.0
+
 # a drug batch's shared release medium (mL) and its number of beads (dosing.batch_drug)
 MEDIUM_VOLUME_ML_RANGE = (1e-6, 1e4)
 BEAD_COUNT_RANGE = (1.0, 1e15)

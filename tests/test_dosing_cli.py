@@ -113,3 +113,47 @@ def test_direct_validation_plot_from_the_answer_alone(tmp_path: Path) -> None:
     paper = {**answer, "validation": {**answer["validation"], "interfacial_length": 0.0}}
     with pytest.raises(ValueError, match="no regularized validation"):
         draw_validation(paper, tmp_path / "paper.png")
+
+
+def test_one_printer_for_fluid_and_drug_doses(capsys, tmp_path: Path) -> None:
+    """`thermogel dose` prints a drug answer (the fluid carrying it: D0 = 0) with the fluid
+    dose's printer: the same model line, the truth, then the drug's payload."""
+    jump = ["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction", "0.5",
+            "--dry-radius-um", "50", "--cache", str(tmp_path / "c.sqlite")]
+    assert main(jump) == 0
+    fluid = capsys.readouterr().out.splitlines()
+    assert main([*jump, "--drug-diffusivity-cm2-s", "0", "--load-ug", "2"]) == 0
+    drug = capsys.readouterr().out.splitlines()
+    assert fluid[0].endswith("release 50.0% of the stored fluid (radius 2.292 -> 1.868 dry "
+                             "radii)")
+    assert drug[0] == "ANB 302 K -> 308 K: release 50.0% of the loaded drug = 1 ug"
+    assert drug[1] == fluid[1] + ", after waiting 0 at T_start"  # the same time, one format
+    assert drug[2].startswith("  truth of the drug runs: ") and fluid[2].startswith("  truth: ")
+    assert any(line.startswith("  mechanism: squeezed out") for line in drug)
+
+
+@pytest.mark.parametrize(("extra", "needle"), [
+    (["--drug-diffusivity-cm2-s", "1e-7", "--wait", "100"], "wait=100.0 is invalid: valid range "
+     "is a finite number 0-32 tau"),
+    (["--drug-diffusivity-cm2-s", "1e-7", "--wait-seconds", "1e6", "--dry-radius-um", "50"],
+     "wait_seconds=1000000.0 is invalid: valid range is a finite number 0-32 tau = 0-7.055e+04 s"),
+])
+def test_a_wait_out_of_range_exits_2_naming_it(extra, needle, capsys, tmp_path: Path) -> None:
+    """The wait's rule (solver.limits, dosing.request.at_start): a drug run's step is at most
+    DRUG_STEP_MAX tau (a wait of 100 tau used to fail naming 'saveat')."""
+    assert main(["dose", "--t-start", "302", "--t-end", "308", "--fraction", "0.3", *extra,
+                 "--cache", str(tmp_path / "c.sqlite")]) == 2
+    assert needle in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("extra", "needle"), [
+    (["--rests", "2000"], "--rests=2000.0 is invalid"),
+    (["--rests-seconds", "1e9", "--dry-radius-um", "50"],
+     "rests_seconds[0]=1000000000.0 is invalid: valid range is a finite number 0-1000 tau"),
+    (["--rests", "100", "--drug-diffusivity-cm2-s", "0"], "rests[0]=100.0 is invalid: valid "
+     "range is a finite number 0-32 tau"),
+])
+def test_a_rest_out_of_range_exits_2_naming_it(extra, needle, capsys, tmp_path: Path) -> None:
+    assert main(["schedule", "--t-start", "302", "--t-end", "308", "--doses", "0.3", "0.3",
+                 "--no-check", *extra, "--cache", str(tmp_path / "c.sqlite")]) == 2
+    assert needle in capsys.readouterr().err

@@ -38,3 +38,31 @@ def test_no_range_is_written_twice() -> None:
                                                              .rstrip("jJ") or 0) in bounds:
                         offenders.append(f"{path.relative_to(ROOT)}:{tok.start[0]}: {tok.line}")
     assert not offenders, "".join(offenders)
+
+
+def test_a_time_at_start_has_one_rule() -> None:
+    """A schedule's rests and a drug's wait are times at T_start: one range (REST_RANGE; a
+    drug run's step at most DRUG_STEP_MAX), one parser (dosing.request.at_start), and the
+    HTTP fields say the same."""
+    import pytest
+
+    from dosing.drug_dose import MAX_HORIZON, DrugCase
+    from dosing.request import ScheduleCase, at_start
+    from dosing.units import PhysicalConstants
+    from solver.errors import ParameterError
+
+    assert ScheduleCase.rest_max == limits.REST_RANGE[1]
+    assert DrugCase.rest_max == MAX_HORIZON == limits.DRUG_STEP_MAX
+    rest = schemas.ScheduleRequest.model_json_schema()["properties"]["rests"]["anyOf"][0]
+    assert (rest["items"]["minimum"], rest["items"]["maximum"]) == limits.REST_RANGE
+    wait = schemas.DrugIn.model_json_schema()["properties"]["wait"]["anyOf"][0]
+    assert (wait["minimum"], wait["maximum"]) == (limits.REST_RANGE[0], limits.DRUG_STEP_MAX)
+    c = PhysicalConstants()
+    top = limits.REST_RANGE[1]
+    assert at_start("rests", [0.0, top], None, None, 308.0, c) == (0.0, top)
+    with pytest.raises(ParameterError, match="0-1000 tau") as err:
+        at_start("rests", [0.5, 2 * top], None, None, 308.0, c)
+    assert err.value.field == "rests[1]"
+    with pytest.raises(ParameterError, match=r"0-32 tau = 0-7\.0\d+e\+04 s") as err:
+        at_start("wait", None, 1e5, 50.0, 308.0, c, limits.DRUG_STEP_MAX)  # tau = 2205 s
+    assert err.value.field == "wait_seconds"

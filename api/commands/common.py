@@ -40,6 +40,23 @@ def gel_from_args(args: argparse.Namespace) -> Gel:
     return gel_with(args.gel, custom, "power" if args.beta is not None else None, args.beta)
 
 
+def add_at_start_options(p: argparse.ArgumentParser, name: str, what: str,
+                         many: bool = False, drug_only: bool = False) -> None:
+    """A time at T_start (a schedule's rests, a drug's wait): ``--NAME`` in tau or
+    ``--NAME-seconds``, one of them; its range is solver.limits' (REST_RANGE; a drug run's
+    step at most DRUG_STEP_MAX), checked by the one parser dosing.request.at_start."""
+    from solver.limits import DRUG_STEP_MAX, REST_RANGE
+
+    top = (f"{DRUG_STEP_MAX:g}" if drug_only
+           else f"{REST_RANGE[1]:g}, with a drug {DRUG_STEP_MAX:g}")
+    g = p.add_mutually_exclusive_group()
+    more = {"nargs": "*"} if many else {}
+    g.add_argument(f"--{name}", type=float, default=None, **more,
+                   help=f"{what}, dimensionless (units of tau, {REST_RANGE[0]:g}-{top})")
+    g.add_argument(f"--{name}-seconds", type=float, default=None, **more,
+                   help="the same in seconds (needs a bead size)")
+
+
 def print_json(obj: Any) -> None:
     """Print one strict JSON object on stdout."""
     json.dump(json_safe(obj), sys.stdout, indent=None)
@@ -111,12 +128,14 @@ def wrap(text: str) -> str:
 
 
 def print_uncertainty(u: Any, what: str = "the truth") -> None:
-    """The three parts of an answer's uncertainty (dosing.truth.Uncertainty), in words."""
+    """The three parts of an answer's uncertainty (dosing.truth.Uncertainty, or its dict),
+    in words."""
     if u is None:
         return
     print(f"  uncertainty of {what}, in three parts:")
-    for part in (u.numerical, u.interfacial_length_range, u.model_form):
-        print(wrap(f"- {part.text}"))
+    for name in ("numerical", "interfacial_length_range", "model_form"):
+        part = u[name] if isinstance(u, dict) else getattr(u, name)
+        print(wrap(f"- {part['text'] if isinstance(part, dict) else part.text}"))
 
 
 def table_row(label: str, values: list[float], fmt: str = "{:.4g}") -> str:

@@ -19,7 +19,7 @@ from .common import (
     print_uncertainty,
     wrap,
 )
-from .drug_cli import add_wait_options, run_drug_dose
+from .drug_cli import add_wait_options, drug_dose
 from .drug_options import add_drug_options, drug_from_args
 from .outfile import add_format_option, figure_path
 
@@ -224,7 +224,8 @@ def run(args: argparse.Namespace) -> int:
             from .batch_cli import run_drug_batch
 
             return run_drug_batch(args, drug, planning_kwargs(args), batch_distribution(args))
-        return run_drug_dose(args, drug, {**planning_kwargs(args), "protocol": steps})
+        return show_dose(args, *drug_dose(args, drug, {**planning_kwargs(args),
+                                                      "protocol": steps}))
     dist = batch_distribution(args)
     req = DoseRequest(dose_fraction=args.fraction, dose_volume_ul=args.volume_ul,
                       drug_mass_ug=args.drug_mass_ug,
@@ -251,39 +252,7 @@ def run(args: argparse.Namespace) -> int:
         from dosing.batch_truth import plan_batch
 
         batch = plan_batch(req, validate=args.validate, cache_path=args.cache)
-    if args.json:
-        print_json(ans.to_dict() if batch is None else {**ans.to_dict(),
-                                                        "batch": batch.to_dict()})
-        return 0
-    print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K: release "
-          f"{ans.dose_fraction:.1%} of the stored fluid (radius {ans.start_radius:.4g} -> "
-          f"{ans.final_radius:.4g} dry radii)")
-    secs = "" if ans.seconds is None else f" = {ans.seconds:.4g} s"
-    print(f"  {ans.model} model: heat for t = {ans.time:.4g} (dimensionless){secs}")
-    print(wrap(f"truth: {ans.truth}"))
-    if ans.expelled_volume_ul is not None:
-        print(f"  expels {ans.expelled_volume_ul:.4g} uL of {ans.stored_volume_ul:.4g} uL "
-              f"stored; final radius {ans.final_radius_um:.4g} um")
-    print(wrap(ans.timescale_formula))
-    if ans.timescale_uncertainty and ans.seconds is not None:
-        tu = ans.timescale_uncertainty
-        lo, hi = tu["seconds_range"]
-        print(wrap(("calibrated" if tu["calibrated"] else "UNCALIBRATED")
-                   + f" seconds: {lo:.3g}-{hi:.3g} s over "
-                   + ("the kinetics fit's 95% interval of D" if tu["calibrated"] else
-                      f"the timescale constants' range (a factor {tu['factor']:.3g}); "
-                      + tu["how_to_pin"])))
-    print(f"  error estimate {ans.error_estimate:.1%}:")
-    print(wrap(ans.error_explanation))
-    print_uncertainty(ans.uncertainty)
-    if ans.validation:
-        runs = ", ".join(f"{e['grid']} N={e['n']} ell={e['interfacial_length']:g}: "
-                         + (f"{e['time']:.5g}" if "time" in e else "failed")
-                         for e in ans.validation.runs)
-        print(wrap(f"full solver: {runs}"))
-    if batch is not None:
-        print_batch(batch)
-    return 0
+    return show_dose(args, req, ans, batch)
 
 
 def protocol_steps(args: argparse.Namespace) -> list[str] | None:
@@ -313,26 +282,103 @@ def run_protocol_dose(args: argparse.Namespace, req: Any) -> int:
         from dosing.batch_protocol import batch_protocol_answer
 
         batch = batch_protocol_answer(req, validate=args.validate)
+    return show_dose(args, req, ans, batch)
+
+
+def show_dose(args: argparse.Namespace, req: Any, ans: Any, batch: Any = None) -> int:
+    """A dose's answer on stdout: one JSON object (--json) or :func:`print_dose`."""
     if args.json:
         print_json(ans.to_dict() if batch is None else {**ans.to_dict(),
                                                         "batch": batch.to_dict()})
-        return 0
-    print(f"{req.gel.name} from {req.t_start:g} K: " + "; ".join(ans.protocol))
+    else:
+        print_dose(req, ans, batch)
+    return 0
+
+
+def print_dose(req: Any, ans: Any, batch: Any = None) -> None:
+    """One printer for a dose's answer (as ``thermogel schedule`` has one for a schedule):
+    fluid, or drug (its payload: the wait, the leak, how the drug came out), after a jump or
+    under a protocol; the parts an answer does not have are left out."""
+    drug = hasattr(ans, "mechanism")
+    steps, at_dose = _heating(ans)
     secs = "" if ans.seconds is None else f" = {ans.seconds:.4g} s"
-    print(f"  release {ans.dose_fraction:.1%} of the stored fluid at t = {ans.time:.4g} tau"
-          f"{secs} from the protocol's start (at {ans.temperature_at_dose:.4g} K)")
-    for u in ans.until_steps:
+    if steps is None:
+        heat = f"{req.t_start:g} K -> {req.t_end:g} K"
+        when = f"heat for t = {ans.time:.4g} (dimensionless){secs}"
+    else:
+        heat = f"from {req.t_start:g} K under {'; '.join(steps)}"
+        when = f"t = {ans.time:.4g} tau{secs} from the protocol's start (at {at_dose:.4g} K)"
+    if drug:
+        what = "the loaded drug" + ("" if ans.dose_ug is None else f" = {ans.dose_ug:.4g} ug")
+        when += "" if steps is not None else f", after waiting {ans.wait:.4g} at T_start"
+    else:
+        what = (f"the stored fluid (radius {ans.start_radius:.4g} -> {ans.final_radius:.4g} "
+                "dry radii)")
+    print(f"{req.gel.name} {heat}: release {ans.dose_fraction:.1%} of {what}")
+    print(f"  {ans.model} model: {when}")
+    for u in getattr(ans, "until_steps", None) or ():
         end = "" if u.end_seconds is None else f" = {u.end_seconds:.4g} s"
         print(f"  step {u.step} '{u.text}' ends at t = {u.end:.4g} tau{end}")
-    print(wrap(ans.reference))
-    if ans.timescale_formula:
-        print(wrap(ans.timescale_formula))
-    print(wrap(f"model: {ans.model}, {ans.model_reason}"))
-    print(wrap(f"truth: {ans.truth}"))
-    print(wrap(f"program: {ans.program}"))
-    print(wrap(ans.error_explanation))
-    if ans.uncertainty and ans.uncertainty["interfacial_length_range"]["relative"] is not None:
-        print(wrap(ans.uncertainty["interfacial_length_range"]["text"]))
+    if getattr(ans, "model_reason", ""):
+        print(wrap(f"model: {ans.model}, {ans.model_reason}"))
+    print(wrap(f"truth{' of the drug runs' if drug else ''}: {ans.truth}"))
+    if getattr(ans, "program", ""):
+        print(wrap(f"program: {ans.program}"))
+    (_print_drug if drug else _print_fluid)(ans)
+    print_uncertainty(ans.uncertainty, "the drug dose time" if drug else "the truth")
+    if drug:
+        print(wrap(ans.note))
+    runs = getattr(getattr(ans, "validation", None), "runs", None)
+    if runs:
+        print(wrap("full solver: " + ", ".join(
+            f"{e['grid']} N={e['n']} ell={e['interfacial_length']:g}: "
+            + (f"{e['time']:.5g}" if "time" in e else "failed") for e in runs)))
     if batch is not None:
         print_batch(batch)
-    return 0
+
+
+def _heating(ans: Any) -> tuple[list[str] | None, float | None]:
+    """A dose answer's protocol steps and its temperature at the dose (None: a jump)."""
+    p = getattr(ans, "protocol", None)
+    if p is None:
+        return None, None
+    if isinstance(p, list):  # a fluid dose (dosing.protocol_dose.ProtocolDoseAnswer)
+        return p, ans.temperature_at_dose
+    return list(p.steps), p.temperature_at_dose  # a drug dose's (dosing.drug_protocol)
+
+
+def _print_fluid(ans: Any) -> None:
+    """The fluid payload: volumes, tau and the error estimate."""
+    if ans.expelled_volume_ul is not None:
+        print(f"  expels {ans.expelled_volume_ul:.4g} uL of {ans.stored_volume_ul:.4g} uL "
+              f"stored; final radius {ans.final_radius_um:.4g} um")
+    if getattr(ans, "reference", ""):
+        print(wrap(ans.reference))
+    if ans.timescale_formula:
+        print(wrap(ans.timescale_formula))
+    tu = getattr(ans, "timescale_uncertainty", None)
+    if tu and ans.seconds is not None:
+        lo, hi = tu["seconds_range"]
+        print(wrap(("calibrated" if tu["calibrated"] else "UNCALIBRATED")
+                   + f" seconds: {lo:.3g}-{hi:.3g} s over "
+                   + ("the kinetics fit's 95% interval of D" if tu["calibrated"] else
+                      f"the timescale constants' range (a factor {tu['factor']:.3g}); "
+                      + tu["how_to_pin"])))
+    if ans.error_estimate is not None:
+        print(f"  error estimate {ans.error_estimate:.1%}:")
+    print(wrap(ans.error_explanation))
+
+
+def _print_drug(ans: Any) -> None:
+    """The drug payload: the leak before heating, how the drug came out, the mesh."""
+    print(f"  leaked before heating: {ans.leaked_before_heating:.4g} of the load; at T_start "
+          f"the bead leaks 10% in {ans.leak_time_10pct:.4g} tau"
+          + ("" if ans.leak_time_10pct_seconds is None
+             else f" ({ans.leak_time_10pct_seconds:.4g} s)"))
+    print(f"  mechanism: {ans.mechanism}; fluid expelled meanwhile {ans.fluid_fraction:.4g} of "
+          f"the stored fluid; D_eff = {ans.effective_diffusivity_cm2_s:.3g} cm^2/s")
+    for text in (ans.split, ans.mesh):
+        if text:
+            print(wrap(f"  {text}"))
+    if ans.medium_concentration_ug_per_ul is not None:
+        print(f"  release medium concentration {ans.medium_concentration_ug_per_ul:.4g} ug/uL")

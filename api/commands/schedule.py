@@ -7,7 +7,15 @@ from typing import Any
 
 from solver.errors import ParameterError
 
-from .common import check_bounds, checked_cache, print_json, print_uncertainty, table_row, wrap
+from .common import (
+    add_at_start_options,
+    check_bounds,
+    checked_cache,
+    print_json,
+    print_uncertainty,
+    table_row,
+    wrap,
+)
 from .dose import add_planning_options, planning_kwargs, planning_values
 from .drug_cli import add_wait_options, run_drug_schedule
 from .drug_options import add_drug_options, drug_from_args
@@ -24,11 +32,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                          "drug option: of the loaded drug)")
     dd.add_argument("--doses-ug", type=float, nargs="+",
                     help="with a drug: doses in ug (needs --load-ug)")
-    r = p.add_mutually_exclusive_group()
-    r.add_argument("--rests", type=float, nargs="*", default=None,
-                   help="rests at T_start between doses, dimensionless (one fewer than doses)")
-    r.add_argument("--rests-seconds", type=float, nargs="*", default=None,
-                   help="rests in seconds (needs a bead size)")
+    add_at_start_options(p, "rests", "rests at T_start between doses (one fewer than doses)",
+                         many=True)
     p.add_argument("--no-check", action="store_true",
                    help="skip the full-solver simulation of the protocol")
     p.add_argument("--no-correct", action="store_true",
