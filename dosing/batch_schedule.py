@@ -84,6 +84,16 @@ def schedule_sizes(req: ScheduleRequest, size_distribution: Any) -> DrySizes:
     return sizes
 
 
+def reference_fields(size_distribution: Any, dry_radius_um: Any,
+                     swollen_radius_um: Any) -> dict[str, float]:
+    """The request's bead size to fill in (the batch's number-weighted mean, in its state)
+    when neither is given and the distribution carries its own size; else nothing."""
+    d = as_distribution(size_distribution)
+    if dry_radius_um is not None or swollen_radius_um is not None or not d.has_size:
+        return {}
+    return {"dry_radius_um" if d.state == "dry" else "swollen_radius_um": d.number_mean_um()}
+
+
 def ladder(sizes: DrySizes) -> tuple[int, ...]:
     """The rules' node counts (a single rung of 0: the batch itself)."""
     if sizes.exact:
@@ -428,4 +438,4 @@ def plan_batch_schedule(req: ScheduleRequest, size_distribution: Any,
 
 
 __all__ = ["BatchHeatings", "BatchScheduleAnswer", "batch_schedule_with",
-           "plan_batch_schedule", "schedule_sizes"]
+           "plan_batch_schedule", "reference_fields", "schedule_sizes"]

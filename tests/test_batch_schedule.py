@@ -121,3 +121,105 @@ def test_a_batch_schedule_needs_its_reference_bead(planner) -> None:
     with pytest.raises(ParameterError) as e:
         batch_schedule_with(planner, req, {"cv": 0.2})
     assert e.value.field == "dry_radius_um"
+
+
+# ------------------------------------------------------------------ the ways in
+SCHED = ["schedule", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--doses", "0.3",
+         "0.3", "0.2", "--rests", "0.5", "0.5"]
+
+
+@pytest.fixture
+def cli_on_fake(monkeypatch):
+    """``thermogel schedule`` with its one-shot planner on a fake solver."""
+    import dosing
+
+    fake, real = FakeSolver(), dosing._one_shot
+    monkeypatch.setattr(dosing, "_one_shot", lambda path, ex, **kw: real(path, ex, solver=fake,
+                                                                          **kw))
+    return fake
+
+
+def test_cli_size_cv_matches_python(cli_on_fake, planner, capsys, tmp_path) -> None:
+    import json
+
+    from api.cli import main
+
+    argv = [*SCHED, "--dry-radius-um", str(RADIUS), "--size-cv", "0.2",
+            "--cache", str(tmp_path / "cli.sqlite")]
+    assert main([*argv, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    want = batch_schedule_with(planner, _req(), {"cv": 0.2}).to_dict()
+    assert out["corrected"]["actuation_times"] == want["corrected"]["actuation_times"]
+    assert out["quadrature"] == json.loads(json.dumps(want["quadrature"]))
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "a batch (a number-weighted lognormal of dry radii, mean 2 um, CV 0.2)" in text
+    assert "quadrature over sizes: Gauss-Hermite" in text and "nodes (dry um" in text
+
+
+@pytest.mark.parametrize(("extra", "flag"), [
+    (["--size-cv", "-0.1", "--dry-radius-um", "2"], "--size-cv"),
+    (["--size-cv", "2.5", "--dry-radius-um", "2"], "--size-cv"),
+    (["--size-cv", "0.2"], "dry_radius_um"),
+    (["--size-cv", "0.2", "--dry-radius-um", "2", "--drug-diffusivity-cm2-s", "1e-7"],
+     "--size-cv"),
+    (["--size-cv", "0.2", "--dry-radius-um", "2", "--medium-volume-ml", "1"],
+     "--medium-volume-ml"),
+])
+def test_cli_refusals_name_the_option(cli_on_fake, capsys, tmp_path, extra, flag) -> None:
+    from api.cli import main
+
+    assert main([*SCHED, *extra, "--cache", str(tmp_path / "c.sqlite")]) == 2
+    assert flag in capsys.readouterr().err
+    assert cli_on_fake.calls == []
+
+
+def test_cli_refuses_an_empty_or_negative_table(cli_on_fake, capsys, tmp_path) -> None:
+    from api.cli import main
+
+    for i, text in enumerate(["radius_um\n", "radius_um\n2\n-3\n"]):
+        p = tmp_path / f"s{i}.csv"
+        p.write_text(text)
+        assert main([*SCHED, "--sizes", str(p), "--cache", str(tmp_path / "c.sqlite")]) == 2
+        assert "--sizes" in capsys.readouterr().err
+
+
+@pytest.fixture
+def anyio_backend() -> str:
+    return "asyncio"
+
+
+@pytest.mark.anyio
+async def test_http_size_distribution_matches_python(planner, tmp_path) -> None:
+    import asyncio
+
+    from api_support import asgi
+
+    from api.http import create_app
+
+    body = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "doses": DOSES, "rests": RESTS,
+            "dry_radius_um": RADIUS, "size_distribution": {"cv": 0.2}}
+    async with asgi(create_app(planner=planner, warm=False)) as (api, raw):
+        for bad, loc in [({"cv": 2.5}, "cv"), ({"cv": -1.0}, "cv"),
+                         ({"kind": "table", "sizes_um": []}, "sizes_um"),
+                         ({"kind": "table", "sizes_um": [2.0, -1.0]}, "sizes_um"),
+                         ({"cv": 0.2, "mean_um": 3.0}, "dry_radius_um")]:
+            r = await raw.post("/v1/schedule", json={**body, "size_distribution": bad})
+            assert r.status_code == 422 and loc in r.text, r.text
+        r = await raw.post("/v1/schedule", json={**body, "drug": {"diffusivity_cm2_s": 1e-7}})
+        assert r.status_code == 422 and "size_distribution" in r.text, r.text
+        assert planner.fake.calls == []
+        r = await raw.post("/v1/schedule", json=body)
+        assert r.status_code == 202, r.text
+        vid = r.json()["validation_id"]
+        for _ in range(600):
+            v = await api.validation(vid)
+            if v.status in ("done", "failed"):
+                break
+            await asyncio.sleep(0.05)
+        assert v.status == "done", v.error
+    want = batch_schedule_with(planner, _req(), {"cv": 0.2}).to_dict()
+    assert v.result["batch"] is True
+    assert v.result["corrected"]["actuation_times"] == want["corrected"]["actuation_times"]
+    assert v.result["quadrature"]["nodes"] == want["quadrature"]["nodes"]
+    assert v.result["nodes"] == want["nodes"]
