@@ -42,9 +42,10 @@ from solver.errors import NotApplicableError, ParameterError, SolverError
 
 from .answers import HoldRow
 from .batch import Quadrature
+from .batch_truth import size_settings
 from .protocol import FluidHeatings, Reach, delivery, heat_cool_protocol, shoot_durations, windows
 from .quantity import micrometres
-from .request import ScheduleRequest, _clamp_length
+from .request import ScheduleRequest
 from .scenario import Scenario, SolverSettings
 from .schedule import SchedulePlanner, hold_schedule
 from .size_distribution import DrySizes, as_distribution
@@ -127,19 +128,6 @@ class Node:
     settings: SolverSettings
 
 
-def node_settings(req: ScheduleRequest, ref_um: float, radius_um: float) -> SolverSettings:
-    """The truth's settings for a bead of ``radius_um``: its own interfacial length
-    ell = xi_dry / a_d (kept in the direct runs' range) when the request's is the reference
-    bead's own, else the request's (an ell given by hand, a ladder, the paper's model)."""
-    s = req.settings
-    if not (s.direct and s.regularized):
-        return s
-    own = _clamp_length(req.constants.interfacial_lengths(ref_um)[0])
-    if not math.isclose(s.interfacial_length, own, rel_tol=1e-9):
-        return s
-    return s.with_length(_clamp_length(req.constants.interfacial_lengths(radius_um)[0]))
-
-
 def nodes_of(req: ScheduleRequest, radii: np.ndarray, weights: np.ndarray,
              ref_um: float) -> list[Node]:
     """The rule's nodes; the reference bead's own (R = R_ref) keep the request's settings."""
@@ -148,7 +136,8 @@ def nodes_of(req: ScheduleRequest, radii: np.ndarray, weights: np.ndarray,
         if math.isclose(r, ref_um, rel_tol=1e-12):
             out.append(Node(ref_um, v, 1.0, req.settings))
             continue
-        out.append(Node(r, v, (r / ref_um) ** 2, node_settings(req, ref_um, r)))
+        settings = size_settings(req.settings, req.constants, ref_um, r)
+        out.append(Node(r, v, (r / ref_um) ** 2, settings))
     return out
 
 
