@@ -266,14 +266,21 @@ def time_grid(s: Any, rho: np.ndarray, t_end: float, times: np.ndarray,
     """The union of the classes' sample times rho_k s_j (``s``: one array, or one per class;
     or, given ``points``, that many even intervals; 0: none) and the output times up to
     ``t_end``, each interval cut into ``sub`` equal steps, the start graded."""
-    pts = [times[times <= t_end], np.array([0.0, t_end])]
+    outs = np.unique(np.concatenate((times[times <= t_end], [0.0, t_end])))
     per = s if isinstance(s, list) else [s] * len(rho)
+    pts = [np.zeros(0)]
     if points is None:
         pts += [r * sk[r * sk < t_end] for r, sk in zip(rho, per, strict=True)]
     elif points > 0:
         pts.append(np.linspace(0.0, t_end, points + 1))
-    base = np.unique(np.concatenate(pts))
-    base = base[np.concatenate(([True], np.diff(base) > 1e-14 * max(t_end, 1.0)))]
+    eps = 1e-14 * max(t_end, 1.0)
+    # a sample within eps of an output gives way to it (the outputs stay on the grid)
+    other = np.unique(np.concatenate(pts))
+    j = np.searchsorted(outs, other)
+    lo, hi = outs[np.maximum(j - 1, 0)], outs[np.minimum(j, outs.size - 1)]
+    near = np.minimum(np.abs(other - lo), np.abs(other - hi)) <= eps
+    base = np.unique(np.concatenate((outs, other[~near])))
+    base = base[np.concatenate(([True], np.diff(base) > eps)) | np.isin(base, outs)]
     frac = np.arange(sub) / sub
     fine = np.concatenate(((base[:-1, None] + np.diff(base)[:, None] * frac[None, :]).ravel(),
                            base[-1:]))
