@@ -169,8 +169,8 @@ def truth_parts(req: Any, sizes: DrySizes, bands: Bands, reps: np.ndarray,
                 x for x in both if isinstance(x, str)) + ")") +
             f" (the mechanics at xi_dry {xr[0]:g}-{xr[1]:g} nm, {where}; each class runs at "
             "its band's ell, which differs from the bead's own by less than that range; the "
-            f"bands' own ells moved the batch's time by {t_bands / t0 - 1.0:+.2%} against "
-            "every class at the central band's)"}
+            f"bands' own ells moved the batch's time by {t_bands / t0 - 1.0:+.1e} "
+            "(relative) against every class at the central band's)"}
         dl = delayed_settings(s)[-1]
         mf = change(dl)
         out["model_form"] = {"relative": None if isinstance(mf, str) else mf, "text": (
