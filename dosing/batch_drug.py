@@ -289,6 +289,8 @@ def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
                                  "medium_volume_ml)")
         n_beads = bead_count(count)
         v0 = ml * 1e3 / batch_dry_volume_ul(sizes, n_beads)
+    if req.heating is not None:  # under a protocol: a run per size node
+        return _protocol_answer(req, sizes, (ml, n_beads, v0))
     settings = drug_settings(req.settings)
     edges, reps = band_edges(sizes)
     bands = run_bands(req, sizes, edges, [size_settings(settings, req.constants, sizes.mean_um,
@@ -351,6 +353,60 @@ def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
         description=sizes.spec.describe(), note=note, uncertainty=unc,
         bands=[{"dry_radius_um": float(r), "interfacial_length": float(x.interfacial_length)}
                for r, x in zip(reps, bands.settings, strict=True)])
+
+
+def _pore(req: Any, v0: float | None) -> float | None:
+    """The medium over the batch's partition-weighted pore volume."""
+    if v0 is None:
+        return None
+    k = float(req.solute.partition_at(1.0 - 1.0 / req.start_radius**3))
+    return v0 / (k * (req.start_radius**3 - 1.0))
+
+
+def _protocol_answer(req: Any, sizes: DrySizes,
+                     medium: tuple[float | None, float | None, float | None]
+                     ) -> DrugBatchAnswer:
+    """The batch's drug dose under ``req.heating`` (``dosing.batch_drug_protocol``)."""
+    from .batch_drug_protocol import protocol_batch_time, protocol_parts
+
+    ml, n_beads, v0 = medium
+    res = protocol_batch_time(req, sizes, v0)
+    t, best, f = res["time"], res["release"], req.fraction
+    if v0 is None:
+        t_sink, over = t, 0.0
+    else:
+        sink = protocol_batch_time(req, sizes, None)["release"]
+        t_sink = sink.time_to_release(f)
+        over = sink.released_at(t) / best.released_at(t) - 1.0
+    tau = timescale(sizes.mean_um, req.t_end, req.constants).seconds
+    conc = None
+    if v0 is not None and req.load_ug is not None:
+        ref_ul = 4.0 * math.pi / 3.0 * sizes.mean_um**3 / UM3_PER_UL
+        conc = float(np.interp(t, best.t, best.concentration)) * req.load_ug / ref_ul
+    unc = protocol_parts(res)
+    runs = res["runs"]
+    medium_text = ("a perfect sink" if v0 is None else
+                   f"one well-mixed medium of {ml:.4g} mL shared by {n_beads:.4g} beads")
+    note = (f"Under the protocol {'; '.join(res['texts'])}: each of {res['nodes']} size "
+            f"nodes ({', '.join(f'{r:.4g}' for r in res['radii'])} um dry) runs the full "
+            f"solver's mechanics of the protocol at its own size and interfacial length (its "
+            f"own program: tau ~ R^2), the drug of every node released into {medium_text}; "
+            f"the batch ({sizes.spec.describe()}) releases {f:.0%} of its load at "
+            f"{t * tau:.4g} s from the protocol's start. Quadrature: {res['quadrature']:.1e} "
+            f"({res['nodes']} against {res['check_nodes']} nodes). "
+            + " ".join(p["text"] for p in unc.values()))
+    return DrugBatchAnswer(
+        model="full+batch-medium under a protocol", dose_fraction=f, time=t, seconds=t * tau,
+        sink_time=t_sink, sink_overestimate=over, medium_volume_ml=ml, bead_count=n_beads,
+        medium_over_pore_volume=_pore(req, v0), medium_concentration_ug_per_ul=conc,
+        mass_balance_error=best.mass_balance_error, numerical_error=res["numerical"],
+        quadrature_error=res["quadrature"], classes=res["nodes"],
+        reference_dry_radius_um=sizes.mean_um,
+        interfacial_length=float(req.settings.interfacial_length or 0.0),
+        description=sizes.spec.describe(), note=note, uncertainty=unc,
+        bands=[{"dry_radius_um": float(r), "interfacial_length":
+                float(m.settings.interfacial_length)} for r, m in zip(res["radii"], runs,
+                                                                      strict=True)])
 
 
 def check_batch_body(body: Any) -> None:
