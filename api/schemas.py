@@ -777,7 +777,7 @@ class BatchScheduleResponse(_Out):
     quadrature: QuadratureOut = Field(description="the rule over sizes, its nodes and error "
                                                   "(table: nodes, the last dose delivered)")
     uncertainty: dict[str, UncertaintyPart] = Field(
-        description="numerical, quadrature, interfacial_length, model_form")
+        description="numerical, quadrature, interfacial_length_range, model_form")
     truth: str = Field(description="the runs' model, in words")
     note: str = Field(description="the answer in words")
 

@@ -45,7 +45,7 @@ from .batch import Quadrature
 from .batch_truth import size_settings
 from .protocol import FluidHeatings, Reach, delivery, heat_cool_protocol, shoot_durations, windows
 from .quantity import micrometres
-from .request import ScheduleRequest
+from .request import ScheduleRequest, _clamp_length
 from .scenario import Scenario, SolverSettings
 from .schedule import SchedulePlanner, hold_schedule
 from .size_distribution import DrySizes, as_distribution
@@ -372,12 +372,52 @@ def batch_schedule_with(planner: SchedulePlanner, req: ScheduleRequest,
         if res is not None:
             res["actuation_seconds"] = [d * tau for d in res["actuation_times"]]
     quad = Quadrature(text, len(nodes), err, converged, table, used)
-    return _answer(req, sizes, nodes, tau, (hold_model, hold), checked, corrected, quad)
+    parts = truth_parts(planner, req, nodes, corrected)
+    return _answer(req, sizes, nodes, tau, (hold_model, hold), checked, corrected, quad, parts)
+
+
+def truth_parts(planner: SchedulePlanner, req: ScheduleRequest, nodes: Sequence[Node],
+                corrected: dict[str, Any] | None) -> dict[str, dict[str, Any]]:
+    """The interfacial-length and model-form parts of a batch schedule: the largest
+    relative change of a delivered dose when the found actuation times are run with every
+    node at the mesh length's range (xi_lo, xi_hi: its ell scaled as its own) and on the
+    delayed-transition lattice (``truth.delayed_settings``); the direct truth only."""
+    from .truth import delayed_settings
+
+    if corrected is None or not req.settings.direct:
+        why = ("no corrected times" if corrected is None else
+               "the paper's model or a ladder (the direct truth, the default, states them)")
+        return {"interfacial_length_range": {"relative": None, "text": (
+                    f"interfacial length: not measured ({why})")},
+                "model_form": {"relative": None, "text": f"model form: not measured ({why})"}}
+    durations, base = corrected["actuation_times"], corrected["rule_delivered_fractions"] \
+        if "rule_delivered_fractions" in corrected else corrected["delivered_fractions"]
+
+    def change(settings_of: Any) -> float:
+        h = BatchHeatings(planner, req, [replace(n, settings=settings_of(n)) for n in nodes])
+        got = check(h, durations)["delivered_fractions"]
+        return max(abs(g / b - 1.0) for g, b in zip(got, base, strict=True))
+
+    own, lo, hi = req.constants.interfacial_lengths(req.bead_dry_radius_um)
+    ell = max(change(lambda n, x=x: n.settings.with_length(
+        _clamp_length(n.settings.interfacial_length * x / own))) for x in (lo, hi))
+    lattice = delayed_settings(req.settings)[-1]
+    form = change(lambda n: lattice)
+    xr = req.constants.mesh_length_range_nm
+    return {
+        "interfacial_length_range": {"relative": ell, "text": (
+            f"interfacial length: {ell:.2%}, the largest change of a delivered dose at the "
+            f"found times with every node at xi_dry {xr[0]:g}-{xr[1]:g} nm")},
+        "model_form": {"relative": form, "text": (
+            f"model form: {form:.2%}, the largest change of a delivered dose at the found "
+            f"times if every bead followed the delayed-transition law (the ell = 0 Lagrangian "
+            f"lattice, N = {lattice.n}; not part of the error estimate)")}}
 
 
 def _answer(req: ScheduleRequest, sizes: DrySizes, nodes: Sequence[Node], tau: float,
             hold: tuple[str, list[HoldRow]], checked: dict[str, Any] | None,
-            corrected: dict[str, Any] | None, quad: Quadrature) -> BatchScheduleAnswer:
+            corrected: dict[str, Any] | None, quad: Quadrature,
+            parts: dict[str, dict[str, Any]]) -> BatchScheduleAnswer:
     ref = sizes.mean_um
     worst = None if corrected is None else corrected["max_relative_error"]
     unc = {
@@ -390,12 +430,7 @@ def _answer(req: ScheduleRequest, sizes: DrySizes, nodes: Sequence[Node], tau: f
             f"quadrature over sizes: {quad.rule}, {quad.nodes} nodes, error {quad.error:.1e} "
             "(the largest change of a dose on the next rule)"
             + ("" if quad.converged else "; NOT converged within the rules tried"))},
-        "interfacial_length": {"relative": None, "text": (
-            "interfacial length: each node runs at its own ell = xi_dry / a_d; the mesh "
-            "length's range is not run for a batch schedule (a single bead's dose gives it)")},
-        "model_form": {"relative": None, "text": (
-            "model form: the truth's; the delayed-transition law is not run for a batch "
-            "schedule (a single bead's validated dose states it)")},
+        **parts,
     }
     note = (f"A batch ({sizes.spec.describe()}): each size is its own full-solver run of the "
             f"protocol in its own time (tau ~ R^2, at its own interfacial length), its fluid "

@@ -48,7 +48,7 @@ def test_cv_zero_is_the_single_beads_schedule_exactly(planner) -> None:
 
 
 def _brute_force(req: ScheduleRequest, cv: float, durations: list[float],
-                 beads: int = 400) -> np.ndarray:
+                 beads: int = 400, xi_nm: float = 4.0, lattice: bool = False) -> np.ndarray:
     """Each heating's delivery summed over ``beads`` beads at the volume-weighted law's
     quantiles (i + 1/2) / beads (each bead one share of the fluid), every bead its own fake
     run at its own ell and its own tau."""
@@ -61,8 +61,9 @@ def _brute_force(req: ScheduleRequest, cv: float, durations: list[float],
         s = req.settings
         d, rests = [x / rho for x in durations], [x / rho for x in req.rests]
         traj = fake(req.gel, req.t_start, protocol=heat_cool_protocol(
-            d, rests, req.t_start, req.t_end), grid=s.grid, n=s.n,
-            interfacial_length=4e-3 / radius)  # the bead's own: xi_dry 4 nm / a_d
+            d, rests, req.t_start, req.t_end), grid="lagrangian" if lattice else s.grid,
+            n=s.n, interfacial_length=0.0 if lattice else 1e-3 * xi_nm / radius)
+        # the bead's own: xi_dry 4 nm / a_d
         out += np.array(delivery(traj, d, rests, req.start_radius).delivered)
     return out / beads
 
@@ -80,6 +81,24 @@ def test_batch_doses_read_back_from_every_bead(planner, cv) -> None:
     ells = [n["interfacial_length"] for n in b.nodes]
     assert ells == pytest.approx([4e-3 / n["dry_radius_um"] for n in b.nodes], rel=1e-12)
     assert sum(n["volume_weight"] for n in b.nodes) == pytest.approx(1.0, rel=1e-12)
+
+
+def test_the_interfacial_length_and_model_form_parts(planner) -> None:
+    """Each part is the largest change of a delivered dose at the found times, here read
+    back from 400 beads run one by one at xi_dry 2 and 8 nm, and on the delayed lattice
+    (the fake's Lagrangian grid at ell = 0): within the sampling and quadrature errors."""
+    req = _req()
+    b = batch_schedule_with(planner, req, {"cv": 0.2})
+    d = b.corrected["actuation_times"]
+    base = _brute_force(req, 0.2, d)
+    ell = max(np.max(np.abs(_brute_force(req, 0.2, d, xi_nm=x) / base - 1.0))
+              for x in (2.0, 8.0))
+    form = np.max(np.abs(_brute_force(req, 0.2, d, lattice=True) / base - 1.0))
+    u = b.uncertainty
+    assert ell > 1e-3 and form > 1e-3  # the fake's rate depends on both
+    assert u["interfacial_length_range"]["relative"] == pytest.approx(ell, abs=2e-4)
+    assert u["model_form"]["relative"] == pytest.approx(form, abs=2e-4)
+    assert "xi_dry 2-8 nm" in u["interfacial_length_range"]["text"]
 
 
 def test_the_spread_lengthens_the_schedule(planner) -> None:
