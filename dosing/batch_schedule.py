@@ -168,8 +168,15 @@ class BatchHeatings:
         scs = [self.scenario(n, durations) for n in self.nodes]
         if len(scs) == 1:
             return [self.planner.trajectory(scs[0])]
-        with ThreadPoolExecutor(len(scs)) as pool:
-            return list(pool.map(self.planner.trajectory, scs))
+        together = getattr(self.planner, "_trajectories", None)  # admitted as one group
+        if together is None:
+            with ThreadPoolExecutor(len(scs)) as pool:
+                return list(pool.map(self.planner.trajectory, scs))
+        out = together(scs, None, 0.0)
+        for x in out:
+            if isinstance(x, BaseException):
+                raise x
+        return out
 
     def per_node(self, result: list[Any], durations: Sequence[float]) -> list[list[float]]:
         """Each node's delivery per heating (fractions of its own stored fluid)."""
