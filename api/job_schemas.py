@@ -16,7 +16,7 @@ from pydantic import Field
 
 from .drug_schemas import DrugDoseResponse, DrugScheduleResponse
 from .outputs import Out
-from .schemas import ScheduleResponse, ValidationReport
+from .schemas import BatchScheduleResponse, ScheduleResponse, ValidationReport
 
 JobStatus = Literal["pending", "running", "done", "failed"]
 
@@ -51,5 +51,12 @@ class DrugDoseJob(_Job):
     result: DrugDoseResponse | None = Field(None, description="when done: the drug dose")
 
 
-ValidationJob = Annotated[DoseValidationJob | ScheduleJob | DrugDoseJob,
+class BatchScheduleJob(_Job):
+    """A batch's schedule (issue 26: every size node's runs); when done, the schedule."""
+
+    kind: Literal["batch-schedule"] = Field(description="a batch's schedule")
+    result: BatchScheduleResponse | None = Field(None, description="when done: the schedule")
+
+
+ValidationJob = Annotated[DoseValidationJob | ScheduleJob | DrugDoseJob | BatchScheduleJob,
                           Field(discriminator="kind")]

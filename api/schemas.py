@@ -40,7 +40,7 @@ from solver.limits import (
 )
 
 from .outputs import Out as _Out
-from .outputs import UncertaintyOut
+from .outputs import UncertaintyOut, UncertaintyPart
 
 # the ranges are solver.limits' (one definition): temperatures, the ladder's coarsest ell
 # (its rungs go down to ell / 4) and a direct run's ell
@@ -763,8 +763,9 @@ class ValidationResponse(_Out):
     :class:`ValidationReport` (dose) or a :class:`ScheduleResponse` (schedule)."""
 
     id: str = Field(description="validation id")
-    kind: Literal["dose", "schedule", "drug-dose"] = Field(
-        "dose", description="what was checked ('drug-dose': a drug dose's runs)")
+    kind: Literal["dose", "schedule", "drug-dose", "batch-schedule"] = Field(
+        "dose", description="what was checked ('drug-dose': a drug dose's runs; "
+                        "'batch-schedule': a batch's schedule)")
     status: Literal["pending", "running", "done", "failed"] = Field(description="its state")
     result: dict[str, Any] | None = Field(
         None, description="when done: the truth's time for the dose, every run behind it and "
@@ -828,6 +829,11 @@ class ScheduleRequest(RequestModel):
     validation_method: Method = method_field()
     interfacial_length: float | None = interfacial_length_field()
     drug: DrugIn | None = Field(None, description="a drug in the pore fluid: doses are drug")
+    size_distribution: SizeDistributionIn | None = Field(
+        None, description="a batch of beads (fluid doses only; docs/batch.md): the actuation "
+                          "times meet each dose of the batch's stored fluid, every size its "
+                          "own full-solver run (a stored job; dosing.batch_schedule); "
+                          "dry_radius_um is the batch's number-weighted mean")
 
     _ell = field_validator("interfacial_length")(check_interfacial_length)
 
@@ -855,6 +861,37 @@ class ScheduleOut(AnswerOut):
                           "per dose and how it came out, the leak per rest)")
     corrected: dict[str, Any] | None = Field(
         None, description="actuation times meeting every dose within the tolerance")
+
+
+class BatchScheduleResponse(_Out):
+    """A batch's schedule (dosing.batch_schedule.BatchScheduleAnswer): actuation times in
+    the reference (number-weighted mean) bead's tau and seconds whose summed release meets
+    each dose of the batch's stored fluid; the size nodes run and the quadrature."""
+
+    batch: Literal[True] = Field(True, description="always true: a batch's schedule")
+    model: str = Field(description="which model ran each size ('full-solver-per-size')")
+    description: str = Field(description="the batch in words")
+    distribution: dict[str, Any] = Field(description="the size distribution as resolved")
+    doses: list[float] = Field(description="the doses, fractions of the batch's stored fluid")
+    rests: list[float] = Field(description="the rests, in the reference bead's tau")
+    reference_dry_radius_um: float = Field(description="the number-weighted mean dry radius")
+    timescale_seconds: float = Field(description="the reference bead's tau in s")
+    nodes: list[dict[str, Any]] = Field(
+        description="per size node: dry_radius_um, volume_weight, rho = (R / R_ref)^2, "
+                    "tau_seconds, interfacial_length")
+    hold: list[dict[str, Any]] = Field(description="the hold reading the shooting started from")
+    hold_model: str = Field(description="how the hold reading was found")
+    protocol_check: dict[str, Any] | None = Field(
+        None, description="the hold times run on every node: the batch's delivered fractions")
+    corrected: dict[str, Any] | None = Field(
+        None, description="actuation_times, actuation_seconds, delivered_fractions (on the "
+                          "check rule), relative_errors, node_delivered_fractions, runs, met")
+    quadrature: QuadratureOut = Field(description="the rule over sizes, its nodes and error "
+                                                  "(table: nodes, the last dose delivered)")
+    uncertainty: dict[str, UncertaintyPart] = Field(
+        description="numerical, quadrature, interfacial_length_range, model_form")
+    truth: str = Field(description="the runs' model, in words")
+    note: str = Field(description="the answer in words")
 
 
 class ScheduleResponse(ScheduleOut):

@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from dosing.batch_drug import SUB, batch_classes, coupled, mechanics
+from dosing.batch_drug import SUB, Bands, batch_classes, coupled, mechanics
 from dosing.drug import drug_settings
 from dosing.drug_dose import DrugDoseRequest
 from dosing.size_distribution import as_distribution
@@ -42,9 +42,10 @@ def main() -> None:
         res = mechanics(req.gel, req.t_start, req.t_end, req.branch, st)
         mech = time.process_time() - c0
         s, s3 = np.asarray(res.t, dtype=float), node_volumes(res)
+        one = Bands(np.array([]), [s], [s3], [st])  # the reference bead's mechanics
         rho, nu = batch_classes(sizes, 0)
         pore = req.start_radius**3 - 1.0  # K = 1: the pore volume, units of the dry volume
-        sink = coupled(s, s3, req.solute, sizes, 0, None, SUB[1])
+        sink = coupled(one, req.solute, sizes, 0, None, SUB[1])
         print(f"D0 = {d0:g} cm^2/s ({req.solute.diffusivity:.3g} x the gel's D); mechanics "
               f"{st.grid} N = {st.n}, ell {st.interfacial_length:.3g}: {mech:.1f} s CPU; "
               f"classes rho = {np.round(rho, 3).tolist()}, load shares "
@@ -52,9 +53,9 @@ def main() -> None:
         ts = [sink.time_to_release(f) for f in DOSES]
         for mult in (1.0, 10.0):
             c0 = time.process_time()
-            mr = coupled(s, s3, req.solute, sizes, 0, mult * pore, SUB[1])
+            mr = coupled(one, req.solute, sizes, 0, mult * pore, SUB[1])
             cpu = time.process_time() - c0
-            half = coupled(s, s3, req.solute, sizes, 0, mult * pore, SUB[0])
+            half = coupled(one, req.solute, sizes, 0, mult * pore, SUB[0])
             over = [sink.released_at(t) / mr.released_at(t) - 1.0 for t in ts]
             end = sink.released[-1] / mr.released[-1] - 1.0
             own = []

@@ -2,15 +2,24 @@
 
 The batch (a size distribution) of drug-loaded beads releases into a well-mixed medium of
 ``medium_volume_ml`` shared by its ``bead_count`` beads (None: a perfect sink, the default).
-One full-solver mechanics run of the reference (number-weighted mean) bead at its own
-interfacial length serves every size in its own time t / tau_k (module ``batch``); the
-solute of every size class and the medium are solved together (module ``batch_medium``),
-so the beads see one concentration c_med(t) and take drug back from it.  The classes are
-Gauss-Legendre nodes over the volume-weighted law (a bead's load is ~ R^3), the rows of a
-measured table exactly.  The answer states the batch's dose time (a fraction of its load in
-the medium), what the sum of perfect-sink beads would say at that time, the numerical error
-(steps halved), the quadrature error (classes doubled), the mass balance and the medium's
-concentration.
+Each size class follows the full-solver mechanics of its interfacial-length band in its own
+time t / tau_k (module ``batch``): the sizes are cut into the fluid batch's bands
+(``batch_truth.band_edges``: even in ln R over the volume-weighted central 99 %), each band
+run once at the ell of its geometric-centre bead (ell = xi_dry / a_d, as every truth's).
+The solute of every size class and the medium are solved together (module
+``batch_medium``), so the beads see one concentration c_med(t) and take drug back from it.
+The classes are Gauss-Legendre nodes over the volume-weighted law (a bead's load is
+~ R^3), the rows of a measured table exactly.
+
+The answer states the batch's dose time (a fraction of its load in the medium), what the
+sum of perfect-sink beads would say at that time, the mass balance, the medium's
+concentration, the quadrature error (classes doubled) and the three parts of the truth's
+uncertainty, each the relative change of the batch's dose time when every class follows
+the central band's other run instead of its own (the parts vary little with the band, as
+the fluid batch's validation measures): numerical (the mechanics on n / 2 cells, with the
+coupled solve's steps halved), interfacial length (the mechanics at the mesh length's
+range, xi_lo and xi_hi; a bead's ell differs from its band's by less than that range) and
+model form (the delayed-transition lattice, ``truth.delayed_settings``).
 """
 
 from __future__ import annotations
@@ -26,8 +35,11 @@ from solver.errors import ParameterError
 from solver.limits import BEAD_COUNT_RANGE, MEDIUM_VOLUME_ML_RANGE
 
 from .batch_medium import MediumRelease, coupled_release
+from .batch_truth import band_edges, size_settings
 from .quantity import micrometres, to_unit
+from .request import _clamp_length
 from .size_distribution import DrySizes, SizeDistribution, as_distribution
+from .truth import delayed_settings
 from .units import UM3_PER_UL, timescale
 
 CLASSES = (32, 64)  # Gauss-Legendre size classes (one panel): the answer's and its check
@@ -106,10 +118,74 @@ class DrugBatchAnswer:
     interfacial_length: float
     description: str
     note: str
+    uncertainty: dict[str, Any] | None = None  # numerical, interfacial length, model form
+    bands: list[dict[str, float]] | None = None  # each band's bead and interfacial length
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
         return asdict(self)
+
+
+def truth_parts(req: Any, sizes: DrySizes, bands: Bands, reps: np.ndarray,
+                case: tuple[float | None, float, float, float]) -> dict[str, dict[str, Any]]:
+    """The three parts of the truth's uncertainty (module doc): each the relative change of
+    the batch's dose time (n classes, 2 steps per interval) when every class follows one of
+    the central band's other runs instead of that band's own; ``case`` is (v0, the dose,
+    the coupled solve's step-halving gap, the answer's time)."""
+    v0, f, steps_gap, t_bands = case
+    c = len(bands.settings) // 2
+    s = bands.settings[c]
+
+    def time_on(b: Bands) -> float:
+        return coupled(b, req.solute, sizes, CLASSES[0], v0, SUB[1]).time_to_release(f)
+
+    def change(other: Any) -> float | str:
+        try:
+            return abs(time_on(run_bands(req, sizes, np.array([]), [other])) / t0 - 1.0)
+        except ValueError as exc:  # the other run does not reach the dose in its horizon
+            return str(exc)
+
+    t0 = time_on(bands.only(c))
+    where = (f"every class on the central band's ({reps[c]:.4g} um, ell = "
+             f"{s.interfacial_length:.3g}) runs")
+    chk = s.check()
+    gap = change(chk)
+    num = (None if isinstance(gap, str) else gap + steps_gap)
+    out = {"numerical": {"relative": num, "text": (
+        f"numerical: {num:.2%}" if num is not None else "numerical: not measured") +
+        f" (the mechanics on {chk.n} cells against {s.n}, {where}: "
+        + (f"{gap:.2%}" if not isinstance(gap, str) else f"the check fails: {gap}")
+        + f"; the coupled solve's steps halved: {steps_gap:.1e})"}}
+    if s.direct:
+        own, lo, hi = req.constants.interfacial_lengths(float(reps[c]))
+        ell = s.interfacial_length
+        both = [change(s.with_length(_clamp_length(ell * x / own))) for x in (lo, hi)]
+        nums = [x for x in both if not isinstance(x, str)]
+        rel = max(nums) if len(nums) == 2 else None
+        xr = req.constants.mesh_length_range_nm
+        out["interfacial_length_range"] = {"relative": rel, "text": (
+            f"interfacial length: {rel:.2%}" if rel is not None else
+            "interfacial length: not measured (" + "; ".join(
+                x for x in both if isinstance(x, str)) + ")") +
+            f" (the mechanics at xi_dry {xr[0]:g}-{xr[1]:g} nm, {where}; each class runs at "
+            "its band's ell, which differs from the bead's own by less than that range; the "
+            f"bands' own ells moved the batch's time by {t_bands / t0 - 1.0:+.1e} "
+            "(relative) against every class at the central band's)"}
+        dl = delayed_settings(s)[-1]
+        mf = change(dl)
+        out["model_form"] = {"relative": None if isinstance(mf, str) else mf, "text": (
+            f"model form: {mf:.2%}" if not isinstance(mf, str) else
+            f"model form: not measured ({mf})") + (
+            f" (the delayed-transition law: the ell = 0 Lagrangian lattice, N = {dl.n}, "
+            f"{where})")}
+    else:
+        why = ("the paper's model (no interfacial energy)" if not s.regularized else
+               "a ladder's coarsest rung")
+        for k in ("interfacial_length_range", "model_form"):
+            out[k] = {"relative": None, "text": (
+                f"{k.replace('_range', '').replace('_', ' ')}: not measured for {why}; "
+                "the direct truth (the default) states it")}
+    return out
 
 
 def reference_bead(req: Any, size_distribution: Any) -> tuple[Any, SizeDistribution]:
@@ -144,15 +220,45 @@ def batch_classes(sizes: DrySizes, n: int) -> tuple[np.ndarray, np.ndarray]:
     return (r / sizes.mean_um) ** 2, v
 
 
-def coupled(s: np.ndarray, s3: np.ndarray, solute: Any, sizes: DrySizes, n: int,
-            v0: float | None, sub: int) -> MediumRelease:
-    """The coupled release of ``n`` classes up to the largest class's horizon (of the
-    finest quadrature: every run on the same outputs), on steps even in ln t (a release
-    is fast at first: the outputs are the steps)."""
+@dataclass(frozen=True)
+class Bands:
+    """The batch's interfacial-length bands: inner edges (um), each band's mechanics
+    samples ``s`` and node volumes ``s3`` (``solver.solute.node_volumes``), its settings."""
+
+    edges: np.ndarray
+    s: list[np.ndarray]
+    s3: list[np.ndarray]
+    settings: list[Any]
+
+    def of(self, sizes: DrySizes, rho: np.ndarray) -> np.ndarray:
+        """Each class's band (its dry radius R_ref sqrt(rho) against the edges)."""
+        return np.searchsorted(self.edges, sizes.mean_um * np.sqrt(rho))
+
+    def only(self, b: int) -> Bands:
+        """Every class on band ``b``'s mechanics."""
+        return Bands(np.array([]), [self.s[b]], [self.s3[b]], [self.settings[b]])
+
+
+def run_bands(req: Any, sizes: DrySizes, edges: np.ndarray, settings: list[Any]) -> Bands:
+    """Each band's mechanics (memoised full-solver runs to HORIZON)."""
+    from solver.solute import node_volumes
+
+    runs = [mechanics(req.gel, req.t_start, req.t_end, req.branch, x) for x in settings]
+    return Bands(edges, [np.asarray(r.t, dtype=float) for r in runs],
+                 [node_volumes(r) for r in runs], list(settings))
+
+
+def coupled(bands: Bands, solute: Any, sizes: DrySizes, n: int, v0: float | None,
+            sub: int) -> MediumRelease:
+    """The coupled release of ``n`` classes, each on its band's mechanics, up to the
+    largest class's horizon (of the finest quadrature: every run on the same outputs), on
+    steps even in ln t (a release is fast at first: the outputs are the steps)."""
     rho, nu = batch_classes(sizes, n)
-    t_max = float(s[-1]) * float(batch_classes(sizes, CLASSES[-1])[0].max())
+    end = min(float(x[-1]) for x in bands.s)
+    t_max = end * float(batch_classes(sizes, CLASSES[-1])[0].max())
     times = np.concatenate(([0.0], np.geomspace(t_max * START, t_max, POINTS)))
-    return coupled_release(s, s3, solute, rho, nu, v0, times, sub=sub, points=0)
+    return coupled_release(bands.s, bands.s3, solute, rho, nu, v0, times, sub=sub, points=0,
+                           band=bands.of(sizes, rho))
 
 
 def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
@@ -183,17 +289,18 @@ def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
                                  "medium_volume_ml)")
         n_beads = bead_count(count)
         v0 = ml * 1e3 / batch_dry_volume_ul(sizes, n_beads)
+    if req.heating is not None:  # under a protocol: a run per size node
+        return _protocol_answer(req, sizes, (ml, n_beads, v0))
     settings = drug_settings(req.settings)
-    from solver.solute import node_volumes
-
-    res = mechanics(req.gel, req.t_start, req.t_end, req.branch, settings)
-    s, s3 = np.asarray(res.t, dtype=float), node_volumes(res)
+    edges, reps = band_edges(sizes)
+    bands = run_bands(req, sizes, edges, [size_settings(settings, req.constants, sizes.mean_um,
+                                                        float(r)) for r in reps])
     solute = req.solute
     f = req.fraction
     # the answer (n classes, 2 steps per interval), its numerical check (1 step) and its
     # quadrature check (2n classes, 1 step: against the n-class 1-step run)
     cases = ((CLASSES[0], SUB[0]), (CLASSES[0], SUB[1]), (CLASSES[1], SUB[0]))
-    runs = {c: coupled(s, s3, solute, sizes, c[0], v0, c[1])
+    runs = {c: coupled(bands, solute, sizes, c[0], v0, c[1])
             for c in (cases[:2] if sizes.exact else cases)}
     if sizes.exact:
         runs[cases[2]] = runs[cases[0]]
@@ -206,7 +313,7 @@ def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
         raise ParameterError("dose_fraction", f, f"below {best.released.max():.4f} (the "
                              "batch's release into this medium by the largest bead's "
                              f"{HORIZON:g} tau)", str(exc)) from None
-    sink = best if v0 is None else coupled(s, s3, solute, sizes, CLASSES[0], None, SUB[1])
+    sink = best if v0 is None else coupled(bands, solute, sizes, CLASSES[0], None, SUB[1])
     t_sink = sink.time_to_release(f)
     over = sink.released_at(t) / best.released_at(t) - 1.0
     tau = timescale(sizes.mean_um, req.t_end, req.constants).seconds
@@ -220,27 +327,86 @@ def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
     medium = ("a perfect sink" if v0 is None else
               f"one well-mixed medium of {ml:.4g} mL shared by {n_beads:.4g} beads "
               f"({pore:.3g}x their partition-weighted pore volume)")
-    note = (f"Full-solver mechanics of the reference bead ({sizes.mean_um:.4g} um dry, "
-            f"{settings.grid} grid, N = {settings.n}, interfacial length "
-            f"{settings.interfacial_length:.3g}; one dimensionless trajectory serves every "
-            f"size in its own tau ~ R^2) with the drug of {best.rho.size} size classes "
+    steps_gap = abs(t_num - t) / t
+    unc = truth_parts(req, sizes, bands, reps, (v0, f, steps_gap, t))
+    ells = ", ".join(f"{x.interfacial_length:.3g}" for x in bands.settings)
+    note = (f"Full-solver mechanics ({settings.grid} grid, N = {settings.n}) of "
+            f"{len(reps)} interfacial-length band(s) of the batch (beads of "
+            f"{', '.join(f'{r:.4g}' for r in reps)} um dry at ell = {ells}; each size in its "
+            f"own tau ~ R^2, the reference bead {sizes.mean_um:.4g} um dry) with the drug of "
+            f"{best.rho.size} size classes "
             f"({sizes.spec.describe()}) released into {medium}: the batch releases "
             f"{f:.0%} of its load at {t:.4g} tau_ref = {t * tau:.4g} s"
             + ("" if v0 is None else
                f"; the sum of perfect-sink beads says {t_sink:.4g} tau_ref and overstates "
                f"the released drug at that time by {over:.1%} (re-absorption from the shared "
-               "medium)") + ". The beads' own interfacial lengths differ from the reference "
-            "bead's (not run per size here; the fluid batch's validation measures it).")
+               "medium)") + ". " + " ".join(p["text"] for p in unc.values()))
     return DrugBatchAnswer(
         model="full+batch-medium", dose_fraction=f, time=t, seconds=t * tau, sink_time=t_sink,
         sink_overestimate=over, medium_volume_ml=ml, bead_count=n_beads,
         medium_over_pore_volume=pore, medium_concentration_ug_per_ul=conc,
         mass_balance_error=max(r.mass_balance_error for r in runs.values()),
-        numerical_error=abs(t_num - t) / t,
+        numerical_error=steps_gap,
         quadrature_error=0.0 if sizes.exact else abs(t_quad - t) / t,
         classes=int(best.rho.size), reference_dry_radius_um=sizes.mean_um,
         interfacial_length=float(settings.interfacial_length or 0.0),
-        description=sizes.spec.describe(), note=note)
+        description=sizes.spec.describe(), note=note, uncertainty=unc,
+        bands=[{"dry_radius_um": float(r), "interfacial_length": float(x.interfacial_length)}
+               for r, x in zip(reps, bands.settings, strict=True)])
+
+
+def _pore(req: Any, v0: float | None) -> float | None:
+    """The medium over the batch's partition-weighted pore volume."""
+    if v0 is None:
+        return None
+    k = float(req.solute.partition_at(1.0 - 1.0 / req.start_radius**3))
+    return v0 / (k * (req.start_radius**3 - 1.0))
+
+
+def _protocol_answer(req: Any, sizes: DrySizes,
+                     medium: tuple[float | None, float | None, float | None]
+                     ) -> DrugBatchAnswer:
+    """The batch's drug dose under ``req.heating`` (``dosing.batch_drug_protocol``)."""
+    from .batch_drug_protocol import protocol_batch_time, protocol_parts
+
+    ml, n_beads, v0 = medium
+    res = protocol_batch_time(req, sizes, v0)
+    t, best, f = res["time"], res["release"], req.fraction
+    if v0 is None:
+        t_sink, over = t, 0.0
+    else:
+        sink = protocol_batch_time(req, sizes, None)["release"]
+        t_sink = sink.time_to_release(f)
+        over = sink.released_at(t) / best.released_at(t) - 1.0
+    tau = timescale(sizes.mean_um, req.t_end, req.constants).seconds
+    conc = None
+    if v0 is not None and req.load_ug is not None:
+        ref_ul = 4.0 * math.pi / 3.0 * sizes.mean_um**3 / UM3_PER_UL
+        conc = float(np.interp(t, best.t, best.concentration)) * req.load_ug / ref_ul
+    unc = protocol_parts(res)
+    runs = res["runs"]
+    medium_text = ("a perfect sink" if v0 is None else
+                   f"one well-mixed medium of {ml:.4g} mL shared by {n_beads:.4g} beads")
+    note = (f"Under the protocol {'; '.join(res['texts'])}: each of {res['nodes']} size "
+            f"nodes ({', '.join(f'{r:.4g}' for r in res['radii'])} um dry) runs the full "
+            f"solver's mechanics of the protocol at its own size and interfacial length (its "
+            f"own program: tau ~ R^2), the drug of every node released into {medium_text}; "
+            f"the batch ({sizes.spec.describe()}) releases {f:.0%} of its load at "
+            f"{t * tau:.4g} s from the protocol's start. Quadrature: {res['quadrature']:.1e} "
+            f"({res['nodes']} against {res['check_nodes']} nodes). "
+            + " ".join(p["text"] for p in unc.values()))
+    return DrugBatchAnswer(
+        model="full+batch-medium under a protocol", dose_fraction=f, time=t, seconds=t * tau,
+        sink_time=t_sink, sink_overestimate=over, medium_volume_ml=ml, bead_count=n_beads,
+        medium_over_pore_volume=_pore(req, v0), medium_concentration_ug_per_ul=conc,
+        mass_balance_error=best.mass_balance_error, numerical_error=res["numerical"],
+        quadrature_error=res["quadrature"], classes=res["nodes"],
+        reference_dry_radius_um=sizes.mean_um,
+        interfacial_length=float(req.settings.interfacial_length or 0.0),
+        description=sizes.spec.describe(), note=note, uncertainty=unc,
+        bands=[{"dry_radius_um": float(r), "interfacial_length":
+                float(m.settings.interfacial_length)} for r, m in zip(res["radii"], runs,
+                                                                      strict=True)])
 
 
 def check_batch_body(body: Any) -> None:

@@ -96,13 +96,15 @@ def _volumes(s, s3, x, out):
 
 
 @njit(cache=True)
-def _march(grid, s, s3, dw, rd, par, rho, nu, v0, m, out_at, out_cls, out_p, out_c):
+def _march(grid, s_all, s3_all, ns, band, dw, rd, par, rho, nu, v0, m, out_at, out_cls, out_p,
+           out_c):
     """TR-BDF2 over ``grid`` for every class (state ``m``, classes x cells, updated) and
-    the medium (module doc); ``v0`` <= 0 a perfect sink.  Writes the classes' released
-    fractions, the medium's drug and concentration at the grid points flagged in
-    ``out_at`` (>= 0: the output's index).  Returns (steps, max |mass - 1|, status)."""
+    the medium (module doc); class k follows mechanics ``band[k]`` (its samples
+    ``s_all[b, :ns[b]]``, node volumes ``s3_all[b, :ns[b]]``); ``v0`` <= 0 a perfect sink.
+    Writes the classes' released fractions, the medium's drug and concentration at the grid
+    points flagged in ``out_at`` (>= 0: the output's index).  Returns (steps, max |mass - 1|,
+    status)."""
     kk, n = m.shape
-    last = s.size - 1
     sink = v0 <= 0.0
     lo = np.zeros((kk, n + 1))
     di = np.zeros((kk, n + 1))
@@ -125,7 +127,7 @@ def _march(grid, s, s3, dw, rd, par, rho, nu, v0, m, out_at, out_cls, out_p, out
     bv = np.zeros((kk, n))
     rhs = np.zeros(n)
     e = np.zeros(n)
-    a3_0 = s3[0, n]
+    a3_0 = s3_all[0, 0, n]  # every mechanics starts from the same loaded bead
     p = 0.0
     balance = 0.0
     steps = 0
@@ -144,6 +146,10 @@ def _march(grid, s, s3, dw, rd, par, rho, nu, v0, m, out_at, out_cls, out_p, out
             continue
         dh = D_COEF * h
         for k in range(kk):  # the step's geometry, node fluxes and conductances per class
+            b = band[k]
+            s = s_all[b, : ns[b]]
+            s3 = s3_all[b, : ns[b]]
+            last = ns[b] - 1
             sa, sb = ta / rho[k], tb / rho[k]
             _volumes(s, s3, sa, s3a[k])
             _volumes(s, s3, sb, s3b[k])
@@ -255,18 +261,26 @@ GRADING = 0.25  # near the start, steps <= GRADING / sub x t (the start's sqrt(t
 START_FLOOR = 1e-10  # the first step, a fraction of the grid's first interval
 
 
-def time_grid(s: np.ndarray, rho: np.ndarray, t_end: float, times: np.ndarray,
+def time_grid(s: Any, rho: np.ndarray, t_end: float, times: np.ndarray,
               sub: int, points: int | None = None) -> np.ndarray:
-    """The union of the classes' sample times rho_k s_j (or, given ``points``, that many
-    even intervals; 0: none) and the output times up to ``t_end``, each interval cut into ``sub``
-    equal steps, the start graded."""
-    pts = [times[times <= t_end], np.array([0.0, t_end])]
+    """The union of the classes' sample times rho_k s_j (``s``: one array, or one per class;
+    or, given ``points``, that many even intervals; 0: none) and the output times up to
+    ``t_end``, each interval cut into ``sub`` equal steps, the start graded."""
+    outs = np.unique(np.concatenate((times[times <= t_end], [0.0, t_end])))
+    per = s if isinstance(s, list) else [s] * len(rho)
+    pts = [np.zeros(0)]
     if points is None:
-        pts += [r * s[r * s < t_end] for r in rho]
+        pts += [r * sk[r * sk < t_end] for r, sk in zip(rho, per, strict=True)]
     elif points > 0:
         pts.append(np.linspace(0.0, t_end, points + 1))
-    base = np.unique(np.concatenate(pts))
-    base = base[np.concatenate(([True], np.diff(base) > 1e-14 * max(t_end, 1.0)))]
+    eps = 1e-14 * max(t_end, 1.0)
+    # a sample within eps of an output gives way to it (the outputs stay on the grid)
+    other = np.unique(np.concatenate(pts))
+    j = np.searchsorted(outs, other)
+    lo, hi = outs[np.maximum(j - 1, 0)], outs[np.minimum(j, outs.size - 1)]
+    near = np.minimum(np.abs(other - lo), np.abs(other - hi)) <= eps
+    base = np.unique(np.concatenate((outs, other[~near])))
+    base = base[np.concatenate(([True], np.diff(base) > eps)) | np.isin(base, outs)]
     frac = np.arange(sub) / sub
     fine = np.concatenate(((base[:-1, None] + np.diff(base)[:, None] * frac[None, :]).ravel(),
                            base[-1:]))
@@ -283,19 +297,21 @@ def time_grid(s: np.ndarray, rho: np.ndarray, t_end: float, times: np.ndarray,
 
 def coupled_release(s: Any, s3: Any, solute: Solute, rho: Any, nu: Any,
                     medium_volume: float | None, times: Any, sub: int = 2,
-                    points: int | None = None) -> MediumRelease:
+                    points: int | None = None, band: Any = None) -> MediumRelease:
     """The batch's release into one medium (module doc).
 
     ``s`` (samples) and ``s3`` (samples, n + 1: the node volumes r^3 of the dry cells,
-    ``solver.solute.node_volumes``) are the one dimensionless mechanics trajectory;
-    ``solute`` its drug (its own ``release_volume`` is not used); ``rho`` the classes' tau
-    over the reference tau, ``nu`` their shares of the load (normalised here);
-    ``medium_volume`` v0 in units of the batch's dry volume (None: a perfect sink);
-    ``times`` the outputs (units of tau_ref, from 0); ``sub`` steps per grid interval;
-    ``points``: even grid intervals (None: the classes' own sample times; 0: the outputs
-    alone)."""
-    s = np.asarray(s, dtype=float)
-    s3 = np.ascontiguousarray(s3, dtype=float)
+    ``solver.solute.node_volumes``) are the one dimensionless mechanics trajectory, or
+    lists of several (one per interfacial-length band, the same n and start) with ``band``
+    the index of each class's; ``solute`` its drug (its own ``release_volume`` is not used);
+    ``rho`` the classes' tau over the reference tau, ``nu`` their shares of the load
+    (normalised here); ``medium_volume`` v0 in units of the batch's dry volume (None: a
+    perfect sink); ``times`` the outputs (units of tau_ref, from 0); ``sub`` steps per grid
+    interval; ``points``: even grid intervals (None: the classes' own sample times; 0: the
+    outputs alone)."""
+    several = isinstance(s, (list, tuple))
+    ss = [np.asarray(x, dtype=float) for x in (s if several else [s])]
+    s3s = [np.ascontiguousarray(x, dtype=float) for x in (s3 if several else [s3])]
     rho = np.atleast_1d(np.asarray(rho, dtype=float))
     nu = np.atleast_1d(np.asarray(nu, dtype=float))
     times = np.asarray(times, dtype=float)
@@ -303,19 +319,33 @@ def coupled_release(s: Any, s3: Any, solute: Solute, rho: Any, nu: Any,
         raise ParameterError("size_distribution", rho.size, "classes with tau > 0 and "
                              "shares >= 0")
     nu = nu / nu.sum()
-    if s.size < 2 or s3.shape[0] != s.size or abs(s[0]) > 1e-14:
-        raise ParameterError("mechanics", s.size, "at least two samples from s = 0")
+    bands = np.zeros(rho.size, dtype=np.int64) if band is None else np.asarray(band,
+                                                                             dtype=np.int64)
+    if len(ss) != len(s3s) or bands.shape != rho.shape or bands.min() < 0 or \
+            bands.max() >= len(ss):
+        raise ParameterError("band", band, f"one index 0-{len(ss) - 1} per class")
+    for x, x3 in zip(ss, s3s, strict=True):
+        if x.size < 2 or x3.shape[0] != x.size or abs(x[0]) > 1e-14 or \
+                x3.shape[1] != s3s[0].shape[1]:
+            raise ParameterError("mechanics", x.size, "at least two samples from s = 0 (the "
+                                 "same cells in every band)")
     if times.size == 0 or times[0] < 0 or np.any(np.diff(times) < 0):
         raise ParameterError("times", times, "non-decreasing times >= 0")
     if isinstance(sub, bool) or not isinstance(sub, int) or not 1 <= sub <= 64:
         raise ParameterError("sub", sub, "an integer 1-64")
-    n = s3.shape[1] - 1
+    n = s3s[0].shape[1] - 1
     if medium_volume is not None and not medium_volume > 0.0:
         raise ParameterError("medium_volume", medium_volume, "None (a perfect sink) or > 0")
+    ns = np.array([x.size for x in ss], dtype=np.int64)
+    s_all = np.zeros((len(ss), int(ns.max())))
+    s3_all = np.zeros((len(ss), int(ns.max()), n + 1))
+    for b, (x, x3) in enumerate(zip(ss, s3s, strict=True)):
+        s_all[b, : x.size], s3_all[b, : x.size] = x, x3
+    s3 = s3s[0]
     dw = np.diff((np.arange(n + 1) / n) ** 3)
     par = solute.params()
     rd, m0 = _start(s3, dw, par)
-    grid = time_grid(s, rho, float(times[-1]), times, sub, points)
+    grid = time_grid([ss[b] for b in bands], rho, float(times[-1]), times, sub, points)
     at = np.searchsorted(grid, times)
     at = np.minimum(at, grid.size - 1)
     if not np.allclose(grid[at], times, rtol=1e-12, atol=1e-300):
@@ -328,8 +358,8 @@ def coupled_release(s: Any, s3: Any, solute: Solute, rho: Any, nu: Any,
     m = np.ascontiguousarray(np.tile(m0, (rho.size, 1)))
     sink = medium_volume is None
     v0 = -1.0 if sink else float(medium_volume)
-    steps, balance, status = _march(grid, s, s3, dw, rd, par, rho, nu, v0, m, out_at,
-                                    out_rel, out_p, out_c)
+    steps, balance, status = _march(grid, s_all, s3_all, ns, bands, dw, rd, par, rho, nu, v0,
+                                    m, out_at, out_rel, out_p, out_c)
     if status != 0:
         raise SolverError("batch medium: a cell without fluid or a non-finite state",
                           {"steps": int(steps)})

@@ -63,6 +63,20 @@ def band_edges(sizes: DrySizes, n_bands: int = BANDS) -> tuple[np.ndarray, np.nd
     return e[1:-1], np.sqrt(e[:-1] * e[1:])
 
 
+def size_settings(settings: SolverSettings, constants: Any, ref_um: float,
+                  radius_um: float) -> SolverSettings:
+    """The truth's settings for a bead of ``radius_um`` in a batch whose reference bead
+    (``ref_um``) runs at ``settings``: its own interfacial length ell = xi_dry / a_d (kept in
+    the direct runs' range) when the reference runs at its own, else ``settings`` (an ell
+    given by hand, a ladder, the paper's model)."""
+    if not settings.direct:
+        return settings
+    own = _clamp_length(constants.interfacial_lengths(ref_um)[0])
+    if not math.isclose(settings.interfacial_length, own, rel_tol=1e-9):
+        return settings
+    return settings.with_length(_clamp_length(constants.interfacial_lengths(radius_um)[0]))
+
+
 def band_request(req: DoseRequest, dry_radius_um: float) -> DoseRequest:
     """The single-bead request of a band: the batch's jump, dose and settings at a bead of
     ``dry_radius_um`` (its own ell = xi_dry / a_d)."""

@@ -503,7 +503,8 @@ def test_the_spec_documents_every_answer() -> None:
         assert content["image/svg+xml"]["schema"]["format"] == "binary", svg
     poll = paths["/v1/validations/{validation_id}"]["get"]["responses"]["200"]["content"][
         "application/json"]["schema"]
-    assert set(poll["discriminator"]["mapping"]) == {"dose", "schedule", "drug-dose"}
+    assert set(poll["discriminator"]["mapping"]) == {"dose", "schedule", "drug-dose",
+                                                     "batch-schedule"}
     report = spec["components"]["schemas"]["DoseValidationJob"]["properties"]["result"]
     assert {"$ref": "#/components/schemas/ValidationReport"} in report["anyOf"]
     fit = spec["components"]["schemas"]["FitJobResponse"]["properties"]["result"]

@@ -4,8 +4,10 @@ and a size_distribution.  Coarse mechanics (Lagrangian, n = 40, ell = 0) keep it
 
 from __future__ import annotations
 
+import functools
 import json
 
+import numpy as np
 import pytest
 from api_support import asgi
 
@@ -16,6 +18,7 @@ from dosing.drug import drug_settings
 from dosing.drug_dose import DrugDoseRequest
 from dosing.size_distribution import as_distribution
 from solver.errors import ParameterError
+from solver.gel import as_gel
 from solver.solute import Solute, release
 
 DRUG = {"diffusivity_cm2_s": 1e-6, "hindrance": "none"}
@@ -131,3 +134,140 @@ def test_http_job_answers_the_python_batch(tmp_path) -> None:
     ref = drug_batch_dose(DrugDoseRequest("ANB", 302, 308, DRUG, dose_fraction=0.5),
                           TABLE, 20.0, 1e6)
     assert out["batch"]["time"] == ref.time and out["batch"]["medium_volume_ml"] == 20.0
+
+
+# --------------------------------------------- each band at its own ell, the three parts
+@functools.lru_cache(maxsize=16)
+def _coarse(temp: float, n: int):
+    from dosing.drug import simulate_protocol
+    from dosing.scenario import SolverSettings
+
+    return simulate_protocol(as_gel("ANB"), 302.0, [(0.5, temp)], "swollen",
+                             SolverSettings(grid="lagrangian", n=n, interfacial_length=0.0))
+
+
+def _stand_in(settings) -> tuple[float, int]:
+    """A coarse real run standing in for the truth at ``settings``: its jump 1e4 x ell K
+    deeper (so every band, ell and the delayed lattice has its own, known mechanics), on
+    n / 10 cells (the check n / 2 on half as many)."""
+    return 308.0 + 1e4 * settings.interfacial_length, max(settings.n // 10, 20)
+
+
+@pytest.fixture
+def coarse_mechanics(monkeypatch):
+    import dosing.batch_drug as bd
+
+    calls = []
+
+    def mech(gel, t_start, t_end, branch, settings):
+        calls.append(settings)
+        return _coarse(*_stand_in(settings))
+
+    monkeypatch.setattr(bd, "mechanics", mech)
+    return calls
+
+
+@pytest.mark.parametrize("medium", [None, 2.0])
+def test_each_band_runs_at_its_own_ell_and_the_three_parts(coarse_mechanics, medium) -> None:
+    """The direct truth (the default settings): the batch's bands each at the ell of their
+    bead (xi_dry / a_d), every class on its band's mechanics (the answer recomputed here
+    from the runs by hand), and each part of the uncertainty the batch's change when every
+    class follows one of the central band's other runs (n / 2 cells; xi 2 and 8 nm; the
+    delayed lattice)."""
+    from dosing.batch_drug import CLASSES, POINTS, START, batch_classes
+    from dosing.batch_medium import coupled_release
+    from dosing.batch_truth import band_edges
+    from solver.solute import node_volumes
+
+    req = DrugDoseRequest("ANB", 302, 308, DRUG, dose_fraction=0.5, dry_radius_um=50.0)
+    assert req.settings.direct
+    count = None if medium is None else 1e5
+    ans = drug_batch_dose(req, {"cv": 0.3}, medium, count)
+    sizes = as_distribution({"cv": 0.3, "mean_um": 50.0}).resolve(req.start_radius)
+    edges, reps = band_edges(sizes)
+    ells = [b["interfacial_length"] for b in ans.bands]
+    assert ells == pytest.approx([4e-3 / r for r in reps], rel=1e-12) and len(set(ells)) == 3
+    v0 = None if medium is None else medium * 1e3 / batch_dry_volume_ul(sizes, 1e5)
+    rho, nu = batch_classes(sizes, CLASSES[0])
+    t_max = 0.5 * float(batch_classes(sizes, CLASSES[-1])[0].max())
+    times = np.concatenate(([0.0], np.geomspace(t_max * START, t_max, POINTS)))
+
+    def batch_time(runs, band) -> float:
+        s = [np.asarray(r.t, dtype=float) for r in runs]
+        mr = coupled_release(s, [node_volumes(r) for r in runs], req.solute, rho, nu, v0,
+                             times, sub=2, points=0, band=band)
+        return mr.time_to_release(0.5)
+
+    band = np.searchsorted(edges, sizes.mean_um * np.sqrt(rho))
+    mine = [_coarse(308.0 + 1e4 * e, 40) for e in ells]
+    assert ans.time == batch_time(mine, band)
+    one = np.zeros_like(band)
+    t0 = batch_time([mine[1]], one)
+    assert abs(ans.time / t0 - 1.0) > 1e-3  # the bands' own ells matter here
+    u = ans.uncertainty
+    check = batch_time([_coarse(308.0 + 1e4 * ells[1], 20)], one)
+    assert u["numerical"]["relative"] == pytest.approx(
+        abs(check / t0 - 1.0) + ans.numerical_error, rel=1e-9)
+    ell_runs = [batch_time([_coarse(308.0 + 1e4 * ells[1] * x, 40)], one) for x in (0.5, 2.0)]
+    assert u["interfacial_length_range"]["relative"] == pytest.approx(
+        max(abs(t / t0 - 1.0) for t in ell_runs), rel=1e-9)
+    assert u["model_form"]["relative"] == pytest.approx(
+        abs(batch_time([_coarse(308.0, 40)], one) / t0 - 1.0), rel=1e-9)
+    assert all(p["relative"] > 0.0 for p in u.values())
+    assert "interfacial length" in ans.note and "model form" in ans.note
+
+
+# ----------------------------------------------------------------- under a heating protocol
+RAMP = ["Heat to 308 K at 5 K/min"]
+
+
+def _protocol_req(**kw) -> DrugDoseRequest:
+    return DrugDoseRequest("ANB", 302, None, DRUG, dose_fraction=0.5, dry_radius_um=50.0,
+                           settings=SETTINGS, protocol=RAMP, **kw)
+
+
+def test_under_a_protocol_cv_zero_is_the_single_beads_drug_dose(tmp_path) -> None:
+    """One size: the coupled solve on the protocol's mechanics against the single bead's
+    drug dose under the protocol (the adaptive solute solver on the same mechanics):
+    measured 5.8e-5 apart, the coupled solve's numerical error (steps halved) 9e-6."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from dosing import Planner
+    from dosing.drug_dose import plan_drug_dose
+
+    req = _protocol_req()
+    with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1)) as p:
+        one = plan_drug_dose(p, req)
+    ans = drug_batch_dose(req, {"cv": 0.0})
+    assert ans.time == pytest.approx(one.time, rel=5e-4)
+    assert ans.classes == 1 and ans.quadrature_error == 0.0 and ans.numerical_error < 1e-4
+    assert "under the protocol" in ans.note.lower() or "Under the protocol" in ans.note
+
+
+def test_under_a_protocol_each_size_runs_its_own_program() -> None:
+    """CV 0.2 into a sink: the batch's time T solves sum_k v_k F_k(T / rho_k) = f with F_k
+    each node's own release on its own run of the protocol (the adaptive solute solver),
+    every node a different dimensionless program; later than its mean bead; a shared medium
+    conserves the drug and the sink sum overstates it."""
+    from dosing.batch_drug_protocol import protocol_batch_time
+    from dosing.batch_schedule import rule
+    from solver.solute import release
+
+    req = _protocol_req()
+    sizes = as_distribution({"cv": 0.2, "mean_um": 50.0}).resolve(req.start_radius)
+    res = protocol_batch_time(req, sizes, None)
+    r, v, _ = rule(sizes, res["nodes"])
+    assert np.array_equal(r, res["radii"]) and res["nodes"] == 3
+    taus = [m.tau_s for m in res["runs"]]
+    assert taus == pytest.approx([taus[1] * (x / r[1]) ** 2 for x in r], rel=1e-12)
+    t = res["time"]
+    got = sum(w * release(m.result, req.solute).released_at(t / (x / sizes.mean_um) ** 2)
+              for w, x, m in zip(v, r, res["runs"], strict=True))
+    assert got == pytest.approx(0.5, rel=1e-3)
+    single = drug_batch_dose(req, {"cv": 0.0}).time
+    ans = drug_batch_dose(req, {"cv": 0.2})
+    assert ans.time == t and ans.time > 1.1 * single
+    assert ans.quadrature_error < 1e-3 and ans.uncertainty["numerical"]["relative"] < 1e-3
+    shared = drug_batch_dose(req, {"cv": 0.2}, 1.0, 1e5)
+    assert shared.mass_balance_error < 1e-10 and shared.sink_overestimate > 0.0
+    assert shared.time > ans.time and shared.sink_time == ans.time

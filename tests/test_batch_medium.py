@@ -99,3 +99,39 @@ def test_bad_input_names_the_field(shrink) -> None:
     with pytest.raises(ParameterError) as exc:
         bead_count(0)
     assert exc.value.field == "bead_count"
+
+
+@pytest.fixture(scope="module")
+def shrink_hot():
+    """The same bead jumping to 310 K (a faster, deeper shrinking: another mechanics on the
+    same cells, standing in for another interfacial-length band)."""
+    res = simulate("ANB", 302, 310, until=0.3, grid="lagrangian", n=40, rtol=1e-6,
+                   every=0.0013)
+    return res, node_volumes(res)
+
+
+def test_bands_each_class_follows_its_own_mechanics(shrink, shrink_hot) -> None:
+    """Classes on two mechanics (``band``): into a perfect sink the classes are independent,
+    so the batch is the share-weighted sum of each class run alone on its own mechanics
+    (to round-off: the same steps, as the grid is the union of every class's samples);
+    into a shared medium, every class on band 0 is the one-mechanics batch exactly."""
+    (a, s3a), (b, s3b) = shrink, shrink_hot
+    sol = Solute(diffusivity=10.0, hindrance=Hindrance("none"))
+    rho, nu = np.array([0.6, 1.0, 1.7]), np.array([0.2, 0.5, 0.3])
+    times = np.linspace(0.0, 0.15, 76)
+    both = coupled_release([a.t, b.t], [s3a, s3b], sol, rho, nu, None, times, band=[0, 1, 0])
+    alone = [coupled_release(x.t, x3, sol, [r], [1.0], None, times, sub=2)
+             for (x, x3), r in zip([shrink, shrink_hot, shrink], rho, strict=True)]
+    want = sum(w * one.released for w, one in zip(nu, alone, strict=True))
+    assert both.released == pytest.approx(want, abs=2e-5)  # different step grids: 2nd order
+    assert np.max(np.abs(both.released - want)) > 0.0
+    v0 = 2.0 * (float(a.radius[0]) ** 3 - 1.0)
+    one = coupled_release(a.t, s3a, sol, rho, nu, v0, times)
+    same = coupled_release([a.t, b.t], [s3a, s3b], sol, rho, nu, v0, times, band=[0, 0, 0])
+    assert np.array_equal(same.released, one.released)
+    mixed = coupled_release([a.t, b.t], [s3a, s3b], sol, rho, nu, v0, times, band=[0, 1, 0])
+    assert mixed.mass_balance_error < 1e-10
+    assert not np.allclose(mixed.released, one.released, rtol=1e-3)  # band 1 matters
+    with pytest.raises(ParameterError) as exc:
+        coupled_release([a.t, b.t], [s3a, s3b], sol, rho, nu, v0, times, band=[0, 2, 0])
+    assert exc.value.field == "band"

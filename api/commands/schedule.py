@@ -16,7 +16,13 @@ from .common import (
     table_row,
     wrap,
 )
-from .dose import add_planning_options, planning_kwargs, planning_values
+from .dose import (
+    add_batch_options,
+    add_planning_options,
+    batch_distribution,
+    planning_kwargs,
+    planning_values,
+)
 from .drug_cli import add_wait_options, run_drug_schedule
 from .drug_options import add_drug_options, drug_from_args
 
@@ -44,6 +50,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with a drug: cumulative drug through the corrected protocol")
     add_drug_options(p)
     add_wait_options(p)
+    add_batch_options(p)
     p.set_defaults(func=run)
 
 
@@ -72,6 +79,21 @@ def run(args: argparse.Namespace) -> int:
                                 "tolerance": args.tolerance}, partial=args.doses is None)
     checked_cache(args.cache)
     drug = drug_from_args(args, always=args.doses_ug is not None)
+    for flag, value in (("--medium-volume-ml", args.medium_volume_ml),
+                        ("--bead-count", args.bead_count)):
+        if value is not None:
+            raise ParameterError(flag, value, "absent with a schedule (a shared medium is a "
+                                 "drug batch's dose: thermogel dose)")
+    dist = batch_distribution(args)
+    if dist is not None:  # a batch (issue 26; api/commands/batch_cli.py)
+        if drug is not None:
+            raise ParameterError("--size-cv" if args.size_cv is not None else "--sizes",
+                                 args.size_cv if args.size_cv is not None else args.sizes,
+                                 "absent with a drug (a drug batch's schedule is not built "
+                                 "yet)")
+        from .batch_cli import run_batch_schedule
+
+        return run_batch_schedule(args, schedule_kwargs(args), dist)
     if drug is None and args.plot:
         raise ParameterError("plot", args.plot, "used with a drug option (e.g. "
                              "--drug-diffusivity-cm2-s)")
