@@ -354,10 +354,6 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest,
     one planner call (:meth:`dosing.Planner.answer`).  A dose with a drug is answered at
     once when its runs are cached (:func:`dosing.drug_dose.drug_dose_now`), else (given
     ``state``) as a stored 'drug-dose' job, so that no HTTP worker thread waits on a run."""
-    if body.size_distribution is not None and body.drug is not None and (
-            body.protocol is not None):
-        raise ParameterError("size_distribution", "a batch", "null with a drug under a "
-                             "protocol (a batch's drug dose under a protocol is not built yet)")
     from dosing.batch_drug import check_batch_body
 
     check_batch_body(body)

@@ -271,3 +271,42 @@ def test_under_a_protocol_each_size_runs_its_own_program() -> None:
     shared = drug_batch_dose(req, {"cv": 0.2}, 1.0, 1e5)
     assert shared.mass_balance_error < 1e-10 and shared.sink_overestimate > 0.0
     assert shared.time > ans.time and shared.sink_time == ans.time
+
+
+def test_a_drug_batch_under_a_protocol_is_the_same_answer_by_every_way_in(
+        tmp_path, capsys, monkeypatch) -> None:
+    """`thermogel dose --protocol ... --size-cv ... --drug-...` gives the Python answer of
+    drug_batch_dose; the HTTP body (its stored 'drug-dose' job, run here blocking) reaches the
+    same function with the same protocol, drug and sizes (HTTP runs at the truth's settings,
+    too costly here: the call is recorded instead)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    import dosing.batch_drug as batch_drug
+    from api.schemas import DoseTimeRequest
+    from api.service import dose_time
+    from dosing import Planner
+
+    ans = drug_batch_dose(_protocol_req(), {"cv": 0.2})
+    argv = ["dose", "--gel", "ANB", "--t-start", "302", "--protocol", RAMP[0], "--fraction",
+            "0.5", "--dry-radius-um", "50", "--size-cv", "0.2", "--drug-diffusivity-cm2-s",
+            "1e-6", "--hindrance", "none", "--grid", "lagrangian", "--n", "40",
+            "--interfacial-length", "0", "--json"]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["time"] == ans.time and out["model"] == ans.model
+    calls = []
+    monkeypatch.setattr(batch_drug, "drug_batch_dose",
+                        lambda req, dist, *rest: calls.append((req, dist)) or ans)
+    body = {"gel": "ANB", "t_start": 302, "protocol": RAMP, "dose_fraction": 0.5,
+            "dry_radius_um": 50, "drug": DRUG, "size_distribution": {"cv": 0.2}}
+    planner = Planner(cache_path=str(tmp_path / "c.sqlite"), executor=ThreadPoolExecutor(1))
+    try:
+        got = dose_time(planner, DoseTimeRequest(**body))
+    finally:
+        planner.close()
+        planner.jobs.executor.shutdown(wait=True)
+    assert got["batch"]["time"] == ans.time
+    (req, dist), = calls
+    ref = _protocol_req()
+    assert req.heating == ref.heating and req.solute == ref.solute
+    assert dist["cv"] == 0.2 and req.dose_fraction == 0.5

@@ -218,12 +218,10 @@ def run(args: argparse.Namespace) -> int:
                                  "(the medium a drug batch shares)")
     if drug is not None:
         if args.size_cv is not None or args.sizes is not None:  # a batch (issue 26)
-            if steps is not None:
-                raise ParameterError("protocol", steps, "absent with a drug batch (a batch's "
-                                     "drug dose under a protocol is not built yet)")
             from .batch_cli import run_drug_batch
 
-            return run_drug_batch(args, drug, planning_kwargs(args), batch_distribution(args))
+            return run_drug_batch(args, drug, {**planning_kwargs(args), "protocol": steps},
+                                  batch_distribution(args))
         return show_dose(args, *drug_dose(args, drug, {**planning_kwargs(args),
                                                       "protocol": steps}))
     dist = batch_distribution(args)
