@@ -23,6 +23,7 @@ import threading
 import time
 from collections import OrderedDict
 from concurrent.futures import Executor, Future, ThreadPoolExecutor, wait
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from solver.errors import SolverError
@@ -37,6 +38,7 @@ from .model_choice import (
     model_answer,
 )
 from .request import DoseRequest, ScheduleRequest
+from .restart import STATES, Start, restartable
 from .scenario import Scenario, Solver, SolverSettings, Trajectory, run_scenario
 from .truth import delayed_settings, is_model_form_run, range_settings
 from .validation import error_estimate, failure, validation_report
@@ -114,6 +116,10 @@ class Planner:
         self.horizon = float(horizon)
         self._mem: OrderedDict[str, Trajectory] = OrderedDict()
         self._mem_lock = threading.Lock()
+        # protocol prefixes with a stored state at their end: prefix key -> (the stored
+        # run's scenario, steps) (module ``restart``; kept for this planner's life)
+        self._starts: OrderedDict[str, tuple[Scenario, int]] = OrderedDict()
+        self.restarts = 0  # protocol runs started from a stored prefix's state
 
     @property
     def solver(self) -> Solver:
@@ -198,7 +204,10 @@ class Planner:
         elif is_model_form_run(sc.settings):  # its dose comes 1.5-9x after the truth's
             first = min(first, max(MOVING_HORIZON, MODEL_FORM_REACH * need_time))
         horizon = first if meta is None else 4.0 * float(meta.get("horizon", 0.0))
-        return Job(sc.key(), functools.partial(run_scenario, solver=self.solver),
+        start = self._start(sc) if restartable(self.solver) else None
+        if start is not None:
+            self.restarts += 1
+        return Job(sc.key(), functools.partial(run_scenario, solver=self.solver, start=start),
                    (sc.to_dict(), max(horizon, first), need_radius, need_time),
                    on_done=self._store,
                    fetch=functools.partial(self._fetch, sc, need_radius, need_time))
@@ -214,12 +223,43 @@ class Planner:
         for _ in range(6):
             traj = self.cached(sc, need_radius, need_time)
             if traj is not None:
-                return traj
+                return self._keep_states(sc, traj)
             meta, blob = self.submit(sc, need_radius, need_time).result()
             traj = Trajectory.from_npz(blob, meta)
             if _covers(traj, sc, need_radius, need_time):
-                return traj
+                return self._keep_states(sc, traj)
         raise SolverError("the full-solver run does not cover the dose", {"key": sc.key()})
+
+    def _keep_states(self, sc: Scenario, traj: Trajectory) -> Trajectory:
+        """Remember where a protocol run kept its state after each step (module
+        ``restart``), so that a later protocol sharing those steps starts there."""
+        states = traj.meta.get(STATES) if sc.protocol is not None else None
+        if states:
+            with self._mem_lock:
+                for st in states:
+                    j = int(st["steps"])
+                    key = _prefix(sc, j).key()
+                    self._starts[key] = (sc, j)
+                    self._starts.move_to_end(key)
+                while len(self._starts) > 4096:
+                    self._starts.popitem(last=False)
+        return traj
+
+    def _start(self, sc: Scenario) -> Start | None:
+        """Where ``sc``'s protocol run starts: the state after its longest prefix that a
+        stored run of this planner's kept (None: from t = 0)."""
+        if sc.protocol is None or len(sc.protocol) < 2 or not self._starts:
+            return None
+        for j in range(len(sc.protocol) - 1, 0, -1):
+            with self._mem_lock:
+                hit = self._starts.get(_prefix(sc, j).key())
+            if hit is None:
+                continue
+            stored = self.cached(hit[0])
+            start = None if stored is None else Start.of(stored, hit[1])
+            if start is not None:
+                return start
+        return None
 
     def _trajectories(self, scs: list[Scenario], need_radius: float,
                       need_time: float) -> list[Trajectory | BaseException]:
@@ -410,6 +450,13 @@ class Planner:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _prefix(sc: Scenario, steps: int) -> Scenario:
+    """The run of ``sc``'s first ``steps`` protocol steps (to their end: no stop)."""
+    if steps == len(sc.protocol) and sc.stop_expelled is None:
+        return sc
+    return replace(sc, protocol=sc.protocol[:steps], stop_expelled=None)
 
 
 def _covers(traj: Trajectory, sc: Scenario, need_radius: float | None, need_time: float) -> bool:
