@@ -417,9 +417,15 @@ def step_outputs(duration: float, k: int) -> np.ndarray:
 
 def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
                       settings: SolverSettings, budget: float = RUN_BUDGET_S) -> Any:
-    """The mechanics of a protocol, one ``simulate`` per step (each continues from the last
-    state, so every protocol boundary is an output), sampled densely; one FullResult."""
+    """The mechanics of a protocol, one ``simulate`` per step (each continues from the
+    exact state where the last ended, its moving nodes included: ``dosing.restart``, so
+    every protocol boundary is an output), sampled densely; one FullResult.  ``budget``
+    (wall seconds) is checked between steps (a wall-clock budget inside a step would stop
+    its integration 200 times, and a short step's mesh checks with it)."""
+    from solver.errors import BudgetExceeded
     from solver.full import FullResult, simulate
+
+    from .restart import restart_options, state_of
 
     s = drug_settings(settings)
     started = time.perf_counter()
@@ -430,11 +436,14 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
         if duration <= 0.0:
             continue
         k = max(MIN_SAMPLES, int(math.ceil(duration * SAMPLES_PER_TAU)))
-        left = budget - (time.perf_counter() - started)
+        spent = time.perf_counter() - started
+        if spent > budget:
+            raise BudgetExceeded(f"the drug run's mechanics used its {budget:.0f} s budget "
+                                 f"at t = {t0:.4g}", {"wall_seconds": spent})
+        kw = {"branch": branch} if prev is None else restart_options(state_of(prev, 0, t0))
         res = simulate(gel, t_start, protocol=[(duration, temp)], grid=s.grid, n=s.n,
                        integrator=s.integrator, rtol=s.rtol, saveat=step_outputs(duration, k),
-                       branch=branch if prev is None else None, initial=prev,
-                       interfacial_length=s.interfacial_length, max_seconds=max(left, 1.0))
+                       interfacial_length=s.interfacial_length, **kw)
         parts.append((t0, res))
         prev = res
         t0 += duration

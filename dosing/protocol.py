@@ -28,6 +28,7 @@ STOP_MARGIN = 1e-6  # a read-off heating stops this much (relative) past its dos
 MAX_EXTENSIONS = 6  # longer heatings tried when reading a dose off (x GROWTH each)
 GROWTH = 4.0
 MAX_SECANT = 10  # secant steps per heating
+READ_OFF_FLOOR = 0.05  # tau: a read-off heating lasts at least its guess plus this
 
 
 def heat_cool_protocol(durations: Sequence[float], rests: Sequence[float], t_start: float,
@@ -150,14 +151,15 @@ class ReadOff:
     trial: list[float]
 
 
-def read_off(h: Heatings, durations: Sequence[float], k: int, guess: float) -> ReadOff | Short:
+def read_off(h: Heatings, durations: Sequence[float], k: int, guess: float,
+             floor: float = READ_OFF_FLOOR) -> ReadOff | Short:
     """Heating k's duration delivering dose k, read off a longer heating after the earlier
-    ``durations``: the one horizon search (from twice ``guess``,
+    ``durations``: the one horizon search (from twice ``guess``, at least ``guess + floor``,
     x GROWTH up to MAX_EXTENSIONS times and the runs' cap; a slowly releasing heating whose
     late rate kept to the cap falls short is given up early).  Heatings that can end a run
     where heating k delivers dose k (``run_until(durations, k)``, a terminal event) run so:
     nothing past the dose is computed."""
-    horizon = min(max(2.0 * guess, guess + 0.05), h.max_horizon)
+    horizon = min(max(2.0 * guess, guess + floor), h.max_horizon)
     until = getattr(h, "run_until", None)  # a run that may stop at dose k (terminal event)
     for _ in range(MAX_EXTENSIONS):
         trial = [*durations, horizon]

@@ -148,3 +148,31 @@ def test_a_restarted_schedule_equals_the_one_shot_schedule(tmp_path) -> None:
         old.corrected["actuation_times"], rel=BOUND)
     assert new.protocol_check["delivered_fractions"] == pytest.approx(
         old.protocol_check["delivered_fractions"], rel=BOUND)
+
+
+def test_a_drug_dose_run_stops_soon_after_its_dose(tmp_path, monkeypatch) -> None:
+    # the full solver's drug run is read off a heating of twice the reduced drug model's
+    # time (it ran to FIRST_HEATING = 0.5 tau, 66x this dose): the same dose within the
+    # answer's numerical bound (the drug run on n / 2 cells)
+    from dosing import drug_dose
+    from dosing.drug import DrugModel
+    from dosing.drug_dose import DrugDoseRequest, DrugHeatings, first_heating, plan_drug_dose
+
+    req = DrugDoseRequest("ANB", 302, 308, DrugModel(diffusivity_cm2_s=1e-7, hindrance="none"),
+                          dose_fraction=0.5, dry_radius_um=50,
+                          settings=SolverSettings(interfacial_length=0.01, n=100))
+    guess, floor = first_heating(req)
+    assert floor == 0.0
+    with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1)) as planner:
+        ans = plan_drug_dose(planner, req, validate=True)
+        heat = DrugHeatings(req, None, [0.5])  # type: ignore[arg-type]
+        assert ans.scenario_key == heat.scenario([2.0 * guess]).key()
+        assert 2.0 * guess < 4.0 * ans.time
+    monkeypatch.setattr(drug_dose, "first_heating",
+                        lambda r: (drug_dose.FIRST_HEATING / 2.0, drug_dose.READ_OFF_FLOOR))
+    with Planner(cache_path=tmp_path / "d.sqlite", executor=ThreadPoolExecutor(1)) as planner:
+        long = plan_drug_dose(planner, req, validate=True)
+        assert long.scenario_key == heat.scenario([drug_dose.FIRST_HEATING]).key()
+    bound = ans.uncertainty.numerical.relative
+    assert 0.0 < bound < 0.05
+    assert ans.time == pytest.approx(long.time, rel=bound)
