@@ -180,11 +180,12 @@ class DrugHeatings:
                          end - rel.released_at(start + durations[k] / 2.0))
 
 
-def first_heating(req: DrugDoseRequest) -> tuple[float, float]:
-    """(guess, floor) of a drug dose's read-off heating (:func:`dosing.protocol.read_off`
-    runs to twice the guess, at least guess + floor): the reduced drug model's time to the
-    dose (the drug on the front model's bead, milliseconds; a guess wherever it runs, its
-    measured error aside), so the full solver's drug run stops soon after the dose instead
+def first_heating(req: DrugCase, fraction: float | None = None) -> tuple[float, float]:
+    """(guess, floor) of the read-off heating of a drug dose, ``fraction`` of the load
+    (default the request's; :func:`dosing.protocol.read_off` runs to twice the guess, at
+    least guess + floor): the reduced drug model's time to the dose (the drug on the
+    front model's bead, milliseconds; a guess wherever it runs, its measured error
+    aside), so the full solver's drug run stops soon after the dose instead
     of running to FIRST_HEATING (24x past an ANB 50 % dose of a 1e-7 cm^2/s drug); else
     (a wait first, no front regime, not reached) FIRST_HEATING."""
     if req.lead == 0.0:
@@ -195,7 +196,7 @@ def first_heating(req: DrugDoseRequest) -> tuple[float, float]:
 
         try:
             if choose_model(req.gel, req.t_start, req.t_end, req.branch)[0] == "front":
-                return float(reduced_release(req)[1]), 0.0
+                return float(reduced_release(req, fraction)[1]), 0.0
         except (ValueError, SolverError):
             pass
     return FIRST_HEATING / 2.0, READ_OFF_FLOOR

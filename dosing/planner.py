@@ -247,16 +247,16 @@ class Planner:
 
     def _start(self, sc: Scenario) -> Start | None:
         """Where ``sc``'s protocol run starts: the state after its longest prefix that a
-        stored run of this planner's kept (None: from t = 0)."""
-        if sc.protocol is None or len(sc.protocol) < 2 or not self._starts:
+        run this planner has seen kept, or a stored run of that prefix itself (the run
+        store keeps each run's states: another process's runs serve too); None: t = 0."""
+        if sc.protocol is None or len(sc.protocol) < 2:
             return None
         for j in range(len(sc.protocol) - 1, 0, -1):
+            pre = _prefix(sc, j)
             with self._mem_lock:
-                hit = self._starts.get(_prefix(sc, j).key())
-            if hit is None:
-                continue
-            stored = self.cached(hit[0])
-            start = None if stored is None else Start.of(stored, hit[1])
+                hit = self._starts.get(pre.key())
+            stored = self.cached(pre if hit is None else hit[0])
+            start = None if stored is None else Start.of(stored, j if hit is None else hit[1])
             if start is not None:
                 return start
         return None

@@ -176,3 +176,46 @@ def test_a_drug_dose_run_stops_soon_after_its_dose(tmp_path, monkeypatch) -> Non
     bound = ans.uncertainty.numerical.relative
     assert 0.0 < bound < 0.05
     assert ans.time == pytest.approx(long.time, rel=bound)
+
+
+def test_a_drug_run_continues_the_kept_mechanics_of_its_prefix(tmp_path) -> None:
+    # each protocol step of a drug run is its own simulate from the last one's exact state,
+    # so continuing a kept prefix is the same arithmetic as running it again: bit for bit
+    from dosing.drug import DrugModel, DrugRuns
+    from dosing.drug_dose import DrugHeatings
+    from dosing.drug_schedule import DrugScheduleRequest
+
+    req = DrugScheduleRequest("ANB", 302, 308, DrugModel(diffusivity_cm2_s=1e-8, load_ug=1.0,
+                                                         hindrance="none"),
+                              doses=[0.2, 0.2], rests=[0.05], dry_radius_um=50,
+                              settings=SolverSettings(interfacial_length=0.01, n=100))
+    with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1)) as planner:
+        runs = DrugRuns(planner)
+        heat = DrugHeatings(req, runs, req.fractions)
+        runs.run(heat.scenario([0.01, 0.02]))
+        assert runs.restarts == 0
+        kept = runs.run(heat.scenario([0.01, 0.03]))
+        assert runs.restarts == 1 and kept.diagnostics["mechanics_from_step"] == 2
+        runs.close()
+    with Planner(cache_path=tmp_path / "d.sqlite", executor=ThreadPoolExecutor(1)) as planner:
+        runs = DrugRuns(planner)
+        fresh = runs.run(DrugHeatings(req, runs, req.fractions).scenario([0.01, 0.03]))
+        assert fresh.diagnostics["mechanics_from_step"] == 0
+        runs.close()
+    assert np.array_equal(kept.t, fresh.t)
+    assert np.array_equal(kept.released_fraction, fresh.released_fraction)
+    assert np.array_equal(kept.radius, fresh.radius)
+
+
+def test_another_processs_stored_prefix_serves_too(tmp_path) -> None:
+    # the run store keeps each protocol run's states: a planner that never saw the prefix
+    # run (another process, sharing the cache file) starts from it
+    with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1),
+                 solver=Counting()) as first:
+        first.trajectory(Scenario(preset("ANB"), 302.0, protocol=PROTOCOL[:2],
+                                  settings=MOVING))
+    spy = Counting()
+    with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1),
+                 solver=spy) as second:
+        second.trajectory(Scenario(preset("ANB"), 302.0, protocol=PROTOCOL, settings=MOVING))
+        assert spy.calls == [(PROTOCOL[2:], True)] and second.restarts == 1
