@@ -50,10 +50,15 @@ class Start:
 
 def restartable(solver: Any) -> bool:
     """True for solvers that continue from a given state exactly (``solver.full.simulate``,
-    or a stand-in saying so with ``restartable = True``)."""
+    or a stand-in saying so with ``restartable = True``; others are not asked to, and
+    asking loads no kernels)."""
+    if getattr(solver, "restartable", False):
+        return True
+    if getattr(solver, "__module__", None) != "solver.full.run":
+        return False
     from solver.full import simulate
 
-    return solver is simulate or bool(getattr(solver, "restartable", False))
+    return solver is simulate
 
 
 def boundaries(steps: tuple[tuple[float, float], ...]) -> list[float]:
