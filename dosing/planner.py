@@ -38,7 +38,7 @@ from .model_choice import (
     model_answer,
 )
 from .request import DoseRequest, ScheduleRequest
-from .restart import STATES, Start, restartable
+from .restart import STATES, Start, restartable, stopped_as_run
 from .scenario import Scenario, Solver, SolverSettings, Trajectory, run_scenario
 from .truth import delayed_settings, is_model_form_run, range_settings
 from .validation import error_estimate, failure, validation_report
@@ -234,9 +234,19 @@ class Planner:
         """Remember where a protocol run kept its state after each step (module
         ``restart``), so that a later protocol sharing those steps starts there."""
         states = traj.meta.get(STATES) if sc.protocol is not None else None
+        alias = stopped_as_run(sc, traj) if states else None
+        if alias is not None:  # a read-off heating's run is also the run to its dose
+            self._keep_states(*alias)
+            key = alias[0].key()
+            self.cache.put_if_longer(key, alias[1].meta, alias[1].to_npz())
+            with self._mem_lock:
+                self._mem[key] = alias[1]
+                self._mem.move_to_end(key)
         if states:
             with self._mem_lock:
                 for st in states:
+                    if st.get("stopped"):
+                        continue
                     j = int(st["steps"])
                     key = _prefix(sc, j).key()
                     self._starts[key] = (sc, j)

@@ -244,8 +244,12 @@ class FluidHeatings:
         return delivery(result, durations, self.req.rests, self.req.start_radius).delivered
 
     def reach(self, result: Trajectory, durations: Sequence[float], k: int) -> Reach:
-        """Where heating k delivers dose k (the radius it must fall to)."""
+        """Where heating k delivers dose k (the radius it must fall to); a run that
+        stopped at the dose (:meth:`run_until`) delivers it where it stopped (the dose and
+        STOP_MARGIN: that run is then also the run of the heating ending there)."""
         start = windows(durations, self.req.rests)[k][0]
+        if result.status == "stopped" and result.terminal_time is not None:
+            return Reach(result.terminal_time - start)
         target = _window_target(self.req, result.radius_at(start), self.req.doses[k], k)
         try:
             return Reach(result.time_to_radius(target, after=start) - start)

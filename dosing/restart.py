@@ -40,7 +40,7 @@ class Start:
     @classmethod
     def of(cls, stored: FullResult, steps: int) -> Start | None:
         """The start after ``steps`` steps of a stored run (None if it kept no state)."""
-        states = list(stored.meta.get(STATES) or [])[:steps]
+        states = [st for st in stored.meta.get(STATES) or [] if not st.get("stopped")][:steps]
         if len(states) != steps or states[-1].get("steps") != steps:
             return None
         rec = truncate(stored, float(states[-1]["t"]))
@@ -187,8 +187,9 @@ def run_steps(sc: Any, solver: Any, budget: float, start: Start | None = None
         for k in _COUNTERS:
             done[k] = done.get(k, 0) + res.diagnostics.get(k, 0)
         state = {**state_of(res, j + 1, t1), "counters": dict(done)}
-        if not stopped:  # a stopped step's end is not the protocol's boundary
-            states.append(state)
+        if stopped:  # not the protocol's boundary: the end of a shorter last step
+            state.update(stopped=True, t=t_e)
+        states.append(state)
         rec = res.without_profiles()
         if first is None:
             first = rec
@@ -212,3 +213,26 @@ def _stop_radius(sc: Any, state: dict[str, Any] | None) -> float:
         a0 = float(state["radius"])
     a3 = a0**3 - float(sc.stop_expelled)
     return float(np.cbrt(a3)) if a3 > 1.0 else 1.0 + 1e-9  # beyond reach: never stops
+
+
+def stopped_as_run(sc: Any, rec: FullResult) -> tuple[Any, FullResult] | None:
+    """A protocol run that stopped at its dose (``sc.stop_expelled``) is also the run of
+    the protocol whose last step ends there: that scenario (the last step's duration the
+    stop's time less the step's start, as a reading of the run computes it) and the record
+    (finished, its state at the stop the state after the last step); None if it did not
+    stop."""
+    states = list(rec.meta.get(STATES) or [])
+    if sc.stop_expelled is None or rec.terminal_time is None or not states or not (
+            states[-1].get("stopped")):
+        return None
+    steps = tuple(sc.protocol)
+    start = boundaries(steps)[-2]
+    last = (float(rec.terminal_time) - start, steps[-1][1])
+    alias = replace(sc, protocol=(*steps[:-1], last), stop_expelled=None)
+    end = {k: v for k, v in states[-1].items() if k != "stopped"}
+    meta = {**rec.meta, "key": alias.key(), "scenario": alias.key_dict(),
+            STATES: [*states[:-1], {**end, "t": boundaries(alias.protocol)[-1]}],
+            "stopped_run": sc.key()}
+    diag = {**rec.diagnostics, "status": "finished", "t_events": [],
+            "protocol": [list(x) for x in alias.protocol]}
+    return alias, replace(rec, diagnostics=diag, meta=meta)

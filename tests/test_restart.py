@@ -219,3 +219,35 @@ def test_another_processs_stored_prefix_serves_too(tmp_path) -> None:
                  solver=spy) as second:
         second.trajectory(Scenario(preset("ANB"), 302.0, protocol=PROTOCOL, settings=MOVING))
         assert spy.calls == [(PROTOCOL[2:], True)] and second.restarts == 1
+
+
+def test_a_stopped_read_off_is_the_run_of_its_heating(tmp_path) -> None:
+    # the heating read off a stopped run lasts until the stop (the dose and STOP_MARGIN),
+    # and that run is also the run of the protocol ending there: the secant's first check
+    # of it, and the next heating's prefix, run nothing more
+    spy = Counting()
+    req = ScheduleRequest("ANB", 302.0, 308.0, doses=[0.2, 0.2], rests=[0.05],
+                          settings=MOVING)
+    with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1),
+                 solver=spy) as planner:
+
+        def run(steps, stop_expelled=None):
+            return planner.trajectory(Scenario(req.gel, req.t_start, protocol=steps,
+                                               settings=req.settings,
+                                               stop_expelled=stop_expelled))
+
+        h = FluidHeatings(run, req)
+        stopped = h.run_until([0.05], 0)
+        d = h.reach(stopped, [0.05], 0).duration
+        assert stopped.status == "stopped" and d == pytest.approx(stopped.terminal_time)
+        calls = len(spy.calls)
+        exact = h.run([d])
+        assert len(spy.calls) == calls and exact.status == "finished"  # no new run
+        assert h.delivered(exact, [d])[0] == pytest.approx(0.2 * (1 + 1e-6), rel=1e-9)
+        h.run([d, 0.003])
+        assert spy.calls[calls:] == [(((0.05, 302.0),), True), (((0.003, 308.0),), True)]
+    # the same heating run to that time from t = 0: the same delivery within the bound
+    with Planner(cache_path=tmp_path / "d.sqlite", executor=ThreadPoolExecutor(1)) as fresh:
+        again = fresh.trajectory(Scenario(req.gel, req.t_start, protocol=((d, 308.0),),
+                                          settings=req.settings))
+        assert h.delivered(again, [d])[0] == pytest.approx(0.2, rel=BOUND)
