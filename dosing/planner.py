@@ -242,6 +242,8 @@ class Planner:
             with self._mem_lock:
                 self._mem[key] = alias[1]
                 self._mem.move_to_end(key)
+                while len(self._mem) > 64:
+                    self._mem.popitem(last=False)
         if states:
             with self._mem_lock:
                 for st in states:
