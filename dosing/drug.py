@@ -424,12 +424,11 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
     ``diagnostics['step_outputs']`` counts the outputs after each step.  ``start``: the
     mechanics of the first j steps (a :func:`mechanics_prefix`), continued from its last
     state: the same arithmetic as running them again.  ``budget`` (wall seconds) is checked
-    between steps (a wall-clock budget inside a step would stop its integration 200 times,
-    and a short step's mesh checks with it)."""
+    between steps, and inside them off the moving grid (``dosing.restart.step_budget``)."""
     from solver.errors import BudgetExceeded
     from solver.full import FullResult, simulate
 
-    from .restart import restart_options, state_of
+    from .restart import restart_options, state_of, step_budget
 
     s = drug_settings(settings)
     started = time.perf_counter()
@@ -454,6 +453,7 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
             raise BudgetExceeded(f"the drug run's mechanics used its {budget:.0f} s budget "
                                  f"at t = {t0:.4g}", {"wall_seconds": spent})
         kw = {"branch": branch} if prev is None else restart_options(state_of(prev, 0, t0))
+        kw.update(step_budget(s.grid, budget - spent))
         res = simulate(gel, t_start, protocol=[(duration, temp)], grid=s.grid, n=s.n,
                        integrator=s.integrator, rtol=s.rtol, saveat=step_outputs(duration, k),
                        interfacial_length=s.interfacial_length, **kw)
