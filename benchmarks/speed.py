@@ -21,6 +21,12 @@ Figures (``--only``):
   50 um bead (``Planner.dose(validate=True)``), with its answer, the truth's numerical
   bound and the model-form lattice, so that the answers can be compared;
 * ``schedule``: a cold three-dose schedule with the protocol check;
+* ``drug``: a cold drug dose on the full solver: ANB 302 -> 308 K, a 50 um bead, 50 % of
+  an unhindered drug with D0 = 1e-7 cm^2/s (``plan_drug_dose(..., validate=True)``: the
+  drug run and its n / 2 check), with its time and numerical bound;
+* ``drug_schedule``: a cold drug schedule on the full solver (the same bead, an unhindered
+  D0 = 1e-8 cm^2/s drug, doses 0.2 x 3 of the load, rests 0.05 tau: hold reading, protocol
+  check, shooting and the n / 2 check), with its corrected times;
 * ``moving``: the moving grid (400 cells, rtol 1e-5) at ell = 1e-3 and 3e-5, ANB 302 ->
   308 K to t = 0.08: CPU, accepted and rejected steps, remaps, the 80 % dose time.
 
@@ -114,8 +120,55 @@ p = Planner(cache_path={cache!r}, executor=ThreadPoolExecutor(2))
 ans = p.schedule(ScheduleRequest("ANB", 302, 308, doses=[0.2, 0.2, 0.2], rests=[0.05, 0.05],
                                  check_protocol=True))
 d = ans.to_dict()
-print(json.dumps({{"cpu": cpu() - t0, "times": d.get("actuation_times"),
-                  "checked": (d.get("protocol_check") or {{}}).get("actuation_times")}}))
+print(json.dumps({{"cpu": cpu() - t0,
+                  "checked": (d.get("protocol_check") or {{}}).get("delivered_fractions"),
+                  "corrected": (d.get("corrected") or {{}}).get("actuation_times")}}))
+p.close()
+"""
+
+DRUG = KERNELS + """
+import json, resource
+from concurrent.futures import ThreadPoolExecutor
+from solver.full import simulate
+from solver.solute import Solute, release
+release(simulate("ANB", 302, 308, until=1e-3, grid="moving", n=40, interfacial_length=1e-3,
+                 saveat=[0.0, 5e-4, 1e-3]), Solute(1.0))  # the solute's kernels loaded
+from dosing import Planner
+from dosing.drug import DrugModel
+from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
+def cpu():
+    u = resource.getrusage(resource.RUSAGE_SELF)
+    return u.ru_utime + u.ru_stime
+t0 = cpu()
+p = Planner(cache_path={cache!r}, executor=ThreadPoolExecutor(2))
+ans = plan_drug_dose(p, DrugDoseRequest("ANB", 302, 308,
+                                        DrugModel(diffusivity_cm2_s=1e-7, hindrance="none"),
+                                        dose_fraction=0.5, dry_radius_um=50), validate=True)
+print(json.dumps({{"cpu": cpu() - t0, "model": ans.model, "time": ans.time,
+                  "numerical": ans.uncertainty.numerical.relative}}))
+p.close()
+"""
+
+DRUG_SCHEDULE = KERNELS + """
+import json, resource
+from concurrent.futures import ThreadPoolExecutor
+from solver.full import simulate
+from solver.solute import Solute, release
+release(simulate("ANB", 302, 308, until=1e-3, grid="moving", n=40, interfacial_length=1e-3,
+                 saveat=[0.0, 5e-4, 1e-3]), Solute(1.0))  # the solute's kernels loaded
+from dosing import Planner
+from dosing.drug import DrugModel
+from dosing.drug_schedule import DrugScheduleRequest, plan_drug_schedule
+def cpu():
+    u = resource.getrusage(resource.RUSAGE_SELF)
+    return u.ru_utime + u.ru_stime
+t0 = cpu()
+p = Planner(cache_path={cache!r}, executor=ThreadPoolExecutor(2))
+ans = plan_drug_schedule(p, DrugScheduleRequest(
+    "ANB", 302, 308, DrugModel(diffusivity_cm2_s=1e-8, hindrance="none", load_ug=1.0),
+    doses=[0.2, 0.2, 0.2], rests=[0.05, 0.05], dry_radius_um=50))
+print(json.dumps({{"cpu": cpu() - t0, "corrected": ans.corrected["actuation_times"],
+                  "numerical": ans.uncertainty.numerical.relative}}))
 p.close()
 """
 
@@ -213,6 +266,20 @@ def fig_schedule(tree: Path, tmp: Path) -> tuple[float, str]:
     return res["cpu"], json.dumps({k: v for k, v in res.items() if k != "cpu"})
 
 
+def fig_drug(tree: Path, tmp: Path) -> tuple[float, str]:
+    code = DRUG.format(cache=str(_fresh(tmp, f"drug-{tree.name}.sqlite")))
+    _, out = run(tree, [PY, "-c", code], timeout=1800)
+    res = _json(out)
+    return res["cpu"], json.dumps({k: v for k, v in res.items() if k != "cpu"})
+
+
+def fig_drug_schedule(tree: Path, tmp: Path) -> tuple[float, str]:
+    code = DRUG_SCHEDULE.format(cache=str(_fresh(tmp, f"dsch-{tree.name}.sqlite")))
+    _, out = run(tree, [PY, "-c", code], timeout=1800)
+    res = _json(out)
+    return res["cpu"], json.dumps({k: v for k, v in res.items() if k != "cpu"})
+
+
 def fig_moving(tree: Path, tmp: Path) -> tuple[float, str]:
     _, out = run(tree, [PY, "-c", MOVING.format()], timeout=1800)
     res = _json(out)
@@ -227,6 +294,8 @@ FIGURES: dict[str, tuple[Callable[[Path, Path], tuple[float, str]], str, bool]] 
     "load": (fig_load, "req/s", False),
     "validation": (fig_validation, "s CPU", True),
     "schedule": (fig_schedule, "s CPU", True),
+    "drug": (fig_drug, "s CPU", True),
+    "drug_schedule": (fig_drug_schedule, "s CPU", True),
     "moving": (fig_moving, "s CPU", True),
 }
 WARMS = {"dose": True, "help": True}  # figures whose first call per tree is not counted
@@ -266,12 +335,13 @@ def main(argv: list[str] | None = None) -> int:
                 if new:
                     made.append(path)
             trees.append(("this tree", ROOT))
-            if {"validation", "schedule", "moving"} & set(names):
+            if {"validation", "schedule", "drug", "drug_schedule", "moving"} & set(names):
                 for tree in (t for _, t in trees):  # compile each tree's kernels once
                     run(tree, [PY, "-c", KERNELS])
             for name in names:
                 fn, unit, lower = FIGURES[name]
-                reps = 1 if name in ("validation", "schedule", "load", "moving") \
+                reps = 1 if name in ("validation", "schedule", "drug", "drug_schedule", "load",
+                                     "moving") \
                     else args.repeats
                 got: dict[Path, list[float]] = {t: [] for _, t in trees}
                 notes: dict[Path, str] = {}

@@ -416,28 +416,52 @@ def step_outputs(duration: float, k: int) -> np.ndarray:
 
 
 def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
-                      settings: SolverSettings, budget: float = RUN_BUDGET_S) -> Any:
-    """The mechanics of a protocol, one ``simulate`` per step (each continues from the last
-    state, so every protocol boundary is an output), sampled densely; one FullResult."""
+                      settings: SolverSettings, budget: float = RUN_BUDGET_S,
+                      start: Any = None) -> Any:
+    """The mechanics of a protocol, one ``simulate`` per step (each continues from the
+    exact state where the last ended, its moving nodes included: ``dosing.restart``, so
+    every protocol boundary is an output), sampled densely; one FullResult, whose
+    ``diagnostics['step_outputs']`` counts the outputs after each step.  ``start``: the
+    mechanics of the first j steps (a :func:`mechanics_prefix`), continued from its last
+    state: the same arithmetic as running them again.  ``budget`` (wall seconds) is checked
+    between steps, and inside them off the moving grid (``dosing.restart.step_budget``)."""
+    from solver.errors import BudgetExceeded
     from solver.full import FullResult, simulate
+
+    from .restart import restart_options, state_of, step_budget
 
     s = drug_settings(settings)
     started = time.perf_counter()
     parts = []
     prev = None
     t0 = 0.0
-    for duration, temp in steps:
+    ends: list[int] = []  # outputs after each step
+    done = 0
+    if start is not None:
+        ends = list(start.diagnostics["step_outputs"])
+        parts.append((0.0, start))
+        prev = start
+        t0 = sum(d for d, _ in steps[:len(ends)] if d > 0.0)
+        done = int(start.t.size)
+    for duration, temp in steps[len(ends):]:
         if duration <= 0.0:
+            ends.append(done)
             continue
         k = max(MIN_SAMPLES, int(math.ceil(duration * SAMPLES_PER_TAU)))
-        left = budget - (time.perf_counter() - started)
+        spent = time.perf_counter() - started
+        if spent > budget:
+            raise BudgetExceeded(f"the drug run's mechanics used its {budget:.0f} s budget "
+                                 f"at t = {t0:.4g}", {"wall_seconds": spent})
+        kw = {"branch": branch} if prev is None else restart_options(state_of(prev, 0, t0))
+        kw.update(step_budget(s.grid, budget - spent))
         res = simulate(gel, t_start, protocol=[(duration, temp)], grid=s.grid, n=s.n,
                        integrator=s.integrator, rtol=s.rtol, saveat=step_outputs(duration, k),
-                       branch=branch if prev is None else None, initial=prev,
-                       interfacial_length=s.interfacial_length, max_seconds=max(left, 1.0))
+                       interfacial_length=s.interfacial_length, **kw)
         parts.append((t0, res))
         prev = res
         t0 += duration
+        done += int(res.t.size)
+        ends.append(done)
     if not parts:
         raise ParameterError("protocol", steps, "at least one step of positive duration")
     names = ["radius", "front", "jump", "phi", "temperature", "solid_error"]
@@ -449,7 +473,8 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
     a = cat["radius"]
     diag = dict(first.diagnostics)
     diag.update(protocol=[list(x) for x in steps], wall_time=time.perf_counter() - started,
-                steps=sum(int(r.diagnostics.get("steps", 0)) for _, r in parts))
+                steps=sum(int(r.diagnostics.get("steps", 0)) for _, r in parts),
+                step_outputs=ends)
     return FullResult(t=t, radius=a, front=cat["front"], jump=cat["jump"], phi=cat["phi"],
                       coords=first.coords, temperature=cat["temperature"],
                       expelled_volume=4.0 * np.pi / 3.0 * (a[0] ** 3 - a**3),
@@ -457,22 +482,40 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
                       nodes=cat.get("nodes", np.zeros((0, 0))))
 
 
-def run_drug_scenario(scenario: dict[str, Any], budget: float = RUN_BUDGET_S
-                      ) -> tuple[dict[str, Any], bytes]:
-    """A drug run: plain data in, (metadata, npz blob) out (for any executor)."""
+def mechanics_prefix(res: Any, steps: int) -> Any:
+    """The mechanics of a :func:`simulate_protocol` run up to the end of its first
+    ``steps`` steps (its outputs there; a FullResult of the same kind)."""
+    ends = res.diagnostics["step_outputs"]
+    k = int(ends[steps - 1])
+    cut = {name: getattr(res, name)[:k] for name in ("t", "radius", "front", "jump", "phi",
+                                                      "temperature", "expelled_volume",
+                                                      "solid_error")}
+    if res.nodes.size:
+        cut["nodes"] = res.nodes[:k]
+    return replace(res, **cut, diagnostics={**res.diagnostics, "step_outputs": ends[:steps]})
+
+
+def run_drug_scenario(scenario: dict[str, Any], budget: float = RUN_BUDGET_S,
+                      start: Any = None, keep: bool = False) -> tuple[Any, ...]:
+    """A drug run: plain data in, (metadata, npz blob) out (for any executor); ``start``
+    the mechanics of its protocol's first steps (:func:`mechanics_prefix`) to continue;
+    ``keep``: (metadata, blob, the mechanics) out, for the next run to start from."""
     from solver.solute import release
 
     sc = DrugScenario.from_dict(scenario)
     wall = time.perf_counter()
-    res = simulate_protocol(sc.gel, sc.t_start, list(sc.protocol), sc.branch, sc.settings, budget)
+    res = simulate_protocol(sc.gel, sc.t_start, list(sc.protocol), sc.branch, sc.settings, budget,
+                            start)
     mech = time.perf_counter() - wall
     rel = release(res, sc.solute)
     meta = {"key": sc.key(), "scenario": sc.to_dict(), "mechanics_seconds": mech,
             "solute_seconds": time.perf_counter() - wall - mech,
             "mass_balance_error": rel.mass_balance_error,
             "effective_diffusivity": rel.effective_diffusivity,
-            "solute_steps": rel.diagnostics.get("steps"), "created": time.time()}
-    return meta, to_npz(rel)
+            "solute_steps": rel.diagnostics.get("steps"), "created": time.time(),
+            "mechanics_from_step": 0 if start is None else len(
+                start.diagnostics["step_outputs"])}
+    return (meta, to_npz(rel), res) if keep else (meta, to_npz(rel))
 
 
 def to_npz(rel: ReleaseResult) -> bytes:
@@ -524,14 +567,22 @@ class DrugCache(ValidationCache):
         return None if row is None else from_npz(bytes(row[1]), json.loads(row[0]))
 
 
+MECHANICS_MEMORY = 64e6  # bytes of drug-run mechanics (profiles) a planner keeps
+
+
 class DrugRuns:
-    """Drug runs for a planner: memory, then the cache file, then its executor."""
+    """Drug runs for a planner: memory, then the cache file, then its executor.  The
+    mechanics of the latest runs (profiles, up to MECHANICS_MEMORY bytes) are kept, and a
+    run whose protocol starts with one of theirs continues from there (``restarts``
+    counts them): a schedule's shooting runs only the heating it varies."""
 
     def __init__(self, planner: Any) -> None:
         self.planner = planner
         self.cache = DrugCache(planner.cache.path)
         self._mem: OrderedDict[str, ReleaseResult] = OrderedDict()
         self._lock = threading.Lock()
+        self._mech: OrderedDict[str, tuple[tuple, tuple[Step, ...], Any]] = OrderedDict()
+        self.restarts = 0
 
     def cached(self, sc: DrugScenario) -> ReleaseResult | None:
         """The stored run, or None (no computation)."""
@@ -558,16 +609,55 @@ class DrugRuns:
             return hit
 
         def store(fut: Any) -> None:
-            meta, blob = fut.result()
+            meta, blob = fut.result()[:2]
             self.cache.put_run(meta["key"], meta, blob)
 
-        meta, blob = self.planner.jobs.submit(sc.key(), run_drug_scenario, sc.to_dict(),
-                                              on_done=store).result()
+        start = self._start(sc)
+        fn = functools.partial(run_drug_scenario, start=start, keep=True)
+        meta, blob, mech = self.planner.jobs.submit(sc.key(), fn, sc.to_dict(),
+                                                    on_done=store).result()
+        self._keep(sc, mech)
         rel = from_npz(blob, meta)
         if rel.mass_balance_error > 1e-10:
             raise SolverError(f"drug run lost mass: {rel.mass_balance_error:.3g}", meta)
         self._remember(sc.key(), rel)
         return rel
+
+    @staticmethod
+    def _case(sc: DrugScenario) -> tuple:
+        return (sc.gel.key(), sc.t_start, sc.branch, drug_settings(sc.settings))
+
+    def _start(self, sc: DrugScenario) -> Any:
+        """The kept mechanics of the longest prefix of ``sc``'s protocol, or None."""
+        case, steps = self._case(sc), tuple(sc.protocol)
+        best, best_j = None, 0
+        with self._lock:
+            for key, (c, kept, _m) in self._mech.items():
+                if c != case:
+                    continue
+                j = 0
+                while j < min(len(kept), len(steps)) and kept[j] == steps[j]:
+                    j += 1
+                if j > best_j:
+                    best, best_j = key, j
+            if best is None:
+                return None
+            self._mech.move_to_end(best)
+            mech = self._mech[best][2]
+        self.restarts += 1
+        return mechanics_prefix(mech, best_j)
+
+    def _keep(self, sc: DrugScenario, mech: Any) -> None:
+        """Keep a run's mechanics (the latest first out past MECHANICS_MEMORY bytes)."""
+        if mech is None or not mech.diagnostics.get("step_outputs"):
+            return
+        with self._lock:
+            self._mech[sc.key()] = (self._case(sc), tuple(sc.protocol), mech)
+            self._mech.move_to_end(sc.key())
+            while len(self._mech) > 1 and sum(
+                    m.phi.nbytes + m.nodes.nbytes for _, _, m in self._mech.values()
+            ) > MECHANICS_MEMORY:
+                self._mech.popitem(last=False)
 
     def close(self) -> None:
         """Close this object's connections to the cache file."""

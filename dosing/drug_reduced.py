@@ -146,9 +146,10 @@ def applies(req: Any, settings: Any) -> float | None:
     return err if model == "front" else None
 
 
-def reduced_release(req: Any) -> tuple[Any, float, float]:
+def reduced_release(req: Any, fraction: float | None = None) -> tuple[Any, float, float]:
     """The reduced model's release (``solver.solute.ReleaseResult``) for ``req``'s jump,
-    the dose's time on it and the squeezed part by then (the D0 = 0 twin's release, run
+    the dose's (``fraction``, default ``req.fraction``) time on it and the squeezed part by
+    then (the D0 = 0 twin's release, run
     only to that time where sieving makes it differ from the expelled fluid).  Run in
     stages that stop early: to a quarter past the fluid's time for the same fraction
     (where a drug the shell hardly sieves has its dose: diffusion adds to what the fluid
@@ -159,17 +160,18 @@ def reduced_release(req: Any) -> tuple[Any, float, float]:
     from .model_choice import front_run
 
     fr = front_run(req.gel, req.t_start, req.t_end, req.branch, True)
+    dose = req.fraction if fraction is None else fraction
     sol = req.solute
     h = sol.hindrance
     sieved = h.convective and h.mesh_ratio > 0.0
-    first = FIRST_REACH * float(fr.time_to_fraction(req.fraction))
+    first = FIRST_REACH * float(fr.time_to_fraction(dose))
     stages = [first, max(STAGE_CENTRE * fr.curve.t_centre, first), HORIZON]
     if sieved and h.mesh_ratio > SIEVED:  # retained behind the fluid: skip the first
         stages.pop(0)
     for horizon in stages:
         rel = front_release(fr, sol, horizon=horizon, twin="none" if sieved else "exact")
         try:
-            t = time_to_release(rel, req.fraction)
+            t = time_to_release(rel, dose)
         except ValueError:
             if horizon == HORIZON:
                 raise

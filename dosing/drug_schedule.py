@@ -29,7 +29,7 @@ from solver.errors import ParameterError, SolverError, require_finite_positive
 
 from .answers import HoldRow
 from .drug import DrugRuns, StatedTruth, carried_by_fluid, drug_settings, leak_time, runs_for
-from .drug_dose import FIRST_HEATING, DrugCase, DrugHeatings
+from .drug_dose import DrugCase, DrugHeatings, first_heating
 from .protocol import Short, read_off, shoot_durations
 from .request import ScheduleCase, ScheduleRequest
 from .schedule import hold_schedule
@@ -228,7 +228,7 @@ def _hold(planner: Any, run: DrugHeatings, tau: float | None) -> tuple[str, list
                 [DrugHoldRow(**asdict(r), dose_ug=None if load is None
                              else r.dose_fraction * load) for r in rows])
     total = DrugHeatings(req, run.runs, [sum(req.fractions)], run.settings)
-    got = read_off(total, [], 0, FIRST_HEATING / 2.0)
+    got = read_off(total, [], 0, *first_heating(req, sum(req.fractions)))
     run.count += total.count  # the schedule's runs include its hold reading's
     if isinstance(got, Short):
         raise ParameterError("doses", list(req.fractions), f"summing to below {got.most:.4f}",

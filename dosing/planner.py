@@ -23,6 +23,7 @@ import threading
 import time
 from collections import OrderedDict
 from concurrent.futures import Executor, Future, ThreadPoolExecutor, wait
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from solver.errors import SolverError
@@ -37,6 +38,7 @@ from .model_choice import (
     model_answer,
 )
 from .request import DoseRequest, ScheduleRequest
+from .restart import STATES, Start, restartable, stopped_as_run
 from .scenario import Scenario, Solver, SolverSettings, Trajectory, run_scenario
 from .truth import delayed_settings, is_model_form_run, range_settings
 from .validation import error_estimate, failure, validation_report
@@ -114,6 +116,10 @@ class Planner:
         self.horizon = float(horizon)
         self._mem: OrderedDict[str, Trajectory] = OrderedDict()
         self._mem_lock = threading.Lock()
+        # protocol prefixes with a stored state at their end: prefix key -> (the stored
+        # run's scenario, steps) (module ``restart``; kept for this planner's life)
+        self._starts: OrderedDict[str, tuple[Scenario, int]] = OrderedDict()
+        self.restarts = 0  # protocol runs started from a stored prefix's state
 
     @property
     def solver(self) -> Solver:
@@ -198,7 +204,10 @@ class Planner:
         elif is_model_form_run(sc.settings):  # its dose comes 1.5-9x after the truth's
             first = min(first, max(MOVING_HORIZON, MODEL_FORM_REACH * need_time))
         horizon = first if meta is None else 4.0 * float(meta.get("horizon", 0.0))
-        return Job(sc.key(), functools.partial(run_scenario, solver=self.solver),
+        start = self._start(sc) if restartable(self.solver) else None
+        if start is not None:
+            self.restarts += 1
+        return Job(sc.key(), functools.partial(run_scenario, solver=self.solver, start=start),
                    (sc.to_dict(), max(horizon, first), need_radius, need_time),
                    on_done=self._store,
                    fetch=functools.partial(self._fetch, sc, need_radius, need_time))
@@ -214,12 +223,55 @@ class Planner:
         for _ in range(6):
             traj = self.cached(sc, need_radius, need_time)
             if traj is not None:
-                return traj
+                return self._keep_states(sc, traj)
             meta, blob = self.submit(sc, need_radius, need_time).result()
             traj = Trajectory.from_npz(blob, meta)
             if _covers(traj, sc, need_radius, need_time):
-                return traj
+                return self._keep_states(sc, traj)
         raise SolverError("the full-solver run does not cover the dose", {"key": sc.key()})
+
+    def _keep_states(self, sc: Scenario, traj: Trajectory) -> Trajectory:
+        """Remember where a protocol run kept its state after each step (module
+        ``restart``), so that a later protocol sharing those steps starts there."""
+        states = traj.meta.get(STATES) if sc.protocol is not None else None
+        alias = stopped_as_run(sc, traj) if states else None
+        if alias is not None:  # a read-off heating's run is also the run to its dose
+            self._keep_states(*alias)
+            key = alias[0].key()
+            self.cache.put_if_longer(key, alias[1].meta, alias[1].to_npz())
+            with self._mem_lock:
+                self._mem[key] = alias[1]
+                self._mem.move_to_end(key)
+                while len(self._mem) > 64:
+                    self._mem.popitem(last=False)
+        if states:
+            with self._mem_lock:
+                for st in states:
+                    if st.get("stopped"):
+                        continue
+                    j = int(st["steps"])
+                    key = _prefix(sc, j).key()
+                    self._starts[key] = (sc, j)
+                    self._starts.move_to_end(key)
+                while len(self._starts) > 4096:
+                    self._starts.popitem(last=False)
+        return traj
+
+    def _start(self, sc: Scenario) -> Start | None:
+        """Where ``sc``'s protocol run starts: the state after its longest prefix that a
+        run this planner has seen kept, or a stored run of that prefix itself (the run
+        store keeps each run's states: another process's runs serve too); None: t = 0."""
+        if sc.protocol is None or len(sc.protocol) < 2:
+            return None
+        for j in range(len(sc.protocol) - 1, 0, -1):
+            pre = _prefix(sc, j)
+            with self._mem_lock:
+                hit = self._starts.get(pre.key())
+            stored = self.cached(pre if hit is None else hit[0])
+            start = None if stored is None else Start.of(stored, j if hit is None else hit[1])
+            if start is not None:
+                return start
+        return None
 
     def _trajectories(self, scs: list[Scenario], need_radius: float,
                       need_time: float) -> list[Trajectory | BaseException]:
@@ -410,6 +462,13 @@ class Planner:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _prefix(sc: Scenario, steps: int) -> Scenario:
+    """The run of ``sc``'s first ``steps`` protocol steps (to their end: no stop)."""
+    if steps == len(sc.protocol) and sc.stop_expelled is None:
+        return sc
+    return replace(sc, protocol=sc.protocol[:steps], stop_expelled=None)
 
 
 def _covers(traj: Trajectory, sc: Scenario, need_radius: float | None, need_time: float) -> bool:

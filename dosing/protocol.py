@@ -23,10 +23,12 @@ from solver.errors import ParameterError, SolverError
 from .request import ScheduleRequest
 from .scenario import Step, Trajectory
 
-Runner = Callable[[tuple[Step, ...]], Trajectory]
+Runner = Callable[..., Trajectory]  # run(steps, stop_expelled=None): the protocol's run
+STOP_MARGIN = 1e-6  # a read-off heating stops this much (relative) past its dose's volume
 MAX_EXTENSIONS = 6  # longer heatings tried when reading a dose off (x GROWTH each)
 GROWTH = 4.0
 MAX_SECANT = 10  # secant steps per heating
+READ_OFF_FLOOR = 0.05  # tau: a read-off heating lasts at least its guess plus this
 
 
 def heat_cool_protocol(durations: Sequence[float], rests: Sequence[float], t_start: float,
@@ -149,15 +151,19 @@ class ReadOff:
     trial: list[float]
 
 
-def read_off(h: Heatings, durations: Sequence[float], k: int, guess: float) -> ReadOff | Short:
+def read_off(h: Heatings, durations: Sequence[float], k: int, guess: float,
+             floor: float = READ_OFF_FLOOR) -> ReadOff | Short:
     """Heating k's duration delivering dose k, read off a longer heating after the earlier
-    ``durations``: the one horizon search (from twice ``guess``,
+    ``durations``: the one horizon search (from twice ``guess``, at least ``guess + floor``,
     x GROWTH up to MAX_EXTENSIONS times and the runs' cap; a slowly releasing heating whose
-    late rate kept to the cap falls short is given up early)."""
-    horizon = min(max(2.0 * guess, guess + 0.05), h.max_horizon)
+    late rate kept to the cap falls short is given up early).  Heatings that can end a run
+    where heating k delivers dose k (``run_until(durations, k)``, a terminal event) run so:
+    nothing past the dose is computed."""
+    horizon = min(max(2.0 * guess, guess + floor), h.max_horizon)
+    until = getattr(h, "run_until", None)  # a run that may stop at dose k (terminal event)
     for _ in range(MAX_EXTENSIONS):
         trial = [*durations, horizon]
-        result = h.run(trial)
+        result = h.run(trial) if until is None else until(trial, k)
         got = h.reach(result, trial, k)
         if got.duration is not None:
             return ReadOff(got.duration, result, trial)
@@ -226,13 +232,24 @@ class FluidHeatings:
         self.count += 1
         return self._run(self.steps(durations))
 
+    def run_until(self, durations: Sequence[float], k: int) -> Trajectory:
+        """The protocol run with these actuation times, ending where the last heating (k)
+        has expelled dose k (a little past it: STOP_MARGIN), or at its end."""
+        self.count += 1
+        volume = self.req.doses[k] * (self.req.start_radius**3 - 1.0) * (1.0 + STOP_MARGIN)
+        return self._run(self.steps(durations), stop_expelled=volume)
+
     def delivered(self, result: Trajectory, durations: Sequence[float]) -> list[float]:
         """Each heating's delivery, fractions of the stored fluid."""
         return delivery(result, durations, self.req.rests, self.req.start_radius).delivered
 
     def reach(self, result: Trajectory, durations: Sequence[float], k: int) -> Reach:
-        """Where heating k delivers dose k (the radius it must fall to)."""
+        """Where heating k delivers dose k (the radius it must fall to); a run that
+        stopped at the dose (:meth:`run_until`) delivers it where it stopped (the dose and
+        STOP_MARGIN: that run is then also the run of the heating ending there)."""
         start = windows(durations, self.req.rests)[k][0]
+        if result.status == "stopped" and result.terminal_time is not None:
+            return Reach(result.terminal_time - start)
         target = _window_target(self.req, result.radius_at(start), self.req.doses[k], k)
         try:
             return Reach(result.time_to_radius(target, after=start) - start)

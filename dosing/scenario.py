@@ -234,9 +234,18 @@ class Scenario:
     # radius at which its run stops (a terminal event); in place of t_end / protocol
     program: Any = None
     stop: float | None = None
+    # a protocol's last step ends where the fluid it expels, a^3 at its start minus a^3
+    # (volumes in 4 pi / 3 dry volumes), reaches this (a terminal event: a read-off heating)
+    stop_expelled: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "t_start", check_temperature(self.t_start, "t_start"))
+        if self.stop_expelled is not None:
+            v = float(self.stop_expelled)
+            if self.protocol is None or not (math.isfinite(v) and v > 0.0):
+                raise ParameterError("stop_expelled", self.stop_expelled,
+                                     "a volume > 0 with a protocol")
+            object.__setattr__(self, "stop_expelled", v)
         if self.program is not None:
             if self.t_end is not None or self.protocol is not None:
                 raise ParameterError("program", "with t_end/protocol", "one of them")
@@ -260,6 +269,8 @@ class Scenario:
                                 else {"program": self.program, "stop": self.stop}
                                 if self.program is not None
                                 else {"protocol": [list(s) for s in self.protocol]})
+        if self.stop_expelled is not None:
+            what["stop_expelled"] = self.stop_expelled
         return {"schema": SCHEMA, "gel": list(self.gel.key()), "t_start": self.t_start, **what,
                 "branch": self.branch, "settings": self.settings.to_dict(),
                 "code": code_version()}
@@ -280,7 +291,9 @@ class Scenario:
                 "protocol": None if self.protocol is None else [list(s) for s in self.protocol],
                 "branch": self.branch, "settings": self.settings.to_dict(),
                 **({} if self.program is None else {"program": self.program,
-                                                    "stop": self.stop})}
+                                                    "stop": self.stop}),
+                **({} if self.stop_expelled is None
+                   else {"stop_expelled": self.stop_expelled})}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Scenario:
@@ -289,7 +302,7 @@ class Scenario:
         return cls(Gel.from_dict(d["gel"]), d["t_start"], d.get("t_end"),
                    None if prot is None else tuple(tuple(s) for s in prot),
                    d.get("branch", "swollen"), SolverSettings(**d.get("settings", {})),
-                   d.get("program"), d.get("stop"))
+                   d.get("program"), d.get("stop"), d.get("stop_expelled"))
 
     def steps(self, horizon: float) -> list[Step]:
         """The protocol to simulate (a jump becomes one step of length ``horizon``)."""
@@ -316,29 +329,41 @@ STOP_MARGIN = 1e-6
 
 
 def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver,
-              stop: float | None = None) -> FullResult:
+              stop: float | None = None, start: Any = None) -> FullResult:
     """One run of ``sc`` (a jump runs for ``horizon``, or until its radius reaches
-    ``stop``) within ``budget`` s, as stored."""
-    s = sc.settings
-    if sc.program is not None:  # a continuous temperature program (dosing.heating)
-        from .heating_program import solver_program
+    ``stop``) within ``budget`` s, as stored.  A protocol runs step by step from ``start``
+    (a :class:`dosing.restart.Start`, or t = 0) where the solver continues exactly, keeping
+    the state after each step in ``meta`` (module ``restart``)."""
+    from . import restart
 
-        kw = {"protocol": solver_program(sc.program), "stop": sc.stop}
+    s = sc.settings
+    states = None
+    if sc.protocol is not None and restart.restartable(solver):
+        rec, states = restart.run_steps(sc, solver, budget, start)
+        res = rec
     else:
-        kw = {"protocol": sc.steps(horizon), **({} if stop is None else {"stop": stop})}
-    res = solver(sc.gel, sc.t_start, **kw, grid=s.grid, n=s.n,
-                 integrator=s.integrator, rtol=s.rtol, branch=sc.branch,
-                 interfacial_length=s.interfacial_length, max_seconds=budget)
-    rec = res.without_profiles()
+        if sc.program is not None:  # a continuous temperature program (dosing.heating)
+            from .heating_program import solver_program
+
+            kw = {"protocol": solver_program(sc.program), "stop": sc.stop}
+        else:
+            kw = {"protocol": sc.steps(horizon), **({} if stop is None else {"stop": stop})}
+        res = solver(sc.gel, sc.t_start, **kw, grid=s.grid, n=s.n,
+                     integrator=s.integrator, rtol=s.rtol, branch=sc.branch,
+                     interfacial_length=s.interfacial_length, max_seconds=budget)
+        rec = res.without_profiles()
     if rec.t.size < 2 or not (np.all(np.isfinite(rec.t)) and np.all(np.isfinite(rec.radius))):
         raise SolverError("the full solver returned no finite a(t)", {"scenario": sc.key_dict()})
     rec.diagnostics = {**json_safe(res.diagnostics, max_array=64), "spinodal": bool(res.spinodal)}
+    if states is not None:
+        rec.meta = {restart.STATES: states}
     return rec
 
 
 def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: float | None = None,
                  need_time: float = 0.0, max_horizon: float = 64.0, budget: float = RUN_BUDGET_S,
-                 solver: Solver | None = None, stop: bool = True) -> tuple[dict, bytes]:
+                 solver: Solver | None = None, stop: bool = True,
+                 start: Any = None) -> tuple[dict, bytes]:
     """Run the full solver for a scenario: plain data in, (metadata, npz blob) out.
 
     A jump is simulated for ``horizon``, extended (x4, up to ``max_horizon``) until a(t)
@@ -347,6 +372,8 @@ def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: fl
     computed; a run that stopped before ``need_time`` is run again to it without the
     event); each run gets ``budget`` seconds
     of wall time, on ``solver`` (the planner's: a module-level function pickles by name).
+    A protocol starts from ``start`` (:class:`dosing.restart.Start`: a stored run's state
+    after its first steps) when given.
     Top-level and free of shared state, so process pools and Dask workers can run it.
     """
     if solver is None:
@@ -359,7 +386,7 @@ def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: fl
            if stop and sc.protocol is None and sc.program is None and need_radius is not None
            and sc.settings.integrator == "implicit" else None)  # events need the implicit one
     while True:
-        traj = _simulate(sc, max(h, need_time), budget, solver, end)
+        traj = _simulate(sc, max(h, need_time), budget, solver, end, start)
         runs += 1
         if end is not None and traj.status == "stopped" and traj.horizon < need_time:
             traj = _simulate(sc, need_time, budget, solver)  # the truth's front-time need
@@ -375,6 +402,6 @@ def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: fl
         h = min(4.0 * h, max_horizon)
     meta = {"scenario": sc.key_dict(), "key": sc.key(), "horizon": traj.horizon,
             "wall_seconds": time.perf_counter() - wall, "runs": runs, "created": time.time(),
-            "diagnostics": traj.diagnostics}
+            "diagnostics": traj.diagnostics, **traj.meta}
     traj.meta = meta
     return meta, traj.to_npz()

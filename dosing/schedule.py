@@ -133,9 +133,9 @@ def plan_schedule_with(planner: SchedulePlanner, req: ScheduleRequest) -> Schedu
     model, hold = hold_schedule(planner, req)
     guesses = [row.actuation_time for row in hold]
 
-    def run(steps: tuple[Step, ...]) -> FullResult:
+    def run(steps: tuple[Step, ...], stop_expelled: float | None = None) -> FullResult:
         sc = Scenario(req.gel, req.t_start, protocol=steps, branch=req.branch,
-                      settings=req.settings)
+                      settings=req.settings, stop_expelled=stop_expelled)
         return planner.trajectory(sc)
 
     checked = protocol.check(run, req, guesses) if req.check_protocol else None
