@@ -185,7 +185,7 @@ class Rezoner:
         self._last: tuple[float, np.ndarray] | None = None
         self._raw: tuple[np.ndarray, float] | None = None
         self._hist: np.ndarray | None = None  # the compiled check's history (rezone.mesh_check)
-        self._scal = np.zeros(4)
+        self._scal = np.zeros(rezone.SCAL_SIZE)
 
     def reset(self, y: np.ndarray, geo: np.ndarray) -> None:
         """Stop the nodes where they are and forget the target's history (at a protocol
@@ -213,14 +213,16 @@ class Rezoner:
         o = self.opts
         mesh = np.empty(n + 1)
         velocity = np.empty(n + 1)
+        accel = np.empty(n + 1)
+        jerk = np.empty(n + 1)
         off = rezone.mesh_check(
             y, geo[0].copy(), o.resolution, o.bulk / n, self.ell / o.edge_cells if self.ell
             > 0.0 else 0.0, self.ell / o.finest if self.ell > 0.0 else 0.0, o.grading,
             self.ITERATIONS, o.tolerance, self.AGREEMENT, self.HORIZON, self._hist,
-            self._scal, mesh, velocity)
+            self._scal, mesh, velocity, accel, jerk, self.ell)
         if off:
             self.remaps += 1
-        ale.set_mesh(geo, mesh, velocity, t)
+        ale.set_mesh(geo, mesh, velocity, t, (accel, jerk, float(self._scal[rezone.S_SPAN])))
         return True
 
     def check_python(self, y: np.ndarray, geo: np.ndarray) -> bool:
@@ -235,12 +237,17 @@ class Rezoner:
         for _ in range(self.ITERATIONS):  # towards the fixed point, independent of the mesh
             new = target_nodes(remap(y[:n], nodes, new), new, self.opts, self.ell)
         velocity = np.zeros(n + 1)
+        accel = np.zeros(n + 1)
+        jerk = np.zeros(n + 1)
         off = rezone.offset(nodes, new) > self.opts.tolerance
+        before = y[:n].copy()
         if off:
             y[:n] = remap(y[:n], nodes, new)
             self.remaps += 1
-        if self._last is not None and t > self._last[0]:
-            dt = t - self._last[0]
+        base = new if off else nodes
+        last = None if self._last is None else self._last[0]
+        if last is not None and t > last:
+            dt = t - last
             raw = (new - self._last[1]) / dt
             # follow the target only while it translates steadily: two successive estimates
             # agree (a nucleating front makes the target jump, not move)
@@ -250,12 +257,15 @@ class Rezoner:
                 # the target's mean velocity over the next interval (as long as the last),
                 # extrapolated linearly from the last two intervals' means
                 velocity = raw + (raw - prev[0]) * (2.0 * dt) / (dt + prev[1])
-                rate = np.diff(velocity) / np.diff(new if off else nodes)
-                worst = -rate.min() * self.HORIZON * dt
-                if worst > 0.5:
-                    velocity = velocity * (0.5 / worst)
+        # the band around the front moves with the front (sec. 7.2)
+        rezone.follow_front(before, y[:n], nodes, base, t, self.ell, rezone.FRONT_AGREEMENT,
+                            velocity, accel, jerk, self._scal)
+        span = 0.0
+        if last is not None and t > last:
+            span = rezone.SPAN * (t - last)
+            rezone.shrink(velocity, accel, jerk, base, self.HORIZON * (t - last), span)
         self._last = (t, new)
         if off:
             nodes = new
-        ale.set_mesh(geo, nodes, velocity, t)
+        ale.set_mesh(geo, nodes, velocity, t, (accel, jerk, span))
         return True
