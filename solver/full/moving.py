@@ -58,6 +58,8 @@ class MeshOptions:
     rezone: False keeps the initial mesh (a fixed non-uniform grid).
     nodes: the initial node positions (n + 1 values from 0 to 1); None adapts them to the
         initial state.
+    front: move the band around a thin front with the front's own motion
+        (docs/moving_mesh.md sec. 7.2); False: the equidistributed target's motion only.
     """
 
     resolution: float = 0.1
@@ -69,6 +71,7 @@ class MeshOptions:
     tolerance: float = 0.3
     rezone: bool = True
     nodes: tuple[float, ...] | None = None
+    front: bool = True
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("resolution", 1e-3, 2.0), ("bulk", 1.0, 100.0),
@@ -79,6 +82,8 @@ class MeshOptions:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (
                     math.isfinite(v) and lo <= v <= hi):
                 raise ParameterError(f"mesh.{name}", v, f"{lo:g} to {hi:g}")
+        if not isinstance(self.front, bool):
+            raise ParameterError("mesh.front", self.front, "True or False")
         ce = self.check_every
         if isinstance(ce, bool) or not isinstance(ce, (int, np.integer)) or not 1 <= ce <= 10_000:
             raise ParameterError("mesh.check_every", ce, "an integer 1-10000")
@@ -219,7 +224,7 @@ class Rezoner:
             y, geo[0].copy(), o.resolution, o.bulk / n, self.ell / o.edge_cells if self.ell
             > 0.0 else 0.0, self.ell / o.finest if self.ell > 0.0 else 0.0, o.grading,
             self.ITERATIONS, o.tolerance, self.AGREEMENT, self.HORIZON, self._hist,
-            self._scal, mesh, velocity, accel, jerk, self.ell)
+            self._scal, mesh, velocity, accel, jerk, self.ell if o.front else 0.0)
         if off:
             self.remaps += 1
         ale.set_mesh(geo, mesh, velocity, t, (accel, jerk, float(self._scal[rezone.S_SPAN])))
@@ -258,7 +263,8 @@ class Rezoner:
                 # extrapolated linearly from the last two intervals' means
                 velocity = raw + (raw - prev[0]) * (2.0 * dt) / (dt + prev[1])
         # the band around the front moves with the front (sec. 7.2)
-        rezone.follow_front(before, y[:n], nodes, base, t, self.ell, rezone.FRONT_AGREEMENT,
+        rezone.follow_front(before, y[:n], nodes, base, t,
+                            self.ell if self.opts.front else 0.0, rezone.FRONT_AGREEMENT,
                             velocity, accel, jerk, self._scal)
         span = 0.0
         if last is not None and t > last:

@@ -168,12 +168,15 @@ def _agree(raw, prev, nodes, agreement):
 S_LEVEL, S_HAS_LEVEL, S_X, S_T, S_HAS_X = 4, 5, 6, 7, 8
 S_U, S_DT, S_HAS_U, S_U2, S_DT2, S_HAS_U2 = 9, 10, 11, 12, 13, 14
 S_SPAN = 15
-SCAL_SIZE = 16
+S_PV, S_PA, S_PB, S_PSPAN, S_HAS_P = 16, 17, 18, 19, 20  # the band's motion since the last
+SCAL_SIZE = 21
 SPAN = 2.0  # the band accelerates for this many of the last check intervals
 FRONT_PLATEAU = 5.0  # interfacial lengths either side of the front moved at its velocity
 FRONT_TAPER = 20.0  # then the correction falls linearly to zero over this many
 FRONT_STEEP = 0.1  # a front: |d ln J / d rho| ell at least this between two cells
 FRONT_AGREEMENT = 0.25  # largest relative change of the front's velocity between checks
+FRONT_QUADRATIC = True  # a quadratic through three interval means (True), else a line
+FRONT_DRIFT = 0.25  # cells the front may move against the band in an interval (else restart)
 
 
 @njit(cache=True)
@@ -250,7 +253,10 @@ def follow_front(before, after, nodes, mesh, t, ell, agreement, velocity, accel,
     velocity, acceleration and the acceleration's rate now, which replace the nodes' at the
     front; the change falls linearly to zero over FRONT_TAPER ell.  Only while the front is
     inside the bead by the band's width and successive velocities agree within
-    ``agreement``.  Returns True when it moved the band.
+    ``agreement``; when the front moved more than FRONT_DRIFT of a cell against the band
+    over the last interval (a coarse mesh's level crossing is biased by where it sits in
+    its cell, and the extrapolation can amplify that into an oscillation: HHT, ell = 3e-5,
+    200 cells), the history restarts.  Returns True when it moved the band.
     """
     if not ell > 0.0:
         return False
@@ -258,6 +264,7 @@ def follow_front(before, after, nodes, mesh, t, ell, agreement, velocity, accel,
     level = scal[S_LEVEL] if scal[S_HAS_LEVEL] > 0.0 else np.nan
     x, level, steep = front_position(before, nodes, level, ell)
     if not (steep >= FRONT_STEEP and reach <= x <= 1.0 - reach):
+        scal[S_HAS_P] = 0.0
         scal[S_HAS_X] = 0.0
         scal[S_HAS_U] = 0.0
         scal[S_HAS_U2] = 0.0
@@ -269,10 +276,20 @@ def follow_front(before, after, nodes, mesh, t, ell, agreement, velocity, accel,
     if scal[S_HAS_X] > 0.0 and t > scal[S_T]:
         dt = t - scal[S_T]
         u = (x - scal[S_X]) / dt
+        if scal[S_HAS_P] > 0.0:  # how far the front moved against the band, in cells
+            sa = min(dt, scal[S_PSPAN])
+            moved = (scal[S_PV] * dt + scal[S_PA] * sa * (dt - 0.5 * sa)
+                     + scal[S_PB] * sa * sa * (dt / 2.0 - sa / 3.0))
+            k = 0
+            while k < nodes.size - 2 and nodes[k + 1] < x:
+                k += 1
+            if abs(u * dt - moved) > FRONT_DRIFT * (nodes[k + 1] - nodes[k]):
+                scal[S_HAS_U] = 0.0
+        scal[S_HAS_P] = 0.0
         u1, u2 = scal[S_U], scal[S_U2]
         if scal[S_HAS_U] > 0.0 and abs(u - u1) <= agreement * max(abs(u), abs(u1)):
-            quadratic = scal[S_HAS_U2] > 0.0 and abs(u1 - u2) <= agreement * max(abs(u1),
-                                                                                abs(u2))
+            quadratic = (FRONT_QUADRATIC and scal[S_HAS_U2] > 0.0
+                         and abs(u1 - u2) <= agreement * max(abs(u1), abs(u2)))
             v0, a0, b0 = front_motion(u, dt, u1, scal[S_DT], u2, scal[S_DT2], quadratic)
             n = mesh.size - 1
             k = 0
@@ -293,6 +310,9 @@ def follow_front(before, after, nodes, mesh, t, ell, agreement, velocity, accel,
                 accel[j] += ca * w
                 jerk[j] += cb * w
             done = True
+            scal[S_PV], scal[S_PA], scal[S_PB] = v0, a0, b0
+            scal[S_PSPAN] = SPAN * dt
+            scal[S_HAS_P] = 1.0
         scal[S_U2] = u1
         scal[S_DT2] = scal[S_DT]
         scal[S_HAS_U2] = scal[S_HAS_U]
@@ -315,10 +335,12 @@ def shrink(velocity, accel, jerk, base, horizon, span):
     travel = sa * (horizon - 0.5 * sa)
     travel3 = sa * sa * (horizon / 2.0 - sa / 3.0)
     worst = -np.inf
-    for k in range(n):
-        worst = max(worst, -((velocity[k + 1] - velocity[k]) * horizon
-                             + (accel[k + 1] - accel[k]) * travel
-                             + (jerk[k + 1] - jerk[k]) * travel3) / (base[k + 1] - base[k]))
+    for k in range(n):  # (the mean rate over the horizon: with A = B = 0 that of V exactly)
+        worst = max(worst, -((velocity[k + 1] - velocity[k])
+                             + (accel[k + 1] - accel[k]) * (travel / horizon)
+                             + (jerk[k + 1] - jerk[k]) * (travel3 / horizon))
+                    / (base[k + 1] - base[k]))
+    worst *= horizon
     if worst > 0.5:
         for k in range(n + 1):
             velocity[k] *= 0.5 / worst
