@@ -169,11 +169,9 @@ def section_speed(gels: list[str]) -> None:
 THIN_ELLS = (1e-3, 1e-4, 3e-5)
 
 
-def section_thin(gels: list[str], front: bool = False) -> None:
+def section_thin(gels: list[str], mesh: MeshOptions | None = None) -> None:
     print("== thin fronts: the planner's direct run (400 cells, check 200; outputs every "
-          f"t = 0.002) to t = 0.1, rtol 1e-5{', the band moving with the front' if front else ''}"
-          " ==")
-    mesh = MeshOptions(front=front)
+          f"t = 0.002) to t = 0.1, rtol 1e-5, {mesh or MeshOptions()} ==")
     simulate("ANB", 302.0, 308.0, until=1e-3, grid="moving", n=20, interfacial_length=0.05)
     for gel in gels:
         t_start, _ = CASES[gel]
@@ -212,8 +210,9 @@ def main() -> None:
     parser.add_argument("--section", choices=("reproduce", "direct", "stiff", "delayed",
                                               "speed", "thin"), action="append")
     parser.add_argument("--gel", choices=tuple(CASES), action="append")
-    parser.add_argument("--front", action="store_true",
-                        help="thin: move the band around the front with it (MeshOptions.front)")
+    parser.add_argument("--no-front", action="store_true",
+                        help="thin: the band does not move with the front (MeshOptions.front)")
+    parser.add_argument("--tolerance", type=float, help="thin: MeshOptions.tolerance")
     args = parser.parse_args()
     sections = args.section or ["reproduce", "direct", "stiff", "delayed", "speed"]
     gels = args.gel or list(CASES)
@@ -227,7 +226,10 @@ def main() -> None:
         elif s == "delayed":
             section_delayed(gels)
         elif s == "thin":
-            section_thin(gels, args.front)
+            kw = {"front": False} if args.no_front else {}
+            if args.tolerance is not None:
+                kw["tolerance"] = args.tolerance
+            section_thin(gels, MeshOptions(**kw))
         else:
             section_speed(gels)
 
