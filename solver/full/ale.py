@@ -56,22 +56,39 @@ def geometry_rows(nodes: np.ndarray) -> np.ndarray:
 def set_mesh(geo: np.ndarray, nodes: np.ndarray, velocity: np.ndarray, t0: float,
              motion: tuple[np.ndarray, np.ndarray, float] | None = None) -> None:
     """In place: nodes at time t0 moving at ``velocity``; ``motion`` (A, B, T): their
-    acceleration and its rate for a time T (the end nodes held fixed)."""
+    acceleration and its rate for a time T (the end nodes held fixed).  A mesh at rest gets
+    rows 0-2 by lagrangian.geometry's numpy arithmetic (bit for bit the uniform grid's)."""
+    if motion is None:
+        zero = np.zeros(nodes.size)
+        motion = (zero, zero, 0.0)
+    if not set_motion(geo, nodes, velocity, motion[0], motion[1], t0, motion[2]):
+        n = nodes.size - 1
+        geo[0] = nodes
+        geo[1, :n] = np.cbrt(0.5 * (nodes[:-1] ** 3 + nodes[1:] ** 3))
+        geo[2, :n] = np.diff(nodes**3)
+
+
+@njit(cache=True)
+def set_motion(geo, nodes, velocity, accel, jerk, t0, span):
+    """The motion rows of ``set_mesh`` (compiled: a mesh check's largest cost in Python);
+    for a moving mesh also rows 0-2 at t0 (``refresh``).  Returns whether it moves."""
     n = nodes.size - 1
-    geo[R_NODES0] = nodes
-    geo[R_VEL] = velocity
-    geo[R_ACC] = 0.0 if motion is None else motion[0]
-    geo[R_JERK] = 0.0 if motion is None else motion[1]
-    for row in (R_VEL, R_ACC, R_JERK):
-        geo[row, 0] = geo[row, n] = 0.0
-    geo[R_VNOW] = geo[R_VEL]
+    moving = False
+    for k in range(n + 1):
+        end = k == 0 or k == n
+        geo[R_NODES0, k] = nodes[k]
+        geo[R_VEL, k] = 0.0 if end else velocity[k]
+        geo[R_ACC, k] = 0.0 if end else accel[k]
+        geo[R_JERK, k] = 0.0 if end else jerk[k]
+        geo[R_VNOW, k] = geo[R_VEL, k]
+        if geo[R_VEL, k] != 0.0 or geo[R_ACC, k] != 0.0 or geo[R_JERK, k] != 0.0:
+            moving = True
     geo[R_T0, 0] = t0
-    geo[R_T0, 1] = 1.0 if (np.any(geo[R_VEL] != 0.0) or np.any(geo[R_ACC] != 0.0)
-                           or np.any(geo[R_JERK] != 0.0)) else 0.0
-    geo[R_T0, 2] = 0.0 if motion is None else motion[2]
-    geo[0] = nodes
-    geo[1, :n] = np.cbrt(0.5 * (nodes[:-1] ** 3 + nodes[1:] ** 3))
-    geo[2, :n] = np.diff(nodes**3)
+    geo[R_T0, 1] = 1.0 if moving else 0.0
+    geo[R_T0, 2] = span
+    if moving:
+        refresh(geo, t0)
+    return moving
 
 
 @njit(cache=True)
