@@ -73,3 +73,17 @@ def test_band_with_the_front_takes_fewer_steps_at_a_thin_front_same_answer() -> 
                        res.time_to_radius(a80))
     assert runs[True][0] < 0.8 * runs[False][0]
     assert runs[True][1] == pytest.approx(runs[False][1], rel=1e-4)
+
+
+def test_an_event_on_the_moving_grid_ends_at_its_radius() -> None:
+    """The state at a terminal event is the step's dense output; over the event's step the
+    front's moving nodes leave the physical range on their cubics (HHT, ell = 1e-3, the 30 %
+    dose: cells 238-248), and the linear fallback put the radius 2.5e-6 off the event's, more
+    than the planner's stop margin (1e-6: its validation re-ran six horizons, then failed).
+    The fallback keeps the radius on its cubic (system.dense_output)."""
+    stop = 2.3922793344077053
+    res = simulate("HHT", 304.0, protocol=[(0.1, 308.0)], grid="moving", n=400,
+                   interfacial_length=1e-3, rtol=1e-5, stop=stop)
+    assert res.status == "stopped"
+    assert abs(res.radius[-1] / stop - 1.0) < 1e-12
+    assert 0.0 < res.phi[-1].min() and res.phi[-1].max() < 1.0
