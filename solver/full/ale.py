@@ -1,7 +1,9 @@
 """Kernels of the moving grid: Lagrangian cells whose nodes move in the dry coordinate.
 
-Between two mesh checks the nodes move at a constant velocity V_k in the dry coordinate,
-rho_k(t) = rho0_k + V_k (t - t0) (V_0 = V_n = 0), so the mesh can follow an interface
+Between two mesh checks the nodes move in the dry coordinate at a velocity
+V_k + A_k s + B_k s^2 / 2, s = t - t0, constant after s = T (rho_k = rho0_k + V_k s
++ A_k s^2 / 2 + B_k s^3 / 6 until then; the end nodes fixed), so the mesh can follow an
+accelerating interface
 instead of letting it cross the cells.  The unknowns are the radii of the moving nodes,
 r_k(t) = r(rho_k(t), t), and the time itself (appended, dt/dt = 1, so the system stays
 autonomous for the Rosenbrock integrator; its Jacobian column is one bordered column).
@@ -16,7 +18,8 @@ stays exact (the cells' dry volumes follow from the nodes) and so does the total
 ``lagrangian.py``: nodes, volume midpoints, dry volumes) to the time in its state, then
 uses the Lagrangian grid's kernels.
 
-Geometry rows: 0-2 current geometry, 3 unused, 4 rho0, 5 V, 6 [t0, moving flag].  At rest
+Geometry rows: 0-2 current geometry, 3 the node velocity now, 4 rho0, 5 V, 6 [t0, moving
+flag, T], 7 A, 8 B.  At rest
 (flag 0) rows 0-2 are those of ``lagrangian.geometry``-style arithmetic and are not
 recomputed, so a mesh at rest with equal widths is the uniform Lagrangian grid bit for bit.
 """
@@ -29,8 +32,8 @@ from numba import njit
 from . import lagrangian
 from .lagrangian import W_JAC
 
-GEO_ROWS = 7
-R_NODES0, R_VEL, R_T0 = 4, 5, 6
+GEO_ROWS = 9
+R_VNOW, R_NODES0, R_VEL, R_T0, R_ACC, R_JERK = 3, 4, 5, 6, 7, 8
 EXTRA = 1  # the time, appended to the node radii
 # the time column's difference: the fastest node moves TIME_STEP of the smallest cell
 TIME_STEP = 0.1
@@ -50,17 +53,42 @@ def geometry_rows(nodes: np.ndarray) -> np.ndarray:
     return geo
 
 
-def set_mesh(geo: np.ndarray, nodes: np.ndarray, velocity: np.ndarray, t0: float) -> None:
-    """In place: nodes at time t0 moving at ``velocity`` (the end nodes held fixed)."""
+def set_mesh(geo: np.ndarray, nodes: np.ndarray, velocity: np.ndarray, t0: float,
+             motion: tuple[np.ndarray, np.ndarray, float] | None = None) -> None:
+    """In place: nodes at time t0 moving at ``velocity``; ``motion`` (A, B, T): their
+    acceleration and its rate for a time T (the end nodes held fixed).  A mesh at rest gets
+    rows 0-2 by lagrangian.geometry's numpy arithmetic (bit for bit the uniform grid's)."""
+    if motion is None:
+        zero = np.zeros(nodes.size)
+        motion = (zero, zero, 0.0)
+    if not set_motion(geo, nodes, velocity, motion[0], motion[1], t0, motion[2]):
+        n = nodes.size - 1
+        geo[0] = nodes
+        geo[1, :n] = np.cbrt(0.5 * (nodes[:-1] ** 3 + nodes[1:] ** 3))
+        geo[2, :n] = np.diff(nodes**3)
+
+
+@njit(cache=True)
+def set_motion(geo, nodes, velocity, accel, jerk, t0, span):
+    """The motion rows of ``set_mesh`` (compiled: a mesh check's largest cost in Python);
+    for a moving mesh also rows 0-2 at t0 (``refresh``).  Returns whether it moves."""
     n = nodes.size - 1
-    geo[R_NODES0] = nodes
-    geo[R_VEL] = velocity
-    geo[R_VEL, 0] = geo[R_VEL, n] = 0.0
+    moving = False
+    for k in range(n + 1):
+        end = k == 0 or k == n
+        geo[R_NODES0, k] = nodes[k]
+        geo[R_VEL, k] = 0.0 if end else velocity[k]
+        geo[R_ACC, k] = 0.0 if end else accel[k]
+        geo[R_JERK, k] = 0.0 if end else jerk[k]
+        geo[R_VNOW, k] = geo[R_VEL, k]
+        if geo[R_VEL, k] != 0.0 or geo[R_ACC, k] != 0.0 or geo[R_JERK, k] != 0.0:
+            moving = True
     geo[R_T0, 0] = t0
-    geo[R_T0, 1] = 1.0 if np.any(geo[R_VEL] != 0.0) else 0.0
-    geo[0] = nodes
-    geo[1, :n] = np.cbrt(0.5 * (nodes[:-1] ** 3 + nodes[1:] ** 3))
-    geo[2, :n] = np.diff(nodes**3)
+    geo[R_T0, 1] = 1.0 if moving else 0.0
+    geo[R_T0, 2] = span
+    if moving:
+        refresh(geo, t0)
+    return moving
 
 
 @njit(cache=True)
@@ -70,12 +98,20 @@ def refresh(geo, t):
     if geo[R_T0, 1] == 0.0:
         return True
     dt = t - geo[R_T0, 0]
+    span = geo[R_T0, 2]
+    sa = min(dt, span)  # the time spent accelerating
+    travel = sa * (dt - 0.5 * sa)  # of the acceleration: s^2/2 until T, then T (s - T/2)
+    travel3 = sa * sa * (dt / 2.0 - sa / 3.0)  # of its rate: s^3/6, then T^3/6 + T^2/2 (s - T)
     prev = 0.0
     prev3 = 0.0
     geo[0, 0] = 0.0
     ok = True
     for k in range(1, n + 1):
-        x = geo[R_NODES0, k] + geo[R_VEL, k] * dt if k < n else 1.0
+        x = 1.0
+        if k < n:
+            x = (geo[R_NODES0, k] + geo[R_VEL, k] * dt + geo[R_ACC, k] * travel
+                 + geo[R_JERK, k] * travel3)
+            geo[R_VNOW, k] = geo[R_VEL, k] + geo[R_ACC, k] * sa + geo[R_JERK, k] * 0.5 * sa * sa
         if not (x > prev):
             ok = False
         x3 = x * x * x
@@ -92,7 +128,7 @@ def _ale_terms(y, geo, work, out):
     """Add V_k J(rho_k) rho_k^2 / r_k^2 to dr_k/dt (needs work[W_JAC] of the cells)."""
     n = geo.shape[1] - 1
     for k in range(1, n):
-        v = geo[R_VEL, k]
+        v = geo[R_VNOW, k]
         if v == 0.0:
             continue
         x = geo[0, k]
@@ -143,7 +179,7 @@ def jacobian(y, par, geo, work, upper, jband, jc, jd, je, out, ytmp, ftmp):
     vmax = 0.0
     hmin = 1.0
     for k in range(1, n):
-        v = geo[R_VEL, k]
+        v = geo[R_VNOW, k]
         hmin = min(hmin, geo[0, k] - geo[0, k - 1])
         if v == 0.0:
             continue
@@ -197,7 +233,7 @@ def fd_scale(y, geo, out):
     vmax = 0.0
     hmin = 1.0
     for k in range(1, n):
-        vmax = max(vmax, abs(geo[R_VEL, k]))
+        vmax = max(vmax, abs(geo[R_VNOW, k]))
         hmin = min(hmin, geo[0, k] - geo[0, k - 1])
     out[n] = 0.1 * TIME_STEP * hmin / vmax if vmax > 0.0 else 1e-7
 

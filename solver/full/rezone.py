@@ -162,17 +162,205 @@ def _agree(raw, prev, nodes, agreement):
     return diff <= agreement * big
 
 
+# the front's history in ``scal`` (after the target's four entries): the level, its last
+# position (after the check's remap) and time, its mean velocities over the last two
+# intervals (newest first) and their lengths, and how long the band accelerates
+S_LEVEL, S_HAS_LEVEL, S_X, S_T, S_HAS_X = 4, 5, 6, 7, 8
+S_U, S_DT, S_HAS_U, S_U2, S_DT2, S_HAS_U2 = 9, 10, 11, 12, 13, 14
+S_SPAN = 15
+S_PV, S_PA, S_PB, S_PSPAN, S_HAS_P = 16, 17, 18, 19, 20  # the band's motion since the last
+SCAL_SIZE = 21
+SPAN = 2.0  # the band accelerates for this many of the last check intervals
+FRONT_PLATEAU = 5.0  # interfacial lengths either side of the front moved at its velocity
+FRONT_TAPER = 20.0  # then the correction falls linearly to zero over this many
+FRONT_STEEP = 0.1  # a front: |d ln J / d rho| ell at least this between two cells
+FRONT_AGREEMENT = 0.25  # largest relative change of the front's velocity between checks
+FRONT_QUADRATIC = True  # a quadratic through three interval means (True), else a line
+FRONT_DRIFT = 0.25  # cells the front may move against the band in an interval (else restart)
+
+
+@njit(cache=True)
+def front_position(y, nodes, level, ell):
+    """(x, level, steepness): where ln J, linear between the cell centres, crosses ``level``
+    (NaN: the midpoint of the steepest pair of cells) nearest that pair; x = -1 without a
+    crossing.  Steepness: the largest |d ln J / d rho| between neighbours, times ell."""
+    n = nodes.size - 1
+    lj = np.empty(n)
+    centre = np.empty(n)
+    prev3 = 0.0
+    for c in range(n):
+        r3 = y[c] ** 3
+        centre[c] = 0.5 * (nodes[c] + nodes[c + 1])
+        lj[c] = np.log((r3 - prev3) / (nodes[c + 1] ** 3 - nodes[c] ** 3))
+        prev3 = r3
+    best = -1.0
+    cs = 0
+    for c in range(n - 1):
+        g = abs(lj[c + 1] - lj[c]) / (centre[c + 1] - centre[c])
+        if g > best:
+            best = g
+            cs = c
+    if np.isnan(level):
+        level = 0.5 * (lj[cs] + lj[cs + 1])
+    x = -1.0
+    dist = n + 1
+    for c in range(n - 1):
+        a = lj[c] - level
+        b = lj[c + 1] - level
+        if (a <= 0.0 < b or b <= 0.0 < a) and abs(c - cs) < dist:
+            dist = abs(c - cs)
+            f = a / (a - b)
+            x = centre[c] + f * (centre[c + 1] - centre[c])
+    return x, level, best * ell
+
+
+
+
+@njit(cache=True)
+def _interval_row(s0, s1):
+    """The mean of 1, s, s^2 over [s0, s1]."""
+    return 1.0, 0.5 * (s0 + s1), (s0 * s0 + s0 * s1 + s1 * s1) / 3.0
+
+
+@njit(cache=True)
+def front_motion(u, d1, u1, d2, u2, d3, quadratic):
+    """(velocity, acceleration, its rate) now (s = 0) of the front from its mean velocities
+    u, u1, u2 over the last three intervals [-d1, 0], [-d1 - d2, -d1], [-d1 - d2 - d3,
+    -d1 - d2]: the quadratic with those means, or (``quadratic`` False) the line through
+    the last two."""
+    if not quadratic:
+        return u + (u - u1) * d1 / (d1 + d2), (u - u1) * 2.0 / (d1 + d2), 0.0
+    # in units of d1 (conditioning), Cramer's rule on the 3 x 3 system of the means
+    a0, b0, c0 = _interval_row(-1.0, 0.0)
+    a1, b1, c1 = _interval_row(-1.0 - d2 / d1, -1.0)
+    a2, b2, c2 = _interval_row(-1.0 - (d2 + d3) / d1, -1.0 - d2 / d1)
+    det = a0 * (b1 * c2 - b2 * c1) - b0 * (a1 * c2 - a2 * c1) + c0 * (a1 * b2 - a2 * b1)
+    p = (u * (b1 * c2 - b2 * c1) - b0 * (u1 * c2 - u2 * c1) + c0 * (u1 * b2 - u2 * b1)) / det
+    q = (a0 * (u1 * c2 - u2 * c1) - u * (a1 * c2 - a2 * c1) + c0 * (a1 * u2 - a2 * u1)) / det
+    r = (a0 * (b1 * u2 - b2 * u1) - b0 * (a1 * u2 - a2 * u1) + u * (a1 * b2 - a2 * b1)) / det
+    return p, q / d1, 2.0 * r / (d1 * d1)
+
+
+@njit(cache=True)
+def follow_front(before, after, nodes, mesh, t, ell, agreement, velocity, accel, jerk, scal):
+    """Move the band within FRONT_PLATEAU ell of the front with the front
+    (docs/moving_mesh.md sec. 7.2).
+
+    The front is the level set of ln J through the steepest pair of cells (the level kept
+    from its first detection), located on the state ``before`` the check's remap (on
+    ``nodes``) and again ``after`` it (on ``mesh``, the reference for the next interval).
+    From its mean velocities over the last three intervals (two at first) it gets its
+    velocity, acceleration and the acceleration's rate now, which replace the nodes' at the
+    front; the change falls linearly to zero over FRONT_TAPER ell.  Only while the front is
+    inside the bead by the band's width and successive velocities agree within
+    ``agreement``; when the front moved more than FRONT_DRIFT of a cell against the band
+    over the last interval (a coarse mesh's level crossing is biased by where it sits in
+    its cell, and the extrapolation can amplify that into an oscillation: HHT, ell = 3e-5,
+    200 cells), the history restarts.  Returns True when it moved the band.
+    """
+    if not ell > 0.0:
+        return False
+    reach = (FRONT_PLATEAU + FRONT_TAPER) * ell
+    level = scal[S_LEVEL] if scal[S_HAS_LEVEL] > 0.0 else np.nan
+    x, level, steep = front_position(before, nodes, level, ell)
+    if not (steep >= FRONT_STEEP and reach <= x <= 1.0 - reach):
+        scal[S_HAS_P] = 0.0
+        scal[S_HAS_X] = 0.0
+        scal[S_HAS_U] = 0.0
+        scal[S_HAS_U2] = 0.0
+        scal[S_HAS_LEVEL] = 0.0
+        return False
+    scal[S_LEVEL] = level
+    scal[S_HAS_LEVEL] = 1.0
+    done = False
+    if scal[S_HAS_X] > 0.0 and t > scal[S_T]:
+        dt = t - scal[S_T]
+        u = (x - scal[S_X]) / dt
+        if scal[S_HAS_P] > 0.0:  # how far the front moved against the band, in cells
+            sa = min(dt, scal[S_PSPAN])
+            moved = (scal[S_PV] * dt + scal[S_PA] * sa * (dt - 0.5 * sa)
+                     + scal[S_PB] * sa * sa * (dt / 2.0 - sa / 3.0))
+            k = 0
+            while k < nodes.size - 2 and nodes[k + 1] < x:
+                k += 1
+            if abs(u * dt - moved) > FRONT_DRIFT * (nodes[k + 1] - nodes[k]):
+                scal[S_HAS_U] = 0.0
+        scal[S_HAS_P] = 0.0
+        u1, u2 = scal[S_U], scal[S_U2]
+        if scal[S_HAS_U] > 0.0 and abs(u - u1) <= agreement * max(abs(u), abs(u1)):
+            quadratic = (FRONT_QUADRATIC and scal[S_HAS_U2] > 0.0
+                         and abs(u1 - u2) <= agreement * max(abs(u1), abs(u2)))
+            v0, a0, b0 = front_motion(u, dt, u1, scal[S_DT], u2, scal[S_DT2], quadratic)
+            n = mesh.size - 1
+            k = 0
+            while k < n - 1 and mesh[k + 1] < x:
+                k += 1
+            f = (x - mesh[k]) / (mesh[k + 1] - mesh[k])
+            cv = v0 - (velocity[k] + f * (velocity[k + 1] - velocity[k]))
+            ca = a0 - (accel[k] + f * (accel[k + 1] - accel[k]))
+            cb = b0 - (jerk[k] + f * (jerk[k + 1] - jerk[k]))
+            for j in range(1, n):
+                d = abs(mesh[j] - x) / ell
+                w = 0.0
+                if d <= FRONT_PLATEAU:
+                    w = 1.0
+                elif d < FRONT_PLATEAU + FRONT_TAPER:
+                    w = (FRONT_PLATEAU + FRONT_TAPER - d) / FRONT_TAPER
+                velocity[j] += cv * w
+                accel[j] += ca * w
+                jerk[j] += cb * w
+            done = True
+            scal[S_PV], scal[S_PA], scal[S_PB] = v0, a0, b0
+            scal[S_PSPAN] = SPAN * dt
+            scal[S_HAS_P] = 1.0
+        scal[S_U2] = u1
+        scal[S_DT2] = scal[S_DT]
+        scal[S_HAS_U2] = scal[S_HAS_U]
+        scal[S_U] = u
+        scal[S_DT] = dt
+        scal[S_HAS_U] = 1.0
+    xa, _, _ = front_position(after, mesh, level, ell)
+    scal[S_X] = xa if xa > 0.0 else x
+    scal[S_T] = t
+    scal[S_HAS_X] = 1.0
+    return done
+
+
+@njit(cache=True)
+def shrink(velocity, accel, jerk, base, horizon, span):
+    """Scale the node motion (velocity; acceleration and its rate for a time ``span``) down
+    so that no cell of ``base`` halves within ``horizon``."""
+    n = base.size - 1
+    sa = min(horizon, span)
+    travel = sa * (horizon - 0.5 * sa)
+    travel3 = sa * sa * (horizon / 2.0 - sa / 3.0)
+    worst = -np.inf
+    for k in range(n):  # (the mean rate over the horizon: with A = B = 0 that of V exactly)
+        worst = max(worst, -((velocity[k + 1] - velocity[k])
+                             + (accel[k + 1] - accel[k]) * (travel / horizon)
+                             + (jerk[k + 1] - jerk[k]) * (travel3 / horizon))
+                    / (base[k + 1] - base[k]))
+    worst *= horizon
+    if worst > 0.5:
+        for k in range(n + 1):
+            velocity[k] *= 0.5 / worst
+            accel[k] *= 0.5 / worst
+            jerk[k] *= 0.5 / worst
+
+
 @njit(cache=True)
 def mesh_check(y, nodes, resolution, h_bulk, h_edge, h_min, grading, iterations, tolerance,
-               agreement, horizon, hist, scal, mesh, velocity):
+               agreement, horizon, hist, scal, mesh, velocity, accel, jerk, ell):
     """One check of the moving grid (moving.Rezoner.__call__) in one compiled call.
 
     ``y`` the state (node radii, then t; remapped in place when the mesh is off),
     ``nodes`` the current nodes at t.  Writes the mesh to keep (the target when remapped,
-    else ``nodes``) to ``mesh`` and its node velocity to ``velocity``; returns True when
-    it remapped.  ``hist`` (2, n + 1): the last target and the last raw velocity; ``scal``:
-    last check time, has a last target, has a raw velocity, its interval (all kept between
-    calls; zeros: none yet).
+    else ``nodes``) to ``mesh``, its node velocity to ``velocity`` and the band's
+    acceleration and its rate to ``accel`` and ``jerk`` (for the time scal[S_SPAN]);
+    returns True when it remapped.  ``hist`` (2, n + 1): the last target and the last raw
+    velocity; ``scal`` (SCAL_SIZE): last check time, has a last target, has a raw velocity,
+    its interval, then the front's history (``follow_front``; all kept between calls;
+    zeros: none yet).
     """
     n = nodes.size - 1
     t = y[n]
@@ -186,10 +374,14 @@ def mesh_check(y, nodes, resolution, h_bulk, h_edge, h_min, grading, iterations,
         target_nodes(tmp, new, resolution, h_bulk, h_edge, h_min, grading, nxt)
         new[:] = nxt
     velocity[:] = 0.0
+    accel[:] = 0.0
+    jerk[:] = 0.0
     off = offset(nodes, new) > tolerance
+    before = radii.copy()
     if off:
         remap(radii, nodes, new, tmp)
         radii[:] = tmp
+    base = new if off else nodes
     if scal[1] > 0.0 and t > scal[0]:
         dt = t - scal[0]
         raw = (new - hist[0]) / dt
@@ -199,16 +391,15 @@ def mesh_check(y, nodes, resolution, h_bulk, h_edge, h_min, grading, iterations,
             # the target's mean velocity over the next interval (as long as the last),
             # extrapolated linearly from the last two intervals' means
             velocity[:] = raw + (raw - hist[1]) * (2.0 * dt) / (dt + scal[3])
-            base = new if off else nodes
-            worst = -np.inf
-            for k in range(n):
-                worst = max(worst, -(velocity[k + 1] - velocity[k]) / (base[k + 1] - base[k]))
-            worst *= horizon * dt
-            if worst > 0.5:
-                velocity *= 0.5 / worst
         hist[1] = raw
         scal[2] = 1.0
         scal[3] = dt
+    follow_front(before, radii, nodes, base, t, ell, FRONT_AGREEMENT, velocity, accel, jerk,
+                 scal)
+    scal[S_SPAN] = 0.0
+    if scal[1] > 0.0 and t > scal[0]:
+        scal[S_SPAN] = SPAN * (t - scal[0])
+        shrink(velocity, accel, jerk, base, horizon * (t - scal[0]), scal[S_SPAN])
     hist[0] = new
     scal[0] = t
     scal[1] = 1.0
