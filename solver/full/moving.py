@@ -222,11 +222,12 @@ class Rezoner:
         velocity = np.empty(n + 1)
         accel = np.empty(n + 1)
         jerk = np.empty(n + 1)
-        off = rezone.mesh_check(
-            y, geo[0].copy(), o.resolution, o.bulk / n, self.ell / o.edge_cells if self.ell
-            > 0.0 else 0.0, self.ell / o.finest if self.ell > 0.0 else 0.0, o.grading,
-            self.ITERATIONS, o.tolerance, self.AGREEMENT, self.HORIZON, self._hist,
-            self._scal, mesh, velocity, accel, jerk, self.ell if o.front else 0.0)
+        params = rezone.mesh_params(
+            o.resolution, o.bulk / n, self.ell / o.edge_cells if self.ell > 0.0 else 0.0,
+            self.ell / o.finest if self.ell > 0.0 else 0.0, o.grading, self.ITERATIONS,
+            o.tolerance, self.AGREEMENT, self.HORIZON, self.ell if o.front else 0.0)
+        off = rezone.mesh_check(y, geo[0].copy(), params, self._hist, self._scal, mesh,
+                                velocity, accel, jerk)
         if off:
             self.remaps += 1
         ale.set_mesh(geo, mesh, velocity, t, (accel, jerk, float(self._scal[rezone.S_SPAN])))

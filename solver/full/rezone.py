@@ -348,20 +348,37 @@ def shrink(velocity, accel, jerk, base, horizon, span):
             jerk[k] *= 0.5 / worst
 
 
+# the mesh check's settings, one float array (mesh_params): MeshOptions and the rezoner's
+P_RESOLUTION, P_H_BULK, P_H_EDGE, P_H_MIN, P_GRADING, P_ITERATIONS = 0, 1, 2, 3, 4, 5
+P_TOLERANCE, P_AGREEMENT, P_HORIZON, P_ELL = 6, 7, 8, 9
+PARAMS_SIZE = 10
+
+
+def mesh_params(resolution: float, h_bulk: float, h_edge: float, h_min: float,
+                grading: float, iterations: int, tolerance: float, agreement: float,
+                horizon: float, ell: float) -> np.ndarray:
+    """The settings of :func:`mesh_check` as one array (indices P_*), built once per check."""
+    return np.array([resolution, h_bulk, h_edge, h_min, grading, iterations, tolerance,
+                     agreement, horizon, ell], dtype=np.float64)
+
+
 @njit(cache=True)
-def mesh_check(y, nodes, resolution, h_bulk, h_edge, h_min, grading, iterations, tolerance,
-               agreement, horizon, hist, scal, mesh, velocity, accel, jerk, ell):
+def mesh_check(y, nodes, params, hist, scal, mesh, velocity, accel, jerk):
     """One check of the moving grid (moving.Rezoner.__call__) in one compiled call.
 
     ``y`` the state (node radii, then t; remapped in place when the mesh is off),
-    ``nodes`` the current nodes at t.  Writes the mesh to keep (the target when remapped,
-    else ``nodes``) to ``mesh``, its node velocity to ``velocity`` and the band's
-    acceleration and its rate to ``accel`` and ``jerk`` (for the time scal[S_SPAN]);
+    ``nodes`` the current nodes at t, ``params`` the settings (:func:`mesh_params`).
+    Writes the mesh to keep (the target when remapped, else ``nodes``) to ``mesh``, its node
+    velocity to ``velocity`` and the band's acceleration and its rate to ``accel`` and ``jerk`` (for the time scal[S_SPAN]);
     returns True when it remapped.  ``hist`` (2, n + 1): the last target and the last raw
     velocity; ``scal`` (SCAL_SIZE): last check time, has a last target, has a raw velocity,
     its interval, then the front's history (``follow_front``; all kept between calls;
     zeros: none yet).
     """
+    resolution, h_bulk, h_edge = params[P_RESOLUTION], params[P_H_BULK], params[P_H_EDGE]
+    h_min, grading, iterations = params[P_H_MIN], params[P_GRADING], int(params[P_ITERATIONS])
+    tolerance, agreement = params[P_TOLERANCE], params[P_AGREEMENT]
+    horizon, ell = params[P_HORIZON], params[P_ELL]
     n = nodes.size - 1
     t = y[n]
     radii = y[:n]
