@@ -368,12 +368,12 @@ def mesh_check(y, nodes, params, hist, scal, mesh, velocity, accel, jerk):
 
     ``y`` the state (node radii, then t; remapped in place when the mesh is off),
     ``nodes`` the current nodes at t, ``params`` the settings (:func:`mesh_params`).
-    Writes the mesh to keep (the target when remapped, else ``nodes``) to ``mesh``, its node
-    velocity to ``velocity`` and the band's acceleration and its rate to ``accel`` and
-    ``jerk`` (for the time scal[S_SPAN]); returns True when it remapped.  ``hist`` (2, n + 1): the last target and the last raw
-    velocity; ``scal`` (SCAL_SIZE): last check time, has a last target, has a raw velocity,
-    its interval, then the front's history (``follow_front``; all kept between calls;
-    zeros: none yet).
+    Writes the mesh to keep (the target when remapped, else ``nodes``) to ``mesh``, its
+    node velocity to ``velocity`` and the band's acceleration and its rate to ``accel``
+    and ``jerk`` (for the time scal[S_SPAN]); returns True when it remapped.  ``hist``
+    (2, n + 1): the last target and the last raw velocity; ``scal`` (SCAL_SIZE): last
+    check time, has a last target, has a raw velocity, its interval, then the front's
+    history (``follow_front``; all kept between calls; zeros: none yet).
     """
     resolution, h_bulk, h_edge = params[P_RESOLUTION], params[P_H_BULK], params[P_H_EDGE]
     h_min, grading, iterations = params[P_H_MIN], params[P_GRADING], int(params[P_ITERATIONS])
