@@ -126,7 +126,7 @@ print(json.dumps({{"cpu": cpu() - t0,
 p.close()
 """
 
-DRUG = KERNELS + """
+DRUG_KERNELS = KERNELS + """
 import json, resource
 from concurrent.futures import ThreadPoolExecutor
 from solver.full import simulate
@@ -135,12 +135,19 @@ release(simulate("ANB", 302, 308, until=1e-3, grid="moving", n=40, interfacial_l
                  saveat=[0.0, 5e-4, 1e-3]), Solute(1.0))  # the solute's kernels loaded
 from dosing import Planner
 from dosing.drug import DrugModel
-from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
+"""
+
+DRUG_START = """
 def cpu():
     u = resource.getrusage(resource.RUSAGE_SELF)
     return u.ru_utime + u.ru_stime
 t0 = cpu()
 p = Planner(cache_path={cache!r}, executor=ThreadPoolExecutor(2))
+"""
+
+DRUG = DRUG_KERNELS + """
+from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
+""" + DRUG_START + """
 ans = plan_drug_dose(p, DrugDoseRequest("ANB", 302, 308,
                                         DrugModel(diffusivity_cm2_s=1e-7, hindrance="none"),
                                         dose_fraction=0.5, dry_radius_um=50), validate=True)
@@ -149,21 +156,9 @@ print(json.dumps({{"cpu": cpu() - t0, "model": ans.model, "time": ans.time,
 p.close()
 """
 
-DRUG_SCHEDULE = KERNELS + """
-import json, resource
-from concurrent.futures import ThreadPoolExecutor
-from solver.full import simulate
-from solver.solute import Solute, release
-release(simulate("ANB", 302, 308, until=1e-3, grid="moving", n=40, interfacial_length=1e-3,
-                 saveat=[0.0, 5e-4, 1e-3]), Solute(1.0))  # the solute's kernels loaded
-from dosing import Planner
-from dosing.drug import DrugModel
+DRUG_SCHEDULE = DRUG_KERNELS + """
 from dosing.drug_schedule import DrugScheduleRequest, plan_drug_schedule
-def cpu():
-    u = resource.getrusage(resource.RUSAGE_SELF)
-    return u.ru_utime + u.ru_stime
-t0 = cpu()
-p = Planner(cache_path={cache!r}, executor=ThreadPoolExecutor(2))
+""" + DRUG_START + """
 ans = plan_drug_schedule(p, DrugScheduleRequest(
     "ANB", 302, 308, DrugModel(diffusivity_cm2_s=1e-8, hindrance="none", load_ug=1.0),
     doses=[0.2, 0.2, 0.2], rests=[0.05, 0.05], dry_radius_um=50))
@@ -252,32 +247,28 @@ def _fresh(tmp: Path, name: str) -> Path:
     return path
 
 
-def fig_validation(tree: Path, tmp: Path) -> tuple[float, str]:
-    code = VALIDATION.format(cache=str(_fresh(tmp, f"val-{tree.name}.sqlite")))
+def _cold(template: str, tag: str, tree: Path, tmp: Path) -> tuple[float, str]:
+    """A cold figure: ``template`` run on a fresh cache; its CPU and its answers."""
+    code = template.format(cache=str(_fresh(tmp, f"{tag}-{tree.name}.sqlite")))
     _, out = run(tree, [PY, "-c", code], timeout=1800)
     res = _json(out)
     return res["cpu"], json.dumps({k: v for k, v in res.items() if k != "cpu"})
+
+
+def fig_validation(tree: Path, tmp: Path) -> tuple[float, str]:
+    return _cold(VALIDATION, "val", tree, tmp)
 
 
 def fig_schedule(tree: Path, tmp: Path) -> tuple[float, str]:
-    code = SCHEDULE.format(cache=str(_fresh(tmp, f"sch-{tree.name}.sqlite")))
-    _, out = run(tree, [PY, "-c", code], timeout=1800)
-    res = _json(out)
-    return res["cpu"], json.dumps({k: v for k, v in res.items() if k != "cpu"})
+    return _cold(SCHEDULE, "sch", tree, tmp)
 
 
 def fig_drug(tree: Path, tmp: Path) -> tuple[float, str]:
-    code = DRUG.format(cache=str(_fresh(tmp, f"drug-{tree.name}.sqlite")))
-    _, out = run(tree, [PY, "-c", code], timeout=1800)
-    res = _json(out)
-    return res["cpu"], json.dumps({k: v for k, v in res.items() if k != "cpu"})
+    return _cold(DRUG, "drug", tree, tmp)
 
 
 def fig_drug_schedule(tree: Path, tmp: Path) -> tuple[float, str]:
-    code = DRUG_SCHEDULE.format(cache=str(_fresh(tmp, f"dsch-{tree.name}.sqlite")))
-    _, out = run(tree, [PY, "-c", code], timeout=1800)
-    res = _json(out)
-    return res["cpu"], json.dumps({k: v for k, v in res.items() if k != "cpu"})
+    return _cold(DRUG_SCHEDULE, "dsch", tree, tmp)
 
 
 def fig_moving(tree: Path, tmp: Path) -> tuple[float, str]:

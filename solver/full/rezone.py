@@ -77,18 +77,25 @@ def remap(y, old, new, out):
 
 
 @njit(cache=True)
+def log_stretch(y, nodes, centre, lj):
+    """Each cell's centre and ln J (its volume over its dry volume, eq. Jeqn) into
+    ``centre`` and ``lj``: the node radii ``y`` over the dry nodes ``nodes``."""
+    prev3 = 0.0
+    for c in range(nodes.size - 1):
+        r3 = y[c] ** 3
+        centre[c] = 0.5 * (nodes[c] + nodes[c + 1])
+        lj[c] = np.log((r3 - prev3) / (nodes[c + 1] ** 3 - nodes[c] ** 3))
+        prev3 = r3
+
+
+@njit(cache=True)
 def target_nodes(y, nodes, resolution, h_bulk, h_edge, h_min, grading, out):
     """Nodes equidistributing 1/h* (moving.py module doc) into ``out``; h_edge <= 0: no
     edge refinement; h* >= h_min."""
     n = nodes.size - 1
     centre = np.empty(n)
     lj = np.empty(n)
-    prev3 = 0.0
-    for c in range(n):
-        r3 = y[c] ** 3
-        centre[c] = 0.5 * (nodes[c] + nodes[c + 1])
-        lj[c] = np.log((r3 - prev3) / (nodes[c + 1] ** 3 - nodes[c] ** 3))
-        prev3 = r3
+    log_stretch(y, nodes, centre, lj)
     h = np.empty(n)
     for c in range(n):
         g = 0.0
@@ -187,12 +194,7 @@ def front_position(y, nodes, level, ell):
     n = nodes.size - 1
     lj = np.empty(n)
     centre = np.empty(n)
-    prev3 = 0.0
-    for c in range(n):
-        r3 = y[c] ** 3
-        centre[c] = 0.5 * (nodes[c] + nodes[c + 1])
-        lj[c] = np.log((r3 - prev3) / (nodes[c + 1] ** 3 - nodes[c] ** 3))
-        prev3 = r3
+    log_stretch(y, nodes, centre, lj)
     best = -1.0
     cs = 0
     for c in range(n - 1):
