@@ -16,8 +16,9 @@ import os
 from contextlib import asynccontextmanager
 from typing import Any
 
-from fastapi import FastAPI
+from fastapi import APIRouter, FastAPI
 from fastapi.concurrency import run_in_threadpool
+from fastapi.routing import APIRoute
 from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from dosing.jobs import exit_with_parent
@@ -80,16 +81,38 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
         app.add_middleware(TokenAuth, token=api_token)
     if allowed_hosts:
         app.add_middleware(TrustedHostMiddleware, allowed_hosts=allowed_hosts)
-    app.include_router(service.router)
-    app.include_router(physics.router)
-    app.include_router(dosing.router)
-    app.include_router(validations.router)
-    app.include_router(fit.router)
-    app.include_router(sweep.router)
-    app.include_router(page.router)
-    app.include_router(sensitivity_routes.router)
-    app.include_router(jobs.router)
+    for router in (service.router, physics.router, dosing.router, validations.router,
+                   fit.router, sweep.router, page.router, sensitivity_routes.router,
+                   jobs.router):
+        add_routes(app, router)
     return app
+
+
+def add_routes(app: FastAPI, router: APIRouter) -> None:
+    """Register ``router``'s routes on the app's own router, one by one (as FastAPI's
+    ``include_router`` did before 0.116).  ``include_router`` now keeps each router as one
+    route that matches its routes on every request, twice, under a body limit of its own:
+    with nine routers that cost about 0.1 ms of a dose request's 1 ms (benchmarks/speed.py
+    ``load``).  The routes, their OpenAPI description and the app's responses, dependency
+    overrides and body limit are the same (tests/test_api_routes_flat.py)."""
+    for r in router.routes:
+        if not isinstance(r, APIRoute):
+            raise TypeError(f"{r!r}: only API routes are registered route by route")
+        app.router.add_api_route(
+            r.path, r.endpoint, response_model=r.response_model, status_code=r.status_code,
+            tags=r.tags, dependencies=r.dependencies, summary=r.summary,
+            description=r.description, response_description=r.response_description,
+            responses=r.responses, deprecated=r.deprecated, methods=r.methods,
+            operation_id=r.operation_id, response_model_include=r.response_model_include,
+            response_model_exclude=r.response_model_exclude,
+            response_model_by_alias=r.response_model_by_alias,
+            response_model_exclude_unset=r.response_model_exclude_unset,
+            response_model_exclude_defaults=r.response_model_exclude_defaults,
+            response_model_exclude_none=r.response_model_exclude_none,
+            include_in_schema=r.include_in_schema, response_class=r.response_class,
+            name=r.name, route_class_override=type(r), callbacks=r.callbacks,
+            openapi_extra=r.openapi_extra,
+            generate_unique_id_function=r.generate_unique_id_function)
 
 
 def app_from_env() -> FastAPI:

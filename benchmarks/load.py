@@ -60,16 +60,20 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-def start_server(cache: Path, workers: int,
-                 max_pending: int | None = None) -> tuple[subprocess.Popen, str]:
-    """``thermogel serve`` on a free loopback port; returns once /health answers 200."""
+def start_server(cache: Path, workers: int, max_pending: int | None = None,
+                 root: Path = ROOT) -> tuple[subprocess.Popen, str]:
+    """``thermogel serve`` of the tree ``root`` on a free loopback port; returns once
+    /health answers 200."""
     port = free_port()
     cmd = [sys.executable, "-m", "api.cli", "serve", "--port", str(port), "--cache", str(cache),
            "--workers", str(workers), "--log-level", "warning"]
     if max_pending is not None:
         cmd += ["--max-pending", str(max_pending)]
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                            text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    if root != ROOT:
+        env["PYTHONPATH"] = str(root)
+    proc = subprocess.Popen(cmd, cwd=root, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True, env=env)
     url = f"http://127.0.0.1:{port}"
     deadline = time.monotonic() + 180.0
     while time.monotonic() < deadline:
@@ -82,6 +86,17 @@ def start_server(cache: Path, workers: int,
             time.sleep(0.2)
     proc.kill()
     raise SystemExit("server did not become healthy in 180 s")
+
+
+def server_cpu(proc: subprocess.Popen | None) -> float | None:
+    """CPU seconds (user + system, its threads included) of the server process so far, or
+    None (a server this script did not start, or not on Linux)."""
+    try:
+        with open(f"/proc/{proc.pid}/stat") as f:  # type: ignore[union-attr]
+            fields = f.read().rsplit(")", 1)[1].split()
+    except (AttributeError, OSError):
+        return None
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime, stime
 
 
 def payloads(n: int, seed: int) -> list[dict]:
@@ -216,6 +231,8 @@ def validation_states(url: str, ids: list[str]) -> dict[str, str]:
 
 
 def _print(res: dict) -> None:
+    if "server_cpu_ms_per_request" in res:
+        print(f"server CPU per request: {res['server_cpu_ms_per_request']:.3f} ms")
     print(f"{res['mode']}: {res['requests']} dose-time requests over {res['concurrency']} "
           f"connections in {res['wall_s']:.2f} s = {res['throughput_rps']:.0f} req/s; "
           f"latency p50 {res['p50_ms']:.1f} ms, p90 {res['p90_ms']:.1f} ms, "
@@ -235,6 +252,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--max-pending", type=int, default=None,
                    help="the started server's validation queue (default: its own)")
     p.add_argument("--url", default=None, help="an already running server (else one starts)")
+    p.add_argument("--tree", type=Path, default=ROOT,
+                   help="the source tree whose server starts (default this one; "
+                        "benchmarks/speed.py measures other revisions with this client)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--json", action="store_true")
     args = p.parse_args(argv)
@@ -248,11 +268,15 @@ def main(argv: list[str] | None = None) -> int:
         url = args.url
         if url is None:
             proc, url = start_server(Path(tmp.name) / "cache.sqlite", args.workers,
-                                     args.max_pending)
+                                     args.max_pending, args.tree.resolve())
         ids, refused = queue_validations(url)
         if args.warmup > 0:
             asyncio.run(run_load(url, payloads(args.warmup, args.seed + 1), args.concurrency))
+        cpu0 = server_cpu(proc)
         closed = asyncio.run(run_load(url, payloads(args.requests, args.seed), args.concurrency))
+        if cpu0 is not None:  # the server process's own CPU (its pool's runs left out)
+            closed["server_cpu_ms_per_request"] = \
+                1e3 * (server_cpu(proc) - cpu0) / closed["requests"]
         rate = args.rate or 0.5 * closed["throughput_rps"]
         paced = asyncio.run(run_load(url, payloads(args.requests, args.seed + 2),
                                      args.concurrency, rate=rate, seed=args.seed))

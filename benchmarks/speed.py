@@ -16,7 +16,10 @@ Figures (``--only``):
 * ``warm``: ``Planner.dose`` on a kept planner, milliseconds of CPU per answer (nine
   front-model requests in turn, 3,000 answers);
 * ``load``: the HTTP service's requests per second (benchmarks/load.py, short: 600
-  requests over 16 connections; wall-clock throughput, so its ratio is what counts);
+  requests over 16 connections; wall-clock throughput, so its ratio is what counts), and
+  the server process's CPU per request (its pool's validation runs left out).  Every tree's
+  server is driven by this tree's client (``load.py --tree``), with the same options, so
+  only the servers differ; median of ``--repeats`` runs, the trees alternating;
 * ``validation``: a cold (fresh cache) validation of the ANB 302 -> 308 K 80 % dose of a
   50 um bead (``Planner.dose(validate=True)``), with its answer, the truth's numerical
   bound and the model-form lattice, so that the answers can be compared;
@@ -233,11 +236,14 @@ def fig_warm(tree: Path, tmp: Path) -> tuple[float, str]:
 
 
 def fig_load(tree: Path, tmp: Path) -> tuple[float, str]:
-    _, out = run(tree, [PY, str(tree / "benchmarks" / "load.py"), "--requests", "600",
-                        "--warmup", "100", "--concurrency", "16", "--json"], timeout=900)
+    _, out = run(tree, [PY, str(ROOT / "benchmarks" / "load.py"), "--tree", str(tree),
+                        "--requests", "600", "--warmup", "100", "--concurrency", "16",
+                        "--json"], timeout=900)
     res = json.loads(out[out.index("{"):])
     closed = res.get("closed_loop") or res.get("closed") or res
-    return float(closed["throughput_rps"]), "requests/s (closed loop)"
+    cpu = closed.get("server_cpu_ms_per_request")
+    return float(closed["throughput_rps"]), "requests/s (closed loop)" + (
+        "" if cpu is None else f"; server CPU {cpu:.2f} ms per request")
 
 
 def _fresh(tmp: Path, name: str) -> Path:
@@ -331,9 +337,8 @@ def main(argv: list[str] | None = None) -> int:
                     run(tree, [PY, "-c", KERNELS])
             for name in names:
                 fn, unit, lower = FIGURES[name]
-                reps = 1 if name in ("validation", "schedule", "drug", "drug_schedule", "load",
-                                     "moving") \
-                    else args.repeats
+                reps = 1 if name in ("validation", "schedule", "drug", "drug_schedule",
+                                     "moving") else args.repeats
                 got: dict[Path, list[float]] = {t: [] for _, t in trees}
                 notes: dict[Path, str] = {}
                 for k in range(reps + (1 if name in WARMS else 0)):

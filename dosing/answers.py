@@ -9,10 +9,38 @@ callers that index them keep working.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+import copy
+import functools
+from dataclasses import dataclass, fields
 from typing import Any
 
 from .truth import Uncertainty
+
+_ATOMS = (str, int, float, type(None))  # immutable leaves (bool is an int)
+
+
+@functools.cache
+def _field_names(cls: type) -> tuple[str, ...]:
+    return tuple(f.name for f in fields(cls))
+
+
+def plain(obj: Any) -> Any:
+    """``dataclasses.asdict(obj)``: records as dicts, lists, tuples and dicts copied, other
+    leaves deep-copied; the same result, but immutable leaves (str, int, float, None) are
+    not passed through ``copy.deepcopy``, which made an answer's ``to_dict`` a quarter of
+    its cost."""
+    if isinstance(obj, _ATOMS):
+        return obj
+    cls = type(obj)
+    if hasattr(cls, "__dataclass_fields__"):
+        return {name: plain(getattr(obj, name)) for name in _field_names(cls)}
+    if isinstance(obj, tuple) and hasattr(obj, "_fields"):  # a namedtuple
+        return cls(*[plain(v) for v in obj])
+    if isinstance(obj, (list, tuple)):
+        return cls(plain(v) for v in obj)
+    if isinstance(obj, dict):
+        return cls((plain(k), plain(v)) for k, v in obj.items())
+    return copy.deepcopy(obj)
 
 
 class ByKey:
@@ -32,7 +60,7 @@ class ByKey:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
-        return asdict(self)  # type: ignore[call-overload]
+        return plain(self)
 
 
 @dataclass(frozen=True)
@@ -119,7 +147,7 @@ class DoseAnswer:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
-        return asdict(self)
+        return plain(self)
 
     def to_dataframe(self) -> Any:
         """One row: the answer, its error and uncertainty parts, the truth (pandas)."""
@@ -161,7 +189,7 @@ class ValidationStatus:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
-        return asdict(self)
+        return plain(self)
 
 
 @dataclass(frozen=True)

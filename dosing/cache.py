@@ -261,11 +261,33 @@ class ValidationCache:
                                   (key,)).fetchone()
         return None if row is None else row[0]
 
-    def get_many(self, keys: list[str] | tuple[str, ...]
+    def digests(self, keys: list[str] | tuple[str, ...]) -> dict[str, str | None]:
+        """Each key's row checksum (None: no row), with no blob read; remembered while the
+        file's version (:meth:`get_many`) stays put.  A caller holding a decoded row knows
+        from it whether the row changed (a longer run stored) without reading it again."""
+        con = self._con()
+        version = self._version(con)
+        memo = getattr(self._local, "digests", None)
+        if memo is None or memo[0] != version or len(memo[1]) > 4096:
+            memo = (version, {})
+            self._local.digests = memo
+        known = memo[1]
+        ask = [k for k in dict.fromkeys(keys) if k not in known]
+        for i in range(0, len(ask), 500):  # SQLite's bound-parameter limit
+            part = ask[i:i + 500]
+            known.update(dict.fromkeys(part))
+            marks = ",".join("?" * len(part))
+            known.update(con.execute(
+                f"SELECT key, sha256 FROM trajectories WHERE key IN ({marks})", part))
+        return {k: known[k] for k in keys}
+
+    def get_many(self, keys: list[str] | tuple[str, ...],
+                 found: dict[str, str] | None = None
                  ) -> dict[str, tuple[dict[str, Any], bytes]]:
         """(metadata, npz blob) of every stored key among ``keys``, in one query (absent
         keys are left out, and damaged rows, which are dropped: checksums verified; no
-        decoding: the caller decodes what it keeps).
+        decoding: the caller decodes what it keeps).  ``found``, if given, receives each
+        returned row's checksum (:meth:`digests`).
 
         Keys found absent are remembered with the file's version (``PRAGMA data_version``,
         which changes when another connection, thread or process commits, and this
@@ -275,7 +297,7 @@ class ValidationCache:
         out: dict[str, tuple[dict[str, Any], bytes]] = {}
         con = self._con()
         uniq = list(dict.fromkeys(keys))
-        version = (con.execute("PRAGMA data_version").fetchone()[0], con.total_changes)
+        version = self._version(con)
         absent = getattr(self._local, "absent", None)
         if absent is not None and absent[0] == version:
             if absent[1].issuperset(uniq):
@@ -290,12 +312,45 @@ class ValidationCache:
                     part):
                 if _sound(meta, bytes(data), digest):
                     out[key] = (json.loads(meta), bytes(data))
+                    if found is not None:
+                        found[key] = digest
                 else:  # damaged: dropped (and so absent: computed again)
                     self._drop_corrupt(key, digest)
         absent[1].update(k for k in uniq if k not in out)
         if len(absent[1]) > 4096:
             absent = (version, {k for k in uniq if k not in out})
         self._local.absent = absent
+        return out
+
+    @staticmethod
+    def _version(con: sqlite3.Connection) -> tuple[int, int]:
+        """What moves when the file may have changed: ``PRAGMA data_version`` (another
+        connection, thread or process committed) and this connection's ``total_changes``."""
+        return con.execute("PRAGMA data_version").fetchone()[0], con.total_changes
+
+    def stored_runs(self) -> frozenset[tuple[float, float, str, float]] | None:
+        """(t_start, t_end, branch, interfacial length) of every stored jump run, from the
+        rows' metadata (its ``scenario``), read again only when the file's version
+        (:meth:`get_many`) moved; None when a row's metadata does not say (then any run
+        may be stored).  A validation whose truth run is not among them is not complete:
+        its runs' keys and their lookup are not needed (a bead size never validated)."""
+        con = self._con()
+        version = self._version(con)
+        memo = getattr(self._local, "runs", None)
+        if memo is not None and memo[0] == version:
+            return memo[1]
+        runs: set[tuple[float, float, str, float]] | None = set()
+        for (text,) in con.execute("SELECT meta FROM trajectories"):
+            try:
+                sc = json.loads(text)["scenario"]
+                if sc.get("t_end") is not None:  # a jump (not a protocol or program)
+                    runs.add((float(sc["t_start"]), float(sc["t_end"]), str(sc["branch"]),
+                              float(sc["settings"]["interfacial_length"])))
+            except (ValueError, KeyError, TypeError, AttributeError):
+                runs = None  # a row that does not say: every run may be stored
+                break
+        out = None if runs is None else frozenset(runs)
+        self._local.runs = (version, out)
         return out
 
     def get_raw(self, key: str) -> tuple[dict[str, Any], bytes] | None:

@@ -87,6 +87,21 @@ def _validation_scenarios(gel: Gel, t_start: float, t_end: float, branch: str,
     return scs
 
 
+@functools.lru_cache(maxsize=1024)
+def _truth_scenario(gel: Gel, t_start: float, t_end: float, branch: str,
+                    settings: SolverSettings) -> Scenario:
+    sc = Scenario(gel, t_start, t_end, branch=branch, settings=settings)
+    sc.key()
+    return sc
+
+
+def truth_scenario(req: DoseRequest) -> Scenario:
+    """The request's truth run: the first of :func:`request_scenarios` (every method's
+    first rung is the settings themselves), without building the others."""
+    return _truth_scenario(req.gel, float(req.t_start), float(req.t_end), req.branch,
+                           req.settings)
+
+
 def request_scenarios(req: DoseRequest | ScheduleRequest) -> tuple[Scenario, ...]:
     """The validation runs of a request (:func:`validation_scenarios`)."""
     return validation_scenarios(req.gel, req.t_start, req.t_end, req.branch, req.settings,
@@ -115,6 +130,7 @@ class Planner:
                               lease_seconds=lease_seconds)
         self.horizon = float(horizon)
         self._mem: OrderedDict[str, Trajectory] = OrderedDict()
+        self._row_digest: dict[str, str] = {}  # the cache row each _mem entry came from
         self._mem_lock = threading.Lock()
         # protocol prefixes with a stored state at their end: prefix key -> (the stored
         # run's scenario, steps) (module ``restart``; kept for this planner's life)
@@ -149,9 +165,10 @@ class Planner:
                 return None
             with self._mem_lock:
                 self._mem[key] = traj
+                self._row_digest.pop(key, None)  # its row unknown: cached_many reads it
                 self._mem.move_to_end(key)
                 while len(self._mem) > 64:
-                    self._mem.popitem(last=False)
+                    self._row_digest.pop(self._mem.popitem(last=False)[0], None)
         return traj if _covers(traj, sc, need_radius, need_time) else None
 
     def cached_many(self, scs: list[Scenario] | tuple[Scenario, ...],
@@ -163,8 +180,14 @@ class Planner:
             out: list[Trajectory | None] = [self._mem.get(sc.key()) for sc in scs]
         ask = [i for i, (sc, t) in enumerate(zip(scs, out, strict=True))
                if t is None or not _covers(t, sc, need_radius, need_time)]
+        short = [scs[i].key() for i in ask if out[i] is not None]  # held, short of the need
+        if short:  # read again only a row that changed since (a longer run stored)
+            now = self.cache.digests(short)
+            ask = [i for i in ask if out[i] is None
+                   or now[scs[i].key()] != self._row_digest.get(scs[i].key())]
         if ask:
-            rows = self.cache.get_many([scs[i].key() for i in ask])
+            found: dict[str, str] = {}
+            rows = self.cache.get_many([scs[i].key() for i in ask], found)
             for i in ask:
                 key = scs[i].key()
                 raw = rows.get(key)
@@ -173,9 +196,10 @@ class Planner:
                 traj = Trajectory.from_npz(raw[1], raw[0])
                 with self._mem_lock:
                     self._mem[key] = traj
+                    self._row_digest[key] = found[key]
                     self._mem.move_to_end(key)
                     while len(self._mem) > 64:
-                        self._mem.popitem(last=False)
+                        self._row_digest.pop(self._mem.popitem(last=False)[0], None)
                 out[i] = traj
         if all(t is None for t in out):
             return out
@@ -288,6 +312,14 @@ class Planner:
         return [f.exception() or f.result() for f in futs]
 
     # ------------------------------------------------------------------ doses
+    def unvalidated(self, req: DoseRequest) -> bool:
+        """True when the request's truth run (the first of its validation runs) is
+        certainly not stored (:meth:`ValidationCache.stored_runs`): its validation is not
+        complete, so a front answer needs neither the runs' keys nor a lookup."""
+        runs = self.cache.stored_runs()
+        return runs is not None and (req.t_start, req.t_end, req.branch,
+                                     req.settings.interfacial_length) not in runs
+
     def front_time(self, req: DoseRequest, radius: float) -> float:
         """The front model's time to ``radius`` (raises where it does not apply)."""
         return front_time(req, radius)
@@ -310,7 +342,9 @@ class Planner:
         choice, scs, ans = self._now(req)
         if ans is None:
             return Pending(self._submit_validation(req, choice, scs))
-        return Answered(ans, self._submit_validation(req, choice, scs) if validate else None)
+        if not validate:
+            return Answered(ans)
+        return Answered(ans, self._submit_validation(req, choice, self.scenarios(req)))
 
     def answer_now(self, req: DoseRequest) -> DoseAnswer | None:
         """The dose's answer when it needs no new full-solver run (as :meth:`answer`), else
@@ -318,8 +352,12 @@ class Planner:
         return self._now(req)[2]
 
     def _now(self, req: DoseRequest) -> tuple[ModelChoice, list[Scenario], DoseAnswer | None]:
-        """(model choice, validation runs, the answer from the cache alone or None)."""
+        """(model choice, validation runs, the answer from the cache alone or None); on a
+        jump with no stored run (:meth:`unvalidated`) the runs are the truth's alone."""
         choice = self.model_answer(req)
+        if not choice.needs_full and self.unvalidated(req):
+            scs = [truth_scenario(req)]
+            return choice, scs, self._dose(req, choice, scs, [])
         scs = self.scenarios(req)
         trajs = self.cached_many(scs, choice.radius, choice.front_time or 0.0)
         complete = all(t is not None for t in trajs)
@@ -335,6 +373,8 @@ class Planner:
 
             return protocol_dose.dose(self, req, validate)  # type: ignore[return-value]
         choice = self.model_answer(req)
+        if not (choice.needs_full or validate) and self.unvalidated(req):
+            return self._dose(req, choice, [truth_scenario(req)], [])
         scs = self.scenarios(req)
         need_time = choice.front_time or 0.0
         if choice.needs_full or validate:

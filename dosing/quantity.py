@@ -164,6 +164,7 @@ _FIELD_SUFFIXES: tuple[tuple[str, str], ...] = (
 )
 
 
+@lru_cache(maxsize=512)  # a request's every field, every request: names are few
 def field_kind(name: str) -> str | None:
     """The kind of physical quantity (a key of ``UNITS``) a request field named ``name``
     holds, from its name ('dry_radius_um' -> 'length'), or None for other fields."""

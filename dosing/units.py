@@ -9,6 +9,7 @@ tau = eta Omega_p R^2 / (k0 k_B T_end) (eq. timescale).  The paper's constants
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -219,6 +220,11 @@ HOW_TO_PIN = ("pin it by a kinetics fit to a measured shrinking curve: thermogel
               "--gel NAME (docs/fitting.md)")
 
 
+@functools.cache
+def _defaults() -> PhysicalConstants:
+    return PhysicalConstants()
+
+
 def timescale_uncertainty(omega: float, t_end: float, constants: PhysicalConstants,
                           seconds: float | None = None,
                           calibrated_interval: tuple[float, float] | None = None
@@ -250,7 +256,7 @@ def timescale_uncertainty(omega: float, t_end: float, constants: PhysicalConstan
               "Tanaka & Fillmore's measured gel diffusivity": TANAKA_FILLMORE_D_CM2_S}
         lo, hi = min(ds.values()), max(ds.values())
         out = {"calibrated": False, "source": "default constants (the paper's: eta = 1e-3 Pa s, "
-               "Omega_p = 3e-25 m^3, k0 = 8e-20 m^2)" if constants == PhysicalConstants()
+               "Omega_p = 3e-25 m^3, k0 = 8e-20 m^2)" if constants == _defaults()
                else "constants given", "diffusivity_cm2_s": d_used,
                "diffusivity_range_cm2_s": [lo, hi], "candidates_cm2_s": ds,
                "factor": hi / lo,

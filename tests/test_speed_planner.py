@@ -58,17 +58,63 @@ def test_scenarios_are_memoised_and_equal_to_fresh_ones() -> None:
     assert other is not first and other[0].key() != first[0].key()  # the bead's own ell
 
 
-def test_one_batched_lookup_per_answer(tmp_path: Path) -> None:
+def test_one_batched_lookup_per_answer_and_none_without_a_stored_truth(
+        tmp_path: Path) -> None:
     planner = Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1),
                       solver=FakeSolver())
     calls: list[int] = []
     get_many = planner.cache.get_many
-    planner.cache.get_many = lambda keys: calls.append(len(keys)) or get_many(keys)
+    planner.cache.get_many = lambda keys, found=None: calls.append(len(keys)) or get_many(
+        keys, found)
     try:
         req = DoseRequest(**FRONT, dose_fraction=0.5, dry_radius_um=50.0)
-        planner.dose(req)
-        planner.dose(req)
-        assert calls == [len(request_scenarios(req))] * 2  # one query for all the runs
+        plain = planner.dose(req)
+        assert calls == []  # no run of this truth stored: no keys, no lookup
+        assert plain.scenario_key == request_scenarios(req)[0].key()
+        validated = planner.dose(req, validate=True)
+        planner._mem.clear()
+        calls.clear()
+        again = planner.dose(req)
+        assert again.validation is not None
+        assert calls == [len(request_scenarios(req))]  # one query for all the runs
+        assert planner.dose(req).validation is not None and len(calls) == 1  # then held
+        assert again.time == validated.time == plain.time
+        other = DoseRequest(**FRONT, dose_fraction=0.5, dry_radius_um=20.0)
+        calls.clear()
+        assert planner.dose(other).validation is None and calls == []  # another bead
+    finally:
+        planner.close()
+
+
+def test_a_stored_run_short_of_the_dose_is_not_read_again(tmp_path: Path) -> None:
+    """A run that stopped at a smaller dose is decoded once; a larger dose asks only for
+    the row's checksum until a longer run replaces it."""
+    planner = Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(2),
+                      solver=StoppingFake())
+    try:
+        small = DoseRequest(**FRONT, dose_fraction=0.3, dry_radius_um=50.0)
+        planner.dose(small, validate=True)
+        decoded: list[str] = []
+        from_npz = FullResult.from_npz
+
+        def counting(blob, meta=None):
+            decoded.append(meta["key"])
+            return from_npz(blob, meta)
+
+        FullResult.from_npz = staticmethod(counting)  # type: ignore[method-assign]
+        try:
+            planner._mem.clear()
+            large = DoseRequest(**FRONT, dose_fraction=0.8, dry_radius_um=50.0)
+            first = planner.dose(large)
+            n = len(decoded)
+            assert n > 0 and first.validation is None  # short of 80 %: unvalidated
+            for _ in range(3):
+                assert planner.dose(large).validation is None
+            assert len(decoded) == n  # not decoded again
+            planner.dose(large, validate=True)  # longer runs replace the short ones
+            assert planner.dose(large).validation is not None
+        finally:
+            FullResult.from_npz = from_npz  # type: ignore[method-assign]
     finally:
         planner.close()
 
@@ -157,3 +203,38 @@ def test_get_many_sees_every_write_after_remembering_absent_keys(tmp_path: Path)
         assert set(cache.get_many(keys)) == {"mine", "thread"}
         other.put("process", {"h": 3}, b"3")
         assert set(cache.get_many(keys)) == {"mine", "thread", "process"}
+
+
+def test_plain_is_asdict() -> None:
+    """An answer's ``to_dict`` (``dosing.answers.plain``) is ``dataclasses.asdict``'s
+    result, a copy: nested records, containers of every kind, numpy leaves."""
+    from collections import namedtuple
+    from dataclasses import asdict, dataclass, field
+
+    from dosing.answers import plain
+
+    Pair = namedtuple("Pair", "lo hi")
+
+    @dataclass
+    class Inner:
+        x: float
+        arr: np.ndarray = field(default_factory=lambda: np.arange(3.0))
+
+    @dataclass
+    class Outer:
+        a: int
+        inner: Inner
+        rows: list
+        t: tuple
+        d: dict
+        pair: Pair
+        none: None = None
+
+    o = Outer(1, Inner(np.float64(2.5)), [{"k": [1, 2.0, "s", None, True]}], (Inner(1.0),),
+              {"u": {"v": (1, 2)}}, Pair(1.0, 2.0))
+    got, want = plain(o), asdict(o)
+    assert repr(got) == repr(want)
+    assert type(got["pair"]) is Pair and type(got["t"]) is tuple
+    got["rows"][0]["k"].append(9)
+    got["inner"]["arr"][0] = 7.0
+    assert o.rows[0]["k"] == [1, 2.0, "s", None, True] and o.inner.arr[0] == 0.0  # a copy

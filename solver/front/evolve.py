@@ -23,6 +23,7 @@ from numba import njit
 from numpy.polynomial import Chebyshev
 
 from ..errors import NotApplicableError, SolverError
+from ..thermo import python_side
 from .flux import flux_numerator
 from .levels import FrontLevels
 
@@ -79,6 +80,11 @@ def _invert_decreasing(cf, cd, lo, hi, targets, tol, steps):
     return out
 
 
+# as Python calls them: a front answer's few calls load no kernel (solver.thermo.python_side)
+_clenshaw_py = python_side(_clenshaw)
+_invert_py = python_side(_invert_decreasing, _clenshaw=_clenshaw)
+
+
 @dataclass
 class FrontCurve:
     """One front trajectory in the front position x = R_f: a(x), A(x), t(x) and inverses.
@@ -104,7 +110,7 @@ class FrontCurve:
         """t when the front is at R_f = x."""
         if np.ndim(x) == 0:
             c = self._integral.coef
-            return self.t_start - _clenshaw(c, 0.0, self.x_start, float(x))
+            return self.t_start - _clenshaw_py(c, 0.0, self.x_start, float(x))
         return self.t_start - self._integral(x)
 
     def front_at(self, t: Array | float) -> Array:
@@ -113,7 +119,7 @@ class FrontCurve:
         cf = -self._integral.coef.copy()
         cf[0] += self.t_start
         y = np.atleast_1d(np.asarray(t, dtype=float))
-        return _invert_decreasing(cf, self.rate.coef, 0.0, self.x_start, y, tol, NEWTON_STEPS)
+        return _invert_py(cf, self.rate.coef, 0.0, self.x_start, y, tol, NEWTON_STEPS)
 
 
 def chebyshev_rate(g: Callable[[Array], Array], x_start: float) -> Chebyshev:

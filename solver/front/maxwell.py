@@ -17,7 +17,7 @@ from numba import njit
 
 from ..errors import NotApplicableError
 from ..gel import Gel
-from ..thermo import normal_energy, normal_stiffness, normal_stress
+from ..thermo import normal_energy, normal_stiffness, normal_stress, python_side
 
 J_MAX = 400.0  # largest volume ratio searched for the swollen side
 GRID = 4001
@@ -42,6 +42,9 @@ def _lower_hull(x: np.ndarray, y: np.ndarray) -> np.ndarray:  # pragma: no cover
     return hull[:m].copy()
 
 
+_lower_hull_py = python_side(_lower_hull)
+
+
 def maxwell_pair(gel: Gel, temperature: float, lambda_t: float) -> tuple[float, float]:
     """(n_-, n_+): the shrunken and swollen normal stretches that coexist across a front with
     tangential stretch ``lambda_t`` at ``temperature`` (module doc).
@@ -52,7 +55,7 @@ def maxwell_pair(gel: Gel, temperature: float, lambda_t: float) -> tuple[float, 
     lo = lt**-2.0
     n = lo * (1.0 + np.geomspace(1e-9, J_MAX, GRID))
     w = normal_energy(gel, temperature, n, lt)
-    hull = _lower_hull(n, w)
+    hull = _lower_hull_py(n, w)
     gaps = np.diff(n[hull])
     k = int(np.argmax(gaps / n[hull[:-1]]))
     i, j = hull[k], hull[k + 1]
