@@ -420,13 +420,15 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
                       start: Any = None) -> Any:
     """The mechanics of a protocol, one ``simulate`` per step (each continues from the
     exact state where the last ended, its moving nodes included: ``dosing.restart``, so
-    every protocol boundary is an output), sampled densely; one FullResult, whose
+    every protocol boundary is an output), sampled densely (on the moving grid between
+    steps, ``MeshOptions.land`` False: docs/moving_mesh.md sec. 8); one FullResult, whose
     ``diagnostics['step_outputs']`` counts the outputs after each step.  ``start``: the
     mechanics of the first j steps (a :func:`mechanics_prefix`), continued from its last
     state: the same arithmetic as running them again.  ``budget`` (wall seconds) is checked
     between steps, and inside them off the moving grid (``dosing.restart.step_budget``)."""
     from solver.errors import BudgetExceeded
     from solver.full import FullResult, simulate
+    from solver.full.moving import MeshOptions
 
     from .restart import restart_options, state_of, step_budget
 
@@ -454,6 +456,8 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
                                  f"at t = {t0:.4g}", {"wall_seconds": spent})
         kw = {"branch": branch} if prev is None else restart_options(state_of(prev, 0, t0))
         kw.update(step_budget(s.grid, budget - spent))
+        if s.grid == "moving":  # dense outputs between steps (docs/moving_mesh.md sec. 8)
+            kw["mesh"] = replace(kw.get("mesh") or MeshOptions(), land=False)
         res = simulate(gel, t_start, protocol=[(duration, temp)], grid=s.grid, n=s.n,
                        integrator=s.integrator, rtol=s.rtol, saveat=step_outputs(duration, k),
                        interfacial_length=s.interfacial_length, **kw)

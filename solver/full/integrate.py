@@ -20,10 +20,12 @@ from ..crossing import hermite_root
 from ..errors import SolverError
 from ..heating import HEAD, temperature_rate
 from . import rosenbrock as ros
+from .dense import DENSE_C, DENSE_D, stage_output
 from .kernels import KernelParams
 from .system import (
     JAC_ANALYTIC,
     MODULES,
+    MOVING,
     dense_output,
     edge_porosity,
     fd_jacobian,
@@ -37,6 +39,7 @@ class Rezoner(Protocol):
     """Mesh adaptation hook of the moving grid (``moving.Rezoner``)."""
 
     every: int
+    land: bool
 
     def __call__(self, y: np.ndarray, geo: np.ndarray) -> bool: ...
 
@@ -158,6 +161,18 @@ def _dense_state(ws: Workspace, t0: float, t1: float, y0: np.ndarray, y1: np.nda
     return out
 
 
+def _stage_state(ws: Workspace, t0: float, t1: float, y0: np.ndarray, y1: np.ndarray,
+                 t: float) -> np.ndarray:
+    """State at t in [t0, t1] on the moving grid: RODASP's continuous output from the
+    stages of the accepted step t0 -> t1 still in ``ws.buf.u`` (see :mod:`.dense`)."""
+    if t >= t1 or t1 <= t0:
+        return y1.copy()
+    out = np.zeros(ws.n)
+    stage_output(ws.grid, ws.geo, y0, y1, ws.buf.u, ros.RODASP.m, DENSE_C, DENSE_D,
+                 (t - t0) / (t1 - t0), t, out, np.zeros(ws.geo.shape[1] - 1))
+    return out
+
+
 def _failure(message: str, stats: Stats, t: float, extra: dict | None = None) -> SolverError:
     diag = {"steps": stats.steps, "rejected": stats.rejected, "jacobians": stats.jacobians,
             "rhs_calls": stats.rhs_calls, "t": t}
@@ -248,11 +263,13 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
 
     The stepping loop runs in numba (rosenbrock.rodas_run) between stops: output times,
     ``ticks`` progress points, record-buffer flushes and, on the moving grid, every
-    ``rezoner.every`` accepted steps a mesh check.  Outputs are cubic Hermite
-    interpolants of the last step.  A rezoner changes y and ``ws.geo`` in place after the
-    outputs up to the current time are out; the integrator restarts there with a fresh
-    Jacobian and without the step controller's history (a one-step method needs nothing
-    else).
+    ``rezoner.every`` accepted steps a mesh check.  Outputs are read between accepted
+    steps: cubic Hermite interpolants of the last step.  A rezoned moving grid lands a step
+    on every output time unless ``rezoner.land`` is False; it then reads them from RODASP's
+    own continuous output from the step's stages (:mod:`.dense`).  A rezoner changes y and
+    ``ws.geo`` in place after the outputs up to the current time are out; the integrator
+    restarts there with a fresh Jacobian and without the step controller's history (a
+    one-step method needs nothing else).
 
     Events: ``control.stop`` (a radius) ends the run when the radius reaches it, from the side it
     is on at the first segment's start; a segment's ``until`` ends that segment (its time
@@ -282,6 +299,9 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
                ros.RUN_UNDERFLOW: "step size underflow",
                ros.RUN_BAD_STATE: "unphysical state"}
     first = True
+    rezoned = rezoner is not None and rezoner.every > 0
+    land = rezoned and rezoner.land  # output times end steps
+    staged = ws.grid == MOVING and rezoned and not land  # outputs from the stages
     for seg in segments:
         f = ws.rhs(y, seg.par_at(seg.t0))
         if f is None:
@@ -315,11 +335,11 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
                 t_stop = min(t_stop, out_times[k_out])
             budget = max_steps
             t_land = seg.t1
-            if rezoner is not None and rezoner.every > 0:
+            if rezoned:
                 budget = min(max_steps, int(counters[ros.C_STEPS]) + rezoner.every)
-                # land on output times: the moving nodes' radii are smooth in time, but their
-                # differences across a thin cell are not well interpolated over a long step
-                if k_out < out_times.size and out_times[k_out] > tt[0]:
+                # land on output times (MeshOptions.land): the old cubic Hermite misplaced
+                # thin cells' nodes between steps (docs/moving_mesh.md sec. 8)
+                if land and k_out < out_times.size and out_times[k_out] > tt[0]:
                     t_land = min(t_land, float(out_times[k_out]))
             status = ros.rodas_run(ws.grid, state, t_stop, t_land, budget, seg.par, seg.heat,
                                    ws.geo, ws.band, ws.buf, method, control)
@@ -340,12 +360,16 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
                                 "phi_min": float(phi.min())})
             t0, t1 = float(tt[1]), float(tt[0])
             dense = partial(_dense_state, ws, t0, t1, yold, y, fold, f)
+            # outputs between steps: a rezoned grid's from the step's stages (its cubic
+            # Hermite's stiff slopes misplace thin cells' nodes, docs/moving_mesh.md sec. 8);
+            # an event's state stays on the cubic its time is the root of
+            between = partial(_stage_state, ws, t0, t1, yold, y) if staged else dense
             if status == ros.RUN_EVENT:
                 t_stop_ev = _event_time(t0, t1, yold, y, fold, f, ia,
                                         [(ctrl[4], ctrl[5])])
                 t_until = _event_time(t0, t1, yold, y, fold, f, ia, [(ctrl[6], ctrl[7])])
                 t_e = min(t_stop_ev, t_until)
-                k_out = _emit(out_times, k_out, t_e, dense, on_output)
+                k_out = _emit(out_times, k_out, t_e, between, on_output)
                 y_e = dense(t_e)
                 stats.truncate(t_e)
                 if t_stop_ev <= t_until and ctrl[5] != 0.0 and (
@@ -363,7 +387,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
                 seg.ended = t_e
                 y = y_e
                 break
-            k_out = _emit(out_times, k_out, t1, dense, on_output)
+            k_out = _emit(out_times, k_out, t1, between, on_output)
             if check and rezoner is not None and rezoner(y, ws.geo):
                 ctrl[1], ctrl[3] = 0.0, 0.0  # restart: new Jacobian, no controller history
             if progress is not None:

@@ -62,6 +62,10 @@ class MeshOptions:
         initial state.
     front: move the band around a thin front with the front's own motion
         (docs/moving_mesh.md sec. 7.2); False: the equidistributed target's motion only.
+    land: every output time ends a step (the planner's fluid runs: landing also caps the
+        steps, which their bounds were measured with); False reads outputs between steps
+        from RODASP's continuous output (a drug run's dense outputs; docs/moving_mesh.md
+        sec. 8).
     """
 
     resolution: float = 0.1
@@ -74,6 +78,7 @@ class MeshOptions:
     rezone: bool = True
     nodes: tuple[float, ...] | None = None
     front: bool = True
+    land: bool = True
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("resolution", 1e-3, 2.0), ("bulk", 1.0, 100.0),
@@ -84,8 +89,9 @@ class MeshOptions:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (
                     math.isfinite(v) and lo <= v <= hi):
                 raise ParameterError(f"mesh.{name}", v, f"{lo:g} to {hi:g}")
-        if not isinstance(self.front, bool):
-            raise ParameterError("mesh.front", self.front, "True or False")
+        for name in ("front", "land"):
+            if not isinstance(getattr(self, name), bool):
+                raise ParameterError(f"mesh.{name}", getattr(self, name), "True or False")
         ce = self.check_every
         if isinstance(ce, bool) or not isinstance(ce, (int, np.integer)) or not 1 <= ce <= 10_000:
             raise ParameterError("mesh.check_every", ce, "an integer 1-10000")
@@ -187,6 +193,7 @@ class Rezoner:
     def __init__(self, opts: MeshOptions, ell: float) -> None:
         self.opts, self.ell = opts, ell
         self.every = opts.check_every if opts.rezone else 0
+        self.land = opts.land
         self.checks = 0
         self.remaps = 0
         self._last: tuple[float, np.ndarray] | None = None
