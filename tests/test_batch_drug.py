@@ -113,24 +113,30 @@ async def test_http_refuses_bad_batch_medium_fields(tmp_path) -> None:
         planner.jobs.executor.shutdown(wait=True)
 
 
-def test_http_job_answers_the_python_batch(tmp_path) -> None:
-    """The stored drug-dose job's run (api.service, state None: blocking) is drug_batch_dose
-    at the request's default settings (the truth's mechanics)."""
+def _dose_time_blocking(tmp_path, body: dict) -> dict:
+    """The service's dose_time on ``body`` with no job state: a stored job's run, here
+    blocking, on a planner of its own (closed afterwards)."""
     from concurrent.futures import ThreadPoolExecutor
 
     from api.schemas import DoseTimeRequest
     from api.service import dose_time
     from dosing import Planner
 
-    body = {"gel": "ANB", "t_start": 302, "t_end": 308, "dose_fraction": 0.5,
-            "drug": DRUG, "size_distribution": TABLE, "medium_volume_ml": "20 mL",
-            "bead_count": 1e6}
     planner = Planner(cache_path=str(tmp_path / "c.sqlite"), executor=ThreadPoolExecutor(1))
     try:
-        out = dose_time(planner, DoseTimeRequest(**body))
+        return dose_time(planner, DoseTimeRequest(**body))
     finally:
         planner.close()
         planner.jobs.executor.shutdown(wait=True)
+
+
+def test_http_job_answers_the_python_batch(tmp_path) -> None:
+    """The stored drug-dose job's run (api.service, state None: blocking) is drug_batch_dose
+    at the request's default settings (the truth's mechanics)."""
+    body = {"gel": "ANB", "t_start": 302, "t_end": 308, "dose_fraction": 0.5,
+            "drug": DRUG, "size_distribution": TABLE, "medium_volume_ml": "20 mL",
+            "bead_count": 1e6}
+    out = _dose_time_blocking(tmp_path, body)
     ref = drug_batch_dose(DrugDoseRequest("ANB", 302, 308, DRUG, dose_fraction=0.5),
                           TABLE, 20.0, 1e6)
     assert out["batch"]["time"] == ref.time and out["batch"]["medium_volume_ml"] == 20.0
@@ -279,12 +285,7 @@ def test_a_drug_batch_under_a_protocol_is_the_same_answer_by_every_way_in(
     drug_batch_dose; the HTTP body (its stored 'drug-dose' job, run here blocking) reaches the
     same function with the same protocol, drug and sizes (HTTP runs at the truth's settings,
     too costly here: the call is recorded instead)."""
-    from concurrent.futures import ThreadPoolExecutor
-
     import dosing.batch_drug as batch_drug
-    from api.schemas import DoseTimeRequest
-    from api.service import dose_time
-    from dosing import Planner
 
     ans = drug_batch_dose(_protocol_req(), {"cv": 0.2})
     argv = ["dose", "--gel", "ANB", "--t-start", "302", "--protocol", RAMP[0], "--fraction",
@@ -299,12 +300,7 @@ def test_a_drug_batch_under_a_protocol_is_the_same_answer_by_every_way_in(
                         lambda req, dist, *rest: calls.append((req, dist)) or ans)
     body = {"gel": "ANB", "t_start": 302, "protocol": RAMP, "dose_fraction": 0.5,
             "dry_radius_um": 50, "drug": DRUG, "size_distribution": {"cv": 0.2}}
-    planner = Planner(cache_path=str(tmp_path / "c.sqlite"), executor=ThreadPoolExecutor(1))
-    try:
-        got = dose_time(planner, DoseTimeRequest(**body))
-    finally:
-        planner.close()
-        planner.jobs.executor.shutdown(wait=True)
+    got = _dose_time_blocking(tmp_path, body)
     assert got["batch"]["time"] == ans.time
     (req, dist), = calls
     ref = _protocol_req()
