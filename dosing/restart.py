@@ -19,10 +19,9 @@ from typing import Any
 import numpy as np
 
 from solver.errors import BudgetExceeded
-from solver.full.result import RECORD_ARRAYS, FullResult
+from solver.full.result import RECORD_ARRAYS, FullResult, uniform_output_times
 
 STATES = "boundary_states"  # meta: the state after each protocol step
-DEFAULT_OUTPUTS = 200  # the one-shot run's outputs (solver.full.run.DEFAULT_OUTPUTS)
 _COUNTERS = ("steps", "rejected", "jacobians", "rhs_calls", "merges", "mesh_checks", "remaps",
              "wall_time")
 
@@ -71,11 +70,8 @@ def boundaries(steps: tuple[tuple[float, float], ...]) -> list[float]:
 
 
 def output_times(total: float) -> np.ndarray:
-    """The one-shot run's default outputs: every total / 200, and the end."""
-    every = total / DEFAULT_OUTPUTS
-    k = int(np.floor(total / every + 1e-9))
-    times = np.unique(np.concatenate([np.arange(k + 1) * every, [total]]))
-    return times[times <= total]
+    """The one-shot run's default outputs (the solver's own rule)."""
+    return uniform_output_times(total)
 
 
 def state_of(res: FullResult, steps: int, t: float) -> dict[str, Any]:

@@ -29,6 +29,16 @@ _ARRAYS = ("t", "radius", "front", "jump", "phi", "coords", "temperature", "expe
 # what a stored run keeps (the planner's cache; also the arrays of its older blobs)
 RECORD_ARRAYS = ("t", "radius", "front", "expelled_volume", "temperature", "step_t",
                  "step_radius", "step_rate", "step_edge")
+DEFAULT_OUTPUTS = 200  # a run's outputs over its length unless told (simulate's ``every``)
+
+
+def uniform_output_times(total: float, every: float | None = None) -> np.ndarray:
+    """A run's outputs every ``every`` (default total / DEFAULT_OUTPUTS) from 0, and
+    ``total``."""
+    every = total / DEFAULT_OUTPUTS if every is None else every
+    k = int(math.floor(total / every + 1e-9))
+    times = np.unique(np.concatenate([np.arange(k + 1) * every, [total]]))
+    return times[times <= total]
 
 
 def _empty() -> np.ndarray:

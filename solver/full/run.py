@@ -25,11 +25,10 @@ from .integrate import Segment, Stats, StepControl, Workspace, run_explicit, run
 from .kernels import KernelParams
 from .moving import MeshOptions, Rezoner
 from .options import SolverOptions
-from .result import FullResult
+from .result import DEFAULT_OUTPUTS, FullResult, uniform_output_times
 from .system import JAC_ANALYTIC, JAC_FD, porosity, solid_error
 
 MAX_OUTPUTS = 100_000
-DEFAULT_OUTPUTS = 200
 HOLD_AFTER = 1e3  # tau: how long a program run with ``stop`` holds after its last step
 
 Initial = FullResult | tuple[float, Sequence[float]] | None
@@ -346,9 +345,7 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
             if total / every > MAX_OUTPUTS:
                 raise ParameterError("every", every, f">= {total / MAX_OUTPUTS:.3g} "
                                      f"(at most {MAX_OUTPUTS} outputs)")
-            k_out = int(math.floor(total / every + 1e-9))
-            out_times = np.unique(np.concatenate([np.arange(k_out + 1) * every, [total]]))
-            out_times = out_times[out_times <= total]
+            out_times = uniform_output_times(total, every)
 
     code = spec.code
     mod = spec.module
