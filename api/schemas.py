@@ -24,10 +24,10 @@ from pydantic import (
     model_validator,
 )
 
-from dosing.drug import REFERENCE_TEMPERATURE_K
 from dosing.quantity import from_edge
 from dosing.request import ScheduleRequest as PlannerSchedule
 from dosing.scenario import DEFAULT_INTERFACIAL_LENGTH
+from dosing.units import REFERENCE_TEMPERATURE_K
 from solver.limits import (
     BEAD_COUNT_RANGE,
     DRUG_STEP_MAX,

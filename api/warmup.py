@@ -64,9 +64,13 @@ def _modules(packages: tuple[str, ...]) -> Iterator[Any]:
 
 def kernels(packages: tuple[str, ...] = PACKAGES) -> dict[str, Any]:
     """Every numba kernel defined in the packages, by qualified name."""
+    from solver.jit import Kernel
+
     out: dict[str, Any] = {}
     for mod in _modules(packages):
         for attr, obj in vars(mod).items():
+            if isinstance(obj, Kernel) and obj.__module__ == mod.__name__:
+                obj = obj.compiled  # numba loaded on first compiled use (solver.jit)
             if _is_kernel(obj) and obj.py_func.__module__ == mod.__name__:
                 out[f"{mod.__name__}.{attr}"] = obj
     return out

@@ -49,7 +49,13 @@ from solver.solute import Hindrance, ReleaseResult, Solute, crank_sphere
 
 from .cache import ValidationCache
 from .scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
-from .units import BOLTZMANN, UM3_PER_UL, PhysicalConstants, water_viscosity
+from .units import (
+    BOLTZMANN,
+    REFERENCE_TEMPERATURE_K,
+    UM3_PER_UL,
+    PhysicalConstants,
+    water_viscosity,
+)
 
 # mechanics samples per unit time (at least MIN_SAMPLES per step): benchmarks/drug.py measures
 # the released fraction within 3e-3 of the load (1e-3 with sieving) at a cost <= 1.5 x
@@ -64,7 +70,6 @@ EARLY_PER_DECADE = 40
 D_RANGE_CM2_S = (0.0, 1e-3)
 HINDRANCE_LAWS = ("free-volume", "ogston", "amsden", "none")
 T_REF_RANGE = (T_MIN, T_MAX)  # solver.limits
-REFERENCE_TEMPERATURE_K = 298.15  # 25 degC: where D0 is given unless stated
 DRUG_ARRAYS = ("t", "radius", "released_fraction", "advected_fraction", "expelled_fraction",
                "in_gel_fraction", "medium_concentration", "temperature", "profile_t",
                "profiles", "profile_radii", "squeezed_fraction")

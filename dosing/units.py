@@ -20,6 +20,7 @@ from solver.gel import check_temperature
 BOLTZMANN = 1.380649e-23  # J/K (exact, SI 2019)
 UM3_PER_UL = 1.0e9  # 1 uL = 1 mm^3 = 1e9 um^3
 WATER = "water"
+REFERENCE_TEMPERATURE_K = 298.15  # 25 degC: where a drug's D0 is given unless stated
 
 # Vogel equation for liquid water, mu = A 10^(B / (T - C)); within 2.5 % over 0-370 C.
 _VOGEL_A, _VOGEL_B, _VOGEL_C = 2.414e-5, 247.8, 140.0

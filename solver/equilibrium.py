@@ -18,7 +18,7 @@ from scipy.optimize import brentq
 
 from .errors import ParameterError
 from .gel import T_MAX, T_MIN, Gel, as_gel, check_temperature
-from .thermo import osmotic_p_py as osmotic_p
+from .thermo import osmotic_p
 
 LAMBDA_MIN = 1.0 + 1e-10
 LAMBDA_MAX = 1.0e3

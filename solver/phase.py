@@ -20,9 +20,7 @@ from scipy.optimize import brentq, minimize_scalar
 from .equilibrium import Branch, equilibrium, nearest_stable
 from .errors import ParameterError
 from .gel import T_MAX, T_MIN, Gel, as_gel, check_temperature
-from .thermo import normal_energy, normal_stiffness, normal_stress
-from .thermo import osmotic_dp_py as osmotic_dp
-from .thermo import osmotic_p_py as osmotic_p
+from .thermo import normal_energy, normal_stiffness, normal_stress, osmotic_dp, osmotic_p
 
 Behaviour = Literal["smooth", "front", "delayed_front", "spinodal"]
 Direction = Literal["swell", "shrink", "none"]

@@ -2,85 +2,54 @@
 
 Stresses are scaled by k_B T / Omega_p, so the neo-Hookean term has unit modulus and the
 mixing term carries Omega (eqs. FreeEnergy-MixingEnergy, Stress_Dimless, Osmotic_Dimless).
-The scalar kernels are numba functions so the full solver's kernels can call them; they
-also accept numpy arrays from Python.  ``x = 1 - phi = 1/J`` is the solid fraction.
+The scalar kernels are numba functions (``solver.jit.kernel``) so the full solver's kernels
+can call them; they also accept numpy arrays from Python.  ``x = 1 - phi = 1/J`` is the
+solid fraction.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from types import FunctionType
-from typing import Any
-
 import numpy as np
-from numba import njit
 
 from .gel import Gel
+from .jit import kernel
 
 
-@njit(cache=True)
+@kernel
 def osmotic_p(phi, chi0, chi1):
     """P(phi), with Pi = Omega P(phi) (eq. Osmotic_Dimless, sec. FrontSoln)."""
     x = 1.0 - phi
     return -np.log1p(-x) - x - (chi0 - chi1) * x * x - 2.0 * chi1 * x * x * x
 
 
-@njit(cache=True)
+@kernel
 def osmotic_dp(phi, chi0, chi1):
     """P'(phi) = dP/dphi (sec. FrontSoln)."""
     x = 1.0 - phi
     return -1.0 / phi + 1.0 + 2.0 * (chi0 - chi1) * x + 6.0 * chi1 * x * x
 
 
-@njit(cache=True)
+@kernel
 def mixing_energy(jac, chi0, chi1):
     """W_mix / Omega per dry volume: J[phi log phi + chi phi (1-phi)] (eq. MixingEnergy)."""
     x = 1.0 / jac
     return (jac - 1.0) * np.log1p(-x) + (chi0 + chi1 * x) * (1.0 - x)
 
 
-def python_side(kernel: Any, **kernels: Any) -> Callable[..., Any]:
-    """A numba kernel as Python code calls it: the kernel once it is loaded in this process
-    (the full solver's and the service's, after its warm-up), else its own Python body,
-    the same arithmetic (bit-identical: tests/test_speed_imports.py), with the kernels it
-    calls (``kernels``: name -> kernel) as Python too.  A one-off answer (a CLI call) then
-    loads none of numba's machinery: 0.2 s of CPU for a process's first kernel, more than
-    the few calls it makes cost in Python (docs/speed.md)."""
-    body = kernel.py_func
-    if kernels:  # the body with the kernels it calls replaced by their Python bodies
-        names = {**body.__globals__, **{k: python_side(v) for k, v in kernels.items()}}
-        body = FunctionType(body.__code__, names, body.__name__, body.__defaults__,
-                            body.__closure__)
-
-    def call(*args: Any) -> Any:
-        return kernel(*args) if kernel.signatures else body(*args)
-
-    call.__name__, call.__doc__ = kernel.__name__, kernel.__doc__
-    call.kernel, call.body = kernel, body  # type: ignore[attr-defined]
-    return call
-
-
-# the scalar kernels as Python callers call them (the full solver's kernels call the
-# compiled ones)
-osmotic_p_py = python_side(osmotic_p)
-osmotic_dp_py = python_side(osmotic_dp)
-mixing_energy_py = python_side(mixing_energy)
-
-
 def osmotic_pressure(gel: Gel, temperature: float, jac: np.ndarray | float) -> np.ndarray | float:
     """Pi(J) = -dW_mix/dJ = Omega P(1 - 1/J) (eq. Osmotic_Dimless)."""
-    return gel.omega * osmotic_p_py(1.0 - 1.0 / np.asarray(jac, dtype=float),
+    return gel.omega * osmotic_p(1.0 - 1.0 / np.asarray(jac, dtype=float),
                                  gel.chi0(temperature), gel.chi1(temperature))
 
 
 def pressure_p(gel: Gel, temperature: float, phi: np.ndarray | float) -> np.ndarray | float:
     """P(phi) at temperature T for this gel (sec. FrontSoln)."""
-    return osmotic_p_py(np.asarray(phi, dtype=float), gel.chi0(temperature), gel.chi1(temperature))
+    return osmotic_p(np.asarray(phi, dtype=float), gel.chi0(temperature), gel.chi1(temperature))
 
 
 def pressure_dp(gel: Gel, temperature: float, phi: np.ndarray | float) -> np.ndarray | float:
     """P'(phi) at temperature T for this gel (sec. FrontSoln)."""
-    return osmotic_dp_py(np.asarray(phi, dtype=float), gel.chi0(temperature), gel.chi1(temperature))
+    return osmotic_dp(np.asarray(phi, dtype=float), gel.chi0(temperature), gel.chi1(temperature))
 
 
 def terzaghi_stress(stretch: np.ndarray | float, jac: np.ndarray | float) -> np.ndarray | float:
@@ -93,7 +62,7 @@ def free_energy(gel: Gel, temperature: float, l1: float, l2: float, l3: float) -
     """Dimensionless W(lambda_1, lambda_2, lambda_3; T) (eqs. FreeEnergy-MixingEnergy)."""
     jac = l1 * l2 * l3
     elastic = 0.5 * (l1 * l1 + l2 * l2 + l3 * l3 - 3.0 - 2.0 * np.log(jac))
-    return elastic + gel.omega * mixing_energy_py(jac, gel.chi0(temperature), gel.chi1(temperature))
+    return elastic + gel.omega * mixing_energy(jac, gel.chi0(temperature), gel.chi1(temperature))
 
 
 def normal_energy(gel: Gel, temperature: float, ln: np.ndarray | float, lt: float) -> np.ndarray:
@@ -101,14 +70,14 @@ def normal_energy(gel: Gel, temperature: float, ln: np.ndarray | float, lt: floa
     ln = np.asarray(ln, dtype=float)
     jac = ln * lt * lt
     elastic = 0.5 * (ln * ln + 2.0 * lt * lt - 3.0 - 2.0 * np.log(jac))
-    return elastic + gel.omega * mixing_energy_py(jac, gel.chi0(temperature), gel.chi1(temperature))
+    return elastic + gel.omega * mixing_energy(jac, gel.chi0(temperature), gel.chi1(temperature))
 
 
 def normal_stress(gel: Gel, temperature: float, ln: np.ndarray | float, lt: float) -> np.ndarray:
     """dW/dlambda_n at (lambda_n, lambda_t, lambda_t) (eq. Coexistence)."""
     ln = np.asarray(ln, dtype=float)
     jac = ln * lt * lt
-    p = osmotic_p_py(1.0 - 1.0 / jac, gel.chi0(temperature), gel.chi1(temperature))
+    p = osmotic_p(1.0 - 1.0 / jac, gel.chi0(temperature), gel.chi1(temperature))
     return ln - 1.0 / ln - gel.omega * p * lt * lt
 
 
@@ -116,7 +85,7 @@ def normal_stiffness(gel: Gel, temperature: float, ln: np.ndarray | float, lt: f
     """d^2W/dlambda_n^2 at (lambda_n, lambda_t, lambda_t) (eq. Spinodal)."""
     ln = np.asarray(ln, dtype=float)
     jac = ln * lt * lt
-    dp = osmotic_dp_py(1.0 - 1.0 / jac, gel.chi0(temperature), gel.chi1(temperature))
+    dp = osmotic_dp(1.0 - 1.0 / jac, gel.chi0(temperature), gel.chi1(temperature))
     return 1.0 + 1.0 / (ln * ln) - gel.omega * dp * lt**4 / (jac * jac)
 
 

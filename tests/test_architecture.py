@@ -45,8 +45,10 @@ def _count(node: Fn) -> int:
 
 
 def _is_kernel(node: Fn) -> bool:
-    """Compiled by numba (@njit, @numba.njit(...), @jit, @numba.jit(...))."""
-    return any("jit" in ast.unparse(d) for d in node.decorator_list)
+    """Compiled by numba (@njit, @numba.njit(...), @jit, @numba.jit(...), solver.jit's
+    @kernel)."""
+    return any("jit" in ast.unparse(d) or ast.unparse(d) == "kernel"
+               for d in node.decorator_list)
 
 
 def _too_long(functions: list[tuple[str, Fn]]) -> list[tuple[str, int, bool]]:

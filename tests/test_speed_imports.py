@@ -81,51 +81,52 @@ def test_lazy_package_names_resolve() -> None:
 
 def test_a_front_cli_dose_loads_no_kernel(tmp_path) -> None:
     """A front-model ``thermogel dose`` calls the scalar kernels' Python bodies
-    (``solver.thermo.python_side``): numba loads none of its kernels."""
-    code = ("import contextlib, io, os\n"
+    (``solver.jit.Kernel``): it imports neither numba nor the drug's solute model."""
+    code = ("import contextlib, os\n"
             f"os.environ['THERMOGEL_CACHE'] = {str(tmp_path / 'c.sqlite')!r}\n"
             "import api.cli\n"
             "with contextlib.redirect_stdout(io.StringIO()):\n"
             "    assert api.cli.main(['dose', '--gel', 'ANB', '--t-start', '302', '--t-end',"
             " '308', '--fraction', '0.8', '--dry-radius-um', '50']) == 0\n"
-            "from numba.core.registry import CPUDispatcher\n"
-            "import gc\n"
-            "loaded = [d.py_func.__name__ for d in gc.get_objects()"
-            " if isinstance(d, CPUDispatcher) and d.signatures]\n"
-            "assert loaded == [], loaded")
-    assert "numba" in _loaded(code)  # imported (the kernels are defined), none loaded
+            "assert 'solver.solute' not in sys.modules\n")
+    loaded = _loaded("import io\n" + code)
+    assert "numba" not in loaded and "solver.full.kernels" not in loaded, loaded
 
 
 def test_the_python_bodies_are_the_kernels_bit_for_bit() -> None:
-    """What python_side runs before a kernel is loaded gives the kernel's own numbers."""
+    """What a Kernel runs before it is compiled gives the compiled kernel's own numbers."""
     import numpy as np
 
-    from solver.front.evolve import _clenshaw, _invert_decreasing, _invert_py
-    from solver.front.maxwell import _lower_hull, _lower_hull_py
-    from solver.thermo import (
-        mixing_energy,
-        mixing_energy_py,
-        osmotic_dp,
-        osmotic_dp_py,
-        osmotic_p,
-        osmotic_p_py,
-    )
+    from solver.front.evolve import _clenshaw, _invert_decreasing
+    from solver.front.maxwell import _lower_hull
+    from solver.thermo import mixing_energy, osmotic_dp, osmotic_p
 
     rng = np.random.default_rng(3)
     phi = rng.uniform(1e-6, 1.0 - 1e-9, 20_000)
     chi = (-12.947 + 0.04496 * 305.0, 17.92 - 0.0569 * 305.0)
-    for kernel, py in ((osmotic_p, osmotic_p_py), (osmotic_dp, osmotic_dp_py)):
-        body = py.body
-        assert np.array_equal(kernel(phi, *chi), body(phi, *chi))
-        assert all(kernel(float(x), *chi) == body(float(x), *chi) for x in phi[:500])
+    for kernel in (osmotic_p, osmotic_dp):
+        c, body = kernel.compiled, kernel.py_func
+        assert np.array_equal(c(phi, *chi), body(phi, *chi))
+        assert all(c(float(x), *chi) == body(float(x), *chi) for x in phi[:500])
+        assert kernel.loaded and kernel(0.3, *chi) == c(0.3, *chi)  # compiled once loaded
     jac = 1.0 / (1.0 - phi)
-    assert np.array_equal(mixing_energy(jac, *chi), mixing_energy_py.body(jac, *chi))
+    assert np.array_equal(mixing_energy.compiled(jac, *chi), mixing_energy.py_func(jac, *chi))
     x = np.sort(rng.uniform(0.1, 5.0, 4001))
     y = np.sin(3.0 * x) + x * x
-    assert np.array_equal(_lower_hull(x, y), _lower_hull_py.body(x, y))
+    assert np.array_equal(_lower_hull.compiled(x, y), _lower_hull.py_func(x, y))
     coef = np.array([1.0, -0.5, 0.1, -0.01, 0.001])  # a decreasing series on [0, 1]
     d = -np.polynomial.chebyshev.chebder(coef) * 2.0
     targets = np.linspace(0.7, 1.5, 9)
-    assert np.array_equal(_invert_decreasing(coef, d, 0.0, 1.0, targets, 1e-14, 60),
-                          _invert_py.body(coef, d, 0.0, 1.0, targets, 1e-14, 60))
-    assert _clenshaw(coef, 0.0, 1.0, 0.3) == _clenshaw.py_func(coef, 0.0, 1.0, 0.3)
+    assert np.array_equal(_invert_decreasing.compiled(coef, d, 0.0, 1.0, targets, 1e-14, 60),
+                          _invert_decreasing.py_func(coef, d, 0.0, 1.0, targets, 1e-14, 60))
+    assert _clenshaw.compiled(coef, 0.0, 1.0, 0.3) == _clenshaw.py_func(coef, 0.0, 1.0, 0.3)
+
+
+def test_a_kernel_calls_the_kernels_it_names_compiled() -> None:
+    """A Kernel's dispatcher is built with the Kernels its body names replaced by their
+    dispatchers (numba cannot call a Python object); the module keeps the Kernels."""
+    from solver.front import evolve
+
+    compiled = evolve._invert_decreasing.compiled
+    assert compiled.py_func.__globals__["_clenshaw"] is evolve._clenshaw.compiled
+    assert isinstance(evolve._clenshaw, type(evolve._invert_decreasing))

@@ -53,10 +53,10 @@ def add_drug_options(p: argparse.ArgumentParser, required: bool = False) -> None
 
 def drug_from_args(args: argparse.Namespace, always: bool = False) -> Any:
     """The DrugModel the options describe, or None when none was given (and not ``always``)."""
-    from dosing.drug import DrugModel
-
     given = {f: getattr(args, f, None) for f in (*DRUG_FIELDS, "sieving")}
     given = {k: v for k, v in given.items() if v is not None}
     if not given and not always:
-        return None
+        return None  # a fluid answer: the drug's model (numba, scipy) is not imported
+    from dosing.drug import DrugModel
+
     return DrugModel(**given)

@@ -19,11 +19,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from numpy.polynomial import Chebyshev
 
 from ..errors import NotApplicableError, SolverError
-from ..thermo import python_side
+from ..jit import kernel
 from .flux import flux_numerator
 from .levels import FrontLevels
 
@@ -43,7 +42,7 @@ def front_of_radius(levels: FrontLevels, solid: float, radius: Array | float) ->
     return np.cbrt((levels.s_plus * np.asarray(radius) ** 3 - solid) / levels.jump)
 
 
-@njit(cache=True)
+@kernel
 def _clenshaw(coef, lo, hi, x):
     """Chebyshev series with domain [lo, hi] at scalar x (Clenshaw recurrence)."""
     y = (2.0 * x - lo - hi) / (hi - lo)
@@ -54,7 +53,7 @@ def _clenshaw(coef, lo, hi, x):
     return coef[0] + y * b1 - b2
 
 
-@njit(cache=True)
+@kernel
 def _invert_decreasing(cf, cd, lo, hi, targets, tol, steps):
     """Solve F(x) = y on [lo, hi] for each target, F decreasing with F' = -D (Chebyshev
     series cf, cd on [lo, hi]): bracketed Newton, bisection when a step leaves the bracket."""
@@ -78,11 +77,6 @@ def _invert_decreasing(cf, cd, lo, hi, targets, tol, steps):
             x = step if a < step < b else 0.5 * (a + b)
         out[i] = x
     return out
-
-
-# as Python calls them: a front answer's few calls load no kernel (solver.thermo.python_side)
-_clenshaw_py = python_side(_clenshaw)
-_invert_py = python_side(_invert_decreasing, _clenshaw=_clenshaw)
 
 
 @dataclass
@@ -110,7 +104,7 @@ class FrontCurve:
         """t when the front is at R_f = x."""
         if np.ndim(x) == 0:
             c = self._integral.coef
-            return self.t_start - _clenshaw_py(c, 0.0, self.x_start, float(x))
+            return self.t_start - _clenshaw(c, 0.0, self.x_start, float(x))
         return self.t_start - self._integral(x)
 
     def front_at(self, t: Array | float) -> Array:
@@ -119,7 +113,7 @@ class FrontCurve:
         cf = -self._integral.coef.copy()
         cf[0] += self.t_start
         y = np.atleast_1d(np.asarray(t, dtype=float))
-        return _invert_py(cf, self.rate.coef, 0.0, self.x_start, y, tol, NEWTON_STEPS)
+        return _invert_decreasing(cf, self.rate.coef, 0.0, self.x_start, y, tol, NEWTON_STEPS)
 
 
 def chebyshev_rate(g: Callable[[Array], Array], x_start: float) -> Chebyshev:

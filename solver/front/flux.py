@@ -17,8 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..gel import Gel
-from ..thermo import osmotic_dp_py as osmotic_dp
-from ..thermo import osmotic_p_py as osmotic_p
+from ..thermo import osmotic_dp, osmotic_p
 from .levels import FrontLevels
 
 

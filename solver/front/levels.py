@@ -15,8 +15,7 @@ from ..equilibrium import Branch, equilibrium
 from ..errors import NotApplicableError, ParameterError
 from ..gel import Gel, Permeability
 from ..phase import classify_jump, shrunken_level
-from ..thermo import osmotic_dp_py as osmotic_dp
-from ..thermo import osmotic_p_py as osmotic_p
+from ..thermo import osmotic_dp, osmotic_p
 
 
 @dataclass(frozen=True)

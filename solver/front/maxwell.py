@@ -13,18 +13,18 @@ convex hull of w on a log grid, then polished by Newton's method.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from ..errors import NotApplicableError
 from ..gel import Gel
-from ..thermo import normal_energy, normal_stiffness, normal_stress, python_side
+from ..jit import kernel
+from ..thermo import normal_energy, normal_stiffness, normal_stress
 
 J_MAX = 400.0  # largest volume ratio searched for the swollen side
 GRID = 4001
 NEWTON_STEPS = 50
 
 
-@njit(cache=True)
+@kernel
 def _lower_hull(x: np.ndarray, y: np.ndarray) -> np.ndarray:  # pragma: no cover - numba
     """Indices of the lower convex hull of the points (x, y), x increasing (monotone chain;
     compiled: it runs once per front trajectory step, on 4001 points)."""
@@ -42,9 +42,6 @@ def _lower_hull(x: np.ndarray, y: np.ndarray) -> np.ndarray:  # pragma: no cover
     return hull[:m].copy()
 
 
-_lower_hull_py = python_side(_lower_hull)
-
-
 def maxwell_pair(gel: Gel, temperature: float, lambda_t: float) -> tuple[float, float]:
     """(n_-, n_+): the shrunken and swollen normal stretches that coexist across a front with
     tangential stretch ``lambda_t`` at ``temperature`` (module doc).
@@ -55,7 +52,7 @@ def maxwell_pair(gel: Gel, temperature: float, lambda_t: float) -> tuple[float, 
     lo = lt**-2.0
     n = lo * (1.0 + np.geomspace(1e-9, J_MAX, GRID))
     w = normal_energy(gel, temperature, n, lt)
-    hull = _lower_hull_py(n, w)
+    hull = _lower_hull(n, w)
     gaps = np.diff(n[hull])
     k = int(np.argmax(gaps / n[hull[:-1]]))
     i, j = hull[k], hull[k + 1]

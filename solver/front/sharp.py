@@ -22,7 +22,7 @@ import numpy as np
 from ..equilibrium import Branch
 from ..errors import NotApplicableError
 from ..gel import Gel, as_gel
-from ..thermo import osmotic_p_py as osmotic_p
+from ..thermo import osmotic_p
 from .evolve import (
     Array,
     FrontCurve,

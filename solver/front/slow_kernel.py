@@ -18,8 +18,12 @@ from numba import njit
 
 from ..full.kernels import permeability
 from ..heating import mobility_factor, temperature_rate
-from ..thermo import osmotic_dp
-from .evolve import _clenshaw
+from ..thermo import osmotic_dp as _osmotic_dp
+from .evolve import _clenshaw as _clenshaw_kernel
+
+# numba kernels call the dispatchers (solver.jit)
+osmotic_dp = _osmotic_dp.compiled
+_clenshaw = _clenshaw_kernel.compiled
 
 LAG_MODES = 15.0  # 1 / sum_n 6 / (n pi)^4: the mean lag of a diffusive sphere's volume
 CENTRE = 1e-12  # R_f^3 at which the core is gone

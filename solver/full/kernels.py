@@ -16,7 +16,11 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..thermo import osmotic_dp, osmotic_p
+from .. import thermo
+
+# numba kernels call the dispatchers (solver.jit)
+osmotic_p = thermo.osmotic_p.compiled
+osmotic_dp = thermo.osmotic_dp.compiled
 
 
 class KernelParams(NamedTuple):
