@@ -65,7 +65,8 @@ def _parts(gel: Gel, lam: np.ndarray | float) -> tuple:
     x = lam**-3.0
     om = gel.omega
     da, db = gel.a0 - gel.a1, gel.b0 - gel.b1
-    p0 = osmotic_p(1.0 - x, 0.0, 0.0)
+    with np.errstate(invalid="ignore"):  # NaN below lambda = 1, as the compiled kernel
+        p0 = osmotic_p(1.0 - x, 0.0, 0.0)
     elastic = (lam * lam - 1.0) / lam**3
     c = elastic - om * p0 + om * (da * x * x + 2.0 * gel.a1 * x**3)
     d = om * (db * x * x + 2.0 * gel.b1 * x**3)
