@@ -21,8 +21,9 @@ Sections (issue 12's acceptance):
              planner's direct run (400 cells, and its 200-cell check: the numerical bound)
              to t = 0.1; attempted and rejected steps, the accepted ones through the
              nucleation (to 3x the time the edge cell's porosity falls half way) and after,
-             t50 / t80, and the attempted steps at each ell relative to ell = 1e-3 (target:
-             at most 1.5x at 3e-5).
+             t50 / t80, the attempted steps at each ell relative to ell = 1e-3 (target:
+             at most 1.5x at 3e-5), and the 400-cell run's accepted steps per window of
+             time (docs/moving_mesh.md sec. 7.3).
 """
 
 from __future__ import annotations
@@ -167,6 +168,8 @@ def section_speed(gels: list[str]) -> None:
 
 
 THIN_ELLS = (1e-3, 1e-4, 3e-5)
+# the time windows of the accepted-step count (docs/moving_mesh.md sec. 7.3)
+THIN_WINDOWS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 0.02, 0.05, 0.1)
 
 
 def section_thin(gels: list[str], mesh: MeshOptions | None = None) -> None:
@@ -199,6 +202,11 @@ def section_thin(gels: list[str], mesh: MeshOptions | None = None) -> None:
                 if n == 400:
                     base = attempted if base is None else base
                     ratio = attempted / base
+                    per = np.histogram(res.step_t[1:], bins=THIN_WINDOWS)[0]
+                    print("   accepted steps per window of t (" + ", ".join(
+                        f"{lo:g}-{hi:g} {k}" for lo, hi, k in zip(
+                            THIN_WINDOWS[:-1], THIN_WINDOWS[1:], per, strict=True)) + ")",
+                          flush=True)
             bound = np.abs(row[400] - row[200]) / row[400]
             print(f"   {gel} ell={ell:g}: attempted {ratio:.2f}x those at ell = 1e-3; numerical "
                   f"bound (400 vs 200) t50 {100 * bound[0]:.3f}% t80 {100 * bound[1]:.3f}%",
