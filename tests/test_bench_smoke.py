@@ -109,7 +109,12 @@ def test_front_model_rows_for_the_front_case(bench: tuple[int, Path]) -> None:
     rows = _table(bench[1] / "work_precision.csv")[1]
     front = [r for r in rows if r["method"].startswith("front model")]
     assert {r["case"] for r in front} == {"ANB 302->308"} and len(front) == 2
-    assert all(float(r["wall_s"]) < 0.1 and float(r["err_t80"]) < 0.5 for r in front)
+    assert all(float(r["err_t80"]) < 0.5 for r in front)
+    # cheaper than any full-solver run of the case, in the same run (a ratio, not a clock:
+    # the machine is shared)
+    fastest_full = min(float(r["wall_s"]) for r in rows
+                       if r["case"] == "ANB 302->308" and r["method"].startswith("full"))
+    assert all(float(r["wall_s"]) < fastest_full for r in front), (front, fastest_full)
 
 
 def test_front_reference_is_the_planners_truth(bench: tuple[int, Path]) -> None:
