@@ -1,0 +1,66 @@
+"""BoundaryState: the full solver's exact state at a protocol boundary, to continue from.
+
+A (duration, temperature) protocol run records its state after every step it completes
+(``FullResult.boundary_states``); ``simulate(..., start=state)`` continues the same protocol
+from there, in protocol time, as the one run of the whole protocol would (every step
+restarts the integrator: a new temperature takes a small first step and stops the moving
+grid's nodes).  The state is the profile the grid's state is rebuilt from exactly up to
+round-off: the radius, the cell porosities and, on the moving grid, the dry node radii of
+its cells (the mesh is kept, not adapted anew).  Plain JSON data for the run store
+(:meth:`to_data` / :meth:`from_data`; the keys are those of the planner's earlier stored
+runs' ``meta['boundary_states']``, so those read too).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+# the solver's counters a state carries, summed over the run up to it
+COUNTERS = ("steps", "rejected", "jacobians", "rhs_calls", "merges", "mesh_checks", "remaps")
+
+
+@dataclass(frozen=True, eq=False)
+class BoundaryState:
+    """The state after the first ``steps`` protocol steps, at protocol time ``t``:
+    radius a, cell porosities ``phi`` and, on the moving grid, the cells' dry node radii
+    ``nodes`` (None on the fixed grids); ``counters`` the solver's work up to there
+    (``COUNTERS``).  ``stopped``: not a boundary but where the ``stop`` event ended the run
+    inside step ``steps`` (a read-off heating's end, dosing.restart.stopped_as_run)."""
+
+    t: float
+    steps: int
+    radius: float
+    phi: np.ndarray
+    nodes: np.ndarray | None = None
+    counters: dict[str, float] = field(default_factory=dict)
+    stopped: bool = False
+
+    def to_data(self) -> dict[str, Any]:
+        """Plain JSON data (lists and floats)."""
+        out: dict[str, Any] = {
+            "steps": int(self.steps), "t": float(self.t), "radius": float(self.radius),
+            "phi": np.asarray(self.phi, dtype=float).tolist(),
+            "nodes": None if self.nodes is None else np.asarray(self.nodes,
+                                                                 dtype=float).tolist(),
+            "counters": {k: v for k, v in self.counters.items()}}
+        if self.stopped:
+            out["stopped"] = True
+        return out
+
+    @classmethod
+    def from_data(cls, data: dict[str, Any]) -> BoundaryState:
+        """Inverse of :meth:`to_data`."""
+        nodes = data.get("nodes")
+        return cls(t=float(data["t"]), steps=int(data["steps"]), radius=float(data["radius"]),
+                   phi=np.asarray(data["phi"], dtype=float),
+                   nodes=None if nodes is None else np.asarray(nodes, dtype=float),
+                   counters=dict(data.get("counters") or {}),
+                   stopped=bool(data.get("stopped", False)))
+
+
+def states_from_data(items: Any) -> list[BoundaryState]:
+    """A list of states from plain data (None or [] -> [])."""
+    return [BoundaryState.from_data(d) for d in items or []]
