@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from solver.errors import BudgetExceeded
-from solver.full.result import FullResult
+from solver.full.result import FullResult, uniform_output_times
 
 
 @dataclass(frozen=True)
@@ -61,29 +61,34 @@ def boundaries(steps: tuple[tuple[float, float], ...]) -> list[float]:
 def run_protocol(sc: Any, solver: Any, budget: float, start: Start | None = None
                  ) -> FullResult:
     """``sc``'s protocol run (a :class:`dosing.scenario.Scenario` with ``protocol``) as
-    stored (no profiles; its boundary states kept): one ``simulate`` from ``start`` (or
-    t = 0) within ``budget`` wall seconds.  With ``sc.stop_expelled`` the last step stops
-    where it has expelled that volume from its own start, a radius known from the state
-    before it: a run without that state runs the steps before the last first (a second
-    call, whose state the record keeps)."""
+    stored (no profiles; its boundary states kept): one ``simulate`` from ``start`` (or t =
+    0) within ``budget`` wall seconds, output at the one-shot run's times and at every
+    protocol boundary. With ``sc.stop_expelled`` the last step stops where it has expelled
+    that volume from its own start, a radius known from the state before it: a run without
+    that state runs the steps before the last first (a second call, whose state the record
+    keeps)."""
     steps = tuple(sc.protocol)
     began = time.perf_counter()
+    bounds = boundaries(steps)
+    outputs = np.union1d(uniform_output_times(bounds[-1]), bounds)
     first = 0 if start is None else start.steps
     last = len(steps) - 1
     if sc.stop_expelled is not None and sc.settings.integrator == "implicit":
         if last > 0 and (start is None or start.steps < last):
-            start = Start(last, _call(sc, solver, steps[:last], start, budget, began))
+            start = Start(last, _call(sc, solver, steps[:last], start, budget, began,
+                                      outputs[outputs <= bounds[last]]))
         a0 = None if last == 0 else start.record.boundary_state(last).radius  # type: ignore
-        rec = _call(sc, solver, steps, start, budget, began, _stop_radius(sc, a0))
+        rec = _call(sc, solver, steps, start, budget, began, outputs, _stop_radius(sc, a0))
     else:
-        rec = _call(sc, solver, steps, start, budget, began)
+        rec = _call(sc, solver, steps, start, budget, began, outputs)
     rec.diagnostics["restarted_after_steps"] = first
     return rec
 
 
 def _call(sc: Any, solver: Any, steps: tuple, start: Start | None, budget: float,
-          began: float, stop: float | None = None) -> FullResult:
-    """One ``simulate`` of ``steps`` from ``start`` (joined to its record), or t = 0."""
+          began: float, outputs: np.ndarray, stop: float | None = None) -> FullResult:
+    """One ``simulate`` of ``steps`` from ``start`` (joined to its record), or t = 0, with
+    ``outputs`` (those before the start are not produced)."""
     s = sc.settings
     left = budget - (time.perf_counter() - began)
     if left <= 0.0:
@@ -93,7 +98,7 @@ def _call(sc: Any, solver: Any, steps: tuple, start: Start | None, budget: float
         "initial": start.record.boundary_state(start.steps)}
     if stop is not None:
         kw["stop"] = stop
-    res = solver(sc.gel, sc.t_start, protocol=list(steps), grid=s.grid, n=s.n,
+    res = solver(sc.gel, sc.t_start, protocol=list(steps), saveat=outputs, grid=s.grid, n=s.n,
                  integrator=s.integrator, rtol=s.rtol, interfacial_length=s.interfacial_length,
                  max_seconds=max(left, 1.0), **kw).without_profiles()
     return res if start is None else res.after(start.record)
