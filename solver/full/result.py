@@ -23,7 +23,13 @@ import numpy as np
 from ..crossing import first_fall, hermite_root, linear_cube_root
 from ..json_safe import json_safe
 from ..presenters import html_or_none, presenter
-from .state import COUNTERS, BoundaryState, states_from_data
+from .state import (
+    COUNTERS,
+    BoundaryState,
+    states_from_arrays,
+    states_from_data,
+    states_to_arrays,
+)
 
 _ARRAYS = ("t", "radius", "front", "jump", "phi", "coords", "temperature", "expelled_volume",
            "solid_error", "step_t", "step_radius", "step_rate", "step_edge", "nodes")
@@ -31,7 +37,7 @@ _ARRAYS = ("t", "radius", "front", "jump", "phi", "coords", "temperature", "expe
 RECORD_ARRAYS = ("t", "radius", "front", "expelled_volume", "temperature", "step_t",
                  "step_radius", "step_rate", "step_edge")
 DEFAULT_OUTPUTS = 200  # a run's outputs over its length unless told (simulate's ``every``)
-STATES = "boundary_states"  # the npz entry (and older stored runs' meta key) of the states
+STATES = "boundary_states"  # older stored runs' meta key of the states
 _PER_OUTPUT = ("t", "radius", "front", "jump", "phi", "temperature", "solid_error", "nodes")
 _PER_STEP = ("step_t", "step_radius", "step_rate", "step_edge")
 
@@ -281,15 +287,13 @@ class FullResult:
                        **{k: np.asarray(getattr(self, k), dtype=float) for k in RECORD_ARRAYS})
 
     def to_npz(self) -> bytes:
-        """The run as ``.npz`` bytes: every array, ``spinodal``, the diagnostics and the
-        boundary states as JSON (``meta`` is not in it: the cache keeps it beside the
-        blob)."""
+        """The run as ``.npz`` bytes: every array, ``spinodal``, the diagnostics as JSON and
+        the boundary states (:func:`~solver.full.state.states_to_arrays`; ``meta`` is not
+        in it: the cache keeps it beside the blob)."""
         buf = io.BytesIO()
-        extra = ({STATES: np.array(json.dumps([st.to_data() for st in self.boundary_states]))}
-                 if self.boundary_states else {})
         np.savez_compressed(buf, spinodal=np.array(bool(self.spinodal)),
                             diagnostics=np.array(json.dumps(json_safe(self.diagnostics))),
-                            **extra,
+                            **states_to_arrays(self.boundary_states),
                             **{name: np.asarray(getattr(self, name)) for name in _ARRAYS})
         return buf.getvalue()
 
@@ -307,10 +311,10 @@ class FullResult:
                     else dict(meta.get("diagnostics") or {}))
             spinodal = (bool(data["spinodal"]) if "spinodal" in data
                         else bool(diag.get("spinodal", False)))
-            states = (json.loads(str(data[STATES])) if STATES in data
-                      else meta.pop(STATES, None))
+            states = states_from_arrays(data)
+        older = meta.pop(STATES, None)
         return cls(**kwargs, spinodal=spinodal, diagnostics=diag, meta=meta,
-                   boundary_states=states_from_data(states))
+                   boundary_states=states or states_from_data(older))
 
     def save(self, path: str | Path) -> Path:
         """Write :meth:`to_npz`'s bytes to an .npz file (the suffix is added if missing)."""

@@ -8,11 +8,13 @@ grid's nodes).  The state is the profile the grid's state is rebuilt from exactl
 round-off: the radius, the cell porosities and, on the moving grid, the dry node radii of
 its cells (the mesh is kept, not adapted anew).  Plain JSON data for the run store
 (:meth:`to_data` / :meth:`from_data`; the keys are those of the planner's earlier stored
-runs' ``meta['boundary_states']``, so those read too).
+runs' ``meta['boundary_states']``, so those read too), or as arrays in a run's npz
+(:func:`states_to_arrays`).
 """
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -64,3 +66,37 @@ class BoundaryState:
 def states_from_data(items: Any) -> list[BoundaryState]:
     """A list of states from plain data (None or [] -> [])."""
     return [BoundaryState.from_data(d) for d in items or []]
+
+
+ARRAY_KEYS = ("state_t", "state_steps", "state_radius", "state_phi", "state_nodes",
+              "state_stopped", "state_counters")
+
+
+def states_to_arrays(states: list[BoundaryState]) -> dict[str, np.ndarray]:
+    """States as the arrays of a run's npz (``ARRAY_KEYS``: binary, exact and quicker to
+    write than their JSON); the counters as one JSON string."""
+    if not states:
+        return {}
+    nodes = [st.nodes for st in states]
+    return {"state_t": np.array([st.t for st in states], dtype=float),
+            "state_steps": np.array([st.steps for st in states], dtype=np.int64),
+            "state_radius": np.array([st.radius for st in states], dtype=float),
+            "state_phi": np.vstack([np.asarray(st.phi, dtype=float) for st in states]),
+            "state_nodes": (np.vstack([np.asarray(x, dtype=float) for x in nodes])
+                            if all(x is not None for x in nodes) else np.zeros((0, 0))),
+            "state_stopped": np.array([st.stopped for st in states], dtype=bool),
+            "state_counters": np.array(json.dumps([st.counters for st in states]))}
+
+
+def states_from_arrays(data: Any) -> list[BoundaryState]:
+    """Inverse of :func:`states_to_arrays` (``data``: a mapping holding its arrays)."""
+    if "state_t" not in data:
+        return []
+    nodes = np.asarray(data["state_nodes"])
+    counters = json.loads(str(data["state_counters"]))
+    return [BoundaryState(t=float(t), steps=int(k), radius=float(a),
+                          phi=np.array(data["state_phi"][i]),
+                          nodes=np.array(nodes[i]) if nodes.size else None,
+                          counters=dict(counters[i]), stopped=bool(data["state_stopped"][i]))
+            for i, (t, k, a) in enumerate(zip(data["state_t"], data["state_steps"],
+                                              data["state_radius"], strict=True))]
