@@ -61,9 +61,9 @@ def boundaries(steps: tuple[tuple[float, float], ...]) -> list[float]:
 def run_protocol(sc: Any, solver: Any, budget: float, start: Start | None = None
                  ) -> FullResult:
     """``sc``'s protocol run (a :class:`dosing.scenario.Scenario` with ``protocol``) as
-    stored (no profiles; its boundary states kept): one ``simulate`` from ``start`` (or t =
-    0) within ``budget`` wall seconds, output at the one-shot run's times and at every
-    protocol boundary. With ``sc.stop_expelled`` the last step stops where it has expelled
+    stored (no profiles; its boundary states kept): one ``simulate`` from ``start`` (or
+    t = 0) within ``budget`` wall seconds, output at the one-shot run's times and at every
+    protocol boundary.  With ``sc.stop_expelled`` the last step stops where it has expelled
     that volume from its own start, a radius known from the state before it: a run without
     that state runs the steps before the last first (a second call, whose state the record
     keeps)."""

@@ -276,10 +276,10 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
 
     The stepping loop runs in numba (rosenbrock.rodas_run) between stops: output times,
     ``PROGRESS_TICKS`` progress points (with ``progress``), record-buffer flushes and, on
-    the moving grid, every ``rezoner.every`` accepted steps a mesh check. Outputs are read
-    between accepted steps: cubic Hermite interpolants of the last step. A rezoned moving
+    the moving grid, every ``rezoner.every`` accepted steps a mesh check.  Outputs are read
+    between accepted steps: cubic Hermite interpolants of the last step.  A rezoned moving
     grid lands a step on every output time unless ``rezoner.land`` is False; it then reads
-    them from RODASP's own continuous output from the step's stages (:mod:`.dense`). A
+    them from RODASP's own continuous output from the step's stages (:mod:`.dense`).  A
     rezoner changes y and ``ws.geo`` in place after the outputs up to the current time are
     out; the integrator restarts there with a fresh Jacobian and without the step
     controller's history (a one-step method needs nothing else).
