@@ -423,85 +423,52 @@ def step_outputs(duration: float, k: int) -> np.ndarray:
 def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
                       settings: SolverSettings, budget: float = RUN_BUDGET_S,
                       start: Any = None) -> Any:
-    """The mechanics of a protocol, one ``simulate`` per step (each continues from the
-    exact state where the last ended, its moving nodes included: ``dosing.restart``, so
-    every protocol boundary is an output), sampled densely (on the moving grid between
-    steps, ``MeshOptions.land`` False: docs/moving_mesh.md sec. 8); one FullResult, whose
-    ``diagnostics['step_outputs']`` counts the outputs after each step.  ``start``: the
-    mechanics of the first j steps (a :func:`mechanics_prefix`), continued from its last
-    state: the same arithmetic as running them again.  ``budget`` (wall seconds) is checked
-    between steps, and inside them off the moving grid (``dosing.restart.step_budget``)."""
-    from solver.errors import BudgetExceeded
-    from solver.full import FullResult, simulate
+    """The mechanics of a protocol: one ``simulate`` of its steps of positive duration,
+    sampled densely after every step's start (:func:`step_outputs`; on the moving grid
+    between steps, ``MeshOptions.land`` False: docs/moving_mesh.md sec. 8), within
+    ``budget`` wall seconds; one FullResult with its state after every step.  ``start``:
+    the mechanics of a protocol's first steps (a :func:`mechanics_prefix`), continued from
+    its last state (``simulate(..., initial=state)``, joined by ``FullResult.after``)."""
+    from solver.full import simulate
     from solver.full.moving import MeshOptions
 
-    from .restart import restart_options, state_of, step_budget
-
     s = drug_settings(settings)
-    started = time.perf_counter()
-    parts = []
-    prev = None
-    t0 = 0.0
-    ends: list[int] = []  # outputs after each step
-    done = 0
-    if start is not None:
-        ends = list(start.diagnostics["step_outputs"])
-        parts.append((0.0, start))
-        prev = start
-        t0 = sum(d for d, _ in steps[:len(ends)] if d > 0.0)
-        done = int(start.t.size)
-    for duration, temp in steps[len(ends):]:
-        if duration <= 0.0:
-            ends.append(done)
-            continue
-        k = max(MIN_SAMPLES, int(math.ceil(duration * SAMPLES_PER_TAU)))
-        spent = time.perf_counter() - started
-        if spent > budget:
-            raise BudgetExceeded(f"the drug run's mechanics used its {budget:.0f} s budget "
-                                 f"at t = {t0:.4g}", {"wall_seconds": spent})
-        kw = {"branch": branch} if prev is None else restart_options(state_of(prev, 0, t0))
-        kw.update(step_budget(s.grid, budget - spent))
-        if s.grid == "moving":  # dense outputs between steps (docs/moving_mesh.md sec. 8)
-            kw["mesh"] = replace(kw.get("mesh") or MeshOptions(), land=False)
-        res = simulate(gel, t_start, protocol=[(duration, temp)], grid=s.grid, n=s.n,
-                       integrator=s.integrator, rtol=s.rtol, saveat=step_outputs(duration, k),
-                       interfacial_length=s.interfacial_length, **kw)
-        parts.append((t0, res))
-        prev = res
-        t0 += duration
-        done += int(res.t.size)
-        ends.append(done)
-    if not parts:
+    run = [(float(d), temp) for d, temp in steps if d > 0.0]
+    if not run:
         raise ParameterError("protocol", steps, "at least one step of positive duration")
-    names = ["radius", "front", "jump", "phi", "temperature", "solid_error"]
-    if s.grid == "moving":
-        names.append("nodes")  # each output's mesh: the cells its phi refers to
-    cat = {name: np.concatenate([getattr(r, name) for _, r in parts]) for name in names}
-    t = np.concatenate([r.t + off for off, r in parts])
-    first = parts[0][1]
-    a = cat["radius"]
-    diag = dict(first.diagnostics)
-    diag.update(protocol=[list(x) for x in steps], wall_time=time.perf_counter() - started,
-                steps=sum(int(r.diagnostics.get("steps", 0)) for _, r in parts),
-                step_outputs=ends)
-    return FullResult(t=t, radius=a, front=cat["front"], jump=cat["jump"], phi=cat["phi"],
-                      coords=first.coords, temperature=cat["temperature"],
-                      expelled_volume=4.0 * np.pi / 3.0 * (a[0] ** 3 - a**3),
-                      solid_error=cat["solid_error"], diagnostics=diag,
-                      nodes=cat.get("nodes", np.zeros((0, 0))))
+    times, t0 = [], 0.0
+    for duration, _ in run:
+        k = max(MIN_SAMPLES, int(math.ceil(duration * SAMPLES_PER_TAU)))
+        times.append(t0 + step_outputs(duration, k))
+        t0 += duration
+    state = None
+    if start is not None and start.boundary_states:
+        state = start.boundary_states[-1]
+        if state.stopped or state.steps >= len(run):
+            state = None
+    kw: dict[str, Any] = {"branch": branch} if state is None else {"initial": state}
+    if s.grid == "moving":  # dense outputs between steps (docs/moving_mesh.md sec. 8)
+        kw["mesh"] = MeshOptions(land=False)
+    res = simulate(gel, t_start, protocol=run, grid=s.grid, n=s.n, integrator=s.integrator,
+                   rtol=s.rtol, saveat=np.concatenate(times), max_seconds=budget,
+                   interfacial_length=s.interfacial_length, **kw)
+    if state is not None:
+        res = res.after(start)
+    res.diagnostics["mechanics_from_step"] = 0 if state is None else int(
+        start.diagnostics.get("prefix_steps", state.steps))
+    return res
 
 
-def mechanics_prefix(res: Any, steps: int) -> Any:
-    """The mechanics of a :func:`simulate_protocol` run up to the end of its first
-    ``steps`` steps (its outputs there; a FullResult of the same kind)."""
-    ends = res.diagnostics["step_outputs"]
-    k = int(ends[steps - 1])
-    cut = {name: getattr(res, name)[:k] for name in ("t", "radius", "front", "jump", "phi",
-                                                      "temperature", "expelled_volume",
-                                                      "solid_error")}
-    if res.nodes.size:
-        cut["nodes"] = res.nodes[:k]
-    return replace(res, **cut, diagnostics={**res.diagnostics, "step_outputs": ends[:steps]})
+def mechanics_prefix(res: Any, steps: tuple[Step, ...]) -> Any:
+    """The mechanics of a :func:`simulate_protocol` run up to the end of the protocol's
+    first steps ``steps`` (its state after those of positive duration), as a FullResult of
+    the same kind; None if it kept no state there."""
+    state = res.boundary_state(sum(1 for d, _ in steps if d > 0.0))
+    if state is None:
+        return None
+    cut = res.truncated(state.t)
+    cut.diagnostics = {**res.diagnostics, "prefix_steps": len(steps)}
+    return cut
 
 
 def run_drug_scenario(scenario: dict[str, Any], budget: float = RUN_BUDGET_S,
@@ -522,8 +489,7 @@ def run_drug_scenario(scenario: dict[str, Any], budget: float = RUN_BUDGET_S,
             "mass_balance_error": rel.mass_balance_error,
             "effective_diffusivity": rel.effective_diffusivity,
             "solute_steps": rel.diagnostics.get("steps"), "created": time.time(),
-            "mechanics_from_step": 0 if start is None else len(
-                start.diagnostics["step_outputs"])}
+            "mechanics_from_step": res.diagnostics["mechanics_from_step"]}
     return (meta, to_npz(rel), res) if keep else (meta, to_npz(rel))
 
 
@@ -653,12 +619,14 @@ class DrugRuns:
                 return None
             self._mech.move_to_end(best)
             mech = self._mech[best][2]
-        self.restarts += 1
-        return mechanics_prefix(mech, best_j)
+        start = mechanics_prefix(mech, steps[:best_j])
+        if start is not None:
+            self.restarts += 1
+        return start
 
     def _keep(self, sc: DrugScenario, mech: Any) -> None:
         """Keep a run's mechanics (the latest first out past MECHANICS_MEMORY bytes)."""
-        if mech is None or not mech.diagnostics.get("step_outputs"):
+        if mech is None or not mech.boundary_states:
             return
         with self._lock:
             self._mech[sc.key()] = (self._case(sc), tuple(sc.protocol), mech)

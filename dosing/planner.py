@@ -38,7 +38,7 @@ from .model_choice import (
     model_answer,
 )
 from .request import DoseRequest, ScheduleRequest
-from .restart import STATES, Start, restartable, stopped_as_run
+from .restart import Start, restartable, stopped_as_run
 from .scenario import Scenario, Solver, SolverSettings, Trajectory, run_scenario
 from .truth import delayed_settings, is_model_form_run, range_settings
 from .validation import error_estimate, failure, validation_report
@@ -257,7 +257,7 @@ class Planner:
     def _keep_states(self, sc: Scenario, traj: Trajectory) -> Trajectory:
         """Remember where a protocol run kept its state after each step (module
         ``restart``), so that a later protocol sharing those steps starts there."""
-        states = traj.meta.get(STATES) if sc.protocol is not None else None
+        states = traj.boundary_states if sc.protocol is not None else []
         alias = stopped_as_run(sc, traj) if states else None
         if alias is not None:  # a read-off heating's run is also the run to its dose
             self._keep_states(*alias)
@@ -271,9 +271,9 @@ class Planner:
         if states:
             with self._mem_lock:
                 for st in states:
-                    if st.get("stopped"):
+                    if st.stopped:
                         continue
-                    j = int(st["steps"])
+                    j = st.steps
                     key = _prefix(sc, j).key()
                     self._starts[key] = (sc, j)
                     self._starts.move_to_end(key)

@@ -336,16 +336,14 @@ STOP_MARGIN = 1e-6
 def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver,
               stop: float | None = None, start: Any = None) -> FullResult:
     """One run of ``sc`` (a jump runs for ``horizon``, or until its radius reaches
-    ``stop``) within ``budget`` s, as stored.  A protocol runs step by step from ``start``
-    (a :class:`dosing.restart.Start`, or t = 0) where the solver continues exactly, keeping
-    the state after each step in ``meta`` (module ``restart``)."""
+    ``stop``) within ``budget`` s, as stored.  A protocol runs from ``start`` (a
+    :class:`dosing.restart.Start`, or t = 0) where the solver continues exactly, its record
+    keeping the state after each step (``FullResult.boundary_states``)."""
     from . import restart
 
     s = sc.settings
-    states = None
     if sc.protocol is not None and restart.restartable(solver):
-        rec, states = restart.run_steps(sc, solver, budget, start)
-        res = rec
+        res = rec = restart.run_protocol(sc, solver, budget, start)
     else:
         if sc.program is not None:  # a continuous temperature program (dosing.heating)
             from .heating_program import solver_program
@@ -360,8 +358,6 @@ def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver,
     if rec.t.size < 2 or not (np.all(np.isfinite(rec.t)) and np.all(np.isfinite(rec.radius))):
         raise SolverError("the full solver returned no finite a(t)", {"scenario": sc.key_dict()})
     rec.diagnostics = {**json_safe(res.diagnostics, max_array=64), "spinodal": bool(res.spinodal)}
-    if states is not None:
-        rec.meta = {restart.STATES: states}
     return rec
 
 

@@ -48,6 +48,7 @@ class Rezoner(Protocol):
 
 OutputFn = Callable[[float, np.ndarray], None]
 ProgressFn = Callable[[float], None]
+PROGRESS_TICKS = 200  # progress points a run reports (each one stops the stepping loop)
 
 
 NO_HEAT = np.zeros((0, HEAD))
@@ -79,6 +80,18 @@ class Segment:
     def par_at(self, t: float) -> KernelParams:
         """The kernel parameters at time t."""
         return par_at(self.par, self.heat, float(t))
+
+
+@dataclass
+class Watch:
+    """What the drivers call besides the outputs and ``progress``: ``check(t)`` wherever
+    the compiled stepping loop returns anyway (outputs, mesh checks, record flushes: at
+    least every 4096 steps), so a wall-clock budget raises there without stopping the
+    integration anywhere it would not stop (``progress``'s ticks do stop it); and
+    ``boundary(seg, y)`` with the state at the end of every segment the run completes."""
+
+    check: Callable[[float], None] | None = None
+    boundary: Callable[[Segment, np.ndarray], None] | None = None
 
 
 @dataclass
@@ -256,20 +269,20 @@ def _event_time(t0: float, t1: float, y0: np.ndarray, y1: np.ndarray, f0: np.nda
 
 def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
                  out_times: np.ndarray, on_output: OutputFn, control: StepControl,
-                 progress: ProgressFn | None, stats: Stats, ticks: int = 200,
+                 progress: ProgressFn | None, stats: Stats, watch: Watch | None = None,
                  method: ros.Method = ros.RODASP, rezoner: Rezoner | None = None,
                  total: float | None = None) -> np.ndarray:
     """Integrate with adaptive RODASP through every segment; returns the final state.
 
     The stepping loop runs in numba (rosenbrock.rodas_run) between stops: output times,
-    ``ticks`` progress points, record-buffer flushes and, on the moving grid, every
-    ``rezoner.every`` accepted steps a mesh check.  Outputs are read between accepted
-    steps: cubic Hermite interpolants of the last step.  A rezoned moving grid lands a step
-    on every output time unless ``rezoner.land`` is False; it then reads them from RODASP's
-    own continuous output from the step's stages (:mod:`.dense`).  A rezoner changes y and
-    ``ws.geo`` in place after the outputs up to the current time are out; the integrator
-    restarts there with a fresh Jacobian and without the step controller's history (a
-    one-step method needs nothing else).
+    ``PROGRESS_TICKS`` progress points (with ``progress``), record-buffer flushes and, on
+    the moving grid, every ``rezoner.every`` accepted steps a mesh check.  Outputs are read
+    between accepted steps: cubic Hermite interpolants of the last step.  A rezoned moving
+    grid lands a step on every output time unless ``rezoner.land`` is False; it then reads
+    them from RODASP's own continuous output from the step's stages (:mod:`.dense`).  A
+    rezoner changes y and ``ws.geo`` in place after the outputs up to the current time are
+    out; the integrator restarts there with a fresh Jacobian and without the step
+    controller's history (a one-step method needs nothing else).
 
     Events: ``control.stop`` (a radius) ends the run when the radius reaches it, from the side it
     is on at the first segment's start; a segment's ``until`` ends that segment (its time
@@ -277,10 +290,13 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
     is the root of the accepted step's cubic Hermite radius, the state there its dense
     output; it is the last output of a stopped run (``stats.t_stop``), and the per-step
     record ends there.  ``total`` is the planned end (default: the last segment's t1).
+    ``watch`` (:class:`Watch`): a check at every stop, the state at every segment's end.
     """
     rtol, atol, max_steps, jac_mode = (control.rtol, control.atol, control.max_steps,
                                        control.jac_mode)
     stop = control.stop
+    ticks = PROGRESS_TICKS
+    watch = watch or Watch()
     if total is None:
         segments = list(segments)
         total = segments[-1].t1
@@ -344,6 +360,8 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
             status = ros.rodas_run(ws.grid, state, t_stop, t_land, budget, seg.par, seg.heat,
                                    ws.geo, ws.band, ws.buf, method, control)
             _flush(stats, rec, counters)
+            if watch.check is not None:
+                watch.check(float(tt[0]))
             check = status == ros.RUN_BUDGET and budget < max_steps
             if check:
                 status = ros.RUN_REACHED
@@ -392,6 +410,8 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
                 ctrl[1], ctrl[3] = 0.0, 0.0  # restart: new Jacobian, no controller history
             if progress is not None:
                 progress(min(1.0, t1 / total))
+        if watch.boundary is not None and seg.ended is None:
+            watch.boundary(seg, y)
     return y
 
 
@@ -447,14 +467,17 @@ _RESTEP = 64
 
 def run_explicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_times: np.ndarray,
                  on_output: OutputFn, dt: float | None, max_steps: int,
-                 progress: ProgressFn | None, stats: Stats) -> np.ndarray:
+                 progress: ProgressFn | None, stats: Stats,
+                 watch: Watch | None = None) -> np.ndarray:
     """The paper's forward Euler scheme on the same semi-discretization (appendix step 6).
 
     dt defaults to 0.8 of the Gershgorin stability limit, re-estimated every ``_RESTEP``
     steps (the limit falls as a front sharpens).  Output times are hit exactly (the last
-    step of an interval is shortened).
+    step of an interval is shortened).  ``watch`` as in :func:`run_implicit` (its check
+    after every batch of steps).
     """
     y = y.copy()
+    watch = watch or Watch()
     total = segments[-1].t1
     f = np.zeros(ws.n)
     a_idx = ws.n - 1
@@ -491,6 +514,8 @@ def run_explicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
                     raise _failure(f"explicit Euler became unstable near t={t + done * h:.6g} "
                                    f"(dt={h:.3g}): reduce dt", stats, t + done * h, {"dt": h})
                 t = stop if nsteps * h >= remaining * (1 - 1e-12) else t + nsteps * h
+                if watch.check is not None:
+                    watch.check(t)
                 if progress is not None:
                     progress(min(1.0, t / total))
             t = stop
@@ -503,4 +528,6 @@ def run_explicit(ws: Workspace, y: np.ndarray, segments: list[Segment], out_time
                 k_out += 1
             if progress is not None:
                 progress(min(1.0, t / total))
+        if watch.boundary is not None:
+            watch.boundary(seg, y)
     return y

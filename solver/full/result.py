@@ -23,6 +23,13 @@ import numpy as np
 from ..crossing import first_fall, hermite_root, linear_cube_root
 from ..json_safe import json_safe
 from ..presenters import html_or_none, presenter
+from .state import (
+    COUNTERS,
+    BoundaryState,
+    states_from_arrays,
+    states_from_data,
+    states_to_arrays,
+)
 
 _ARRAYS = ("t", "radius", "front", "jump", "phi", "coords", "temperature", "expelled_volume",
            "solid_error", "step_t", "step_radius", "step_rate", "step_edge", "nodes")
@@ -30,6 +37,9 @@ _ARRAYS = ("t", "radius", "front", "jump", "phi", "coords", "temperature", "expe
 RECORD_ARRAYS = ("t", "radius", "front", "expelled_volume", "temperature", "step_t",
                  "step_radius", "step_rate", "step_edge")
 DEFAULT_OUTPUTS = 200  # a run's outputs over its length unless told (simulate's ``every``)
+STATES = "boundary_states"  # older stored runs' meta key of the states
+_PER_OUTPUT = ("t", "radius", "front", "jump", "phi", "temperature", "solid_error", "nodes")
+_PER_STEP = ("step_t", "step_radius", "step_rate", "step_edge")
 
 
 def uniform_output_times(total: float, every: float | None = None) -> np.ndarray:
@@ -64,6 +74,10 @@ class FullResult:
     ``coords`` the last output's cell midpoints; on fixed grids it is empty.  A stored run
     (the planner's cache) has no profiles (``phi``, ``coords``, ``jump``, ``solid_error``,
     ``nodes`` empty) and carries ``meta``: its cache key, scenario, horizon, wall time.
+    A protocol run's ``boundary_states`` hold its state after every step it completed
+    (:class:`~solver.full.state.BoundaryState`; the last one where a ``stop`` ended it,
+    marked ``stopped``): what ``simulate(..., initial=state)`` continues from, and
+    :meth:`after` joins such a continued run to the record before it.
     """
 
     t: np.ndarray
@@ -83,6 +97,7 @@ class FullResult:
     step_edge: np.ndarray = field(default_factory=_empty)
     nodes: np.ndarray = field(default_factory=_empty2)
     meta: dict[str, Any] = field(default_factory=dict)
+    boundary_states: list[BoundaryState] = field(default_factory=list)
 
     @property
     def grid(self) -> str:
@@ -190,6 +205,67 @@ class FullResult:
         lo = np.concatenate([np.zeros((r3.shape[0], 1)), r3[:, :-1]], axis=1)
         return np.cbrt(0.5 * (lo + r3))
 
+    def boundary_state(self, steps: int) -> BoundaryState | None:
+        """The state after the protocol's first ``steps`` steps (None if not kept)."""
+        for st in self.boundary_states:
+            if st.steps == steps and not st.stopped:
+                return st
+        return None
+
+    def truncated(self, time: float) -> FullResult:
+        """This run up to ``time`` (outputs and accepted steps at or before it; its states
+        up to there; no meta)."""
+        end = float(time) * (1.0 + 1e-12)
+        keep, steps = self.t <= end, self.step_t <= end
+        arrays = {k: np.asarray(getattr(self, k))[keep] for k in (*_PER_OUTPUT,
+                                                                  "expelled_volume")
+                  if np.shape(getattr(self, k))[:1] == self.t.shape}
+        arrays.update({k: np.asarray(getattr(self, k))[steps] for k in _PER_STEP
+                       if np.shape(getattr(self, k)) == self.step_t.shape})
+        states = [st for st in self.boundary_states if st.t <= end]
+        return replace(self, **arrays, boundary_states=states, meta={})
+
+    def after(self, prefix: FullResult) -> FullResult:
+        """This run, continued from a protocol boundary (``simulate(..., initial=state)``),
+        as one run of the whole protocol records it: ``prefix`` (a run of the same
+        protocol's first steps, e.g. a stored one; its state there is where this one
+        started) up to the boundary, then this run.  Outputs: the prefix's up to the
+        boundary, then this run's after them; per-step record: the prefix's up to the
+        boundary, this run's after it (its record at the boundary is the new step's rate,
+        the one-shot run keeps the old one's); profiles only where both have them;
+        counters summed (``diagnostics['restarted_after_steps']``: the steps before)."""
+        start = self.diagnostics.get("start")
+        if not start:
+            raise ValueError("this run did not continue from a protocol boundary")
+        t_s, j = float(start["t"]), int(start["steps"])
+        pre = prefix.truncated(t_s)
+        state = pre.boundary_state(j)
+        last = float(pre.t[-1]) if pre.t.size else -math.inf
+        mine, steps = self.t > last, self.step_t > t_s * (1.0 + 1e-12)
+        arrays: dict[str, np.ndarray] = {}
+        for name in _PER_OUTPUT:
+            a, b = np.asarray(getattr(pre, name)), np.asarray(getattr(self, name))
+            if (a.shape[:1] == pre.t.shape and b.shape[:1] == self.t.shape and a.size
+                    and b.size and a.shape[1:] == b.shape[1:]):
+                arrays[name] = np.concatenate([a, b[mine]])
+            else:
+                arrays[name] = _empty2() if a.ndim == 2 or b.ndim == 2 else _empty()
+        for name in _PER_STEP:
+            arrays[name] = np.concatenate([np.asarray(getattr(pre, name), dtype=float),
+                                           np.asarray(getattr(self, name), dtype=float)[steps]])
+        a = arrays["radius"]
+        arrays["expelled_volume"] = 4.0 * np.pi / 3.0 * (a[0] ** 3 - a**3)
+        diag = dict(self.diagnostics)
+        base = state.counters if state is not None else {}
+        for name in COUNTERS:
+            if name in base or name in diag:
+                diag[name] = base.get(name, 0) + diag.get(name, 0)
+        diag["restarted_after_steps"] = j
+        states = [st for st in pre.boundary_states if st.steps <= j and not st.stopped]
+        return replace(self, **arrays, spinodal=bool(pre.spinodal or self.spinodal),
+                       diagnostics=diag, boundary_states=states + list(self.boundary_states),
+                       meta={})
+
     def to_json_dict(self, profiles: bool = True) -> dict[str, Any]:
         """JSON-ready dict (NaN -> None); ``profiles=False`` drops the phi snapshots."""
         out: dict[str, Any] = {}
@@ -211,11 +287,13 @@ class FullResult:
                        **{k: np.asarray(getattr(self, k), dtype=float) for k in RECORD_ARRAYS})
 
     def to_npz(self) -> bytes:
-        """The run as ``.npz`` bytes: every array, ``spinodal`` and the diagnostics as JSON
-        (``meta`` is not in it: the cache keeps it beside the blob)."""
+        """The run as ``.npz`` bytes: every array, ``spinodal``, the diagnostics as JSON and
+        the boundary states (:func:`~solver.full.state.states_to_arrays`; ``meta`` is not
+        in it: the cache keeps it beside the blob)."""
         buf = io.BytesIO()
         np.savez_compressed(buf, spinodal=np.array(bool(self.spinodal)),
                             diagnostics=np.array(json.dumps(json_safe(self.diagnostics))),
+                            **states_to_arrays(self.boundary_states),
                             **{name: np.asarray(getattr(self, name)) for name in _ARRAYS})
         return buf.getvalue()
 
@@ -223,7 +301,8 @@ class FullResult:
     def from_npz(cls, blob: bytes, meta: dict[str, Any] | None = None) -> FullResult:
         """Inverse of :meth:`to_npz`; also reads the planner's older blobs (the arrays of
         ``RECORD_ARRAYS`` alone: diagnostics and ``spinodal`` then come from
-        ``meta['diagnostics']``)."""
+        ``meta['diagnostics']``; boundary states from ``meta['boundary_states']``, where
+        the planner kept them before the solver did)."""
         meta = dict(meta or {})
         with np.load(io.BytesIO(blob), allow_pickle=False) as data:
             kwargs: dict[str, Any] = {f.name: np.array(data[f.name]) for f in fields(cls)
@@ -232,7 +311,10 @@ class FullResult:
                     else dict(meta.get("diagnostics") or {}))
             spinodal = (bool(data["spinodal"]) if "spinodal" in data
                         else bool(diag.get("spinodal", False)))
-        return cls(**kwargs, spinodal=spinodal, diagnostics=diag, meta=meta)
+            states = states_from_arrays(data)
+        older = meta.pop(STATES, None)
+        return cls(**kwargs, spinodal=spinodal, diagnostics=diag, meta=meta,
+                   boundary_states=states or states_from_data(older))
 
     def save(self, path: str | Path) -> Path:
         """Write :meth:`to_npz`'s bytes to an .npz file (the suffix is added if missing)."""

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Iterator, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -20,18 +21,28 @@ from ..gel import Gel, check_temperature, preset
 from ..heating import UNTIL_LIMIT, Program, Radius, Released
 from . import front as fronts
 from . import moving
-from .grids import GridSpec, grid_spec
-from .integrate import Segment, Stats, StepControl, Workspace, run_explicit, run_implicit
+from .grids import GRIDS, GridSpec, grid_spec
+from .integrate import (
+    Segment,
+    Stats,
+    StepControl,
+    Watch,
+    Workspace,
+    run_explicit,
+    run_implicit,
+)
 from .kernels import KernelParams
 from .moving import MeshOptions, Rezoner
 from .options import SolverOptions
 from .result import DEFAULT_OUTPUTS, FullResult, uniform_output_times
+from .state import COUNTERS, BoundaryState
 from .system import JAC_ANALYTIC, JAC_FD, porosity, solid_error
 
 MAX_OUTPUTS = 100_000
+MOVING_CODE = GRIDS["moving"].code
 HOLD_AFTER = 1e3  # tau: how long a program run with ``stop`` holds after its last step
 
-Initial = FullResult | tuple[float, Sequence[float]] | None
+Initial = FullResult | BoundaryState | tuple[float, Sequence[float]] | None
 
 
 def _protocol(t_end: float | None, until: float | None,
@@ -96,9 +107,10 @@ def _given_profile(initial: Any, n: int) -> tuple[float, np.ndarray]:
 
 def _initial_state(spec: GridSpec, gel: Gel, t_start: float, first_t: float,
                    branch: str | None, initial: Initial, n: int, mesh: MeshOptions,
-                   ell: float) -> tuple[np.ndarray, np.ndarray, str]:
+                   ell: float, t0: float = 0.0) -> tuple[np.ndarray, np.ndarray, str]:
     """(state, geometry, branch) on the grid: uniform equilibrium, a FullResult's last state
-    (remapped conservatively), or (a, phi); the moving grid's first mesh is adapted to it."""
+    (remapped conservatively; the moving grid's first mesh is adapted to it), (a, phi), or
+    a BoundaryState (its profile on its own nodes, at ``t0``, the run's start)."""
     mod = spec.module
     if initial is None:
         if branch is None:
@@ -123,11 +135,20 @@ def _initial_state(spec: GridSpec, gel: Gel, t_start: float, first_t: float,
             return (moving.state(np.cbrt(np.interp(nodes[1:] ** 3, s, r**3))),
                     moving.geometry(nodes), "given")
         return mod.state_from_dry(r, s, n), mod.geometry(n), "given"
+    nodes = None
+    if isinstance(initial, BoundaryState):  # a protocol boundary: its profile and mesh
+        nodes = initial.nodes
+        if spec.moving and (nodes is None or np.shape(nodes) != (n + 1,)):
+            raise ParameterError("initial.nodes", None if nodes is None else np.shape(nodes),
+                                 f"the moving grid's {n + 1} dry node radii of the state")
+        initial = (initial.radius, initial.phi)
+    elif mesh.nodes is not None:
+        nodes = np.asarray(mesh.nodes)
     radius, phi = _given_profile(initial, n)
     if spec.moving:  # a profile on the mesh's given nodes, else on uniform cells (the
-        # first mesh check adapts them)
-        nodes = np.asarray(mesh.nodes) if mesh.nodes is not None else np.arange(n + 1) / n
-        y = moving.state(moving.state_from_profile(radius, phi, nodes))
+        # first mesh check adapts them); the state's time is the run's start
+        nodes = np.asarray(nodes, dtype=float) if nodes is not None else np.arange(n + 1) / n
+        y = moving.state(moving.state_from_profile(radius, phi, nodes), t0)
         geo = moving.geometry(nodes)
         a = float(y[-2])
     else:
@@ -137,6 +158,45 @@ def _initial_state(spec: GridSpec, gel: Gel, t_start: float, first_t: float,
         raise ParameterError("initial.radius", radius,
                              f"the radius implied by the profile, {a:.6g} (solid volume 1)")
     return y, geo, "given"
+
+
+def _resume_at(state: BoundaryState, steps: list[tuple[float, float]]) -> tuple[int, float]:
+    """(protocol steps done, their end in protocol time, summed as the segments are) of a
+    BoundaryState to continue ``steps`` from; ParameterError if it is not one of their
+    boundaries before the last."""
+    j = state.steps
+    if state.stopped or not (isinstance(j, int) and 0 < j < len(steps)):
+        raise ParameterError("initial.steps", j, f"a boundary of the protocol's {len(steps)} "
+                             "steps before its end (not a stopped run's end)")
+    t = 0.0
+    for duration, _ in steps[:j]:
+        t += duration
+    if not abs(float(state.t) - t) <= 1e-9 * max(1.0, t):
+        raise ParameterError("initial.t", state.t, f"the end of the protocol's first {j} "
+                             f"steps, {t:.12g}")
+    return j, t
+
+
+def _state_builder(code: int, geo: np.ndarray, stats: Stats, rezoner: Rezoner | None,
+                   base: dict[str, float]) -> Callable[[int, float, np.ndarray],
+                                                      BoundaryState]:
+    """(steps, t, y) -> the BoundaryState of grid state y (``geo``: the grid's live
+    geometry, the moving grid's nodes included), its counters ``base`` plus the run's."""
+
+    def build(steps: int, t: float, y: np.ndarray) -> BoundaryState:
+        phi = np.zeros(geo.shape[1] - 1)
+        a = porosity(code, y, geo, phi)
+        now = {"steps": stats.steps, "rejected": stats.rejected, "jacobians": stats.jacobians,
+               "rhs_calls": stats.rhs_calls, "merges": stats.merges}
+        if rezoner is not None:
+            now.update(mesh_checks=rezoner.checks, remaps=rezoner.remaps)
+        counters = {k: base.get(k, 0) + now.get(k, 0) for k in COUNTERS
+                    if k in base or k in now}
+        return BoundaryState(t=float(t), steps=int(steps), radius=float(a), phi=phi,
+                             nodes=geo[0].copy() if code == MOVING_CODE else None,
+                             counters=counters)
+
+    return build
 
 
 def _program_segments(program: Program, gel: Gel, t_start: float, a0: float, ell: float,
@@ -243,7 +303,14 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     when the first step heats, shrunken when it cools) or from ``initial`` (a FullResult's
     final state, remapped conservatively, or (radius, phi) on this grid), then follows
     ``protocol`` [(duration, temperature), ...] from t = 0; without a protocol it is
-    [(until, t_end)].  Or ``protocol`` is a :class:`solver.heating.Program` of
+    [(until, t_end)].  A protocol run records its state after every step it completes
+    (``FullResult.boundary_states``, :class:`~solver.full.state.BoundaryState`); with
+    ``initial`` one of them (of this protocol's first j steps, on this grid and N) the run
+    continues the protocol from there exactly, in protocol time (the moving grid keeps its
+    nodes; outputs from the state's time, which is the first): one run of the whole
+    protocol, up to round-off and, on the moving grid, the mesh motion's history (every step
+    restarts the integrator and stops the nodes); ``result.after(prefix)`` joins it to the
+    record of the steps before.  Or ``protocol`` is a :class:`solver.heating.Program` of
     Hold/Ramp/Bath/Trace steps with T(t) continuous inside the kernels and the mobility
     factor m(T) (docs/heating.md); ``until`` is then the run's horizon (default: the
     program's end, or with ``stop`` the program plus HOLD_AFTER at its last temperature).
@@ -270,8 +337,9 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
     is the paper's model): the interface is about 10 ell wide, resolve it with n >= 2/ell
     cells on the Lagrangian grid (the Eulerian grid needs several times more and uses the
     finite-difference Jacobian with the term) or use the moving grid; ``max_steps`` and
-    ``max_seconds`` (a wall-clock budget, checked at least every 4096 steps: past it the
-    run stops with BudgetExceeded, a SolverError).
+    ``max_seconds`` (a wall-clock budget, checked wherever the stepping loop stops anyway,
+    at least every 4096 steps, so it changes no step: past it the run stops with
+    BudgetExceeded, a SolverError).
     By default 200 outputs (a program: 200 over its length, 100 after);
     ``progress(fraction)`` is called as the run advances.  Raises ParameterError for bad
     input and SolverError (with diagnostics) for numerical failure.
@@ -316,8 +384,16 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
         steps = _protocol(t_end, until, protocol)
         total = float(sum(d for d, _ in steps))
         has_until = False
+    resume = initial if isinstance(initial, BoundaryState) else None
+    j_begin, t_begin = 0, 0.0
+    if resume is not None:
+        if steps is None:
+            raise ParameterError("initial", "a BoundaryState",
+                                 "a (duration, temperature) protocol to continue")
+        j_begin, t_begin = _resume_at(resume, steps)
+    if steps is not None:
         short = total
-        first_t = steps[0][1]
+        first_t = steps[j_begin][1]
     opts = SolverOptions.build(options, **option_fields)
     spec = grid_spec(opts.grid)
     grid, n, integrator, mesh = spec.name, opts.n, opts.integrator, opts.mesh
@@ -346,11 +422,13 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
                 raise ParameterError("every", every, f">= {total / MAX_OUTPUTS:.3g} "
                                      f"(at most {MAX_OUTPUTS} outputs)")
             out_times = uniform_output_times(total, every)
+    if resume is not None:  # from the state's time, the first output
+        out_times = np.concatenate([[t_begin], out_times[out_times > t_begin]])
 
     code = spec.code
     mod = spec.module
     y0, geo, branch_used = _initial_state(spec, gel, t_start, first_t, branch, initial, n,
-                                          mesh, ell)
+                                          mesh, ell, t_begin)
     a0 = float(y0[-2] if spec.moving else mod.radius(y0))
     if isinstance(stop_given, (Radius, Released)):
         stop = _check_stop(stop_given, a0)
@@ -366,6 +444,7 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
             segments.append(Segment(t0, t0 + duration, temp, par))
             t0 += duration
         segments[-1].t1 = total
+        segments = segments[j_begin:]
         done = segments
     else:
         segments = _program_segments(program, gel, t_start, a0, ell, total,
@@ -387,22 +466,33 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
         diag["protocol"] = [list(s) for s in steps]
     else:
         diag["program"] = program.to_dict()
+    if resume is not None:
+        diag["start"] = {"t": t_begin, "steps": j_begin}
     if stop is not None:
         diag["stop"] = stop
     if spec.moving:
         diag["mesh"] = mesh.to_dict()
+    watch = Watch()
     if max_seconds is not None:
-        progress = _budgeted(progress, started, float(max_seconds), total, stats,
-                             f"{grid} grid, N = {n}, interfacial length {ell:g}")
+        watch.check = _budget_check(started, float(max_seconds), total, stats,
+                                    f"{grid} grid, N = {n}, interfacial length {ell:g}")
+    states: list[BoundaryState] = []
+    state_of = _state_builder(code, geo, stats, rezoner,
+                              {} if resume is None else dict(resume.counters))
+    if steps is not None:
+        def boundary(seg: Segment, y: np.ndarray) -> None:
+            states.append(state_of(j_begin + len(states) + 1, seg.t1, y))
+
+        watch.boundary = boundary
     try:
         if integrator == "implicit":
             y_end = run_implicit(ws, y0, segments, out_times, collector,
                                  StepControl(rtol, atol, max_steps, jac_mode, stop), progress,
-                                 stats, rezoner=rezoner, total=total)
+                                 stats, watch, rezoner=rezoner, total=total)
         else:
             diag["dt"] = dt
             y_end = run_explicit(ws, y0, segments, out_times, collector, dt, max_steps,
-                                 progress, stats)
+                                 progress, stats, watch)
     except SolverError as exc:
         exc.diagnostics.update(diag)
         exc.diagnostics["wall_time"] = time.perf_counter() - started
@@ -426,26 +516,29 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
         diag["until_events"] = {str(k): t for k, t in ends.items()}
     if rezoner is not None:
         diag.update(mesh_checks=rezoner.checks, remaps=rezoner.remaps)
+    if steps is not None and stats.t_stop is not None:  # where the stop event ended it
+        states.append(replace(state_of(j_begin + len(states) + 1, stats.t_stop, y_end),
+                              stopped=True))
     result = collector.result(diag, stats)
+    result.boundary_states = states
     return result
 
 
-def _budgeted(progress: Callable[[float], None] | None, started: float, seconds: float,
-              total: float, stats: Stats, what: str) -> Callable[[float], None]:
-    """``progress`` behind a wall-clock check: past ``seconds`` it raises BudgetExceeded."""
+def _budget_check(started: float, seconds: float, total: float, stats: Stats,
+                  what: str) -> Callable[[float], None]:
+    """A wall-clock check at time t of the run: past ``seconds`` it raises BudgetExceeded."""
 
-    def tick(fraction: float) -> None:
+    def check(t: float) -> None:
         spent = time.perf_counter() - started
+        fraction = min(1.0, t / total) if total > 0.0 else 1.0
         if spent > seconds:
             raise BudgetExceeded(
                 f"the full-solver run ({what}) used its {seconds:.0f} s budget at "
                 f"{fraction:.0%} of the simulated time (t = {fraction * total:.4g}, "
                 f"{stats.steps} steps): this scenario is too stiff for these settings",
                 {"wall_seconds": spent, "fraction": fraction, "steps": stats.steps})
-        if progress is not None:
-            progress(fraction)
 
-    return tick
+    return check
 
 
 class _Collector:
