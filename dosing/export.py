@@ -179,7 +179,7 @@ def run_dataset(res: FullResult, dry_radius_um: float | None = None,
                        dry_radius_um=dry_radius_um if dry_radius_um is not None else "",
                        timescale_seconds=(timescale_seconds if timescale_seconds is not None
                                           else ""))
-    if res.meta:  # not the protocol boundaries' states (dosing.restart: profiles, not meta)
+    if res.meta:  # without the boundary states older runs kept in meta (now the run's own)
         attrs["meta"] = _attr({k: v for k, v in res.meta.items() if k != "boundary_states"})
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
