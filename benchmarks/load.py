@@ -255,6 +255,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--tree", type=Path, default=ROOT,
                    help="the source tree whose server starts (default this one; "
                         "benchmarks/speed.py measures other revisions with this client)")
+    p.add_argument("--no-validations", action="store_true",
+                   help="queue no validations (the server's own cost alone, no pool running)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--json", action="store_true")
     args = p.parse_args(argv)
@@ -269,7 +271,7 @@ def main(argv: list[str] | None = None) -> int:
         if url is None:
             proc, url = start_server(Path(tmp.name) / "cache.sqlite", args.workers,
                                      args.max_pending, args.tree.resolve())
-        ids, refused = queue_validations(url)
+        ids, refused = ([], []) if args.no_validations else queue_validations(url)
         if args.warmup > 0:
             asyncio.run(run_load(url, payloads(args.warmup, args.seed + 1), args.concurrency))
         cpu0 = server_cpu(proc)

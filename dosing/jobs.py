@@ -32,6 +32,11 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 DEFAULT_LEASE_SECONDS = 30.0
+# How much a background pool's workers lower their own scheduling priority (os.nice): the
+# validations they run yield the CPU to the process that owns them (a server answering
+# requests) and to the user's foreground work whenever both want it; alone they run at
+# full speed.
+BACKGROUND_NICENESS = 10
 WAIT_POLL_SECONDS = 0.25  # how often a waiting process looks for another's result
 
 
@@ -119,12 +124,27 @@ class ScriptSafeProcessPool(ProcessPoolExecutor):
             return super().submit(fn, *args, **kwargs)
 
 
-def default_executor(max_workers: int | None = None) -> ProcessPoolExecutor:
+def pool_worker_start(parent_pid: int, niceness: int = 0) -> None:
+    """A pool worker's initializer: end with ``parent_pid`` (:func:`exit_with_parent`) and
+    lower this process's priority by ``niceness`` (``os.nice``; 0 leaves it, and a
+    platform without ``os.nice`` runs at the parent's priority)."""
+    exit_with_parent(parent_pid)
+    if niceness > 0 and hasattr(os, "nice"):
+        try:
+            os.nice(niceness)
+        except OSError:  # not permitted here: run at the parent's priority
+            pass
+
+
+def default_executor(max_workers: int | None = None,
+                     niceness: int = 0) -> ProcessPoolExecutor:
     """A process pool of spawned workers (half the cores, at least one) that do not re-run
-    the caller's script; each worker ends itself if this process dies."""
+    the caller's script; each worker ends itself if this process dies and runs
+    ``niceness`` below this process's priority (:func:`pool_worker_start`)."""
     n = max_workers or max(1, (os.cpu_count() or 2) // 2)
     return ScriptSafeProcessPool(max_workers=n, mp_context=multiprocessing.get_context("spawn"),
-                                 initializer=exit_with_parent, initargs=(os.getpid(),))
+                                 initializer=pool_worker_start,
+                                 initargs=(os.getpid(), int(niceness)))
 
 
 def stop_executor(executor: Executor) -> None:
@@ -198,10 +218,11 @@ class JobRunner:
 
     @property
     def executor(self) -> Executor:
-        """The executor (the default process pool is created on first use)."""
+        """The executor (the default process pool is created on first use: background
+        work, its workers at :data:`BACKGROUND_NICENESS`)."""
         with self._lock:
             if self._executor is None:
-                self._executor = default_executor()
+                self._executor = default_executor(niceness=BACKGROUND_NICENESS)
             return self._executor
 
     # ------------------------------------------------------------------ queries

@@ -1,5 +1,6 @@
 """Jobs on a pluggable executor, deduplicated by key; the same planner on Dask distributed."""
 
+import os
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -8,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from dosing import DoseRequest, JobRunner, Planner, QueueFullError, ValidationCache
-from dosing.jobs import Job, default_executor
+from dosing.jobs import BACKGROUND_NICENESS, Job, default_executor, stop_executor
 from dosing.units import radius_after_dose
 from solver.gel import HHT
 
@@ -57,6 +58,25 @@ def test_default_executor_is_a_spawned_process_pool() -> None:
         assert ex._mp_context.get_start_method() == "spawn"
     finally:
         ex.shutdown()
+
+
+@pytest.mark.skipif(not hasattr(os, "nice"), reason="os.nice is POSIX")
+def test_a_runners_own_pool_works_at_a_lower_priority() -> None:
+    """The validations' pool yields the CPU to the server that owns it (docs/speed.md sec.
+    6.1): its workers run BACKGROUND_NICENESS below the parent; a pool made for other
+    work (``default_executor()``, the sweep's) runs at the parent's priority."""
+    own = os.nice(0)
+    runner = JobRunner()
+    try:
+        worker = runner.submit("nice", os.nice, 0).result(60)
+    finally:
+        runner.shutdown()
+    assert BACKGROUND_NICENESS > 0 and worker == min(19, own + BACKGROUND_NICENESS)
+    ex = default_executor(1)
+    try:
+        assert ex.submit(os.nice, 0).result(60) == own
+    finally:
+        stop_executor(ex)
 
 
 @pytest.mark.slow  # the first full-solver call of a session may pay numba compilation

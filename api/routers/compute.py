@@ -1,24 +1,31 @@
 """Running blocking physics and planner calls from a route: in worker threads, guarded.
 
-The calls share a limiter of ``COMPUTE_THREADS`` threads (not anyio's default 40): the
-rest wait on the event loop, costing nothing, so that a burst of requests cannot starve
-the loop of the GIL and /health (answered on the loop, no thread) stays prompt.
+The calls share a pool of ``COMPUTE_THREADS`` threads per event loop (not anyio's default
+40): the rest wait in the pool's queue, costing nothing, so that a burst of requests
+cannot starve the loop of the GIL and /health (answered on the loop, no thread) stays
+prompt.  The pool is a ``concurrent.futures.ThreadPoolExecutor``: a thread that finishes
+a call takes the next queued one at once, where a limiter on the loop (anyio's
+``CapacityLimiter``, used before) woke a waiting task on the loop and then a sleeping
+thread for each call; with 16 concurrent dose requests that saved about a quarter of a
+request's CPU in process (docs/speed.md sec. 6.1).  A queued call whose request is gone
+(its task cancelled) is dropped; a running one finishes and its result is dropped.
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextvars
 import weakref
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 from typing import Any
-
-import anyio.to_thread
 
 from ..service import solver_guard
 
 COMPUTE_THREADS = 4
-_LIMITERS: weakref.WeakKeyDictionary[Any, anyio.CapacityLimiter] = weakref.WeakKeyDictionary()
+_POOLS: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, ThreadPoolExecutor] = \
+    weakref.WeakKeyDictionary()
 
 
 def _guarded(fn: Callable[..., Any], *args: Any) -> Any:
@@ -26,18 +33,22 @@ def _guarded(fn: Callable[..., Any], *args: Any) -> Any:
         return fn(*args)
 
 
-def limiter() -> anyio.CapacityLimiter:
-    """The compute threads' limiter of the running event loop (one per loop: a limiter
-    is bound to the loop it is first used in)."""
+def pool() -> ThreadPoolExecutor:
+    """The compute threads of the running event loop (one pool per loop, its threads
+    stopped once the loop is gone)."""
     loop = asyncio.get_running_loop()
-    lim = _LIMITERS.get(loop)
-    if lim is None:
-        lim = _LIMITERS[loop] = anyio.CapacityLimiter(COMPUTE_THREADS)
-    return lim
+    ex = _POOLS.get(loop)
+    if ex is None:
+        ex = _POOLS[loop] = ThreadPoolExecutor(COMPUTE_THREADS,
+                                               thread_name_prefix="thermogel-compute")
+        weakref.finalize(loop, ex.shutdown, wait=False, cancel_futures=True)
+    return ex
 
 
 async def compute(fn: Callable[..., Any], *args: Any) -> Any:
-    """Run a blocking physics or planner call in a compute thread, under
-    :func:`solver_guard` (an input or solver error passes; a cache failure is a 503, any
-    other failure a 500)."""
-    return await anyio.to_thread.run_sync(partial(_guarded, fn, *args), limiter=limiter())
+    """Run a blocking physics or planner call in a compute thread (the caller's context
+    variables copied to it), under :func:`solver_guard` (an input or solver error passes;
+    a cache failure is a 503, any other failure a 500)."""
+    ctx = contextvars.copy_context()
+    return await asyncio.get_running_loop().run_in_executor(
+        pool(), partial(ctx.run, _guarded, fn, *args))

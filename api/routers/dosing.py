@@ -4,14 +4,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Request
 from fastapi.responses import JSONResponse
 
 from solver.errors import ParameterError
 
 from .. import schemas as s
 from .. import stored_jobs
-from ..deps import PlannerDep, StateDep
+from ..deps import PlannerDep, StateDep, service_state
 from ..drug_schemas import DrugDoseResponse, DrugScheduleResponse
 from ..safe_route import SafeRoute
 from ..service import Accepted, dose_time, schedule, to_schedule_request
@@ -40,10 +40,11 @@ def answer_or_pending(out: dict[str, Any] | Accepted) -> Any:
           "description": "needs the full solver: poll validation_url, then ask again (a "
                          "drug dose: the validation's result is the answer)"},
     429: _FULL})
-async def dose(body: s.DoseTimeRequest, planner: PlannerDep, state: StateDep) -> Any:
+async def dose(body: s.DoseTimeRequest, planner: PlannerDep, request: Request) -> Any:
     """How long to heat a bead to release a dose (front model at once, or 202; a drug dose
     whose runs are not cached is a job: 202, its validation's result is the answer)."""
-    return answer_or_pending(await compute(dose_time, planner, body, state))
+    # one dependency: the service's busiest route (docs/speed.md sec. 6.1)
+    return answer_or_pending(await compute(dose_time, planner, body, service_state(request)))
 
 
 @router.post("/schedule", response_model=s.ScheduleResponse | DrugScheduleResponse,
