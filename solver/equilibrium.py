@@ -14,10 +14,10 @@ from functools import lru_cache
 from typing import Literal
 
 import numpy as np
-from scipy.optimize import brentq
 
 from .errors import ParameterError
 from .gel import T_MAX, T_MIN, Gel, as_gel, check_temperature
+from .roots import brentq
 from .thermo import osmotic_p
 
 LAMBDA_MIN = 1.0 + 1e-10

@@ -15,11 +15,11 @@ from functools import lru_cache
 from typing import Literal
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 from .equilibrium import Branch, equilibrium, nearest_stable
 from .errors import ParameterError
 from .gel import T_MAX, T_MIN, Gel, as_gel, check_temperature
+from .roots import bounded_minimum, brentq
 from .thermo import normal_energy, normal_stiffness, normal_stress, osmotic_dp, osmotic_p
 
 Behaviour = Literal["smooth", "front", "delayed_front", "spinodal"]
@@ -71,10 +71,10 @@ def coexistence_gap(gel: Gel, temperature: float, stretch: float) -> tuple[float
     gap = tangent_gap(gel, temperature, grid, lam)
     i = int(np.argmin(gap))
     lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
-    res = minimize_scalar(lambda v: float(tangent_gap(gel, temperature, v, lam)),
-                          bounds=(lo, hi), method="bounded", options={"xatol": 1e-12})
-    if res.fun < gap[i]:
-        return float(res.fun), float(res.x)
+    x, fx, _ = bounded_minimum(lambda v: float(tangent_gap(gel, temperature, v, lam)),
+                               lo, hi, xatol=1e-12)
+    if fx < gap[i]:
+        return float(fx), float(x)
     return float(gap[i]), float(grid[i])
 
 
