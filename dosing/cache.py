@@ -234,6 +234,9 @@ class ValidationCache:
             return None
         text, blob, digest = row[0], bytes(row[1]), row[2]
         if not _sound(text, blob, digest):
+            log.warning("cache row %s: %d bytes of metadata and %d of data fail the stored "
+                        "checksum %s", key, len(text) if isinstance(text, str) else -1,
+                        len(blob), digest)
             self._drop_corrupt(key, digest)
             return None
         return json.loads(text), blob
@@ -252,7 +255,8 @@ class ValidationCache:
             return None
         try:
             return Trajectory.from_npz(raw[1], raw[0])
-        except Exception:  # an unchecked (old) row that no longer decodes
+        except Exception as exc:  # an unchecked (old) row that no longer decodes
+            log.warning("cache row %s does not decode (%r): dropped", key, exc)
             self._drop_corrupt(key, self._digest(key))
             return None
 
