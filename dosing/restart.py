@@ -20,6 +20,7 @@ import numpy as np
 
 from solver.errors import BudgetExceeded
 from solver.full.result import FullResult, uniform_output_times
+from solver.full.state import protocol_boundaries
 
 
 @dataclass(frozen=True)
@@ -49,15 +50,6 @@ def restartable(solver: Any) -> bool:
     return solver is simulate
 
 
-def boundaries(steps: tuple[tuple[float, float], ...]) -> list[float]:
-    """The time at the start of each step and at the end (summed as the solver sums)."""
-    out, t = [0.0], 0.0
-    for d, _ in steps:
-        t += d
-        out.append(t)
-    return out
-
-
 def run_protocol(sc: Any, solver: Any, budget: float, start: Start | None = None
                  ) -> FullResult:
     """``sc``'s protocol run (a :class:`dosing.scenario.Scenario` with ``protocol``) as
@@ -69,7 +61,7 @@ def run_protocol(sc: Any, solver: Any, budget: float, start: Start | None = None
     keeps)."""
     steps = tuple(sc.protocol)
     began = time.perf_counter()
-    bounds = boundaries(steps)
+    bounds = protocol_boundaries(steps)
     outputs = np.union1d(uniform_output_times(bounds[-1]), bounds)
     first = 0 if start is None else start.steps
     last = len(steps) - 1
@@ -126,10 +118,10 @@ def stopped_as_run(sc: Any, rec: FullResult) -> tuple[Any, FullResult] | None:
             states[-1].stopped):
         return None
     steps = tuple(sc.protocol)
-    start = boundaries(steps)[-2]
+    start = protocol_boundaries(steps)[-2]
     last = (float(rec.terminal_time) - start, steps[-1][1])
     alias = replace(sc, protocol=(*steps[:-1], last), stop_expelled=None)
-    end = replace(states[-1], stopped=False, t=boundaries(alias.protocol)[-1])
+    end = replace(states[-1], stopped=False, t=protocol_boundaries(alias.protocol)[-1])
     meta = {**rec.meta, "key": alias.key(), "scenario": alias.key_dict(),
             "stopped_run": sc.key()}
     diag = {**rec.diagnostics, "status": "finished", "t_events": [],

@@ -17,11 +17,12 @@ from grid_support import every_grid
 
 from dosing import Planner, ScheduleRequest
 from dosing.protocol import FluidHeatings, windows
-from dosing.restart import Start, boundaries, run_protocol
+from dosing.restart import Start, run_protocol
 from dosing.scenario import Scenario, SolverSettings
 from solver.errors import ParameterError
 from solver.full import FullResult, simulate
 from solver.full.state import BoundaryState
+from solver.full.state import protocol_boundaries as boundaries
 from solver.gel import preset
 
 PROTOCOL = ((0.01, 308.0), (0.05, 302.0), (0.02, 308.0))

@@ -35,7 +35,7 @@ from .kernels import KernelParams
 from .moving import MeshOptions, Rezoner
 from .options import SolverOptions
 from .result import DEFAULT_OUTPUTS, FullResult, uniform_output_times
-from .state import COUNTERS, BoundaryState
+from .state import COUNTERS, BoundaryState, protocol_boundaries
 from .system import JAC_ANALYTIC, JAC_FD, porosity, solid_error
 
 MAX_OUTPUTS = 100_000
@@ -168,9 +168,7 @@ def _resume_at(state: BoundaryState, steps: list[tuple[float, float]]) -> tuple[
     if state.stopped or not (isinstance(j, int) and 0 < j < len(steps)):
         raise ParameterError("initial.steps", j, f"a boundary of the protocol's {len(steps)} "
                              "steps before its end (not a stopped run's end)")
-    t = 0.0
-    for duration, _ in steps[:j]:
-        t += duration
+    t = protocol_boundaries(steps)[j]
     if not abs(float(state.t) - t) <= 1e-9 * max(1.0, t):
         raise ParameterError("initial.t", state.t, f"the end of the protocol's first {j} "
                              f"steps, {t:.12g}")

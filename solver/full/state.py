@@ -1,7 +1,7 @@
 """BoundaryState: the full solver's exact state at a protocol boundary, to continue from.
 
 A (duration, temperature) protocol run records its state after every step it completes
-(``FullResult.boundary_states``); ``simulate(..., start=state)`` continues the same protocol
+(``FullResult.boundary_states``); ``simulate(..., initial=state)`` continues the same protocol
 from there, in protocol time, as the one run of the whole protocol would (every step
 restarts the integrator: a new temperature takes a small first step and stops the moving
 grid's nodes).  The state is the profile the grid's state is rebuilt from exactly up to
@@ -89,14 +89,23 @@ def states_to_arrays(states: list[BoundaryState]) -> dict[str, np.ndarray]:
 
 
 def states_from_arrays(data: Any) -> list[BoundaryState]:
-    """Inverse of :func:`states_to_arrays` (``data``: a mapping holding its arrays)."""
+    """Inverse of :func:`states_to_arrays` (``data``: a mapping holding its arrays; an npz
+    file decompresses an array on every access, so each is read once)."""
     if "state_t" not in data:
         return []
-    nodes = np.asarray(data["state_nodes"])
+    t, k, a, phi, nodes, stopped = (np.asarray(data[name]) for name in ARRAY_KEYS[:-1])
     counters = json.loads(str(data["state_counters"]))
-    return [BoundaryState(t=float(t), steps=int(k), radius=float(a),
-                          phi=np.array(data["state_phi"][i]),
-                          nodes=np.array(nodes[i]) if nodes.size else None,
-                          counters=dict(counters[i]), stopped=bool(data["state_stopped"][i]))
-            for i, (t, k, a) in enumerate(zip(data["state_t"], data["state_steps"],
-                                              data["state_radius"], strict=True))]
+    return [BoundaryState(t=float(t[i]), steps=int(k[i]), radius=float(a[i]),
+                          phi=phi[i].copy(), nodes=nodes[i].copy() if nodes.size else None,
+                          counters=dict(counters[i]), stopped=bool(stopped[i]))
+            for i in range(t.size)]
+
+
+def protocol_boundaries(steps: Any) -> list[float]:
+    """The time at the start of each (duration, temperature) step and at the end, summed
+    as the solver sums its segments."""
+    out, t = [0.0], 0.0
+    for duration, _ in steps:
+        t += duration
+        out.append(t)
+    return out
