@@ -15,8 +15,10 @@ Figures (``--only``):
   --fraction 0.8 --dry-radius-um 50`` (numba caches warm, the validation cache fresh);
 * ``warm``: ``Planner.dose`` on a kept planner, milliseconds of CPU per answer (nine
   front-model requests in turn, 3,000 answers);
-* ``load``: the HTTP service's requests per second (benchmarks/load.py, short: 600
-  requests over 16 connections; wall-clock throughput, so its ratio is what counts), and
+* ``load``: the HTTP service's requests per second (benchmarks/load.py: 3,000 requests
+  over 16 connections after 300 uncounted, 2-4 s at this service's rate, where 600 took
+  well under a second and two runs of one tree differed by up to 1.5x; wall-clock
+  throughput, so its ratio is what counts), and
   the server process's CPU per request (its pool's validation runs left out).  Every tree's
   server is driven by this tree's client (``load.py --tree``), with the same options, so
   only the servers differ; median of ``--repeats`` runs, the trees alternating;
@@ -237,7 +239,7 @@ def fig_warm(tree: Path, tmp: Path) -> tuple[float, str]:
 
 def fig_load(tree: Path, tmp: Path) -> tuple[float, str]:
     _, out = run(tree, [PY, str(ROOT / "benchmarks" / "load.py"), "--tree", str(tree),
-                        "--requests", "600", "--warmup", "100", "--concurrency", "16",
+                        "--requests", "3000", "--warmup", "300", "--concurrency", "16",
                         "--json"], timeout=900)
     res = json.loads(out[out.index("{"):])
     closed = res.get("closed_loop") or res.get("closed") or res
@@ -359,6 +361,12 @@ def main(argv: list[str] | None = None) -> int:
                     ratio = med / last if lower else last / med
                     print(f"  {label:<14} {med:10.4g}   ({ratio:.2f}x this tree's speed)"
                           f"   {notes[tree][:400]}")
+                    if tree != ROOT and len(got[tree]) > 1:  # the runs side by side, paired
+                        pairs = [(a / b if lower else b / a) for a, b in
+                                 zip(got[tree], got[ROOT], strict=True)]
+                        print(f"  {'':<14} this tree / {label} run by run: "
+                              f"{', '.join(f'{x:.2f}x' for x in pairs)} (paired median "
+                              f"{statistics.median(pairs):.2f}x)")
                 sys.stdout.flush()
         finally:
             for path in made:

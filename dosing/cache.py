@@ -27,6 +27,8 @@ import socket
 import sqlite3
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -173,18 +175,24 @@ class ValidationCache:
                 self._connections = [*alive, (threading.current_thread(), con)]
         return con
 
-    def _write(self, sql: str, params: tuple[Any, ...]) -> int:
-        """One statement in its own write transaction; the number of rows it changed."""
+    @contextmanager
+    def _transaction(self) -> Iterator[sqlite3.Connection]:
+        """This thread's connection inside one ``BEGIN IMMEDIATE ... COMMIT`` write
+        transaction (rolled back if the block raises)."""
         con = self._con()
         con.execute("BEGIN IMMEDIATE")
         try:
-            changed = con.execute(sql, params).rowcount
+            yield con
         except BaseException:
             if con.in_transaction:  # SQLITE_FULL (a full disk) has rolled it back already
                 con.execute("ROLLBACK")
             raise
         con.execute("COMMIT")
-        return changed
+
+    def _write(self, sql: str, params: tuple[Any, ...]) -> int:
+        """One statement in its own write transaction; the number of rows it changed."""
+        with self._transaction() as con:
+            return con.execute(sql, params).rowcount
 
     # trajectories ---------------------------------------------------------------------
     def put(self, key: str, meta: dict[str, Any], blob: bytes) -> None:
@@ -199,9 +207,7 @@ class ValidationCache:
 
         Two writers extending the same scenario never replace a longer run by a shorter one.
         """
-        con = self._con()
-        con.execute("BEGIN IMMEDIATE")
-        try:
+        with self._transaction() as con:
             row = con.execute("SELECT meta, data, sha256 FROM trajectories WHERE key = ?",
                               (key,)).fetchone()
             old = -1.0
@@ -214,11 +220,6 @@ class ValidationCache:
                             "sha256) VALUES (?, ?, ?, ?, ?)",
                             (key, text, sqlite3.Binary(blob), time.time(),
                              row_checksum(text, blob)))
-        except BaseException:
-            if con.in_transaction:  # SQLITE_FULL (a full disk) has rolled it back already
-                con.execute("ROLLBACK")
-            raise
-        con.execute("COMMIT")
         return write
 
     def put_trajectory(self, key: str, traj: Trajectory) -> None:
@@ -393,35 +394,21 @@ class ValidationCache:
     def claim(self, key: str, owner: str, seconds: float) -> bool:
         """Take the lease on ``key`` for ``seconds`` if it is free, expired, ours, or held
         by a process of this host that has ended; True if we hold it now."""
-        con = self._con()
         now = time.time()
-        con.execute("BEGIN IMMEDIATE")
-        try:
+        with self._transaction() as con:
             row = con.execute("SELECT owner, expires FROM leases WHERE key = ?",
                               (key,)).fetchone()
             free = row is None or row[0] == owner or row[1] < now or _owner_gone(row[0])
             if free:
                 con.execute("INSERT OR REPLACE INTO leases (key, owner, expires) "
                             "VALUES (?, ?, ?)", (key, owner, now + seconds))
-        except BaseException:
-            if con.in_transaction:  # SQLITE_FULL (a full disk) has rolled it back already
-                con.execute("ROLLBACK")
-            raise
-        con.execute("COMMIT")
         return free
 
     def renew(self, keys: list[str] | tuple[str, ...], owner: str, seconds: float) -> None:
         """Extend our leases on ``keys`` to ``seconds`` from now (one transaction)."""
-        con = self._con()
-        con.execute("BEGIN IMMEDIATE")
-        try:
+        with self._transaction() as con:
             con.executemany("UPDATE leases SET expires = ? WHERE key = ? AND owner = ?",
                             [(time.time() + seconds, k, owner) for k in keys])
-        except BaseException:
-            if con.in_transaction:  # SQLITE_FULL (a full disk) has rolled it back already
-                con.execute("ROLLBACK")
-            raise
-        con.execute("COMMIT")
 
     def release(self, key: str, owner: str) -> None:
         """Drop our lease on ``key`` (another owner's is left alone)."""
