@@ -24,6 +24,9 @@ Sections (issue 12's acceptance):
              t50 / t80, the attempted steps at each ell relative to ell = 1e-3 (target:
              at most 1.5x at 3e-5), and the 400-cell run's accepted steps per window of
              time (docs/moving_mesh.md sec. 7.3).
+  options    issue 23's own figure (benchmarks.speed --only moving: ANB, 400 cells, rtol
+             1e-5, to t = 0.08, no outputs) at ell = 1e-3 and 3e-5 with the mesh options
+             moved one or two at a time: attempted steps, their ratio, t80 (sec. 7.4).
 """
 
 from __future__ import annotations
@@ -213,10 +216,37 @@ def section_thin(gels: list[str], mesh: MeshOptions | None = None) -> None:
                   flush=True)
 
 
+# the mesh options tried on issue 23's figure (docs/moving_mesh.md sec. 7.4)
+OPTION_VARIANTS: tuple[dict[str, float], ...] = (
+    {}, {"check_every": 1}, {"check_every": 3}, {"tolerance": 2.0}, {"bulk": 8.0},
+    {"edge_cells": 2.0}, {"edge_cells": 1.0}, {"grading": 0.2}, {"resolution": 0.15},
+    {"resolution": 0.07}, {"edge_cells": 2.0, "resolution": 0.15},
+    {"edge_cells": 2.0, "tolerance": 2.0}, {"edge_cells": 2.0, "bulk": 6.0},
+    {"edge_cells": 2.0, "finest": 20.0}, {"edge_cells": 2.0, "check_every": 1})
+
+
+def section_options() -> None:
+    print("== mesh options on issue 23's figure: ANB 302 -> 308 K, 400 cells, rtol 1e-5, to "
+          "t = 0.08, ell = 1e-3 and 3e-5 (attempted = accepted + rejected) ==")
+    simulate("ANB", 302.0, 308.0, until=1e-3, grid="moving", n=20, interfacial_length=0.05)
+    a80 = float(fraction_radius(equilibrium(preset("ANB"), 302.0).stretch, 0.8))
+    for variant in OPTION_VARIANTS:
+        row = []
+        for ell in (1e-3, 3e-5):
+            res = simulate("ANB", 302.0, 308.0, until=0.08, grid="moving", n=400,
+                           interfacial_length=ell, rtol=RTOL, mesh=MeshOptions(**variant))
+            d = res.diagnostics
+            row.append((d["steps"] + d["rejected"], d["rejected"], res.time_to_radius(a80)))
+        (a, ra, ta), (b, rb, tb) = row
+        print(f"{variant or 'defaults'}: {a} ({ra} rejected) / {b} ({rb} rejected) attempted, "
+              f"{b / a:.2f}x; t80 {ta:.7f} / {tb:.7f}", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--section", choices=("reproduce", "direct", "stiff", "delayed",
-                                              "speed", "thin"), action="append")
+                                              "speed", "thin", "options"),
+                        action="append")
     parser.add_argument("--gel", choices=tuple(CASES), action="append")
     parser.add_argument("--no-front", action="store_true",
                         help="thin: the band does not move with the front (MeshOptions.front)")
@@ -233,6 +263,8 @@ def main() -> None:
             section_stiff()
         elif s == "delayed":
             section_delayed(gels)
+        elif s == "options":
+            section_options()
         elif s == "thin":
             kw = {"front": False} if args.no_front else {}
             if args.tolerance is not None:
