@@ -46,6 +46,7 @@ from solver.errors import ParameterError, SolverError
 from solver.gel import Gel
 from solver.limits import T_MAX, T_MIN
 from solver.solute import Hindrance, ReleaseResult, Solute, crank_sphere
+from solver.solute.result import RELEASE_ARRAYS
 
 from .cache import ValidationCache
 from .scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
@@ -70,9 +71,6 @@ EARLY_PER_DECADE = 40
 D_RANGE_CM2_S = (0.0, 1e-3)
 HINDRANCE_LAWS = ("free-volume", "ogston", "amsden", "none")
 T_REF_RANGE = (T_MIN, T_MAX)  # solver.limits
-DRUG_ARRAYS = ("t", "radius", "released_fraction", "advected_fraction", "expelled_fraction",
-               "in_gel_fraction", "medium_concentration", "temperature", "profile_t",
-               "profiles", "profile_radii", "squeezed_fraction")
 
 
 def _opt_positive(name: str, value: Any) -> float | None:
@@ -472,24 +470,38 @@ def mechanics_prefix(res: Any, steps: tuple[Step, ...]) -> Any:
 
 
 def run_drug_scenario(scenario: dict[str, Any], budget: float = RUN_BUDGET_S,
-                      start: Any = None, keep: bool = False) -> tuple[Any, ...]:
+                      start: Any = None, keep: bool = False,
+                      solute_from: ReleaseResult | None = None) -> tuple[Any, ...]:
     """A drug run: plain data in, (metadata, npz blob) out (for any executor); ``start``
-    the mechanics of its protocol's first steps (:func:`mechanics_prefix`) to continue;
-    ``keep``: (metadata, blob, the mechanics) out, for the next run to start from."""
+    the mechanics of its protocol's first steps (:func:`mechanics_prefix`) to continue, and
+    ``solute_from`` the stored drug run those mechanics came from, whose solute continues
+    from the same boundary where it kept its state (``solver.solute.SoluteStart``; else the
+    solute runs from t = 0); ``keep``: (metadata, blob, the mechanics) out, for the next
+    run to start from."""
     from solver.solute import release
+    from solver.solute.transport import SoluteStart
 
     sc = DrugScenario.from_dict(scenario)
     wall = time.perf_counter()
     res = simulate_protocol(sc.gel, sc.t_start, list(sc.protocol), sc.branch, sc.settings, budget,
                             start)
     mech = time.perf_counter() - wall
-    rel = release(res, sc.solute)
+    from_solute = None
+    if start is not None and solute_from is not None and sc.solute.squeezed_is_expelled \
+            and start.boundary_states:
+        from_solute = SoluteStart.at(solute_from, start.boundary_states[-1].t)
+        k = None if from_solute is None else from_solute.index
+        if k is not None and not (k < res.t.size and np.array_equal(
+                solute_from.t[:k + 1], res.t[:k + 1])):
+            from_solute = None  # not the samples this run shares: from t = 0
+    rel = release(res, sc.solute, start=from_solute)
     meta = {"key": sc.key(), "scenario": sc.to_dict(), "mechanics_seconds": mech,
             "solute_seconds": time.perf_counter() - wall - mech,
             "mass_balance_error": rel.mass_balance_error,
             "effective_diffusivity": rel.effective_diffusivity,
             "solute_steps": rel.diagnostics.get("steps"), "created": time.time(),
-            "mechanics_from_step": res.diagnostics["mechanics_from_step"]}
+            "mechanics_from_step": res.diagnostics["mechanics_from_step"],
+            "solute_from_sample": rel.diagnostics.get("from_sample", 0)}
     return (meta, to_npz(rel), res) if keep else (meta, to_npz(rel))
 
 
@@ -497,14 +509,14 @@ def to_npz(rel: ReleaseResult) -> bytes:
     """A release result's arrays as an .npz blob."""
     buf = io.BytesIO()
     np.savez_compressed(buf, **{k: np.asarray(getattr(rel, k), dtype=float)
-                                for k in DRUG_ARRAYS})
+                                for k in RELEASE_ARRAYS})
     return buf.getvalue()
 
 
 def from_npz(blob: bytes, meta: dict[str, Any]) -> ReleaseResult:
     """Inverse of :func:`to_npz` (scalars from the metadata)."""
     with np.load(io.BytesIO(blob)) as z:
-        arrays = {k: np.array(z[k]) for k in DRUG_ARRAYS if k in z}
+        arrays = {k: np.array(z[k]) for k in RELEASE_ARRAYS if k in z}
     return ReleaseResult(**arrays, mass_balance_error=float(meta.get("mass_balance_error", 0.0)),
                          effective_diffusivity=float(meta.get("effective_diffusivity", 0.0)),
                          diagnostics=dict(meta))
@@ -556,7 +568,9 @@ class DrugRuns:
         self.cache = DrugCache(planner.cache.path)
         self._mem: OrderedDict[str, ReleaseResult] = OrderedDict()
         self._lock = threading.Lock()
-        self._mech: OrderedDict[str, tuple[tuple, tuple[Step, ...], Any]] = OrderedDict()
+        # key -> (case, protocol, mechanics, the run's solute as a dict)
+        self._mech: OrderedDict[str, tuple[tuple, tuple[Step, ...], Any, dict[str, Any]]] = \
+            OrderedDict()
         self.restarts = 0
 
     def cached(self, sc: DrugScenario) -> ReleaseResult | None:
@@ -587,8 +601,9 @@ class DrugRuns:
             meta, blob = fut.result()[:2]
             self.cache.put_run(meta["key"], meta, blob)
 
-        start = self._start(sc)
-        fn = functools.partial(run_drug_scenario, start=start, keep=True)
+        start, solute_from = self._start(sc)
+        fn = functools.partial(run_drug_scenario, start=start, keep=True,
+                               solute_from=solute_from)
         meta, blob, mech = self.planner.jobs.submit(sc.key(), fn, sc.to_dict(),
                                                     on_done=store).result()
         self._keep(sc, mech)
@@ -602,12 +617,13 @@ class DrugRuns:
     def _case(sc: DrugScenario) -> tuple:
         return (sc.gel.key(), sc.t_start, sc.branch, drug_settings(sc.settings))
 
-    def _start(self, sc: DrugScenario) -> Any:
-        """The kept mechanics of the longest prefix of ``sc``'s protocol, or None."""
+    def _start(self, sc: DrugScenario) -> tuple[Any, ReleaseResult | None]:
+        """The kept mechanics of the longest prefix of ``sc``'s protocol (or None), and the
+        drug run they came from if its solute was ``sc``'s (its states continue it)."""
         case, steps = self._case(sc), tuple(sc.protocol)
         best, best_j = None, 0
         with self._lock:
-            for key, (c, kept, _m) in self._mech.items():
+            for key, (c, kept, _m, _s) in self._mech.items():
                 if c != case:
                     continue
                 j = 0
@@ -616,23 +632,29 @@ class DrugRuns:
                 if j > best_j:
                     best, best_j = key, j
             if best is None:
-                return None
+                return None, None
             self._mech.move_to_end(best)
-            mech = self._mech[best][2]
+            _, _, mech, solute = self._mech[best]
         start = mechanics_prefix(mech, steps[:best_j])
-        if start is not None:
-            self.restarts += 1
-        return start
+        if start is None:
+            return None, None
+        self.restarts += 1
+        if solute != sc.solute.to_dict():
+            return start, None
+        with self._lock:
+            rel = self._mem.get(best)
+        return start, rel if rel is not None else self.cache.get_run(best)
 
     def _keep(self, sc: DrugScenario, mech: Any) -> None:
         """Keep a run's mechanics (the latest first out past MECHANICS_MEMORY bytes)."""
         if mech is None or not mech.boundary_states:
             return
         with self._lock:
-            self._mech[sc.key()] = (self._case(sc), tuple(sc.protocol), mech)
+            self._mech[sc.key()] = (self._case(sc), tuple(sc.protocol), mech,
+                                    sc.solute.to_dict())
             self._mech.move_to_end(sc.key())
             while len(self._mech) > 1 and sum(
-                    m.phi.nbytes + m.nodes.nbytes for _, _, m in self._mech.values()
+                    m.phi.nbytes + m.nodes.nbytes for _, _, m, _ in self._mech.values()
             ) > MECHANICS_MEMORY:
                 self._mech.popitem(last=False)
 

@@ -198,17 +198,23 @@ def _geometry(s3a, s3b, theta, r3):
 
 
 @njit(cache=True)
-def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, prof_idx,
-                rtol, max_steps, counters):
+def release_run(ts, s3, dw, vmed0, par, m, out, out_prof, prof_idx, rtol, max_steps, counters,
+                carry, mark_idx, out_mark):
     """March the solute through the mechanics samples ``ts`` with node volumes ``s3``
     (len(ts), n + 1).  ``m`` (n + 1) is the initial state, updated in place.
 
     ``par`` is a :class:`SoluteParams`.  ``vmed0`` > 0: the medium volume at t = 0 (it grows
     by the expelled fluid), else a perfect sink.  Writes the released mass, and its
-    advective part, and the mass in the gel at every sample (``out_rel``, ``out_adv``,
-    ``out_gel``) and the concentration
+    advective part, and the mass in the gel at every sample (the rows of ``out``, (3,
+    len(ts))) and the concentration
     profile at the samples flagged in ``prof_idx`` (row prof_idx[k] >= 0).  Returns a
     status code; counters = (steps, rejected).
+
+    ``carry`` = (step size, advected mass) in and out: what the march carries from one
+    sample to the next besides ``m`` (a step size <= 0: start afresh, 1e-9 of the span).
+    At the samples flagged in ``mark_idx`` (row >= 0) the whole state is written to
+    ``out_mark`` (m, then the step size and the advected mass): a march started from such
+    a row with ``carry`` from it continues exactly as this one does.
     """
     n = dw.size
     size = n + 1
@@ -243,23 +249,25 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
     lam = np.zeros(n)
     kcell = np.zeros(n)
     wcell = np.zeros(n)
-    adv = 0.0
-    h = 1e-9 * max(1.0, ts[-1] - ts[0])
+    adv = carry[1]
+    h = carry[0] if carry[0] > 0.0 else 1e-9 * max(1.0, ts[-1] - ts[0])
     a3_0 = s3[0, n]
-    out_rel[0] = m[n]
-    out_adv[0] = 0.0
-    out_gel[0] = np.sum(m[:n])
+    out[0, 0] = m[n]
+    out[1, 0] = adv
+    out[2, 0] = np.sum(m[:n])
     for k in range(ts.size - 1):
         ta, tb = ts[k], ts[k + 1]
+        if mark_idx[k] >= 0:
+            _mark(m, h, adv, out_mark[mark_idx[k]])
         if prof_idx[k] >= 0:
             _geometry(s3[k], s3[k], 0.0, r3)
             for i in range(n):
                 out_prof[prof_idx[k], i] = m[i] / (r3[i + 1] - r3[i] - dw[i])
         span = tb - ta
         if span <= 0.0:
-            out_rel[k + 1] = m[n]
-            out_adv[k + 1] = adv
-            out_gel[k + 1] = np.sum(m[:n])
+            out[0, k + 1] = m[n]
+            out[1, k + 1] = adv
+            out[2, k + 1] = np.sum(m[:n])
             continue
         for i in range(n):
             q[i] = -(s3[k + 1, i + 1] - s3[k, i + 1]) / span
@@ -337,12 +345,26 @@ def release_run(ts, s3, dw, vmed0, par, m, out_rel, out_adv, out_gel, out_prof, 
             else:
                 counters[1] += 1
                 h = hh * max(0.2, 0.9 * norm ** (-1.0 / 3.0))
-        out_rel[k + 1] = m[n]
-        out_adv[k + 1] = adv
-        out_gel[k + 1] = np.sum(m[:n])
+        out[0, k + 1] = m[n]
+        out[1, k + 1] = adv
+        out[2, k + 1] = np.sum(m[:n])
     kl = ts.size - 1
     if prof_idx[kl] >= 0:
         _geometry(s3[kl], s3[kl], 0.0, r3)
         for i in range(n):
             out_prof[prof_idx[kl], i] = m[i] / (r3[i + 1] - r3[i] - dw[i])
+    if mark_idx[kl] >= 0:
+        _mark(m, h, adv, out_mark[mark_idx[kl]])
+    carry[0] = h
+    carry[1] = adv
     return OK
+
+
+@njit(cache=True)
+def _mark(m, h, adv, row):
+    """The march's whole state as one row: m, the step size, the advected mass."""
+    size = m.size
+    for i in range(size):
+        row[i] = m[i]
+    row[size] = h
+    row[size + 1] = adv

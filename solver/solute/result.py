@@ -11,9 +11,11 @@ import numpy as np
 
 from ..json_safe import json_safe
 
-_ARRAYS = ("t", "radius", "released_fraction", "advected_fraction", "expelled_fraction",
-           "in_gel_fraction", "medium_concentration", "temperature", "profile_t", "profiles",
-           "profile_radii", "squeezed_fraction")
+# a release result's arrays (its .npz, and a drug run's in the run store)
+RELEASE_ARRAYS = ("t", "radius", "released_fraction", "advected_fraction",
+                  "expelled_fraction", "in_gel_fraction", "medium_concentration",
+                  "temperature", "profile_t", "profiles", "profile_radii",
+                  "squeezed_fraction", "state_index", "states")
 
 
 @dataclass
@@ -31,7 +33,10 @@ class ReleaseResult:
     twin's).  ``squeezed_fraction``: the release of the same mechanics with D0 = 0 (what
     the fluid's motion alone releases; grid-independent, unlike ``advected_fraction``, the
     released mass that crossed the edge with the fluid); ``start_partition`` K at the start
-    state.
+    state.  ``states`` (one row per sample index in ``state_index``, the protocol's step
+    boundaries): the march's whole state there (cell masses and the medium's, step size,
+    advected mass), from which a run of a protocol sharing those steps continues
+    (``transport.SoluteStart``).
     """
 
     t: np.ndarray
@@ -50,6 +55,8 @@ class ReleaseResult:
     diagnostics: dict[str, Any] = field(default_factory=dict)
     squeezed_fraction: np.ndarray = field(default_factory=lambda: np.zeros(0))
     start_partition: float = 1.0
+    state_index: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    states: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     def squeezed_at(self, time: float) -> float:
         """The D0 = 0 twin's release at ``time`` (the advected part if no twin was run)."""
@@ -99,10 +106,12 @@ class ReleaseResult:
         return t1 if r1 == r0 else t0 + (amount - r0) / (r1 - r0) * (t1 - t0)
 
     def to_json_dict(self, profiles: bool = True) -> dict[str, Any]:
-        """JSON-ready dict (NaN -> None); ``profiles=False`` drops the profiles."""
+        """JSON-ready dict (NaN -> None); ``profiles=False`` drops the profiles.  The march's
+        states (a restart's, not an outcome) are left out."""
         out: dict[str, Any] = {}
-        for name in _ARRAYS:
-            if name in ("profiles", "profile_radii") and not profiles:
+        for name in RELEASE_ARRAYS:
+            if name in ("state_index", "states") or (
+                    name in ("profiles", "profile_radii") and not profiles):
                 continue
             out[name] = getattr(self, name)
         out["mass_balance_error"] = self.mass_balance_error
@@ -114,7 +123,7 @@ class ReleaseResult:
     def save(self, path: str | Path) -> Path:
         """Write to an .npz file (arrays plus scalars and diagnostics as JSON)."""
         p = Path(path)
-        arrays = {name: np.asarray(getattr(self, name)) for name in _ARRAYS}
+        arrays = {name: np.asarray(getattr(self, name)) for name in RELEASE_ARRAYS}
         extra = {"mass_balance_error": self.mass_balance_error,
                  "effective_diffusivity": self.effective_diffusivity,
                  "start_partition": self.start_partition,
@@ -126,6 +135,6 @@ class ReleaseResult:
     def load(cls, path: str | Path) -> ReleaseResult:
         """Read a file written by :meth:`save`."""
         with np.load(Path(path), allow_pickle=False) as data:
-            kwargs: dict[str, Any] = {k: np.array(data[k]) for k in _ARRAYS if k in data}
+            kwargs: dict[str, Any] = {k: np.array(data[k]) for k in RELEASE_ARRAYS if k in data}
             kwargs.update(json.loads(str(data["extra"])))
         return cls(**kwargs)

@@ -26,6 +26,7 @@ from .kernels import BAD, BUDGET, SoluteParams, cell_props, release_run
 from .result import ReleaseResult
 
 D_MAX = 1e8  # solute diffusivity / gel diffusivity
+STATE_ROW_EXTRA = 2  # a march state's row: n + 1 masses, then the step size, the advected mass
 K_RANGE = (1e-6, 1e6)
 MAX_PROFILES = 201
 DEFAULT_RTOL = 1e-6
@@ -81,6 +82,14 @@ class Solute:
                                      "None (a perfect sink) or a volume > 0")
             object.__setattr__(self, "release_volume", v)
 
+    @property
+    def squeezed_is_expelled(self) -> bool:
+        """True if the D0 = 0 twin's release is the expelled fraction exactly (no sieving
+        of the fluid's solute, a perfect sink): its run is not needed, and a run of this
+        solute can continue from a stored state (:class:`SoluteStart`)."""
+        h = self.hindrance
+        return not (h.convective and h.mesh_ratio > 0.0) and self.release_volume is None
+
     def diffusivity_at(self, phi: float | np.ndarray) -> float | np.ndarray:
         """The hindered diffusivity D0 f(phi) (isotropic state)."""
         return self.diffusivity * self.hindrance.factor(phi)
@@ -108,6 +117,39 @@ class Solute:
         d = dict(d)
         d["hindrance"] = Hindrance(**d.get("hindrance", {}))
         return cls(**d)
+
+
+@dataclass(frozen=True)
+class SoluteStart:
+    """Where a solute run continues a stored one: ``record`` (a :class:`ReleaseResult` of
+    the same solute on mechanics that share the samples up to ``index``) kept its march's
+    state at sample ``index`` (``record.state_index``, a step boundary).  The run then
+    marches only the samples after it, exactly as the one run would (the same masses, step
+    size and advected mass), and takes the record's outputs before it."""
+
+    record: ReleaseResult
+    index: int
+
+    @classmethod
+    def at(cls, record: ReleaseResult, t: float) -> SoluteStart | None:
+        """The start at time ``t`` (its output sample, :func:`_sample_at`) of a record that
+        kept its state there, else None."""
+        k = _sample_at(np.asarray(record.t, dtype=float), t)
+        idx = np.asarray(record.state_index, dtype=float).astype(np.int64)
+        return None if k is None or k == 0 or k not in idx else cls(record, k)
+
+    def state(self) -> np.ndarray:
+        """The march's state row at ``index``."""
+        idx = np.asarray(self.record.state_index, dtype=float).astype(np.int64)
+        return np.asarray(self.record.states[int(np.flatnonzero(idx == self.index)[0])],
+                          dtype=float)
+
+
+def _sample_at(ts: np.ndarray, t: float) -> int | None:
+    """The first output sample at time ``t`` (to 1e-12 relative: a protocol boundary's time
+    and its output may differ in the last bits), or None."""
+    k = int(np.searchsorted(ts, t - 1e-12 * max(1.0, abs(t))))
+    return k if k < ts.size and abs(ts[k] - t) <= 1e-12 * max(1.0, abs(t)) else None
 
 
 def node_volumes(res: FullResult, cells: int | None = None) -> np.ndarray:
@@ -138,7 +180,7 @@ def node_volumes(res: FullResult, cells: int | None = None) -> np.ndarray:
 
 def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
             profiles: int = 51, max_steps: int = MAX_STEPS,
-            twin: str = "exact") -> ReleaseResult:
+            twin: str = "exact", start: SoluteStart | None = None) -> ReleaseResult:
     """Integrate the solute through the mechanics samples of ``res`` (Lagrangian grid).
 
     The solute starts in equilibrium with one loading solution in the pore fluid of the
@@ -152,22 +194,29 @@ def release(res: FullResult, solute: Solute, *, rtol: float = DEFAULT_RTOL,
     own scale).  The samples should
     be dense enough for the fluid's motion (``simulate(..., every=...)``); the time steps
     adapt within them to ``rtol``.  ``profiles`` concentration profiles are kept at evenly
-    spread samples.
+    spread samples.  A protocol run's step boundaries (``res.boundary_states``) that are
+    output times keep the march's state (``ReleaseResult.states``); ``start`` continues a
+    stored run from one.
     """
     if not isinstance(solute, Solute):
         raise ParameterError("solute", solute, "a Solute")
     s3 = node_volumes(res)
-    return release_on_nodes(np.asarray(res.t, dtype=float), s3, solute,
+    ts = np.asarray(res.t, dtype=float)
+    marks = [k for k in (_sample_at(ts, st.t) for st in res.boundary_states
+                         if not st.stopped) if k is not None]
+    return release_on_nodes(ts, s3, solute,
                             radius=np.asarray(res.radius, dtype=float),
                             temperature=np.asarray(res.temperature, dtype=float),
-                            rtol=rtol, profiles=profiles, max_steps=max_steps, twin=twin)
+                            rtol=rtol, profiles=profiles, max_steps=max_steps, twin=twin,
+                            marks=marks, start=start)
 
 
 def release_on_nodes(ts: np.ndarray, s3: np.ndarray, solute: Solute, *,
                      radius: np.ndarray | None = None, temperature: np.ndarray | None = None,
                      dry: np.ndarray | None = None, rtol: float = DEFAULT_RTOL,
                      profiles: int = 51, max_steps: int = MAX_STEPS,
-                     twin: str = "exact") -> ReleaseResult:
+                     twin: str = "exact", marks: Sequence[int] | np.ndarray = (),
+                     start: SoluteStart | None = None) -> ReleaseResult:
     """:func:`release` on given mechanics: node volumes ``s3`` (len(ts), n + 1; r_k^3 at
     the material nodes, s3[:, 0] = 0) sampled at ``ts``, on dry cells ending at rho_k^3 =
     ``dry`` (n + 1 values from 0 to 1; default uniform in rho, rho_k = k / n).  Any
@@ -178,7 +227,9 @@ def release_on_nodes(ts: np.ndarray, s3: np.ndarray, solute: Solute, *,
     the conservative upwind scheme keeps it so to round-off: the run twin agrees to
     ~1e-13, tests/test_solute_twin.py), else runs it; "run": always run the D0 = 0 twin
     (it costs a third to a half of the solute's time); "none": no twin
-    (``squeezed_fraction`` empty)."""
+    (``squeezed_fraction`` empty).  ``marks``: sample indices whose march state the result
+    keeps (``states``).  ``start``: continue a stored run (:class:`SoluteStart`; its samples
+    up to the start must be these): only where the twin needs no run (it has no state)."""
     if not isinstance(solute, Solute):
         raise ParameterError("solute", solute, "a Solute")
     if not (isinstance(rtol, (int, float)) and 1e-12 <= rtol <= 1e-2):
@@ -208,8 +259,15 @@ def release_on_nodes(ts: np.ndarray, s3: np.ndarray, solute: Solute, *,
     m[:n] = (s3[0, 1:] - s3[0, :-1] - dw) * k0c
     m[:n] /= m[:n].sum()
     m_start = m.copy()
-    k_prof = max(2, min(int(profiles), MAX_PROFILES, ts.size))
-    picks = np.unique(np.round(np.linspace(0, ts.size - 1, k_prof)).astype(np.int64))
+    exact_twin = solute.squeezed_is_expelled
+    k0 = 0 if start is None else _check_start(start, ts, n, solute.diffusivity > 0.0
+                                              and twin == "run" or not exact_twin)
+    marks = np.unique(np.asarray(marks, dtype=np.int64))
+    marks = marks[(marks >= 0) & (marks < ts.size)]
+    mark_idx = np.full(ts.size, -1, dtype=np.int64)
+    mark_idx[marks] = np.arange(marks.size)
+    out_mark = np.zeros((marks.size, n + 1 + STATE_ROW_EXTRA))
+    picks, kept = _profile_picks(ts, k0, start, profiles)
     prof_idx = np.full(ts.size, -1, dtype=np.int64)
     prof_idx[picks] = np.arange(picks.size)
     out_prof = np.zeros((picks.size, n))
@@ -219,22 +277,40 @@ def release_on_nodes(ts: np.ndarray, s3: np.ndarray, solute: Solute, *,
     counters = np.zeros(2, dtype=np.int64)
     gel = np.zeros(ts.size)
     vmed = -1.0 if vol is None else float(vol)
-    _check(release_run(ts, s3, dw, vmed, par, m, rel, adv, gel, out_prof, prof_idx,
-                       float(rtol), int(max_steps), counters), max_steps, counters)
+    carry = np.zeros(2)
+    if start is not None:  # the stored run's state at the start, its outputs before it
+        row = start.state()
+        m[:] = row[:n + 1]
+        carry[:] = row[n + 1:]
+        for out, name in ((rel, "released_fraction"), (adv, "advected_fraction"),
+                          (gel, "in_gel_fraction")):
+            out[:k0] = getattr(start.record, name)[:k0]
+        mark_idx[:k0] = -1
+    series = np.zeros((3, ts.size - k0))  # released, advected, in the gel
+    _check(release_run(ts[k0:], s3[k0:], dw, vmed, par, m, series, out_prof, prof_idx[k0:],
+                       float(rtol), int(max_steps), counters, carry, mark_idx[k0:], out_mark),
+           max_steps, counters)
+    rel[k0:], adv[k0:], gel[k0:] = series
+    state_index, states = marks, out_mark
+    if start is not None:  # the stored run's states before the start, then this run's
+        old = np.asarray(start.record.state_index, dtype=float).astype(np.int64)
+        before = old < k0
+        state_index = np.concatenate([old[before], marks[marks >= k0]])
+        states = np.concatenate([np.asarray(start.record.states)[before],
+                                 out_mark[marks >= k0]])
     balance = float(np.max(np.abs(gel + rel - 1.0)))
-    exact_twin = not (solute.hindrance.convective and solute.hindrance.mesh_ratio > 0.0) \
-        and vol is None
     if solute.diffusivity > 0.0 and twin == "none":
         squeezed = np.zeros(0)
     elif solute.diffusivity > 0.0 and twin == "exact" and exact_twin:
         squeezed = np.maximum((a3[0] - a3) / w0, 0.0)
     elif solute.diffusivity > 0.0:  # the D0 = 0 twin: the release of the fluid's motion alone
-        squeezed, twin_gel = np.zeros(ts.size), np.zeros(ts.size)
+        twin_series = np.zeros((3, ts.size))
         twin_counters = np.zeros(2, dtype=np.int64)
-        _check(release_run(ts, s3, dw, vmed, solute.params(0.0), m_start, squeezed,
-                           np.zeros(ts.size), twin_gel, np.zeros_like(out_prof), prof_idx,
-                           float(rtol), int(max_steps), twin_counters), max_steps,
-               twin_counters)
+        _check(release_run(ts, s3, dw, vmed, solute.params(0.0), m_start, twin_series,
+                           np.zeros_like(out_prof), prof_idx, float(rtol), int(max_steps),
+                           twin_counters, np.zeros(2), np.full(ts.size, -1, dtype=np.int64),
+                           np.zeros((0, n + 1 + STATE_ROW_EXTRA))), max_steps, twin_counters)
+        squeezed, twin_gel = twin_series[0], twin_series[2]
         balance = max(balance, float(np.max(np.abs(twin_gel + squeezed - 1.0))))
     else:
         squeezed = rel.copy()
@@ -247,15 +323,50 @@ def release_on_nodes(ts: np.ndarray, s3: np.ndarray, solute: Solute, *,
     radii = np.cbrt(0.5 * (s3[picks, 1:] + s3[picks, :-1]))
     diag = {"steps": int(counters[0]), "rejected": int(counters[1]), "rtol": rtol,
             "samples": int(ts.size), "n": n, "solute": solute.to_dict(),
-            "wall_time": time.perf_counter() - started}
+            "wall_time": time.perf_counter() - started, "from_sample": int(k0)}
     return ReleaseResult(
         t=ts.copy(), radius=np.asarray(radius, dtype=float).copy(),
         released_fraction=rel, advected_fraction=adv,
         expelled_fraction=(a3[0] - a3) / w0, in_gel_fraction=gel,
         medium_concentration=conc, temperature=np.asarray(temperature, dtype=float).copy(),
-        profile_t=ts[picks].copy(), profiles=out_prof * w0, profile_radii=radii,
+        profile_t=ts[picks].copy(), profile_radii=radii,
+        profiles=out_prof * w0 if start is None else np.concatenate(
+            [start.record.profiles[kept], out_prof[kept.size:] * w0]),
         mass_balance_error=balance, effective_diffusivity=d_eff, diagnostics=diag,
-        squeezed_fraction=squeezed, start_partition=float(solute.partition_at(phi0)))
+        squeezed_fraction=squeezed, start_partition=float(solute.partition_at(phi0)),
+        state_index=state_index.astype(float), states=states)
+
+
+def _check_start(start: SoluteStart, ts: np.ndarray, n: int, twin_runs: bool) -> int:
+    """The sample index a run continues ``start`` from (ParameterError if it cannot)."""
+    rec, k0 = start.record, int(start.index)
+    if twin_runs:
+        raise ParameterError("start", "a stored solute run", "no start where the D0 = 0 twin "
+                             "is run (sieving, or a finite medium): it keeps no state")
+    if not (0 < k0 < ts.size and rec.t.size > k0 and np.array_equal(rec.t[:k0 + 1],
+                                                                   ts[:k0 + 1])):
+        raise ParameterError("start", k0, "a sample both runs share (the same outputs up "
+                             "to it)")
+    if start.state().size != n + 1 + STATE_ROW_EXTRA:
+        raise ParameterError("start", k0, f"a state on {n} cells")
+    return k0
+
+
+def _profile_picks(ts: np.ndarray, k0: int, start: SoluteStart | None, profiles: int
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """The samples whose profiles are kept, and which of a start's stored profiles (those
+    before the start) are taken: ``profiles`` evenly spread over the run, or over what is
+    left after the start's."""
+    k_prof = max(2, min(int(profiles), MAX_PROFILES, ts.size))
+    if start is None:
+        kept = np.zeros(0, dtype=np.int64)
+        picks = np.unique(np.round(np.linspace(0, ts.size - 1, k_prof)).astype(np.int64))
+        return picks, kept
+    kept = np.flatnonzero(start.record.profile_t < ts[k0])
+    before = np.searchsorted(ts[:k0], start.record.profile_t[kept])
+    rest = max(2, min(k_prof - kept.size, ts.size - k0))
+    after = np.unique(np.round(np.linspace(k0, ts.size - 1, rest)).astype(np.int64))
+    return np.concatenate([before, after]).astype(np.int64), kept
 
 
 def _check(status: int, max_steps: int, counters: np.ndarray) -> None:
