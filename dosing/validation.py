@@ -80,7 +80,11 @@ def _run_entry(sc: Scenario, traj: Trajectory | BaseException | None, start_radi
     entry: dict[str, Any] = {"grid": s.grid, "n": s.n, "interfacial_length": s.interfacial_length,
                              "scenario_key": sc.key()}
     if isinstance(traj, Trajectory):
-        entry["time"] = traj.time_to_radius(radius)
+        try:
+            entry["time"] = traj.time_to_radius(radius)
+        except ValueError as exc:  # a run that never reaches the radius: its error, not ours
+            entry["error"] = f"ValueError: {exc}"
+            return entry
         entry["nucleation_time"] = None if level is None else traj.nucleation_time(level)
         entry["wall_seconds"] = traj.meta.get("wall_seconds")
         if traj.spinodal:

@@ -262,3 +262,18 @@ def test_typed_answers_keep_their_json(planner, fake) -> None:
         "dose_fraction", "cumulative_fraction", "start", "end", "actuation_time",
         "actuation_seconds", "error_estimate"]
     assert rows[1]["end"] == sch.hold[1].end == sch.hold[1]["end"]
+
+
+def test_a_run_short_of_the_dose_radius_is_reported_not_raised() -> None:
+    # a stored run that never reaches the asked radius is that run's error in the report
+    # (the validation poll raised it before: a 500 on GET /v1/validations/{id})
+    from dosing.scenario import Scenario
+    from dosing.validation import failure, validation_report
+    from solver.full import simulate
+    from solver.gel import preset
+
+    run = simulate("ANB", 302.0, 308.0, until=1e-3, grid="lagrangian", n=20)
+    scs = [Scenario(preset("ANB"), 302.0, 308.0, settings=s) for s in PAPER.rungs()]
+    rep = validation_report(scs, [run, run], float(run.radius[0]), 1.0, None)
+    assert all("never reaches 1" in e["error"] and "time" not in e for e in rep.runs)
+    assert rep.time is None and "never reaches 1" in failure(rep)
