@@ -204,6 +204,15 @@ def test_page_in_headless_chromium(tmp_path: Path) -> None:
 BATH_CSV = "time (s),T (degC)\n0,28.85\n10,31.0\n20,32.5\n40,34.0\n80,34.8\n120,34.85\n"
 
 
+def _protocol_answered(page) -> None:
+    """Wait for the protocol's answer, or its error (which fails at once, with the page's
+    message: CI once waited 15 minutes on a poll that had answered 500)."""
+    page.wait_for_selector("body[data-protocol=answered], body[data-protocol=error]",
+                           timeout=900_000)
+    state = page.evaluate("document.body.dataset.protocol")
+    assert state == "answered", page.inner_text("#protocol-error")
+
+
 @pytest.mark.slow  # a real server, a browser and the full solver's protocol runs (issue 24)
 def test_protocol_editor_in_headless_chromium(tmp_path: Path) -> None:
     """The protocol editor: the ramp preset, a bad step named at its row, the answer read
@@ -237,7 +246,7 @@ def test_protocol_editor_in_headless_chromium(tmp_path: Path) -> None:
             body = {"gel": "ANB", "t_start": 302.0, "dose_fraction": 0.3, "dry_radius_um": 50.0,
                     "protocol": ["Heat to 308 K at 5 K/min"]}
             page.click("#plan-protocol")
-            page.wait_for_selector("body[data-protocol=answered]", timeout=900_000)
+            _protocol_answered(page)
             want = httpx.post(f"{url}/v1/dose-time", json=body, timeout=60)
             assert want.status_code == 200  # cached by the page's request
             want = want.json()
@@ -257,7 +266,7 @@ def test_protocol_editor_in_headless_chromium(tmp_path: Path) -> None:
             page.set_input_files("#trace-file", str(trace))
             assert steps.count() == 1 and steps.nth(0).input_value() == "Trace from bath.csv"
             page.click("#plan-protocol")
-            page.wait_for_selector("body[data-protocol=answered]", timeout=900_000)
+            _protocol_answered(page)
             structured = {**body, "protocol": [{"step": "trace", "name": "bath.csv",
                                                 "csv": BATH_CSV}]}
             want = httpx.post(f"{url}/v1/dose-time", json=structured, timeout=60).json()
