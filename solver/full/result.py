@@ -155,19 +155,23 @@ class FullResult:
 
         Between accepted steps a(t) is the cubic Hermite interpolant of a and da/dt; between
         outputs (a record without steps, or from ``after`` to the next step) a^3 is linear
-        in t, as the expelled volume (eq. FluidVolExpelled).  A target within
-        ``SAME_RADIUS`` of the radius at ``after`` is reached there (the start radius as the
-        equilibrium gives it and as the run's cells sum it may differ in the last bits).
-        Raises ValueError if the radius never reaches it.
+        in t, as the expelled volume (eq. FluidVolExpelled).  A target that is never
+        crossed but lies within ``SAME_RADIUS`` of the radius at ``after`` is reached there
+        (the start radius as the equilibrium gives it and as the run's cells sum it may
+        differ in the last bits, on the side the bead moves away from; a target on the side
+        it moves to is crossed, however close: a dose of 1e-15 has its own time).  Raises
+        ValueError if the radius never reaches it.
         """
         target = float(a_target)
         t, a, rate = self._dense()
         start = max(float(after), float(t[0]))
         i0 = int(np.searchsorted(t, start, side="left"))
         a0 = float(a[i0]) if i0 < t.size and t[i0] == start else self.radius_at(start)
-        if abs(a0 - target) <= SAME_RADIUS * abs(target):
+        if a0 == target:
             return start
         hit = np.nonzero((a[i0:] - target) * np.sign(a0 - target) <= 0.0)[0]
+        if hit.size == 0 and abs(a0 - target) <= SAME_RADIUS * abs(target):
+            return start  # the radius at the start, to its last bits, on the side left
         if hit.size == 0:
             rest = a[i0:] if i0 < t.size else a[-1:]
             raise ValueError(f"the radius never reaches {target:.6g} (range {rest.min():.6g} "
