@@ -179,7 +179,7 @@ def uncertainty(truth: SolverSettings, runs: list[dict[str, Any]], time: float,
     if mf:
         ts = [t for _, t in mf]
         t_d = ts[-1]
-        spread = (max(ts) - min(ts)) / t_d
+        spread = (max(ts) - min(ts)) / t_d if t_d > 0.0 else 0.0  # a dose at t = 0
         ratio = t_d / time if time > 0 else math.inf
         extra = {"delayed_transition_time": t_d, "delayed_transition_ratio": ratio,
                  "delayed_transition_ns": [k for k, _ in mf],
