@@ -478,22 +478,17 @@ def run_drug_scenario(scenario: dict[str, Any], budget: float = RUN_BUDGET_S,
     from the same boundary where it kept its state (``solver.solute.SoluteStart``; else the
     solute runs from t = 0); ``keep``: (metadata, blob, the mechanics) out, for the next
     run to start from."""
-    from solver.solute import release
-    from solver.solute.transport import SoluteStart
+    from solver.solute import SoluteStart, release
 
     sc = DrugScenario.from_dict(scenario)
     wall = time.perf_counter()
     res = simulate_protocol(sc.gel, sc.t_start, list(sc.protocol), sc.branch, sc.settings, budget,
                             start)
     mech = time.perf_counter() - wall
-    from_solute = None
+    from_solute = None  # else from t = 0
     if start is not None and solute_from is not None and sc.solute.squeezed_is_expelled \
             and start.boundary_states:
-        from_solute = SoluteStart.at(solute_from, start.boundary_states[-1].t)
-        k = None if from_solute is None else from_solute.index
-        if k is not None and not (k < res.t.size and np.array_equal(
-                solute_from.t[:k + 1], res.t[:k + 1])):
-            from_solute = None  # not the samples this run shares: from t = 0
+        from_solute = SoluteStart.at(solute_from, start.boundary_states[-1].t, res.t)
     rel = release(res, sc.solute, start=from_solute)
     meta = {"key": sc.key(), "scenario": sc.to_dict(), "mechanics_seconds": mech,
             "solute_seconds": time.perf_counter() - wall - mech,

@@ -46,6 +46,7 @@ _PER_STEP = ("step_t", "step_radius", "step_rate", "step_edge")
 # between the equilibrium's root and the sum of the run's cell volumes (1e-16 seen)
 SAME_RADIUS = 1e-12
 
+
 def uniform_output_times(total: float, every: float | None = None) -> np.ndarray:
     """A run's outputs every ``every`` (default total / DEFAULT_OUTPUTS) from 0, and
     ``total``."""

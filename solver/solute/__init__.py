@@ -9,7 +9,7 @@ or a well-mixed volume; Crank's series for the tests (``crank``).
 from .crank import crank_sphere, crank_sphere_finite
 from .hindrance import LAWS, Hindrance
 from .result import ReleaseResult
-from .transport import Solute, node_volumes, release, simulate_release
+from .transport import Solute, SoluteStart, node_volumes, release, simulate_release
 
-__all__ = ["LAWS", "Hindrance", "ReleaseResult", "Solute", "crank_sphere",
+__all__ = ["LAWS", "Hindrance", "ReleaseResult", "Solute", "SoluteStart", "crank_sphere",
            "crank_sphere_finite", "node_volumes", "release", "simulate_release"]

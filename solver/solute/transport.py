@@ -131,18 +131,31 @@ class SoluteStart:
     index: int
 
     @classmethod
-    def at(cls, record: ReleaseResult, t: float) -> SoluteStart | None:
+    def at(cls, record: ReleaseResult, t: float, ts: np.ndarray | None = None
+           ) -> SoluteStart | None:
         """The start at time ``t`` (its output sample, :func:`_sample_at`) of a record that
-        kept its state there, else None."""
+        kept its state there, else None; with ``ts``, also None unless a run on those
+        samples shares the record's up to the start."""
         k = _sample_at(np.asarray(record.t, dtype=float), t)
-        idx = np.asarray(record.state_index, dtype=float).astype(np.int64)
-        return None if k is None or k == 0 or k not in idx else cls(record, k)
+        if k is None or k == 0 or k not in _state_indices(record):
+            return None
+        start = cls(record, k)
+        return None if ts is not None and not start.shares(ts) else start
+
+    def shares(self, ts: np.ndarray) -> bool:
+        """True if a run on samples ``ts`` has the record's samples up to the start."""
+        k, t = self.index, self.record.t
+        return 0 < k < len(ts) and t.size > k and np.array_equal(t[:k + 1], ts[:k + 1])
 
     def state(self) -> np.ndarray:
         """The march's state row at ``index``."""
-        idx = np.asarray(self.record.state_index, dtype=float).astype(np.int64)
-        return np.asarray(self.record.states[int(np.flatnonzero(idx == self.index)[0])],
-                          dtype=float)
+        row = int(np.flatnonzero(_state_indices(self.record) == self.index)[0])
+        return np.asarray(self.record.states[row], dtype=float)
+
+
+def _state_indices(record: ReleaseResult) -> np.ndarray:
+    """The samples whose march state a record kept (stored as floats in its npz)."""
+    return np.asarray(record.state_index, dtype=float).astype(np.int64)
 
 
 def _sample_at(ts: np.ndarray, t: float) -> int | None:
@@ -293,7 +306,7 @@ def release_on_nodes(ts: np.ndarray, s3: np.ndarray, solute: Solute, *,
     rel[k0:], adv[k0:], gel[k0:] = series
     state_index, states = marks, out_mark
     if start is not None:  # the stored run's states before the start, then this run's
-        old = np.asarray(start.record.state_index, dtype=float).astype(np.int64)
+        old = _state_indices(start.record)
         before = old < k0
         state_index = np.concatenate([old[before], marks[marks >= k0]])
         states = np.concatenate([np.asarray(start.record.states)[before],
@@ -339,12 +352,11 @@ def release_on_nodes(ts: np.ndarray, s3: np.ndarray, solute: Solute, *,
 
 def _check_start(start: SoluteStart, ts: np.ndarray, n: int, twin_runs: bool) -> int:
     """The sample index a run continues ``start`` from (ParameterError if it cannot)."""
-    rec, k0 = start.record, int(start.index)
+    k0 = int(start.index)
     if twin_runs:
         raise ParameterError("start", "a stored solute run", "no start where the D0 = 0 twin "
                              "is run (sieving, or a finite medium): it keeps no state")
-    if not (0 < k0 < ts.size and rec.t.size > k0 and np.array_equal(rec.t[:k0 + 1],
-                                                                   ts[:k0 + 1])):
+    if not start.shares(ts):
         raise ParameterError("start", k0, "a sample both runs share (the same outputs up "
                              "to it)")
     if start.state().size != n + 1 + STATE_ROW_EXTRA:
