@@ -10,13 +10,19 @@ answers any job: these, a fit job or a sweep.  (The Python client keeps the loos
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import Field
 
 from .drug_schemas import DrugDoseResponse, DrugScheduleResponse
 from .outputs import Out
-from .schemas import BatchScheduleResponse, ScheduleResponse, ValidationReport
+from .schemas import (
+    BatchScheduleResponse,
+    DoseTimeResponse,
+    ProtocolDoseResponse,
+    ScheduleResponse,
+    ValidationReport,
+)
 
 JobStatus = Literal["pending", "running", "done", "failed"]
 
@@ -28,33 +34,39 @@ class _Job(Out):
 
 
 class DoseValidationJob(_Job):
-    """A dose's full-solver validation; when done, the truth for the dose."""
+    """A dose's full-solver validation (when done, the truth for the dose), or a stored
+    dose job (``dose-<id>``: a dose whose cell needs its runs; when done, the answer)."""
 
-    kind: Literal["dose"] = Field(description="a dose validation")
-    result: ValidationReport | None = Field(
-        None, description="when done: the truth's time for the dose, every run behind it "
-                          "and the front model's errors")
+    kind: Literal["dose"] = Field(description="a dose validation or a stored dose job")
+    result: (ValidationReport | DoseTimeResponse | ProtocolDoseResponse | DrugDoseResponse
+             | dict[str, Any] | None) = Field(
+        None, description="when done: a validation's truth for the dose, every run behind it "
+                          "and the front model's errors; a dose job's answer")
 
 
 class ScheduleJob(_Job):
     """A schedule's protocol check and correction; when done, the schedule."""
 
     kind: Literal["schedule"] = Field(description="a schedule job")
-    result: ScheduleResponse | DrugScheduleResponse | None = Field(
-        None, description="when done: the schedule (a drug schedule with a drug)")
+    result: (ScheduleResponse | DrugScheduleResponse | BatchScheduleResponse
+             | dict[str, Any] | None) = Field(
+        None, description="when done: the schedule, whatever its cell")
 
 
 class DrugDoseJob(_Job):
     """A drug dose whose drug runs were not cached; when done, the drug dose."""
 
-    kind: Literal["drug-dose"] = Field(description="a drug dose's runs")
-    result: DrugDoseResponse | None = Field(None, description="when done: the drug dose")
+    kind: Literal["drug-dose"] = Field(description="a drug dose's runs (round three's ids; "
+                                                   "new ones are 'dose' jobs)")
+    result: DrugDoseResponse | dict[str, Any] | None = Field(
+        None, description="when done: the drug dose")
 
 
 class BatchScheduleJob(_Job):
     """A batch's schedule (issue 26: every size node's runs); when done, the schedule."""
 
-    kind: Literal["batch-schedule"] = Field(description="a batch's schedule")
+    kind: Literal["batch-schedule"] = Field(description="a batch's schedule (round three's "
+                                                        "ids; new ones are 'schedule' jobs)")
     result: BatchScheduleResponse | None = Field(None, description="when done: the schedule")
 
 

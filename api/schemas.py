@@ -795,7 +795,15 @@ class ScheduleRequest(RequestModel):
 
     gel: GelSpec = "ANB"
     t_start: float = temperature_field("start (rest) temperature", 302.0)
-    t_end: float = temperature_field("end (actuation) temperature", 308.0)
+    t_end: float | None = Field(  # 308 K unless a protocol is given in its place
+        None, ge=T_MIN, le=T_MAX, examples=[308.0],
+        description=f"end (actuation) temperature in K; liquid water, {T_MIN}-{T_MAX} K "
+                    "(default 308 K; absent when a protocol is given)")
+    protocol: list[str | dict[str, Any]] | None = Field(
+        None, min_length=1, max_length=1000, examples=[["Heat to 308 K at 5 K/min"]],
+        description="a heating protocol in place of t_end (docs/heating.md): every heating "
+                    "of the schedule follows its steps from t_start, then holds at its last "
+                    "temperature until the heating's actuation time ends (no until-steps)")
     doses: list[Fraction] = Field(
         min_length=1, max_length=20, examples=[[0.3, 0.3, 0.3]],
         description="1-20 doses, each a fraction of the stored fluid (0 < f <= 1); their sum "
@@ -840,6 +848,12 @@ class ScheduleRequest(RequestModel):
     model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
         {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dry_radius_um": 50.0,
          "doses": [0.3, 0.3, 0.3], "rests": [0.5, 0.5]}]})
+
+    @model_validator(mode="after")
+    def _heating(self) -> ScheduleRequest:
+        if self.protocol is None and self.t_end is None:
+            self.t_end = 308.0  # the documented default
+        return self
 
 
 class ScheduleOut(AnswerOut):

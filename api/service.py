@@ -22,18 +22,13 @@ from functools import lru_cache
 from typing import Any
 
 from dosing import (
-    DoseRequest,
     JobRunner,
     Pending,
     Planner,
     QueueFullError,
-    ScheduleRequest,
-    SolverSettings,
     UnknownValidationError,
+    question,
 )
-from dosing.drug import DrugModel, carried_by_fluid
-from dosing.drug_dose import DrugDoseRequest, drug_dose_now, plan_drug_dose
-from dosing.drug_schedule import DrugScheduleRequest, plan_drug_schedule
 from dosing.jobs import DEFAULT_LEASE_SECONDS
 from dosing.request import resolve_gel
 from solver.equilibrium import equilibria, folds
@@ -44,6 +39,7 @@ from solver.phase import classify_jump
 from . import schemas as s
 from . import stored_jobs
 from .errors import CacheFault, InternalError, ServiceUnavailable
+from .requests import to_request
 from .warmup import WarmupReport, warm_up
 
 log = logging.getLogger("thermogel.service")
@@ -245,183 +241,80 @@ class ServiceState:
 
 # ----------------------------------------------------------------------------- dosing
 
-def _constants(c: s.ConstantsIn | None) -> dict[str, Any] | None:
-    return None if c is None else c.model_dump(exclude_none=True)
+PENDING_NOTE = (
+    "{cell} needs full-solver runs that are not cached yet; they are queued. Poll "
+    "validation_url; once it is done, send the same request again: it is then answered at "
+    "once from the cache (a protocol with until-steps may take one more round per "
+    "until-step).")
+JOB_NOTE = (
+    "{cell} needs full-solver runs that are not cached yet: it is queued as a job. Poll "
+    "validation_url; once done, its result is the answer (asking again is then answered at "
+    "once from the cache).")
+
+HOLD_NOTE = (
+    " `hold` is the hold reading (the paper's assumption: one continuous heating, doses read "
+    "off cumulatively): a rough reading only, since the gel takes up fluid while it rests "
+    "and later doses then come out larger.")
 
 
-def _protocol(body: s.DoseTimeRequest) -> Any:
-    """The request's heating protocol (no file paths over HTTP), or None."""
-    if body.protocol is None:
-        return None
-    from dosing.heating import Protocol
-
-    if body.t_end is not None:
-        raise ParameterError("t_end", body.t_end, "absent when a protocol is given (the "
-                             "protocol's steps set the heating)")
-    return Protocol(body.t_start, body.protocol, files=False)
+def _answered(result: Any) -> dict[str, Any]:
+    out = {"status": "answered", **result.to_dict()}
+    if getattr(result, "validation_id", None) is not None:
+        out["validation_url"] = validation_url(result.validation_id)
+    return out
 
 
-def _case(body: s.DoseTimeRequest | s.ScheduleRequest) -> dict[str, Any]:
-    """The :class:`dosing.request.Case` fields every request body shares (t_end aside)."""
-    return {"gel": to_gel(body.gel), "t_start": body.t_start,
-            "dry_radius_um": body.dry_radius_um, "swollen_radius_um": body.swollen_radius_um,
-            "constants": _constants(body.constants), "branch": body.branch,
-            "settings": SolverSettings(interfacial_length=body.interfacial_length,
-                                       method=body.validation_method)}
+def _job_result(planner: Planner, body: s.DoseTimeRequest | s.ScheduleRequest
+                ) -> dict[str, Any]:
+    """A stored job's run: the request planned, blocking (dosing.question.run)."""
+    return _answered(question.run(planner, to_request(body)))
 
 
-def to_dose_request(body: s.DoseTimeRequest) -> DoseRequest:
-    """The planner's request (it checks the dose against the stored fluid: ParameterError)."""
-    protocol = _protocol(body)
-    return DoseRequest(
-        **_case(body), t_end=None if protocol is not None else body.t_end,
-        protocol=protocol, dose_fraction=body.dose_fraction,
-        dose_volume_ul=body.dose_volume_ul, drug_mass_ug=body.drug_mass_ug,
-        concentration_ug_per_ul=body.concentration_ug_per_ul,
-        size_distribution=None if body.size_distribution is None
-        else body.size_distribution.model_dump(exclude_none=True))
-
-
-def to_schedule_request(body: s.ScheduleRequest) -> ScheduleRequest | DrugScheduleRequest:
-    """The planner's schedule request: of fluid, or of drug with a ``drug``."""
-    fields = dict(_case(body), t_end=body.t_end, rests=body.rests,
-                  rests_seconds=body.rests_seconds, check_protocol=body.check_protocol,
-                  correct=body.correct, tolerance=body.tolerance)
-    if body.drug is None:
-        return ScheduleRequest(**fields, doses=tuple(body.doses))
-    return DrugScheduleRequest(**fields, doses=tuple(body.doses), **_drug(body))
-
-
-def _drug(body: s.DoseTimeRequest | s.ScheduleRequest) -> dict[str, Any]:
-    """The :class:`dosing.drug_dose.DrugCase` fields of a body with a ``drug``."""
-    return {"drug": DrugModel(**body.drug.model_kwargs()), "wait": body.drug.wait,
-            "wait_seconds": body.drug.wait_seconds}
-
-
-def to_drug_dose_request(body: s.DoseTimeRequest) -> DrugDoseRequest:
-    """The planner's drug dose request (ParameterError names a bad field)."""
-    for name in ("dose_volume_ul", "concentration_ug_per_ul"):
-        if getattr(body, name) is not None:
-            raise ParameterError(name, getattr(body, name), "null with a drug (give "
-                                 "dose_fraction of the load or drug_mass_ug)")
-    protocol = _protocol(body)
-    return DrugDoseRequest(**_case(body), t_end=None if protocol is not None else body.t_end,
-                           protocol=protocol, **_drug(body),
-                           dose_fraction=body.dose_fraction, drug_mass_ug=body.drug_mass_ug)
-
-
-DOSE_PENDING_NOTE = (
-    "This scenario needs the full solver (no front model applies and no run is cached yet). "
-    "Poll validation_url; once it is done, send the same request again: it is then answered "
-    "at once from the cache.")
-SCHEDULE_PENDING_NOTE = (
-    "The schedule's protocol check and correction need the full solver; poll validation_url "
-    "for the result.  `hold`, when present, is the hold reading (the paper's assumption: one "
-    "continuous heating, doses read off cumulatively): a rough reading only, since the gel "
-    "takes up fluid while it rests and later doses then come out larger.")
-PROTOCOL_PENDING_NOTE = (
-    "A dose under a heating protocol is a full-solver answer and its runs are not cached "
-    "yet. Poll validation_url; once it is done, send the same request again (a protocol "
-    "with until-steps may take one more round per until-step).")
-
-
-DRUG_PENDING_NOTE = (
-    "This drug dose needs full-solver drug runs that are not cached yet: it is queued as a "
-    "job. Poll validation_url; once done, its result is the answer (asking again is then "
-    "answered at once from the cache).")
-
-
-def _drug_answer(ans: Any) -> dict[str, Any]:
-    return {"status": "answered", "drug": True, **ans.to_dict()}
-
-
-def _drug_dose_job(planner: Planner, body: s.DoseTimeRequest) -> dict[str, Any]:
-    """A stored drug-dose job's run: the answer, computing its drug runs (blocking); a
-    batch's (a size_distribution) from dosing.batch_drug."""
-    req = to_drug_dose_request(body)
-    if body.size_distribution is not None:
-        from dosing.batch_drug import drug_batch_dose
-
-        ans = drug_batch_dose(req, body.size_distribution.model_dump(exclude_none=True),
-                              body.medium_volume_ml, body.bead_count)
-        return {"status": "answered", "drug": True, "batch": ans.to_dict()}
-    return _drug_answer(plan_drug_dose(planner, req, validate=body.validate_full))
+def _plan(state: ServiceState | None, planner: Planner, body: Any, kind: str,
+          hold: Any = None) -> dict[str, Any] | Accepted:
+    """One adapter: body -> request -> planner -> one answer (200), a queued validation or
+    a stored job (202)."""
+    request = to_request(body)
+    if state is None:
+        return _job_result(planner, body)
+    out = question.answer(planner, request)
+    if isinstance(out, Pending):
+        return Accepted(out.validation_id, PENDING_NOTE.format(cell=request.cell_name))
+    if out is None:
+        job = stored_jobs.submit(state, kind, body)
+        rough = None if hold is None else hold(planner, body)
+        return Accepted(job, JOB_NOTE.format(cell=request.cell_name)
+                        + ("" if rough is None else HOLD_NOTE), hold=rough)
+    return _answered(out)
 
 
 def dose_time(planner: Planner, body: s.DoseTimeRequest,
               state: ServiceState | None = None) -> dict[str, Any] | Accepted:
-    """The answer (front model or cache; 200), or :class:`Accepted` with a validation id;
-    one planner call (:meth:`dosing.Planner.answer`).  A dose with a drug is answered at
-    once when its runs are cached (:func:`dosing.drug_dose.drug_dose_now`), else (given
-    ``state``) as a stored 'drug-dose' job, so that no HTTP worker thread waits on a run."""
-    from dosing.batch_drug import check_batch_body
-
-    check_batch_body(body)
-    if body.drug is not None and body.size_distribution is not None:  # issue 26
-        if state is None:
-            return _drug_dose_job(planner, body)
-        return Accepted(stored_jobs.submit(state, "drug-dose", body), DRUG_PENDING_NOTE)
-    if body.drug is not None:  # under a protocol too (dosing.drug_protocol): always a job
-        if state is None:
-            return _drug_dose_job(planner, body)
-        now = drug_dose_now(planner, to_drug_dose_request(body), validate=body.validate_full)
-        if now is not None:
-            return _drug_answer(now)
-        return Accepted(stored_jobs.submit(state, "drug-dose", body), DRUG_PENDING_NOTE)
-    req = to_dose_request(body)
-    out = planner.answer(req, validate=body.validate_full)
-    if isinstance(out, Pending):
-        return Accepted(out.validation_id, DOSE_PENDING_NOTE if body.protocol is None
-                        else PROTOCOL_PENDING_NOTE)
-    answer = {"status": "answered", **out.answer.to_dict()}
-    if req.size_distribution is not None:  # a batch (issue 26), under a protocol (24)
-        from dosing.batch import batch_answer
-        from dosing.batch_protocol import batch_protocol_answer
-
-        answer["batch"] = (batch_answer(req) if req.heating is None else
-                           batch_protocol_answer(req, validate=body.validate_full)).to_dict()
-    if out.validation_id is not None:
-        answer.update(validation_id=out.validation_id,
-                      validation_url=validation_url(out.validation_id))
-    return answer
+    """A dose, whatever its cell (:func:`_plan`): answered now (front or reduced model, or
+    cached runs), else a queued validation or a stored 'dose' job (202)."""
+    return _plan(state, planner, body, "dose")
 
 
-def _schedule_result(planner: Planner, body: s.ScheduleRequest) -> dict[str, Any]:
-    """The whole schedule (blocking): fluid, or drug with a ``drug``."""
-    req = to_schedule_request(body)
-    if isinstance(req, DrugScheduleRequest):
-        return {"drug": True, **plan_drug_schedule(planner, req).to_dict()}
-    return planner.schedule(req).to_dict()
-
-
-def _schedule_now(planner: Planner, body: s.ScheduleRequest) -> dict[str, Any] | None:
-    """The schedule when nothing in it needs a new full-solver run (one planner call for a
-    fluid schedule: :meth:`dosing.Planner.schedule_now`), else None."""
-    req = to_schedule_request(body)
-    if isinstance(req, DrugScheduleRequest):  # the hold reading of a drug the fluid carries
-        quick = not (req.check_protocol or req.correct) and carried_by_fluid(req.solute)
-        return {"drug": True, **plan_drug_schedule(planner, req).to_dict()} if quick else None
-    now = planner.schedule_now(req)
-    return None if now is None else now.to_dict()
+def _rough_hold(planner: Planner, body: s.ScheduleRequest) -> list[dict[str, Any]] | None:
+    """A schedule's hold reading while its job runs, when it is at hand without runs."""
+    try:
+        quick = question.answer(planner, to_request(body.model_copy(
+            update={"check_protocol": False, "correct": False})))
+    except ParameterError:
+        return None
+    return None if quick is None or isinstance(quick, Pending) else quick.to_dict()["hold"]
 
 
 def schedule(state: ServiceState, body: s.ScheduleRequest) -> dict[str, Any] | Accepted:
-    """The hold schedule (200) when nothing needs a new full-solver run, else a stored job
-    (:class:`Accepted`)."""
-    now = _schedule_now(state.planner, body)
-    if now is not None:
-        return {"status": "answered", **now}
-    job = stored_jobs.submit(state, "schedule", body)
-    rough = None
-    if body.drug is None and (body.check_protocol or body.correct):
-        hold = _schedule_now(state.planner, body.model_copy(
-            update={"check_protocol": False, "correct": False}))
-        rough = None if hold is None else hold["hold"]
-    return Accepted(job, SCHEDULE_PENDING_NOTE, hold=rough)
+    """A schedule, whatever its cell: answered now (the hold reading asked alone), else a
+    stored 'schedule' job (202, with the rough hold reading when at hand)."""
+    return _plan(state, state.planner, body, "schedule", _rough_hold)
 
 
-stored_jobs.register(stored_jobs.JobKind("schedule", s.ScheduleRequest, _schedule_result))
-stored_jobs.register(stored_jobs.JobKind("drug-dose", s.DoseTimeRequest, _drug_dose_job))
+# the job kinds; 'drug-dose' and 'batch-schedule' (round three) still poll their stored ids
+for _kind, _body in (("dose", s.DoseTimeRequest), ("drug-dose", s.DoseTimeRequest),
+                     ("schedule", s.ScheduleRequest), ("batch-schedule", s.ScheduleRequest)):
+    stored_jobs.register(stored_jobs.JobKind(_kind, _body, _job_result))
 
 
 def validation(state: ServiceState, vid: str) -> dict[str, Any]:

@@ -69,9 +69,16 @@ def _one_shot(cache_path: str | None, executor: Executor | None, **kw: Any) -> P
 
 def plan_dose(req: DoseRequest, validate: bool = False, cache_path: str | None = None,
               executor: Executor | None = None, **planner_kw: Any) -> DoseAnswer:
-    """One dose with a throw-away :class:`Planner` (the cache persists)."""
+    """One dose with a throw-away :class:`Planner` (the cache persists); a request with a
+    ``size_distribution`` is answered for the batch (a ``dosing.question.DoseResult``: its
+    headline the batch's own time)."""
     planner = _one_shot(cache_path, executor, **planner_kw)
     try:
+        if getattr(req, "size_distribution", None) is not None:  # a batch: its own time
+            from .question import run
+            from .question.legacy import request_of
+
+            return run(planner, request_of(req, validate))  # type: ignore[return-value]
         return planner.dose(req, validate=validate)
     finally:
         planner.close()

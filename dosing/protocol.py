@@ -77,13 +77,16 @@ def delivery(traj: Trajectory, durations: Sequence[float], rests: Sequence[float
     return Delivery(delivered, uptake, radii)
 
 
-def check(run: Runner, req: ScheduleRequest, durations: Sequence[float]) -> dict[str, Any]:
-    """Simulate the heat/cool protocol with these actuation times; compare with the doses."""
-    steps = heat_cool_protocol(durations, req.rests, req.t_start, req.t_end)
+def check(run: Runner, req: ScheduleRequest, durations: Sequence[float],
+          h: FluidHeatings | None = None) -> dict[str, Any]:
+    """Simulate the heat/cool protocol with these actuation times (each heating a jump to
+    T_end, or ``h``'s heatings); compare with the doses."""
+    h = h or FluidHeatings(run, req)
+    steps = h.steps(durations)
     traj = run(steps)
     dl = delivery(traj, durations, req.rests, req.start_radius)
     errors = [g / f - 1.0 for g, f in zip(dl.delivered, req.doses, strict=True)]
-    return {"actuation_times": list(map(float, durations)), "protocol": [list(s) for s in steps],
+    return {"actuation_times": list(map(float, durations)), "protocol": h.rows(steps),
             "delivered_fractions": dl.delivered, "relative_errors": errors,
             "rest_uptake_fractions": dl.uptake, "radii": [list(r) for r in dl.radii],
             "scenario_key": traj.meta.get("key")}
@@ -227,6 +230,10 @@ class FluidHeatings:
         """The protocol's (duration, temperature) steps."""
         return heat_cool_protocol(durations, self.req.rests, self.req.t_start, self.req.t_end)
 
+    def rows(self, steps: Sequence[Any]) -> list[list[Any]]:
+        """The run's steps as plain rows (JSON)."""
+        return [list(s) for s in steps]
+
     def run(self, durations: Sequence[float]) -> Trajectory:
         """The protocol run with these actuation times."""
         self.count += 1
@@ -257,14 +264,16 @@ class FluidHeatings:
             return Reach(None, self.delivered(result, durations)[k])
 
 
-def shoot(run: Runner, req: ScheduleRequest, guesses: Sequence[float]) -> dict[str, Any]:
-    """Actuation times meeting every dose within ``req.tolerance`` in the real protocol."""
-    h = FluidHeatings(run, req)
+def shoot(run: Runner, req: ScheduleRequest, guesses: Sequence[float],
+          h: FluidHeatings | None = None) -> dict[str, Any]:
+    """Actuation times meeting every dose within ``req.tolerance`` in the real protocol
+    (each heating a jump to T_end, or ``h``'s heatings)."""
+    h = h or FluidHeatings(run, req)
     durations, short = shoot_durations(h, guesses)
     if short is not None:
         raise SolverError(f"dose {short.k} is not reached within a heating of "
                           f"{short.horizon:.4g}", {"dose": short.k, "horizon": short.horizon})
-    res = check(run, req, durations)
+    res = check(run, req, durations, h)
     worst = float(np.max(np.abs(res["relative_errors"])))
     res.update({"runs": h.count + 1, "max_relative_error": worst,
                 "met": bool(worst <= req.tolerance)})

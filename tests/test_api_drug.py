@@ -42,14 +42,14 @@ async def test_drug_dose_answers(clients) -> None:
     r = await raw.post("/v1/dose-time", json=diffusing)
     assert r.status_code == 202, r.text  # its drug runs are a job: no HTTP thread waits
     url = r.headers["location"]
-    assert url == r.json()["validation_url"] and "/drug-dose-" in url
+    assert url == r.json()["validation_url"] and "/dose-" in url
     deadline = time.monotonic() + 900  # a drug run and its check: minutes on a busy machine
     while time.monotonic() < deadline:
         job = (await raw.get(url)).json()
         if job["status"] in ("done", "failed"):
             break
         await asyncio.sleep(0.2)
-    assert job["status"] == "done" and job["kind"] == "drug-dose", job
+    assert job["status"] == "done" and job["kind"] == "dose", job
     r = await raw.post("/v1/dose-time", json=diffusing)  # now cached: answered at once
     assert r.status_code == 200, r.text
     got = r.json()

@@ -1,0 +1,73 @@
+"""An HTTP body as the planner's one request (``dosing.question.Request``): the body's
+optional fields (``protocol``, ``drug``, ``size_distribution``) pick the value of each
+axis here, once, so that the service's adapter only plans the request it is given."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from dosing.question import Batch, Dose, Drug, Fluid, Heating, Jump, OneBead, Request, Schedule
+from dosing.scenario import SolverSettings
+from solver.errors import ParameterError
+
+from . import schemas as s
+
+
+def _heating(body: Any) -> Jump | Heating:
+    """A jump to t_end, or the protocol (no file paths over HTTP)."""
+    if getattr(body, "protocol", None) is None:
+        return Jump(body.t_end)
+    from dosing.heating import Protocol
+
+    if body.t_end is not None:
+        raise ParameterError("t_end", body.t_end, "absent when a protocol is given (the "
+                             "protocol's steps set the heating)")
+    return Heating(Protocol(body.t_start, body.protocol, files=False))
+
+
+def _payload(body: Any) -> Fluid | Drug:
+    """The fluid, or the drug with its batch's medium; a medium without a drug is refused."""
+    medium = {"medium_volume_ml": getattr(body, "medium_volume_ml", None),
+              "bead_count": getattr(body, "bead_count", None)}
+    if body.drug is None:
+        for name, value in medium.items():
+            if value is not None:
+                raise ParameterError(name, value, "null without a drug and a "
+                                     "size_distribution (the medium a drug batch shares)")
+        return Fluid()
+    from dosing.drug import DrugModel
+
+    return Drug(DrugModel(**body.drug.model_kwargs()), wait=body.drug.wait,
+                wait_seconds=body.drug.wait_seconds, **medium)
+
+
+def _population(body: Any) -> OneBead | Batch:
+    if body.size_distribution is None:
+        return OneBead()
+    return Batch(body.size_distribution.model_dump(exclude_none=True))
+
+
+def _question(body: s.DoseTimeRequest | s.ScheduleRequest) -> Dose | Schedule:
+    if isinstance(body, s.ScheduleRequest):
+        return Schedule(doses=body.doses, rests=body.rests, rests_seconds=body.rests_seconds,
+                        check_protocol=body.check_protocol, correct=body.correct,
+                        tolerance=body.tolerance)
+    return Dose(fraction=body.dose_fraction, volume_ul=body.dose_volume_ul,
+                drug_mass_ug=body.drug_mass_ug,
+                concentration_ug_per_ul=body.concentration_ug_per_ul)
+
+
+def to_request(body: s.DoseTimeRequest | s.ScheduleRequest) -> Request:
+    """The planner's request (ParameterError names a bad field: HTTP 422)."""
+    from .service import to_gel
+
+    return Request(
+        to_gel(body.gel), body.t_start, _heating(body), _question(body),
+        payload=_payload(body), population=_population(body),
+        dry_radius_um=body.dry_radius_um, swollen_radius_um=body.swollen_radius_um,
+        constants=None if body.constants is None
+        else body.constants.model_dump(exclude_none=True),
+        branch=body.branch,
+        settings=SolverSettings(interfacial_length=body.interfacial_length,
+                                method=body.validation_method),
+        validate=bool(getattr(body, "validate_full", False)))

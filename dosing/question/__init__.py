@@ -1,0 +1,61 @@
+"""One request, one answer: the planner as one pipeline over payload x population x heating
+x question (issue 35).
+
+    from dosing.question import Request, Jump, Dose, Batch, plan
+    ans = plan(Request("ANB", 302, Jump(308), Dose(0.8), population=Batch({"cv": 0.2}),
+                       dry_radius_um=50))
+    ans.seconds            # the batch's own time: the answer to the question asked
+
+:func:`plan` answers blocking; :func:`answer` answers without waiting on a new full-solver
+run (a result, a ``Pending`` validation, or None: the request needs a job, which
+:func:`plan` then is).  Which code answers a cell: ``dosing.question.cells.CELLS``.
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import Executor
+from typing import Any
+
+from ..answers import Pending
+from .axes import Batch, Dose, Drug, Fluid, Heating, Jump, OneBead, Schedule
+from .request import Request
+from .result import DoseResult, ScheduleResult
+
+Result = DoseResult | ScheduleResult
+
+
+def answer(planner: Any, request: Request) -> Result | Pending | None:
+    """The answer if no new full-solver run is needed; a ``Pending`` validation queued on
+    the planner; or None when the request needs a blocking job (:func:`run`)."""
+    out = request.cell.now(planner, request)
+    if out is not None and not isinstance(out, Pending):
+        out.request, out.tags = request.to_dict(), {**out.tags, **request.payload.tags}
+    return out
+
+
+def run(planner: Any, request: Request) -> Result:
+    """The answer, blocking (full-solver runs on the planner, cached)."""
+    out = request.cell.run(planner, request)
+    out.request, out.tags = request.to_dict(), {**out.tags, **request.payload.tags}
+    return out
+
+
+def plan(request: Request, planner: Any = None, cache_path: str | None = None,
+         executor: Executor | None = None) -> Result:
+    """The answer, blocking, on ``planner`` or a throw-away one on the cache."""
+    if planner is not None:
+        return run(planner, request)
+    from .. import _one_shot
+
+    p = _one_shot(cache_path, executor)
+    try:
+        return run(p, request)
+    finally:
+        p.close()
+        if executor is None:
+            p.jobs.executor.shutdown(wait=True)
+
+
+__all__ = ["Batch", "Dose", "DoseResult", "Drug", "Fluid", "Heating", "Jump", "OneBead",
+           "Pending", "Request", "Result", "Schedule", "ScheduleResult", "answer", "plan",
+           "run"]

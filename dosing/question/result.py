@@ -1,0 +1,141 @@
+"""One answer per question: :class:`DoseResult` and :class:`ScheduleResult`.
+
+Whatever the cell (payload x population x heating), the headline answers the question
+asked: a dose's ``time`` / ``seconds`` is the population's (a batch's own time, not its
+mean bead's: issue 35), a schedule's ``actuation_times`` / ``actuation_seconds`` are the
+corrected times when they were found (the hold reading otherwise, and ``reading`` says
+which).  The cell's own answer (``answer``: the bead's, or a drug batch's) and the optional
+sections (``batch``) are kept whole; ``to_dict()`` is the JSON every way in returns: the
+cell's answer with the headline over it, the sections beside it and the request it answered.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+
+@dataclass
+class DoseResult:
+    """A dose's answer: the headline (``time`` in the reference bead's tau, ``seconds``),
+    the cell that answered, the cell's own answer (None for a drug batch, whose answer is
+    its batch section) and, for a batch, the batch section (its own time; the answer's
+    fields are then its number-weighted mean bead's)."""
+
+    cell: str
+    answer: Any
+    batch: Any = None
+    validation_id: str | None = None
+    request: dict[str, Any] | None = None
+    tags: dict[str, Any] = field(default_factory=dict)  # the payload's flags ({"drug": True})
+
+    @property
+    def time(self) -> float:
+        """The dose time (dimensionless, tau of the reference bead): the population's."""
+        return (self.batch or self.answer).time
+
+    @property
+    def seconds(self) -> float | None:
+        """The dose time in seconds (with a bead size): the population's."""
+        return (self.batch or self.answer).seconds
+
+    @property
+    def model(self) -> str:
+        """The model that answered."""
+        return (self.batch or self.answer).model
+
+    @property
+    def headline(self) -> str:
+        """The answer in one line."""
+        secs = "" if self.seconds is None else f" = {self.seconds:.4g} s"
+        who = "the batch" if self.batch is not None else "the bead"
+        return (f"{self.cell}: {who} releases the dose at t = {self.time:.4g} tau{secs} "
+                f"({self.model} model)")
+
+    def __getattr__(self, name: str) -> Any:
+        # the cell's answer's own fields (error_estimate, final_radius, uncertainty, ...)
+        if name.startswith("__") or name in ("answer", "batch"):
+            raise AttributeError(name)
+        return getattr(self.answer if self.answer is not None else self.batch, name)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The cell's answer with the headline over it and the sections beside it."""
+        d = {} if self.answer is None else self.answer.to_dict()
+        if self.batch is not None:
+            if self.answer is not None:  # the bead's fields are its mean bead's
+                d["reference_bead"] = {"time": d.get("time"), "seconds": d.get("seconds"),
+                                       "model": d.get("model"),
+                                       "dry_radius_um": self.batch.reference_dry_radius_um}
+            d["batch"] = self.batch.to_dict()
+        d.update(self.tags)
+        d.update(time=self.time, seconds=self.seconds, model=self.model, question="dose",
+                 cell=self.cell, headline=self.headline)
+        if self.validation_id is not None:
+            d["validation_id"] = self.validation_id
+        if self.request is not None:
+            d["request"] = self.request
+        return d
+
+
+@dataclass
+class ScheduleResult:
+    """A schedule's answer: the headline ``actuation_times`` (tau of the reference bead)
+    and ``actuation_seconds``, the corrected times when the schedule was corrected
+    (``reading`` 'corrected'), else the hold reading ('hold'); the cell's own answer with
+    every reading."""
+
+    cell: str
+    answer: Any
+    request: dict[str, Any] | None = None
+    tags: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def reading(self) -> str:
+        """Which reading the headline is: 'corrected' or 'hold'."""
+        corrected = getattr(self.answer, "corrected", None)
+        return "corrected" if corrected and corrected.get("actuation_times") else "hold"
+
+    @property
+    def actuation_times(self) -> list[float]:
+        """Each heating's duration (tau of the reference bead)."""
+        if self.reading == "corrected":
+            return [float(x) for x in self.answer.corrected["actuation_times"]]
+        return [float(row.actuation_time) for row in self.answer.hold]
+
+    @property
+    def actuation_seconds(self) -> list[float] | None:
+        """Each heating's duration in seconds (with a bead size)."""
+        if self.reading == "corrected":
+            secs = self.answer.corrected.get("actuation_seconds")
+            return None if secs is None else [float(x) for x in secs]
+        secs = [getattr(row, "actuation_seconds", None) for row in self.answer.hold]
+        return None if any(s is None for s in secs) else [float(s) for s in secs]
+
+    @property
+    def model(self) -> str:
+        """The model that answered."""
+        return self.answer.model
+
+    @property
+    def headline(self) -> str:
+        """The answer in one line."""
+        secs = self.actuation_seconds
+        times = ", ".join(f"{t:.4g}" for t in (secs or self.actuation_times))
+        return (f"{self.cell}: heat for {times} {'s' if secs else 'tau'} "
+                f"({self.reading} times)")
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__") or name == "answer":
+            raise AttributeError(name)
+        return getattr(self.answer, name)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The cell's answer with the headline over it."""
+        d = self.answer.to_dict()
+        d.update(self.tags)
+        d.update(question="schedule", cell=self.cell, reading=self.reading,
+                 actuation_times=self.actuation_times,
+                 actuation_seconds=self.actuation_seconds, headline=self.headline)
+        if self.request is not None:
+            d["request"] = self.request
+        return d
