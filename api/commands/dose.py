@@ -19,7 +19,7 @@ from .common import (
     print_uncertainty,
     wrap,
 )
-from .drug_cli import add_wait_options, drug_dose
+from .drug_cli import add_wait_options
 from .drug_options import add_drug_options, drug_from_args
 from .outfile import add_format_option, figure_path
 
@@ -106,16 +106,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add the sub-command."""
     p = sub.add_parser("dose", help="actuation time to release a dose")
     add_planning_options(p)
-    for action in p._actions:  # --protocol stands in for --t-end (checked in run)
-        if action.dest == "t_end":
-            action.required = False
-            action.help = "heating temperature in K (or give --protocol)"
-    p.add_argument("--protocol", action="append", default=None, metavar="STEP",
-                   help="a heating step in place of --t-end, repeatable, or several joined "
-                        "by ';' ('Heat to 308 K at 5 K/min', 'Hold at 308 K until 30 %% "
-                        "released', 'Rest at 302 K for 10 min', 'Bath at 308 K with a time "
-                        "constant of 30 s', 'Trace from run.csv'; docs/heating.md): the "
-                        "answer is the time from the protocol's start (full solver)")
+    add_protocol_option(p, "the answer is the time from the protocol's start")
     d = p.add_mutually_exclusive_group(required=True)
     d.add_argument("--fraction", type=float, help="dose as a fraction of the stored fluid "
                    "(with a drug option: of the loaded drug)")
@@ -135,6 +126,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_drug_options(p)
     add_wait_options(p)
     p.set_defaults(func=run)
+
+
+def add_protocol_option(p: argparse.ArgumentParser, what: str) -> None:
+    """--protocol in place of --t-end (repeatable; the step grammar of dosing.heating)."""
+    for action in p._actions:  # --protocol stands in for --t-end (checked in run)
+        if action.dest == "t_end":
+            action.required = False
+            action.help = "heating temperature in K (or give --protocol)"
+    p.add_argument("--protocol", action="append", default=None, metavar="STEP",
+                   help="a heating step in place of --t-end, repeatable, or several joined "
+                        "by ';' ('Heat to 308 K at 5 K/min', 'Hold at 308 K until 30 %% "
+                        "released', 'Rest at 302 K for 10 min', 'Bath at 308 K with a time "
+                        f"constant of 30 s', 'Trace from run.csv'; docs/heating.md): {what}")
 
 
 def add_batch_options(p: argparse.ArgumentParser) -> None:
@@ -198,10 +202,30 @@ def print_batch(b: Any) -> None:
             print(wrap(part["text"]))
 
 
+def request_from_args(args: argparse.Namespace, question: Any, steps: list[str] | None,
+                      drug: Any) -> Any:
+    """The one request (dosing.question.Request) the options ask: the case, the payload
+    (a drug option: a drug), the population (--size-cv / --sizes: a batch), the heating
+    (--protocol or --t-end) and ``question``."""
+    from dosing.question import Batch, Drug, Fluid, Heating, Jump, OneBead, Request
+
+    case = planning_kwargs(args)
+    dist = batch_distribution(args)
+    payload = Fluid() if drug is None else Drug(
+        drug, wait=getattr(args, "wait", None), wait_seconds=getattr(args, "wait_seconds", None),
+        medium_volume_ml=getattr(args, "medium_volume_ml", None),
+        bead_count=getattr(args, "bead_count", None))
+    return Request(**{k: v for k, v in case.items() if k != "t_end"},
+                   heating=Jump(args.t_end) if steps is None else Heating(steps),
+                   question=question, payload=payload,
+                   population=OneBead() if dist is None else Batch(dist),
+                   validate=bool(getattr(args, "validate", False)))
+
+
 def run(args: argparse.Namespace) -> int:
-    """Print the answer."""
+    """Print the answer, whatever its cell (one request, dosing.question)."""
     from api.schemas import DoseTimeRequest
-    from dosing import DoseRequest, plan_dose
+    from dosing.question import Dose, run
 
     steps = protocol_steps(args)
     check_bounds(DoseTimeRequest, {
@@ -210,47 +234,53 @@ def run(args: argparse.Namespace) -> int:
         "concentration_ug_per_ul": args.concentration_ug_per_ul})
     checked_cache(args.cache)
     drug = drug_from_args(args)
+    batch = args.size_cv is not None or args.sizes is not None
     for flag, value in (("--medium-volume-ml", args.medium_volume_ml),
                         ("--bead-count", args.bead_count)):
-        if value is not None and (drug is None or (args.size_cv is None
-                                                   and args.sizes is None)):
+        if value is not None and (drug is None or not batch):
             raise ParameterError(flag, value, "with a drug option and --size-cv or --sizes "
                                  "(the medium a drug batch shares)")
-    if drug is not None:
-        if args.size_cv is not None or args.sizes is not None:  # a batch (issue 26)
-            from .batch_cli import run_drug_batch
-
-            return run_drug_batch(args, drug, {**planning_kwargs(args), "protocol": steps},
-                                  batch_distribution(args))
-        return show_dose(args, *drug_dose(args, drug, {**planning_kwargs(args),
-                                                      "protocol": steps}))
-    dist = batch_distribution(args)
-    req = DoseRequest(dose_fraction=args.fraction, dose_volume_ul=args.volume_ul,
-                      drug_mass_ug=args.drug_mass_ug,
-                      concentration_ug_per_ul=args.concentration_ug_per_ul,
-                      **{**planning_kwargs(args), "protocol": steps},
-                      **({} if dist is None else {"size_distribution": dist}))
-    if steps is not None:
-        return run_protocol_dose(args, req)
+    if drug is not None and batch and args.fraction is None:
+        raise ParameterError("--fraction", None, "a fraction of the batch's load, 0-1")
     if args.plot and not args.validate:
         raise ParameterError("plot", args.plot, "used with --validate")
-    if args.validate:
-        runs = ", ".join(f"ell = {s.interfacial_length:.3g} N = {s.n}" if s.regularized
-                         else f"{s.grid} N = {s.n}" for s in req.settings.rungs())
+    request = request_from_args(args, Dose(
+        fraction=args.fraction, volume_ul=args.volume_ul, drug_mass_ug=args.drug_mass_ug,
+        concentration_ug_per_ul=args.concentration_ug_per_ul), steps, drug)
+    s = request.planned.settings
+    if steps is not None:
+        print(f"planning the protocol dose: the reduced model inside its region, else the "
+              f"full solver ({s.grid} grid, {s.n} cells and {s.n // 2}): seconds to minutes "
+              "the first time, then cached", file=sys.stderr, flush=True)
+    elif args.validate:
+        runs = ", ".join(f"ell = {r.interfacial_length:.3g} N = {r.n}" if r.regularized
+                         else f"{r.grid} N = {r.n}" for r in s.rungs())
         print(f"validating with the full solver ({runs}): seconds to minutes the first "
               "time, then cached", file=sys.stderr, flush=True)
-    ans = plan_dose(req, validate=args.validate, cache_path=args.cache)
+    from .drug_cli import _planner
+
+    planner = _planner(args)
+    try:
+        result = run(planner, request)
+    finally:
+        planner.close()
     if args.plot:
         from api.plots.validation import draw_validation
 
-        print(f"wrote {draw_validation(ans.to_dict(), figure_path(args.plot, args.format))}",
-              file=sys.stderr)
-    batch = None
-    if dist is not None:
-        from dosing.batch_truth import plan_batch
+        path = figure_path(args.plot, args.format)
+        print(f"wrote {draw_validation(result.answer.to_dict(), path)}", file=sys.stderr)
+    if args.json:
+        print_json(result.to_dict())
+        return 0
+    if result.batch is not None:  # the batch's own time first: the answer asked for
+        print(result.headline)
+    if result.answer is None:  # a drug batch: its answer is the batch's
+        from .batch_cli import print_drug_batch
 
-        batch = plan_batch(req, validate=args.validate, cache_path=args.cache)
-    return show_dose(args, req, ans, batch)
+        print_drug_batch(request.planned, result.batch)
+        return 0
+    print_dose(request.planned, result.answer, result.batch)
+    return 0
 
 
 def protocol_steps(args: argparse.Namespace) -> list[str] | None:
@@ -264,33 +294,6 @@ def protocol_steps(args: argparse.Namespace) -> list[str] | None:
         raise ParameterError("--t-end", args.t_end, "absent with --protocol (the protocol's "
                              "steps set the heating)")
     return [s.strip() for arg in args.protocol for s in arg.split(";") if s.strip()]
-
-
-def run_protocol_dose(args: argparse.Namespace, req: Any) -> int:
-    """Print the dose under a heating protocol (dosing.protocol_dose)."""
-    from dosing import plan_dose
-
-    print(f"planning the protocol dose: the reduced model inside its region, else the full "
-          f"solver ({req.settings.grid} grid, {req.settings.n} cells and "
-          f"{req.settings.n // 2}): seconds to minutes the first time, then cached",
-          file=sys.stderr, flush=True)
-    ans = plan_dose(req, validate=args.validate, cache_path=args.cache)
-    batch = None
-    if req.size_distribution is not None:  # a batch under the protocol (reduced model)
-        from dosing.batch_protocol import batch_protocol_answer
-
-        batch = batch_protocol_answer(req, validate=args.validate)
-    return show_dose(args, req, ans, batch)
-
-
-def show_dose(args: argparse.Namespace, req: Any, ans: Any, batch: Any = None) -> int:
-    """A dose's answer on stdout: one JSON object (--json) or :func:`print_dose`."""
-    if args.json:
-        print_json(ans.to_dict() if batch is None else {**ans.to_dict(),
-                                                        "batch": batch.to_dict()})
-    else:
-        print_dose(req, ans, batch)
-    return 0
 
 
 def print_dose(req: Any, ans: Any, batch: Any = None) -> None:

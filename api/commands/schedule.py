@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-from typing import Any
 
 from solver.errors import ParameterError
 
+from .batch_cli import print_batch_schedule
 from .common import (
     add_at_start_options,
     check_bounds,
@@ -19,11 +19,12 @@ from .common import (
 from .dose import (
     add_batch_options,
     add_planning_options,
-    batch_distribution,
-    planning_kwargs,
+    add_protocol_option,
     planning_values,
+    protocol_steps,
+    request_from_args,
 )
-from .drug_cli import add_wait_options, run_drug_schedule
+from .drug_cli import _planner, _plot, add_wait_options
 from .drug_options import add_drug_options, drug_from_args
 
 
@@ -32,6 +33,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("schedule", help="multi-dose schedule: hold times, protocol check, "
                                         "corrected times")
     add_planning_options(p)
+    add_protocol_option(p, "every heating follows the protocol's steps from T_start, then "
+                           "holds at its last temperature until its actuation time ends")
     dd = p.add_mutually_exclusive_group(required=True)
     dd.add_argument("--doses", type=float, nargs="+",
                     help="doses as fractions of the stored fluid, e.g. 0.3 0.3 0.3 (with a "
@@ -54,13 +57,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def schedule_kwargs(args: argparse.Namespace) -> dict[str, Any]:
-    """The ScheduleCase fields (dosing.request) of the options, fluid or drug."""
-    return dict(rests=args.rests, rests_seconds=args.rests_seconds,
-                check_protocol=not args.no_check, correct=not args.no_correct,
-                tolerance=args.tolerance, **planning_kwargs(args))
-
-
 FLUID_ROWS = (("  delivered (fraction of stored)", "delivered_fractions", "{:.4g}"),
               ("  relative error", "relative_errors", "{:+.2%}"))
 DRUG_ROWS = (("  drug delivered (of the load)", "delivered_fractions", "{:.4g}"),
@@ -70,12 +66,15 @@ DRUG_ROWS = (("  drug delivered (of the load)", "delivered_fractions", "{:.4g}")
 
 
 def run(args: argparse.Namespace) -> int:
-    """Print the schedule, of fluid or (with a drug option or --doses-ug) of drug."""
+    """Print the schedule, whatever its cell: of fluid or (with a drug option or
+    --doses-ug) of drug, one bead or a batch, after a jump or under --protocol."""
     from api.schemas import ScheduleRequest as HttpSchedule
-    from dosing import ScheduleRequest, plan_schedule
+    from dosing.question import Schedule, run
 
-    check_bounds(HttpSchedule, {**planning_values(args), "doses": args.doses,
-                                "rests": args.rests, "rests_seconds": args.rests_seconds,
+    steps = protocol_steps(args)
+    check_bounds(HttpSchedule, {**planning_values(args), "protocol": steps,
+                                "doses": args.doses, "rests": args.rests,
+                                "rests_seconds": args.rests_seconds,
                                 "tolerance": args.tolerance}, partial=args.doses is None)
     checked_cache(args.cache)
     drug = drug_from_args(args, always=args.doses_ug is not None)
@@ -84,26 +83,27 @@ def run(args: argparse.Namespace) -> int:
         if value is not None:
             raise ParameterError(flag, value, "absent with a schedule (a shared medium is a "
                                  "drug batch's dose: thermogel dose)")
-    dist = batch_distribution(args)
-    if dist is not None:  # a batch (issue 26; api/commands/batch_cli.py)
-        if drug is not None:
-            raise ParameterError("--size-cv" if args.size_cv is not None else "--sizes",
-                                 args.size_cv if args.size_cv is not None else args.sizes,
-                                 "absent with a drug (a drug batch's schedule is not built "
-                                 "yet)")
-        from .batch_cli import run_batch_schedule
-
-        return run_batch_schedule(args, schedule_kwargs(args), dist)
     if drug is None and args.plot:
         raise ParameterError("plot", args.plot, "used with a drug option (e.g. "
                              "--drug-diffusivity-cm2-s)")
-    if drug is None:
-        req = ScheduleRequest(doses=args.doses, **schedule_kwargs(args))
-        ans = plan_schedule(req, cache_path=args.cache)
-    else:
-        req, ans = run_drug_schedule(args, drug, schedule_kwargs(args))
+    request = request_from_args(args, Schedule(
+        doses=args.doses, doses_ug=args.doses_ug, rests=args.rests,
+        rests_seconds=args.rests_seconds, check_protocol=not args.no_check,
+        correct=not args.no_correct, tolerance=args.tolerance), steps, drug)
+    planner = _planner(args)
+    try:
+        result = run(planner, request)
+        if args.plot:
+            _plot(planner, request.planned, result.answer, args.plot)
+    finally:
+        planner.close()
+    req, ans = request.planned, result.answer
     if args.json:
-        print_json(ans.to_dict())
+        print_json(result.to_dict())
+        return 0
+    print(result.headline)
+    if hasattr(ans, "nodes"):  # a batch's schedule: its nodes and quadrature
+        print_batch_schedule(req, ans)
         return 0
     doses = (f"drug doses {', '.join(f'{d:.3g}' for d in ans.doses)} of the load"
              if drug is not None else f"doses {', '.join(f'{d:.0%}' for d in ans.doses)}")
