@@ -94,3 +94,145 @@ def test_solver_and_dosing_import_neither_fastapi_nor_matplotlib(package: str) -
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=120)
     assert done.returncode == 0, done.stdout + done.stderr
+
+
+# ------------------------------------------- the planner holds no physics kernels (issue 35)
+NUMBA_DECORATORS = {"njit", "jit", "generated_jit", "vectorize", "guvectorize", "cfunc",
+                    "stencil", "jitclass"}
+# dosing/batch_medium.py as it was before issue 35 (the coupled march in the planner)
+OLD_BATCH_MEDIUM = """
+import numpy as np
+from numba import njit
+
+from solver.errors import ParameterError, SolverError
+from solver.solute import Solute
+from solver.solute.kernels import A_N, A_U, D_COEF, GAMMA, _solve, conductances, operator
+
+
+@njit(cache=True)
+def _march(grid, m):
+    _solve(grid, m)
+"""
+
+
+def _is_solver(module: str) -> bool:
+    return module == "solver" or module.startswith("solver.")
+
+
+def _private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def _numba_uses(tree: ast.AST, where: str) -> list[str]:
+    """numba in a module: ``import numba[.x]``, ``from numba[.x] import ...``, the solver's
+    numba gate ``solver.jit`` imported, and functions or classes under a numba decorator
+    (``@njit``, ``@numba.jit(...)``, ``@vectorize``, ...)."""
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out += [f"{where}:{node.lineno} import {a.name}" for a in node.names
+                    if a.name.split(".")[0] == "numba" or a.name == "solver.jit"]
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and (
+                (node.module or "").split(".")[0] == "numba" or node.module == "solver.jit"
+                or node.module == "solver" and any(a.name == "jit" for a in node.names)):
+            out.append(f"{where}:{node.lineno} from {node.module} import")
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            for d in node.decorator_list:
+                target = d.func if isinstance(d, ast.Call) else d
+                name = target.attr if isinstance(target, ast.Attribute) else \
+                    getattr(target, "id", "")
+                if name in NUMBA_DECORATORS:
+                    out.append(f"{where}:{node.lineno} @{ast.unparse(d)} {node.name}")
+    return out
+
+
+def _private_solver_names(tree: ast.AST, where: str) -> list[str]:
+    """Private solver names a module reaches: ``from solver.x import _name``, a private
+    module (``solver._x``, ``from solver import _x``), or ``_name`` read off anything it
+    imported from ``solver`` (``kernels._solve`` after ``import solver.solute.kernels as
+    kernels``).  Its own private names and a public solver name bound to a private alias
+    (``import register as _register``) are its business."""
+    out = []
+    bound: set[str] = set()  # names this module bound to something of the solver's
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if _is_solver(a.name):
+                    bound.add(a.asname or "solver")
+                    if any(_private(p) for p in a.name.split(".")):
+                        out.append(f"{where}:{node.lineno} import {a.name}")
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and \
+                _is_solver(node.module or ""):
+            bound.update(a.asname or a.name for a in node.names)
+            bad = [a.name for a in node.names if _private(a.name)]
+            if bad or any(_private(p) for p in node.module.split(".")):
+                out.append(f"{where}:{node.lineno} from {node.module} import "
+                           f"{', '.join(bad) or '...'}")
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and _private(node.attr):
+            root = node.value
+            while isinstance(root, ast.Attribute):
+                root = root.value
+            if isinstance(root, ast.Name) and root.id in bound:
+                out.append(f"{where}:{node.lineno} {ast.unparse(node)}")
+    return out
+
+
+def _dosing_modules() -> list[tuple[str, ast.AST]]:
+    return [(str(p.relative_to(ROOT)), ast.parse(p.read_text()))
+            for p in sorted((ROOT / "dosing").rglob("*.py"))]
+
+
+def test_dosing_holds_no_numba() -> None:
+    """The planner holds no compiled physics: kernels live in solver/ (issue 35; the batch's
+    coupled march moved to solver/solute/medium.py)."""
+    found = [x for where, tree in _dosing_modules() for x in _numba_uses(tree, where)]
+    assert not found, found
+
+
+def test_dosing_imports_no_private_solver_names() -> None:
+    """The planner reaches the solver through its public names only."""
+    found = [x for where, tree in _dosing_modules() for x in _private_solver_names(tree, where)]
+    assert not found, found
+
+
+def test_the_checkers_flag_numba_and_private_solver_names() -> None:
+    """The rules can fail: the old dosing/batch_medium.py is flagged on both (its numba
+    import and kernel, its import of kernels._solve), and so are the other forms, while
+    public names, a module's own private names and private aliases pass."""
+    old = ast.parse(OLD_BATCH_MEDIUM)
+    assert [x.split(" ", 1)[1] for x in _numba_uses(old, "old")] == [
+        "from numba import", "@njit(cache=True) _march"]
+    assert [x.split(" ", 1)[1] for x in _private_solver_names(old, "old")] == [
+        "from solver.solute.kernels import _solve"]
+    flagged = """
+import numba
+import numba.typed
+from solver.jit import kernel
+import solver.solute.kernels as kern
+import solver._hidden
+from solver import _secret
+
+@numba.jit(nopython=True)
+def a(x):
+    return kern._solve(x) + solver.solute.kernels._apply(x)
+
+@vectorize
+def b(x):
+    return x
+"""
+    tree = ast.parse(flagged)
+    assert len(_numba_uses(tree, "s")) == 5, _numba_uses(tree, "s")
+    assert [x.split(" ", 1)[1] for x in _private_solver_names(tree, "s")] == [
+        "import solver._hidden", "from solver import _secret", "kern._solve",
+        "solver.solute.kernels._apply"]
+    clean = ast.parse("""
+import numpy as np
+from solver.presenters import register as _register
+from solver.solute import MediumRelease, coupled_release
+from .batch_truth import _private_helper
+
+def njit_like(x):
+    return np.asarray(x).__class__, _private_helper(x)._y
+""")
+    assert _numba_uses(clean, "c") == [] and _private_solver_names(clean, "c") == []

@@ -1,4 +1,5 @@
-"""A batch sharing one finite medium (issue 26): dosing.batch_medium, dosing.batch_drug.
+"""A batch sharing one finite medium (issue 26): solver.solute.medium (through the planner's
+names, dosing.batch_medium), dosing.batch_drug.
 
 References: the full solute solver's own finite-medium boundary condition (one bead in a
 medium V / N, ``solver.solute.release``) and Crank's finite-bath sphere (eq. 6.30) for a

@@ -1,4 +1,6 @@
-"""ReleaseResult: the plain-data outcome of a solute run (arrays plus diagnostics)."""
+"""The plain-data outcomes of the solute's runs (arrays plus diagnostics): ``ReleaseResult``
+(one bead, module ``transport``) and ``MediumRelease`` (a batch in one medium, module
+``medium``)."""
 
 from __future__ import annotations
 
@@ -138,3 +140,42 @@ class ReleaseResult:
             kwargs: dict[str, Any] = {k: np.array(data[k]) for k in RELEASE_ARRAYS if k in data}
             kwargs.update(json.loads(str(data["extra"])))
         return cls(**kwargs)
+
+
+@dataclass
+class MediumRelease:
+    """A batch's coupled release into one medium (module ``medium``), dimensionless, on the
+    output ``t`` (units of tau_ref): the batch's released fraction of its load, each class's
+    own (net: what left minus what it took back), the medium's concentration (per load /
+    batch dry volume), the classes' load shares ``nu`` and time ratios ``rho``, the medium's
+    volume v0 (units of the batch's dry volume; None: a perfect sink), the mass-balance
+    error (max |gel + medium - 1|) and the steps taken."""
+
+    t: np.ndarray
+    released: np.ndarray
+    class_released: np.ndarray  # (classes, times)
+    concentration: np.ndarray
+    nu: np.ndarray
+    rho: np.ndarray
+    medium_volume: float | None
+    mass_balance_error: float
+    steps: int
+    diagnostics: dict[str, Any] = field(default_factory=dict)
+
+    def released_at(self, time: float) -> float:
+        """The batch's released fraction at ``time`` (linear between outputs)."""
+        return float(np.interp(time, self.t, self.released))
+
+    def time_to_release(self, fraction: float) -> float:
+        """The first time the batch has released ``fraction`` of its load (ValueError when
+        it does not within the outputs)."""
+        r = self.released
+        hit = np.nonzero(r >= fraction)[0]
+        if hit.size == 0:
+            raise ValueError(f"the batch releases at most {r.max():.6g} of its load by "
+                             f"t = {self.t[-1]:.6g}")
+        i = int(hit[0])
+        if i == 0:
+            return float(self.t[0])
+        t0, t1, r0, r1 = self.t[i - 1], self.t[i], r[i - 1], r[i]
+        return float(t0 + (fraction - r0) * (t1 - t0) / (r1 - r0))
