@@ -1,0 +1,155 @@
+"""One request, one answer (issue 35): every cell of payload x population x heating x
+question has its code in one registry, and a question asked through Python, the CLI and HTTP
+gets one answer whose headline is the answer to the question asked (a batch's own time)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+
+import pytest
+from api_support import asgi
+
+from api.cli import main
+from api.http import create_app
+from dosing import Planner
+from dosing.question import (
+    Batch,
+    Dose,
+    Drug,
+    Fluid,
+    Heating,
+    Jump,
+    OneBead,
+    Request,
+    Schedule,
+    plan,
+)
+from dosing.question.axes import HEATINGS, PAYLOADS, POPULATIONS, QUESTIONS
+from dosing.question.cells import CELLS
+from solver.errors import ParameterError
+
+CASE = {"gel": "ANB", "t_start": 302.0, "dry_radius_um": 50.0}
+# the batch under a ramp at 120 um: its smallest beads stay in the reduced model's region
+RAMP_CASE = {**CASE, "dry_radius_um": 120.0}
+RAMP = ["Heat to 308 K at 5 K/min"]
+CV = {"kind": "lognormal", "cv": 0.2}
+DRUG = {"diffusivity_cm2_s": 1e-6}
+NOT_BUILT = {("fluid", "batch", "protocol", "schedule"), ("drug", "one", "protocol", "schedule"),
+             ("drug", "batch", "jump", "schedule"), ("drug", "batch", "protocol", "schedule")}
+
+
+def test_every_cell_has_its_code() -> None:
+    """The registry covers the product of the axes, no more."""
+    keys = {tuple(c.key for c in cell) for cell in
+            itertools.product(PAYLOADS, POPULATIONS, HEATINGS, QUESTIONS)}
+    assert set(CELLS) == keys and len(keys) == 16
+
+
+@pytest.mark.parametrize("key", sorted(NOT_BUILT))
+def test_a_cell_not_built_refuses_naming_its_field(key: tuple[str, ...]) -> None:
+    payload = Drug(DRUG) if key[0] == "drug" else Fluid()
+    population = Batch(CV) if key[1] == "batch" else OneBead()
+    heating = Heating(RAMP) if key[2] == "protocol" else Jump(308.0)
+    with pytest.raises(ParameterError) as err:
+        Request(**CASE, heating=heating, question=Schedule([0.3]), payload=payload,
+                population=population)
+    assert err.value.field in ("protocol", "size_distribution")
+    assert "not built yet" in str(err.value)
+
+
+# (name, request fields, CLI options, HTTP body): the cells answered without a full-solver run
+CHEAP = [
+    ("fluid one jump dose", dict(CASE, heating=Jump(308.0), question=Dose(0.8)),
+     ["--t-end", "308", "--fraction", "0.8"], {"t_end": 308.0, "dose_fraction": 0.8}),
+    ("fluid batch jump dose", dict(CASE, heating=Jump(308.0), question=Dose(0.8),
+                                   population=Batch(CV)),
+     ["--t-end", "308", "--fraction", "0.8", "--size-cv", "0.2"],
+     {"t_end": 308.0, "dose_fraction": 0.8, "size_distribution": CV}),
+    ("fluid one protocol dose", dict(CASE, heating=Heating(RAMP), question=Dose(0.8)),
+     ["--protocol", RAMP[0], "--fraction", "0.8"], {"protocol": RAMP, "dose_fraction": 0.8}),
+    ("fluid batch protocol dose", dict(RAMP_CASE, heating=Heating(RAMP), question=Dose(0.8),
+                                       population=Batch(CV)),
+     ["--protocol", RAMP[0], "--fraction", "0.8", "--size-cv", "0.2"],
+     {"protocol": RAMP, "dose_fraction": 0.8, "size_distribution": CV}),
+    ("drug one jump dose", dict(CASE, heating=Jump(308.0), question=Dose(0.8),
+                                payload=Drug({"diffusivity_cm2_s": 0.0})),
+     ["--t-end", "308", "--fraction", "0.8", "--drug-diffusivity-cm2-s", "0"],
+     {"t_end": 308.0, "dose_fraction": 0.8, "drug": {"diffusivity_cm2_s": 0.0}}),
+]
+
+
+@pytest.fixture
+def anyio_backend() -> str:
+    return "asyncio"
+
+
+@pytest.fixture(scope="module")
+def planner(tmp_path_factory):
+    from concurrent.futures import ThreadPoolExecutor
+
+    p = Planner(cache_path=str(tmp_path_factory.mktemp("one") / "c.sqlite"),
+                executor=ThreadPoolExecutor(2))
+    yield p
+    p.close()
+
+
+@pytest.mark.anyio
+@pytest.mark.parametrize("name,fields,cli,body", CHEAP, ids=[c[0] for c in CHEAP])
+async def test_one_answer_whatever_the_way_in(name, fields, cli, body, planner, capsys,
+                                              tmp_path) -> None:
+    """Python, the CLI and HTTP give the same headline for the same question."""
+    py = plan(Request(**fields), planner=planner)
+    assert py.cell == name.replace(" ", " · ")
+    one = fields.get("population", OneBead()).key == "one"
+    assert (py.batch is None) == one
+    if not one:  # the headline is the batch's own time, not its mean bead's
+        assert py.seconds == py.batch.seconds and py.seconds > py.answer.seconds
+        assert py.to_dict()["reference_bead"]["seconds"] == py.answer.seconds
+    size = ["--dry-radius-um", str(fields["dry_radius_um"])]
+    assert main(["dose", "--gel", "ANB", "--t-start", "302", *size, *cli, "--json",
+                 "--cache", str(tmp_path / "c.sqlite")]) == 0
+    out = json.loads(capsys.readouterr().out)
+    async with asgi(create_app(planner=planner, warm=False)) as (_, raw):
+        r = await raw.post("/v1/dose-time", json={"gel": "ANB", "t_start": 302.0,
+                                                  "dry_radius_um": fields["dry_radius_um"],
+                                                  **body})
+    assert r.status_code == 200, r.text
+    for d in (out, r.json()):
+        assert d["cell"] == py.cell and d["question"] == "dose"
+        assert d["time"] == pytest.approx(py.time, rel=1e-12)
+        assert d["seconds"] == pytest.approx(py.seconds, rel=1e-12)
+        assert d["request"]["population"]["kind"] == fields.get("population", OneBead()).key
+
+
+@pytest.mark.anyio
+async def test_a_schedule_reads_the_same_everywhere(planner, capsys, tmp_path) -> None:
+    """The hold reading asked alone: the headline says it is the hold reading."""
+    q = Schedule([0.3, 0.3, 0.3], rests=[0.5, 0.5], check_protocol=False, correct=False)
+    py = plan(Request(**CASE, heating=Jump(308.0), question=q), planner=planner)
+    assert py.reading == "hold" and len(py.actuation_seconds) == 3
+    assert main(["schedule", "--gel", "ANB", "--t-start", "302", "--t-end", "308",
+                 "--dry-radius-um", "50", "--doses", "0.3", "0.3", "0.3", "--rests", "0.5",
+                 "0.5", "--no-check", "--no-correct", "--json",
+                 "--cache", str(tmp_path / "c.sqlite")]) == 0
+    out = json.loads(capsys.readouterr().out)
+    async with asgi(create_app(planner=planner, warm=False)) as (_, raw):
+        r = await raw.post("/v1/schedule", json={
+            **CASE, "t_end": 308.0, "doses": [0.3, 0.3, 0.3], "rests": [0.5, 0.5],
+            "check_protocol": False, "correct": False})
+    assert r.status_code == 200, r.text
+    for d in (out, r.json()):
+        assert d["reading"] == "hold"
+        assert d["actuation_seconds"] == pytest.approx(py.actuation_seconds, rel=1e-12)
+
+
+def test_python_plan_dose_answers_a_batch() -> None:
+    """A DoseRequest with a size_distribution is answered for the batch (it was the mean
+    bead's time, without a word)."""
+    from dosing import DoseRequest, plan_dose
+
+    ans = plan_dose(DoseRequest(gel="ANB", t_start=302, t_end=308, dose_fraction=0.8,
+                                dry_radius_um=50, size_distribution=CV))
+    bead = plan_dose(DoseRequest(gel="ANB", t_start=302, t_end=308, dose_fraction=0.8,
+                                 dry_radius_um=50))
+    assert ans.seconds == ans.batch.seconds and ans.seconds > 1.1 * bead.seconds
