@@ -1,6 +1,7 @@
 """Issue 23's speed figures, in CPU seconds, this tree side by side with other revisions.
 
 Run:  .venv/bin/python -m benchmarks.speed [--before 4aa7d90] [--only help,dose,warm]
+      .venv/bin/python -m benchmarks.speed --before 70c49c7 --only warm_dose
 
 Each figure is measured in a fresh interpreter per tree (``PYTHONPATH`` = that tree), in
 CPU seconds (user + system, ``resource.getrusage`` of the children, threads and worker
@@ -15,6 +16,12 @@ Figures (``--only``):
   --fraction 0.8 --dry-radius-um 50`` (numba caches warm, the validation cache fresh);
 * ``warm``: ``Planner.dose`` on a kept planner, milliseconds of CPU per answer (nine
   front-model requests in turn, 3,000 answers);
+* ``warm_dose``: ``Planner.dose`` of one front-model request (ANB 302 -> 308 K, 80 %, a
+  50 um bead) on a kept planner, milliseconds of CPU per answer (3,000 answers), with its
+  truth (the validation runs) stored in the planner's cache, and beside it the same
+  request on a fresh cache (no truth stored: the prior), measured in the same process
+  (issue 35).  Each tree stores its truth once (``dose(validate=True)``, about 30 s, not
+  counted) in a cache file kept for the repeats;
 * ``load``: the HTTP service's requests per second (benchmarks/load.py: 3,000 requests
   over 16 connections after 300 uncounted, 2-4 s at this service's rate, where 600 took
   well under a second and two runs of one tree differed by up to 1.5x; wall-clock
@@ -75,6 +82,39 @@ t0 = cpu()
 for i in range(n):
     p.dose(reqs[i % len(reqs)])
 print(json.dumps({{"ms": 1e3 * (cpu() - t0) / n}}))
+p.close()
+"""
+
+WARM_DOSE = """
+import json, resource
+from concurrent.futures import ThreadPoolExecutor
+from dosing import DoseRequest, Planner
+def cpu():
+    u = resource.getrusage(resource.RUSAGE_SELF)
+    return u.ru_utime + u.ru_stime
+req = DoseRequest("ANB", 302, 308, dose_fraction=0.8, dry_radius_um=50)
+out = {{}}
+for name, path in (("stored", {stored!r}), ("fresh", {fresh!r})):
+    p = Planner(cache_path=path, executor=ThreadPoolExecutor(1))
+    first = p.dose(req).to_dict()
+    n = 3000
+    t0 = cpu()
+    for _ in range(n):
+        ans = p.dose(req)
+    out[name] = 1e3 * (cpu() - t0) / n
+    out[name + "_validated"] = ans.validation is not None
+    out[name + "_same"] = ans.to_dict() == first
+    out[name + "_time"] = ans.time
+    p.close()
+print(json.dumps(out))
+"""
+
+STORE_TRUTH = """
+from concurrent.futures import ThreadPoolExecutor
+from dosing import DoseRequest, Planner
+p = Planner(cache_path={stored!r}, executor=ThreadPoolExecutor(2))
+assert p.dose(DoseRequest("ANB", 302, 308, dose_fraction=0.8, dry_radius_um=50),
+              validate=True).validation is not None
 p.close()
 """
 
@@ -237,6 +277,23 @@ def fig_warm(tree: Path, tmp: Path) -> tuple[float, str]:
     return _json(out)["ms"], "ms of CPU per answer"
 
 
+def fig_warm_dose(tree: Path, tmp: Path) -> tuple[float, str]:
+    stored = tmp / f"warm-dose-truth-{tree.name}.sqlite"
+    done = Path(f"{stored}.done")
+    if not done.exists():  # this tree's truth, stored once (kept for the repeats)
+        run(tree, [PY, "-c", STORE_TRUTH.format(stored=str(stored))], timeout=1800)
+        done.touch()
+    fresh = _fresh(tmp, f"warm-dose-fresh-{tree.name}.sqlite")
+    _, out = run(tree, [PY, "-c", WARM_DOSE.format(stored=str(stored), fresh=str(fresh))])
+    res = _json(out)
+    if not res["stored_validated"] or res["fresh_validated"]:
+        raise RuntimeError(f"{tree}: the stored truth does not validate the answer: {res}")
+    return res["stored"], (f"ms of CPU per answer with its truth stored; without: "
+                           f"{res['fresh']:.4f} ms (the stored truth costs "
+                           f"{res['stored'] / res['fresh']:.2f}x); warm answers equal the "
+                           f"first: {res['stored_same'] and res['fresh_same']}")
+
+
 def fig_load(tree: Path, tmp: Path) -> tuple[float, str]:
     _, out = run(tree, [PY, str(ROOT / "benchmarks" / "load.py"), "--tree", str(tree),
                         "--requests", "3000", "--warmup", "300", "--concurrency", "16",
@@ -290,6 +347,7 @@ FIGURES: dict[str, tuple[Callable[[Path, Path], tuple[float, str]], str, bool]] 
     "help": (fig_help, "s CPU", True),
     "dose": (fig_dose, "s CPU", True),
     "warm": (fig_warm, "ms CPU", True),
+    "warm_dose": (fig_warm_dose, "ms CPU", True),
     "load": (fig_load, "req/s", False),
     "validation": (fig_validation, "s CPU", True),
     "schedule": (fig_schedule, "s CPU", True),

@@ -20,6 +20,7 @@ so it is computed again instead of answering from damaged data.
 from __future__ import annotations
 
 import hashlib
+import itertools
 import json
 import logging
 import os
@@ -71,6 +72,7 @@ CREATE TABLE IF NOT EXISTS jobs (
 """
 JOB_STATES = ("pending", "done", "failed")
 CACHE_VALID = "a writable SQLite file whose directory exists or can be created"
+_SERIALS = itertools.count(1)  # each connection's number (a generation token names it)
 
 
 def _owner_gone(owner: str) -> bool:
@@ -165,6 +167,7 @@ class ValidationCache:
             con.execute("PRAGMA synchronous=FULL")
             con.execute(f"PRAGMA busy_timeout={int(BUSY_TIMEOUT_S * 1000)}")
             self._local.con = con
+            self._local.serial = next(_SERIALS)
             with self._lock:
                 alive = []
                 for thread, old in self._connections:  # threads come and go (thread pools)
@@ -332,6 +335,15 @@ class ValidationCache:
         """What moves when the file may have changed: ``PRAGMA data_version`` (another
         connection, thread or process committed) and this connection's ``total_changes``."""
         return con.execute("PRAGMA data_version").fetchone()[0], con.total_changes
+
+    def generation(self) -> tuple[int, int, int]:
+        """A token that changes whenever any row of the file may have changed since this
+        thread last asked: this thread's connection (its number: the counters are its own),
+        ``PRAGMA data_version`` (another connection, thread or process committed) and the
+        connection's ``total_changes`` (its own writes).  One pragma, no row read: what was
+        built from the rows under an equal token is still what they would give."""
+        con = self._con()
+        return (self._local.serial, *self._version(con))
 
     def stored_runs(self) -> frozenset[tuple[float, float, str, float]] | None:
         """(t_start, t_end, branch, interfacial length) of every stored jump run, from the

@@ -23,13 +23,21 @@ import threading
 import time
 from collections import OrderedDict
 from concurrent.futures import Executor, Future, ThreadPoolExecutor, wait
-from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from dataclasses import fields, replace
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from solver.errors import SolverError
 from solver.gel import Gel
 
-from .answers import Answered, DoseAnswer, ModelChoice, Pending, ValidationStatus
+from .answers import (
+    Answered,
+    DoseAnswer,
+    ModelChoice,
+    Pending,
+    ValidationReport,
+    ValidationStatus,
+    plain,
+)
 from .cache import ValidationCache
 from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner
 from .model_choice import (
@@ -56,6 +64,7 @@ MOVING_HORIZON = 0.1
 # HHT 80 %, up to 9x for HHT's 10 % dose, whose front time is tiny: the floor covers it);
 # a run that falls short is extended (x4) like every other
 MODEL_FORM_REACH = 4.0
+VERDICTS = 1024  # front-model verdicts remembered per planner (keyed by cache generation)
 
 
 class UnknownValidationError(KeyError):
@@ -136,6 +145,9 @@ class Planner:
         # run's scenario, steps) (module ``restart``; kept for this planner's life)
         self._starts: OrderedDict[str, tuple[Scenario, int]] = OrderedDict()
         self.restarts = 0  # protocol runs started from a stored prefix's state
+        # a front-model dose's verdict from the stored runs (:meth:`_front_dose`): (request's
+        # verdict key, cache generation) -> _Verdict, least recently used dropped
+        self._verdicts: OrderedDict[tuple[Any, ...], _Verdict] = OrderedDict()
 
     @property
     def solver(self) -> Solver:
@@ -352,12 +364,11 @@ class Planner:
         return self._now(req)[2]
 
     def _now(self, req: DoseRequest) -> tuple[ModelChoice, list[Scenario], DoseAnswer | None]:
-        """(model choice, validation runs, the answer from the cache alone or None); on a
-        jump with no stored run (:meth:`unvalidated`) the runs are the truth's alone."""
+        """(model choice, validation runs, the answer from the cache alone or None); for a
+        front-model answer (:meth:`_front_dose`, never None) the runs are the truth's alone."""
         choice = self.model_answer(req)
-        if not choice.needs_full and self.unvalidated(req):
-            scs = [truth_scenario(req)]
-            return choice, scs, self._dose(req, choice, scs, [])
+        if not choice.needs_full:
+            return choice, [truth_scenario(req)], self._front_dose(req, choice)
         scs = self.scenarios(req)
         trajs = self.cached_many(scs, choice.radius, choice.front_time or 0.0)
         complete = all(t is not None for t in trajs)
@@ -373,22 +384,46 @@ class Planner:
 
             return protocol_dose.dose(self, req, validate)  # type: ignore[return-value]
         choice = self.model_answer(req)
-        if not (choice.needs_full or validate) and self.unvalidated(req):
-            return self._dose(req, choice, [truth_scenario(req)], [])
+        if not (choice.needs_full or validate):
+            return self._front_dose(req, choice)
         scs = self.scenarios(req)
-        need_time = choice.front_time or 0.0
-        if choice.needs_full or validate:
-            trajs: list[Any] = self._trajectories(scs, choice.radius, need_time)
-        else:
-            trajs = self.cached_many(scs, choice.radius, need_time)
-            if any(t is None for t in trajs):
-                trajs = []
+        trajs: list[Any] = self._trajectories(scs, choice.radius, choice.front_time or 0.0)
         return self._dose(req, choice, scs, trajs)
 
-    def _dose(self, req: DoseRequest, choice: ModelChoice, scs: list[Scenario],
-              trajs: list[Any]) -> DoseAnswer:
-        """The answer from the model choice and the validation runs' trajectories (or
-        exceptions; none: unvalidated)."""
+    def _front_dose(self, req: DoseRequest, choice: ModelChoice) -> DoseAnswer:
+        """A front-model answer from the runs stored now (none run): validated when every
+        validation run covering the dose is stored, else with the prior.
+
+        The verdict (validation report, error estimate) is remembered per request and
+        cache generation (:meth:`ValidationCache.generation`, read once, before any row):
+        while no row of the file changed, in this process or another, a warm answer reads
+        none, and the first answer after a change (a longer run, a new row) builds it again
+        from the rows.  The rest of the answer (seconds, a fitted gel's interval) is made
+        afresh as for any answer."""
+        key = (_verdict_key(req, choice), self.cache.generation())
+        with self._mem_lock:
+            verdict = self._verdicts.get(key)
+            if verdict is not None:
+                self._verdicts.move_to_end(key)
+        if verdict is None:
+            if self.unvalidated(req):
+                scs, trajs = [truth_scenario(req)], []
+            else:
+                scs = self.scenarios(req)
+                trajs = self.cached_many(scs, choice.radius, choice.front_time or 0.0)
+                if any(t is None for t in trajs):
+                    trajs = []
+            verdict = self._verdict(req, choice, scs, trajs)
+            with self._mem_lock:
+                self._verdicts[key] = verdict
+                while len(self._verdicts) > VERDICTS:
+                    self._verdicts.popitem(last=False)
+        return self._answer(req, choice, verdict, remembered=True)
+
+    def _verdict(self, req: DoseRequest, choice: ModelChoice, scs: list[Scenario],
+                 trajs: list[Any]) -> _Verdict:
+        """The validation runs' verdict on the model choice (trajectories or exceptions;
+        none: unvalidated): its report, the answer's time and its error estimate."""
         t_front = choice.front_time
         rep = (validation_report(scs, trajs, req.start_radius, choice.radius, t_front)
                if trajs else None)
@@ -398,7 +433,23 @@ class Planner:
         time = max(0.0, t_front if t_front is not None else rep.time)  # tiny doses: -1e-17
         est, explain = error_estimate(choice.model, time, rep, req.fraction, req.gel,
                                       req.settings.method)
-        ans = build_answer(req, choice, time, est, explain, rep, scs[0].key())
+        return _Verdict(rep, time, est, explain, scs[0].key())
+
+    def _dose(self, req: DoseRequest, choice: ModelChoice, scs: list[Scenario],
+              trajs: list[Any]) -> DoseAnswer:
+        """The answer from the model choice and the validation runs' trajectories (or
+        exceptions; none: unvalidated)."""
+        return self._answer(req, choice, self._verdict(req, choice, scs, trajs))
+
+    def _answer(self, req: DoseRequest, choice: ModelChoice, verdict: _Verdict,
+                remembered: bool = False) -> DoseAnswer:
+        """The answer from the model choice and the validation's verdict (``remembered``:
+        one kept for later answers, whose report this answer gets a copy of)."""
+        rep = verdict.report
+        if remembered and rep is not None:
+            rep = _copy_report(rep)
+        ans = build_answer(req, choice, verdict.time, verdict.estimate, verdict.explanation,
+                           rep, verdict.key)
         from .gel_store import record_for
 
         if record_for(req.gel) is None:  # a preset or custom gel: no fit, no interval
@@ -502,6 +553,45 @@ class Planner:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+class _Verdict(NamedTuple):
+    """What the validation runs say of a dose (:meth:`Planner._verdict`)."""
+
+    report: ValidationReport | None
+    time: float
+    estimate: float
+    explanation: str
+    key: str  # the truth run's scenario key
+
+
+def _verdict_key(req: DoseRequest, choice: ModelChoice) -> tuple[Any, ...]:
+    """What a front-model verdict depends on besides the stored runs: the validation runs
+    (jump, settings, ell range), the start radius, the dose and the model's answer."""
+    s = req.settings
+    return (req.gel, req.t_start, req.t_end, req.branch, s, s.auto_length,
+            req.interfacial_range, req.start_radius, req.fraction, choice)
+
+
+def _copy_report(rep: ValidationReport) -> ValidationReport:
+    """A remembered report for one answer: its containers copied (an answer's report may
+    be changed by its caller; the remembered one may not)."""
+    return ValidationReport(*[_copied(getattr(rep, f)) for f in _REPORT_FIELDS])
+
+
+_REPORT_FIELDS = tuple(f.name for f in fields(ValidationReport))
+_ATOMS = (str, int, float, bool, type(None))
+
+
+def _copied(obj: Any) -> Any:
+    """A copy of JSON-like data (dicts and lists of numbers, strings, None): the report's
+    form, copied in a quarter of :func:`plain`'s time; anything else through it."""
+    cls = type(obj)
+    if cls is dict:
+        return {k: _copied(v) for k, v in obj.items()}
+    if cls is list:
+        return [_copied(v) for v in obj]
+    return obj if cls in _ATOMS else plain(obj)
 
 
 def _prefix(sc: Scenario, steps: int) -> Scenario:

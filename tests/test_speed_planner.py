@@ -238,3 +238,95 @@ def test_plain_is_asdict() -> None:
     got["rows"][0]["k"].append(9)
     got["inner"]["arr"][0] = 7.0
     assert o.rows[0]["k"] == [1, 2.0, "s", None, True] and o.inner.arr[0] == 0.0  # a copy
+
+
+def _copy_rows(src: Planner, dst_path: Path) -> None:
+    """Every run ``src`` stored, written to ``dst_path`` by a cache object of its own (as
+    another process would)."""
+    from dosing.cache import ValidationCache
+
+    with ValidationCache(dst_path) as other:
+        for key in src.cache.keys():
+            meta, blob = src.cache.get_raw(key)
+            other.put(key, meta, blob)
+
+
+def test_a_warm_answer_with_its_truth_stored_reads_no_row(tmp_path: Path) -> None:
+    """Issue 35: once a front-model dose's validation runs are stored and its answer made,
+    asking again reads no row (one pragma: the cache's generation) and answers the same."""
+    pool = ThreadPoolExecutor(2)
+    planner = Planner(cache_path=tmp_path / "c.sqlite", executor=pool, solver=FakeSolver())
+    try:
+        req = DoseRequest(**FRONT, dose_fraction=0.8, dry_radius_um=50.0)
+        validated = planner.dose(req, validate=True)
+        pool.shutdown(wait=True)  # its runs' last writes (leases let go) done
+        first = planner.dose(req)
+        assert first.validation is not None and first.to_dict() == validated.to_dict()
+        cache = planner.cache
+        calls: list[str] = []
+        for name in ("get_many", "digests", "stored_runs", "get", "get_raw"):
+            real = getattr(cache, name)
+
+            def spy(*a, _name=name, _real=real, **kw):
+                calls.append(_name)
+                return _real(*a, **kw)
+
+            setattr(cache, name, spy)
+        sql: list[str] = []
+        cache._con().set_trace_callback(sql.append)
+        try:
+            again = [planner.dose(req) for _ in range(3)]
+            now = planner.answer(req)
+        finally:
+            cache._con().set_trace_callback(None)
+        assert calls == []
+        assert sql and all(s.strip().upper() == "PRAGMA DATA_VERSION" for s in sql)
+        assert all(a.to_dict() == first.to_dict() for a in [*again, now.answer])
+        again[0].validation.runs[0]["time"] = -1.0  # a caller's change stays in its answer
+        assert planner.dose(req).to_dict() == first.to_dict()
+    finally:
+        planner.close()
+
+
+def test_a_warm_answer_sees_runs_another_cache_stores(tmp_path: Path) -> None:
+    """A warm answer notices rows written by another connection to its file (another
+    process): a truth stored short of the dose leaves it unvalidated; the longer runs,
+    replacing those rows, validate the next answer, which is the one they give."""
+    runs = {}
+    for name, f in (("short", 0.3), ("long", 0.8)):
+        src = Planner(cache_path=tmp_path / f"{name}.sqlite", executor=ThreadPoolExecutor(2),
+                      solver=StoppingFake())
+        try:
+            runs[name] = (src, src.dose(DoseRequest(**FRONT, dose_fraction=f,
+                                                    dry_radius_um=50.0), validate=True))
+        finally:
+            src.close()
+    path = tmp_path / "shared.sqlite"
+    planner = Planner(cache_path=path, executor=ThreadPoolExecutor(1), solver=StoppingFake())
+    try:
+        req = DoseRequest(**FRONT, dose_fraction=0.8, dry_radius_um=50.0)
+        prior = planner.dose(req)
+        assert prior.validation is None and planner.dose(req).to_dict() == prior.to_dict()
+        _copy_rows(runs["short"][0], path)  # the truth stored, short of 80 %
+        short = planner.dose(req)
+        assert short.validation is None and short.to_dict() == prior.to_dict()
+        _copy_rows(runs["long"][0], path)  # longer runs replace those rows
+        got = planner.dose(req)
+        assert got.validation is not None
+        assert got.to_dict() == runs["long"][1].to_dict()
+        assert planner.dose(req).to_dict() == got.to_dict()
+        # a new row for another bead: its first answer sees it too
+        other = DoseRequest(**FRONT, dose_fraction=0.8, dry_radius_um=20.0)
+        assert planner.dose(other).validation is None
+        src = Planner(cache_path=tmp_path / "bead.sqlite", executor=ThreadPoolExecutor(2),
+                      solver=StoppingFake())
+        try:
+            want = src.dose(other, validate=True)
+        finally:
+            src.close()
+        _copy_rows(src, path)  # (its model-form runs, shared by the beads, rewritten too)
+        got = planner.dose(other)
+        assert got.validation is not None and got.validation.time == want.validation.time
+        assert got.error_estimate == want.error_estimate
+    finally:
+        planner.close()
