@@ -7,10 +7,21 @@ from __future__ import annotations
 from typing import Any
 
 from dosing.question import Batch, Dose, Drug, Fluid, Heating, Jump, OneBead, Request, Schedule
+from dosing.request import resolve_gel
 from dosing.scenario import SolverSettings
 from solver.errors import ParameterError
+from solver.gel import Gel
 
 from . import schemas as s
+
+
+def to_gel(spec: str | s.GelParameters) -> Gel:
+    """The solver gel a request names: a preset or stored gel, or one with parameters
+    replaced (``dosing.request.resolve_gel``: one rule for HTTP, CLI and Python)."""
+    if isinstance(spec, str):
+        return resolve_gel(spec)
+    return resolve_gel(spec.model_dump(include=set(s.GelParameters.model_fields),
+                                       exclude_none=True))
 
 
 def _heating(body: Any) -> Jump | Heating:
@@ -59,8 +70,6 @@ def _question(body: s.DoseTimeRequest | s.ScheduleRequest) -> Dose | Schedule:
 
 def to_request(body: s.DoseTimeRequest | s.ScheduleRequest) -> Request:
     """The planner's request (ParameterError names a bad field: HTTP 422)."""
-    from .service import to_gel
-
     return Request(
         to_gel(body.gel), body.t_start, _heating(body), _question(body),
         payload=_payload(body), population=_population(body),

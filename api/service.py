@@ -30,7 +30,6 @@ from dosing import (
     question,
 )
 from dosing.jobs import DEFAULT_LEASE_SECONDS
-from dosing.request import resolve_gel
 from solver.equilibrium import equilibria, folds
 from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.gel import PRESETS, Gel
@@ -39,7 +38,7 @@ from solver.phase import classify_jump
 from . import schemas as s
 from . import stored_jobs
 from .errors import CacheFault, InternalError, ServiceUnavailable
-from .requests import to_request
+from .requests import to_gel, to_request
 from .warmup import WarmupReport, warm_up
 
 log = logging.getLogger("thermogel.service")
@@ -52,14 +51,6 @@ FAULT_SECONDS = 120.0  # /health is 'degraded' this long after a cache fault
 
 
 # ----------------------------------------------------------------------------- physics
-
-def to_gel(spec: str | s.GelParameters) -> Gel:
-    """The solver gel a request names: a preset or stored gel, or one with parameters
-    replaced (``dosing.request.resolve_gel``: one rule for HTTP, CLI and Python)."""
-    if isinstance(spec, str):
-        return resolve_gel(spec)
-    return resolve_gel(spec.model_dump(include=set(s.GelParameters.model_fields),
-                                       exclude_none=True))
 
 
 def _folds(gel: Gel) -> list[dict[str, Any]]:

@@ -215,11 +215,18 @@ def request_from_args(args: argparse.Namespace, question: Any, steps: list[str] 
         drug, wait=getattr(args, "wait", None), wait_seconds=getattr(args, "wait_seconds", None),
         medium_volume_ml=getattr(args, "medium_volume_ml", None),
         bead_count=getattr(args, "bead_count", None))
-    return Request(**{k: v for k, v in case.items() if k != "t_end"},
-                   heating=Jump(args.t_end) if steps is None else Heating(steps),
-                   question=question, payload=payload,
-                   population=OneBead() if dist is None else Batch(dist),
-                   validate=bool(getattr(args, "validate", False)))
+    flags = {"size_distribution": "--size-cv" if args.size_cv is not None else "--sizes",
+             "protocol": "--protocol"}
+    try:
+        return Request(**{k: v for k, v in case.items() if k != "t_end"},
+                       heating=Jump(args.t_end) if steps is None else Heating(steps),
+                       question=question, payload=payload,
+                       population=OneBead() if dist is None else Batch(dist),
+                       validate=bool(getattr(args, "validate", False)))
+    except ParameterError as exc:  # the cell's own refusal names the option that chose it
+        if exc.field not in flags:
+            raise
+        raise ParameterError(flags[exc.field], exc.value, exc.valid) from None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -257,13 +264,13 @@ def run(args: argparse.Namespace) -> int:
                          else f"{r.grid} N = {r.n}" for r in s.rungs())
         print(f"validating with the full solver ({runs}): seconds to minutes the first "
               "time, then cached", file=sys.stderr, flush=True)
-    from .drug_cli import _planner
+    from .drug_cli import _planner, close_planner
 
     planner = _planner(args)
     try:
         result = run(planner, request)
     finally:
-        planner.close()
+        close_planner(planner)
     if args.plot:
         from api.plots.validation import draw_validation
 

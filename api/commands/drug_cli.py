@@ -18,11 +18,17 @@ def add_wait_options(p: argparse.ArgumentParser) -> None:
 
 
 def _planner(args: argparse.Namespace) -> Any:
-    from concurrent.futures import ThreadPoolExecutor
+    """The command's one-shot planner (``dosing._one_shot``: runs in this process; its
+    executor stops with it, :func:`close_planner`)."""
+    import dosing
 
-    from dosing import Planner
+    return dosing._one_shot(args.cache, None)
 
-    return Planner(cache_path=args.cache, executor=ThreadPoolExecutor(2))
+
+def close_planner(planner: Any) -> None:
+    """Close the one-shot planner and stop its executor."""
+    planner.close()
+    planner.jobs.executor.shutdown(wait=True)
 
 
 def _plot(planner: Any, req: Any, ans: Any, path: str) -> None:

@@ -24,7 +24,7 @@ from .dose import (
     protocol_steps,
     request_from_args,
 )
-from .drug_cli import _planner, _plot, add_wait_options
+from .drug_cli import _planner, _plot, add_wait_options, close_planner
 from .drug_options import add_drug_options, drug_from_args
 
 
@@ -96,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
         if args.plot:
             _plot(planner, request.planned, result.answer, args.plot)
     finally:
-        planner.close()
+        close_planner(planner)
     req, ans = request.planned, result.answer
     if args.json:
         print_json(result.to_dict())

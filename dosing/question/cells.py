@@ -158,8 +158,8 @@ def _not_built(field: str, what: str) -> Callable[[Any], Any]:
                  "size_distribution": getattr(request.population, "sizes", None),
                  "drug": getattr(request.payload, "model", None)}[field]
         raise ParameterError(field, value if isinstance(value, (str, float, int, list))
-                             else str(value), f"null for {request.cell_name}",
-                             f"{what} is not built yet")
+                             else str(value),
+                             f"null for {request.cell_name} ({what} is not built yet)")
 
     return build
 

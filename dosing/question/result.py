@@ -60,7 +60,8 @@ class DoseResult:
 
     def to_dict(self) -> dict[str, Any]:
         """The cell's answer with the headline over it and the sections beside it."""
-        d = {} if self.answer is None else self.answer.to_dict()
+        # a drug batch's answer is its batch section, also at the top
+        d = (self.answer or self.batch).to_dict()
         if self.batch is not None:
             if self.answer is not None:  # the bead's fields are its mean bead's
                 d["reference_bead"] = {"time": d.get("time"), "seconds": d.get("seconds"),
