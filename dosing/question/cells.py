@@ -177,6 +177,13 @@ def _bead_run(planner: Any, request: Any) -> DoseResult:
                                                       validate=request.validate))
 
 
+def _with_batch(bead: Any, batch: Any) -> Any:
+    """The mean bead's answer (or its ``Pending``) with the batch's section beside it."""
+    if not isinstance(bead, Pending):
+        bead.batch = batch
+    return bead
+
+
 def _batch_jump_now(planner: Any, request: Any) -> DoseResult | Pending | None:
     from ..batch import batch_answer
 
@@ -186,11 +193,7 @@ def _batch_jump_now(planner: Any, request: Any) -> DoseResult | Pending | None:
         batch = batch_answer(request.planned)
     except NotApplicableError:  # no front model: the truth per band (a job)
         return None
-    bead = _bead_now(planner, request)
-    if isinstance(bead, Pending):
-        return bead
-    bead.batch = batch
-    return bead
+    return _with_batch(_bead_now(planner, request), batch)
 
 
 def _batch_jump_run(planner: Any, request: Any) -> DoseResult:
@@ -202,29 +205,21 @@ def _batch_jump_run(planner: Any, request: Any) -> DoseResult:
         batch = validated_batch(planner, req) if request.validate else batch_answer(req)
     except NotApplicableError:
         batch = validated_batch(planner, req)
-    bead = _bead_run(planner, request)
-    bead.batch = batch
-    return bead
+    return _with_batch(_bead_run(planner, request), batch)
 
 
 def _batch_protocol_now(planner: Any, request: Any) -> DoseResult | Pending:
     from ..batch_protocol import batch_protocol_answer
 
     batch = batch_protocol_answer(request.planned, validate=request.validate)
-    bead = _bead_now(planner, request)
-    if isinstance(bead, Pending):
-        return bead
-    bead.batch = batch
-    return bead
+    return _with_batch(_bead_now(planner, request), batch)
 
 
 def _batch_protocol_run(planner: Any, request: Any) -> DoseResult:
     from ..batch_protocol import batch_protocol_answer
 
     batch = batch_protocol_answer(request.planned, validate=request.validate)
-    bead = _bead_run(planner, request)
-    bead.batch = batch
-    return bead
+    return _with_batch(_bead_run(planner, request), batch)
 
 
 # ------------------------------------------------------------------ drug doses
