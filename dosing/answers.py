@@ -17,6 +17,7 @@ from typing import Any
 from .truth import Uncertainty
 
 _ATOMS = (str, int, float, type(None))  # immutable leaves (bool is an int)
+_EXACT_ATOMS = frozenset((str, int, float, bool, type(None)))
 
 
 @functools.cache
@@ -29,9 +30,17 @@ def plain(obj: Any) -> Any:
     leaves deep-copied; the same result, but immutable leaves (str, int, float, None) are
     not passed through ``copy.deepcopy``, which made an answer's ``to_dict`` a quarter of
     its cost."""
+    cls = type(obj)
+    # the JSON-like bulk of a report first, by exact type (a report's runs are dicts and
+    # lists of numbers and strings: this path copies them in a quarter of the general one)
+    if cls in _EXACT_ATOMS:
+        return obj
+    if cls is dict:
+        return {k if type(k) is str else plain(k): plain(v) for k, v in obj.items()}
+    if cls is list:
+        return [plain(v) for v in obj]
     if isinstance(obj, _ATOMS):
         return obj
-    cls = type(obj)
     if hasattr(cls, "__dataclass_fields__"):
         return {name: plain(getattr(obj, name)) for name in _field_names(cls)}
     if isinstance(obj, tuple) and hasattr(obj, "_fields"):  # a namedtuple

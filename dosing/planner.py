@@ -576,22 +576,10 @@ def _verdict_key(req: DoseRequest, choice: ModelChoice) -> tuple[Any, ...]:
 def _copy_report(rep: ValidationReport) -> ValidationReport:
     """A remembered report for one answer: its containers copied (an answer's report may
     be changed by its caller; the remembered one may not)."""
-    return ValidationReport(*[_copied(getattr(rep, f)) for f in _REPORT_FIELDS])
+    return ValidationReport(*[plain(getattr(rep, f)) for f in _REPORT_FIELDS])
 
 
 _REPORT_FIELDS = tuple(f.name for f in fields(ValidationReport))
-_ATOMS = (str, int, float, bool, type(None))
-
-
-def _copied(obj: Any) -> Any:
-    """A copy of JSON-like data (dicts and lists of numbers, strings, None): the report's
-    form, copied in a quarter of :func:`plain`'s time; anything else through it."""
-    cls = type(obj)
-    if cls is dict:
-        return {k: _copied(v) for k, v in obj.items()}
-    if cls is list:
-        return [_copied(v) for v in obj]
-    return obj if cls in _ATOMS else plain(obj)
 
 
 def _prefix(sc: Scenario, steps: int) -> Scenario:

@@ -142,7 +142,7 @@ def _drug_schedule(request: Any) -> Any:
 
 
 def _protocol_schedule(request: Any) -> Any:
-    from ..protocol_schedule import ProtocolScheduleRequest
+    from ..heating_cycles import ProtocolScheduleRequest
 
     q = request.question
     if q.doses_ug is not None:
@@ -278,7 +278,7 @@ def _drug_schedule_run(planner: Any, request: Any) -> ScheduleResult:
 
 
 def _protocol_schedule_run(planner: Any, request: Any) -> ScheduleResult:
-    from ..protocol_schedule import plan_protocol_schedule
+    from ..heating_cycles import plan_protocol_schedule
 
     return ScheduleResult(request.cell_name, plan_protocol_schedule(planner,
                                                                     request.planned))
