@@ -43,7 +43,8 @@ from solver.errors import NotApplicableError, ParameterError, SolverError
 from .answers import HoldRow
 from .batch import Quadrature
 from .batch_truth import size_settings
-from .protocol import FluidHeatings, Reach, delivery, heat_cool_protocol, shoot_durations, windows
+from .heating_cycles import cycle_scenario
+from .protocol import FluidHeatings, Reach, delivery, shoot_durations, windows
 from .quantity import micrometres
 from .request import ScheduleRequest, _clamp_length
 from .scenario import Scenario, SolverSettings
@@ -150,17 +151,20 @@ class BatchHeatings:
 
     def __init__(self, planner: SchedulePlanner, req: ScheduleRequest,
                  nodes: Sequence[Node]) -> None:
+        from .protocol_dose import mode_for
+
         self.planner, self.req, self.nodes = planner, req, list(nodes)
         self.targets, self.tolerance = req.doses, req.tolerance
         self.count = 0
+        self.mode = mode_for(planner, req)
+        self.tau_ref = timescale(req.bead_dry_radius_um, req.t_end, req.constants).seconds
 
     def scenario(self, node: Node, durations: Sequence[float]) -> Scenario:
-        """Node's protocol in its own time (durations and rests over rho)."""
-        steps = heat_cool_protocol([d / node.rho for d in durations],
-                                   [r / node.rho for r in self.req.rests],
-                                   self.req.t_start, self.req.t_end)
-        return Scenario(self.req.gel, self.req.t_start, protocol=steps, branch=self.req.branch,
-                        settings=node.settings)
+        """Node's heat/rest cycles in its own time (durations and rests over rho; a heating
+        protocol's program in the node's own tau: ``dosing.heating_cycles``)."""
+        return cycle_scenario(self.req, [d / node.rho for d in durations],
+                              [r / node.rho for r in self.req.rests], self.tau_ref * node.rho,
+                              node.settings, self.mode)
 
     def run(self, durations: Sequence[float]) -> list[Any]:
         """Every node's trajectory of the protocol with these actuation times."""
@@ -275,13 +279,15 @@ def batch_hold(planner: SchedulePlanner, req: ScheduleRequest,
     by the batch's delay at that cumulative dose (``dosing.batch``, the front model); where
     the front model does not answer a batch, the reference bead's own (said in the model)."""
     from .batch import batch_answer
+    from .batch_protocol import batch_protocol_answer
 
     model, rows = hold_schedule(planner, req)
     tau = timescale(req.bead_dry_radius_um, req.t_end, req.constants).seconds
     out, prev = [], 0.0
     for row, cum in zip(rows, accumulate(req.doses), strict=True):
         try:
-            b = batch_answer(dose_request(req, cum, size_distribution))
+            dreq = dose_request(req, cum, size_distribution)
+            b = (batch_answer if dreq.heating is None else batch_protocol_answer)(dreq)
         except (NotApplicableError, ParameterError):
             return f"{model} (the mean bead's: no front model for the batch)", rows
         end = row.end * (b.time / b.mean_bead_time)  # a CV of 0: the ratio is 1 exactly
@@ -439,13 +445,16 @@ def _answer(req: ScheduleRequest, sizes: DrySizes, nodes: Sequence[Node], tau: f
             + ("" if quad.converged else "; NOT converged within the rules tried"))},
         **parts,
     }
+    heating = ("" if req.heating is None else
+               f" Every heating follows the protocol ({'; '.join(req.heating.texts)}) from "
+               f"T_start, then holds at its last temperature.")
     note = (f"A batch ({sizes.spec.describe()}): each size is its own full-solver run of the "
             f"protocol in its own time (tau ~ R^2, at its own interfacial length), its fluid "
             f"weighted by R^3; the actuation times (in the number-weighted mean bead's tau, "
             f"{ref:.4g} um dry, tau = {tau:.4g} s) were shot on the summed release so that "
             f"each heating delivers its dose of the batch's stored fluid within "
             f"{req.tolerance:.0%}. Quadrature: {quad.rule}, {quad.nodes} nodes, error "
-            f"{quad.error:.1e}. Volumes are fluid volumes.")
+            f"{quad.error:.1e}. Volumes are fluid volumes." + heating)
     return BatchScheduleAnswer(
         model=MODEL, distribution=sizes.spec.to_dict(), description=sizes.spec.describe(),
         doses=list(req.doses), rests=list(req.rests), reference_dry_radius_um=ref,

@@ -33,7 +33,7 @@ from .drug import (
     leak_time,
     runs_for,
 )
-from .protocol import READ_OFF_FLOOR, Reach, Short, heat_cool_protocol, read_off, windows
+from .protocol import READ_OFF_FLOOR, Reach, Short, read_off, windows
 from .request import Case, _resolve_protocol, at_start, resolve_case
 from .scenario import SolverSettings, Step
 from .truth import Part, Uncertainty, truth_text
@@ -144,12 +144,18 @@ class DrugHeatings:
         self.settings = settings or drug_settings(req.settings)
         self.solute = req.solute
         self.count = 0
+        dry = req.bead_dry_radius_um
+        self.tau_s = None if dry is None else timescale(dry, req.t_end, req.constants).seconds
 
     def steps(self, durations: Sequence[float]) -> tuple[Step, ...]:
-        """The protocol's (duration, temperature) steps, the wait first."""
+        """The protocol's (duration, temperature) steps, the wait first; each heating a jump
+        to T_end, or a schedule's heating protocol (its staircase:
+        ``dosing.heating_cycles.cycle_steps``)."""
+        from .heating_cycles import cycle_steps
+
         r = self.req
         lead = ((r.lead, r.t_start),) if r.lead > 0.0 else ()
-        return (*lead, *heat_cool_protocol(durations, self.rests, r.t_start, r.t_end))
+        return (*lead, *cycle_steps(r, durations, self.rests, self.tau_s))
 
     def scenario(self, durations: Sequence[float]) -> DrugScenario:
         """The drug run of these actuation times."""

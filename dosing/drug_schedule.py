@@ -57,6 +57,7 @@ class DrugScheduleRequest(DrugCase, ScheduleCase):
     fractions: tuple[float, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        self.resolve_heating()
         dry = self.resolve_drug()
         object.__setattr__(self, "fractions", self._resolve_doses(self.load_ug))
         self.resolve_schedule(len(self.fractions), dry)

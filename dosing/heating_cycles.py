@@ -1,59 +1,36 @@
-"""A fluid schedule whose every heating follows a heating protocol (issue 35).
+"""The heat/rest cycles of a schedule: each heating a jump to T_end or a protocol (issue 35).
 
-The schedule of sec. Application (fig. multidose_schematic) with the jump to T_end replaced
-by the protocol: heating k runs the protocol's steps from T_start ("Heat to 308 K at
-5 K/min", a bath, a trace...) for its actuation time d_k, holding at the protocol's last
-temperature once its steps are done (cut short when d_k ends first), then the bead rests
-at T_start for r_k.  The three readings are those of a jump's schedule
-(``dosing.schedule``): the hold reading from the protocol doses of the cumulative doses
-(one continuous heating), the check of those times on the full solver, and the times
-corrected by the one shooting routine (``dosing.protocol.shoot``) on the same runs, each a
-continuous program in the solver's kernels (``solver.heating.Program``; a stand-in solver
-gets the staircase of holds, as a protocol dose does).  Times are in tau at the protocol's
-hottest temperature (eq. timescale), as every protocol answer's.
+A schedule's heating is the heating axis of its request (``ScheduleCase.protocol``): the
+cycles are a jump's steps, or the protocol's program cut at each actuation time
+(:func:`cycle_steps`, :func:`cycle_scenario`), in a bead's own tau (a batch's node) or as
+the staircase a drug run takes.  Under a protocol, heating k runs the protocol's steps from
+T_start ("Heat to 308 K at 5 K/min", a bath, a trace...) for its actuation time d_k,
+holding at the protocol's last temperature once its steps are done (cut short when d_k
+ends first), then the bead rests at T_start for r_k (sec. Application, fig.
+multidose_schematic, with the jump replaced by the protocol).  The three readings are a
+jump's schedule's (``dosing.schedule``): the hold reading from the protocol doses of the
+cumulative doses (one continuous heating), the check of those times on the full solver,
+and the times corrected by the one shooting routine (``dosing.protocol.shoot``) on the same
+runs, each a continuous program in the solver's kernels (``solver.heating.Program``; a
+stand-in solver gets the staircase of holds, as a protocol dose does).  Times are in tau
+at the protocol's hottest temperature (eq. timescale), as every protocol answer's.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
-from itertools import accumulate
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
-from solver.errors import ParameterError
-
 from . import protocol
 from .heating import Piece
 from .heating_program import program_spec, staircase
-from .request import DoseRequest, ScheduleRequest, _resolve_protocol
-from .scenario import Scenario
-from .schedule import ScheduleAnswer, _answer, hold_rows
+from .protocol import heat_cool_protocol
+from .request import ScheduleRequest
+from .scenario import Scenario, Step
 from .units import timescale
-
-
-@dataclass(frozen=True)
-class ProtocolScheduleRequest(ScheduleRequest):
-    """A fluid schedule (:class:`~dosing.request.ScheduleRequest`) whose heatings follow
-    ``protocol`` (steps without until-steps: the doses end each heating); T_end is the
-    protocol's hottest temperature."""
-
-    protocol: Any = field(default=None, kw_only=True)
-    heating: Any = field(init=False, repr=False, compare=False, default=None)
-
-    def __post_init__(self) -> None:
-        _resolve_protocol(self)
-        for i in self.heating.until_steps:
-            raise ParameterError(f"protocol[{i}].until", self.heating.steps[i].text,
-                                 "a step with a duration or none (a schedule's doses end "
-                                 "each heating)")
-        super().__post_init__()
-
-    def dose_request(self, fraction: float) -> DoseRequest:
-        """The protocol dose of ``fraction`` of the stored fluid (one continuous heating)."""
-        fields = {**self.case_fields(), "t_end": None}
-        return DoseRequest(**fields, protocol=self.heating, dose_fraction=fraction)
 
 
 def _cut(p: Piece, length: float) -> Piece:
@@ -95,69 +72,65 @@ def heating_pieces(heat: Sequence[Piece], length: float) -> list[Piece]:
     return out
 
 
-def cycle_pieces(req: ProtocolScheduleRequest, tau_s: float | None,
-                 durations: Sequence[float]) -> list[Piece]:
+def cycle_pieces(req: Any, tau_s: float | None, durations: Sequence[float],
+                 rests: Sequence[float]) -> list[Piece]:
     """The schedule's program: heating k (:func:`heating_pieces`) for ``durations[k]``, the
-    rests at T_start between heatings."""
+    ``rests`` at T_start between heatings (tau of the bead whose tau is ``tau_s``)."""
     heat = req.heating.program(tau_s)
     out: list[Piece] = []
     for k, d in enumerate(durations):
-        if k > 0 and req.rests[k - 1] > 0.0:
+        if k > 0 and rests[k - 1] > 0.0:
             cur = _end(out[-1]) if out else req.t_start
-            out.append(Piece("hold", cur, req.t_start, float(req.rests[k - 1])))
+            out.append(Piece("hold", cur, req.t_start, float(rests[k - 1])))
         out += heating_pieces(heat, float(d))
     return out
 
 
+def cycle_steps(req: Any, durations: Sequence[float], rests: Sequence[float],
+                tau_s: float | None) -> tuple[Step, ...]:
+    """The heat/rest cycles as (duration, temperature) steps: a jump's heat at T_end and
+    rest at T_start, or (a protocol) the staircase of its program (0.05 K stairs,
+    ``dosing.heating_program.staircase``): the form a drug run takes."""
+    if req.heating is None:
+        return heat_cool_protocol(durations, rests, req.t_start, req.t_end)
+    return tuple(staircase(cycle_pieces(req, tau_s, durations, rests), 0.0))
+
+
+def cycle_scenario(req: Any, durations: Sequence[float], rests: Sequence[float],
+                   tau_s: float | None, settings: Any, mode: Any) -> Scenario:
+    """The full-solver run of the heat/rest cycles: a jump's steps, or a protocol's program
+    run continuously in the solver's kernels (``mode.continuous``; the staircase on a
+    stand-in solver)."""
+    if req.heating is None or not mode.continuous:
+        steps = cycle_steps(req, durations, rests, tau_s)
+        return Scenario(req.gel, req.t_start, protocol=steps, branch=req.branch,
+                        settings=settings)
+    spec = program_spec(cycle_pieces(req, tau_s, durations, rests), mode.mobility, req.t_end)
+    return Scenario(req.gel, req.t_start, program=spec, branch=req.branch, settings=settings)
+
+
 class ProtocolHeatings(protocol.FluidHeatings):
-    """The heatings of a schedule under a protocol (:class:`dosing.protocol.Heatings`):
-    each run the schedule's program on the planner's solver, continuous (``mode``) or the
-    staircase of a stand-in solver."""
+    """The heatings of a fluid schedule under a protocol (:class:`dosing.protocol.Heatings`):
+    each run the full solver's run of the heat/rest cycles (:func:`cycle_scenario`)."""
 
     run_until = None  # no terminal event on a program's expelled volume: read off a run
 
-    def __init__(self, planner: Any, req: ProtocolScheduleRequest, mode: Any) -> None:
+    def __init__(self, planner: Any, req: ScheduleRequest, mode: Any) -> None:
         dry = req.bead_dry_radius_um
         self.tau_s = None if dry is None else timescale(dry, req.t_end, req.constants).seconds
         self.planner, self.mode = planner, mode
         super().__init__(self.trajectory, req)
 
-    def steps(self, durations: Sequence[float]) -> list[Piece]:  # type: ignore[override]
-        """The schedule's program pieces for these actuation times."""
-        return cycle_pieces(self.req, self.tau_s, durations)
-
-    def scenario(self, pieces: Sequence[Piece]) -> Scenario:
-        """The full-solver run of ``pieces``."""
+    def steps(self, durations: Sequence[float]) -> Scenario:  # type: ignore[override]
+        """The run of these actuation times."""
         r = self.req
-        if self.mode.continuous:
-            return Scenario(r.gel, r.t_start, program=program_spec(pieces, self.mode.mobility,
-                                                                    r.t_end),
-                            branch=r.branch, settings=r.settings)
-        return Scenario(r.gel, r.t_start, protocol=tuple(staircase(pieces, 0.0)),
-                        branch=r.branch, settings=r.settings)
+        return cycle_scenario(r, durations, r.rests, self.tau_s, r.settings, self.mode)
 
-    def trajectory(self, pieces: Sequence[Piece], stop_expelled: float | None = None) -> Any:
-        """The run of ``pieces`` (blocking, cached)."""
-        return self.planner.trajectory(self.scenario(pieces))
+    def trajectory(self, sc: Scenario, stop_expelled: float | None = None) -> Any:
+        """The run ``sc`` (blocking, cached)."""
+        return self.planner.trajectory(sc)
 
-    def rows(self, pieces: Sequence[Piece]) -> list[list[Any]]:
-        """The program's steps as plain rows."""
-        return [list(row) for row in program_spec(pieces, self.mode.mobility,
-                                                  self.req.t_end)["steps"]]
-
-
-def plan_protocol_schedule(planner: Any, req: ProtocolScheduleRequest) -> ScheduleAnswer:
-    """The schedule's hold reading, protocol check and corrected times (module doc)."""
-    from .protocol_dose import mode_for
-
-    answers = [planner.dose(req.dose_request(cum)) for cum in accumulate(req.doses)]
-    model, hold = hold_rows(req, answers)
-    guesses = [row.actuation_time for row in hold]
-    h = ProtocolHeatings(planner, req, mode_for(planner, req))
-    checked = protocol.check(h.trajectory, req, guesses, h) if req.check_protocol else None
-    corrected = protocol.shoot(h.trajectory, req, guesses, h) if req.correct else None
-    ans = _answer(req, model, hold, checked, corrected)
-    ans.note = (f"Each heating follows the protocol ({'; '.join(req.heating.texts)}) from "
-                f"T_start = {req.t_start:g} K, then holds at its last temperature; times in "
-                f"tau at its hottest temperature {req.t_end:g} K. " + ans.note)
-    return ans
+    def rows(self, sc: Scenario) -> list[list[Any]]:  # type: ignore[override]
+        """The run's steps as plain rows: the program's, or the staircase's."""
+        return [list(row) for row in (sc.program["steps"] if sc.program is not None
+                                      else sc.protocol)]

@@ -417,7 +417,26 @@ class ScheduleCase(Case):
     check_protocol: bool = field(default=True, kw_only=True)
     correct: bool = field(default=True, kw_only=True)
     tolerance: float = field(default=0.01, kw_only=True)
+    # every heating follows this protocol in place of a jump to t_end (dosing.heating_cycles)
+    protocol: Any = field(default=None, kw_only=True)
+    heating: Any = field(init=False, repr=False, compare=False, default=None)
     rest_max: ClassVar[float] = REST_RANGE[1]  # tau: the longest rest (a drug case: shorter)
+
+    def resolve_heating(self) -> None:
+        """The heating protocol in place of t_end (:func:`_resolve_protocol`), without
+        until-steps: the schedule's doses end each heating."""
+        _resolve_protocol(self)
+        for i in () if self.heating is None else self.heating.until_steps:
+            raise ParameterError(f"protocol[{i}].until", self.heating.steps[i].text,
+                                 "a step with a duration or none (a schedule's doses end "
+                                 "each heating)")
+
+    def case_fields(self) -> dict[str, Any]:
+        """The resolved case, with the protocol in place of t_end when there is one."""
+        out = super().case_fields()
+        if self.heating is not None:
+            out.update(t_end=None, protocol=self.heating)
+        return out
 
     def resolve_schedule(self, n_doses: int, dry: float | None) -> None:
         """Rests in tau (:func:`at_start`; zeros when none are given), one fewer than the
@@ -445,6 +464,7 @@ class ScheduleRequest(ScheduleCase):
     doses: Sequence[float] = ()
 
     def __post_init__(self) -> None:
+        self.resolve_heating()
         jump, dry = resolve_case(self)
         doses = tuple(self.doses or ())
         if not doses:

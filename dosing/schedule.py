@@ -25,6 +25,7 @@ from solver.full import FullResult
 
 from . import protocol
 from .answers import DoseAnswer, HoldRow
+from .heating_cycles import ProtocolHeatings
 from .request import DoseRequest, ScheduleRequest
 from .scenario import Scenario, Step
 from .truth import truth_text
@@ -129,7 +130,8 @@ def _seconds(res: dict[str, Any] | None, tau: float | None) -> None:
 
 
 def plan_schedule_with(planner: SchedulePlanner, req: ScheduleRequest) -> ScheduleAnswer:
-    """Plan ``req`` with ``planner``: hold times, then the protocol check and shooting."""
+    """Plan ``req`` with ``planner``: hold times, then the protocol check and shooting
+    (every heating a jump to T_end, or a heating protocol's: ``dosing.heating_cycles``)."""
     model, hold = hold_schedule(planner, req)
     guesses = [row.actuation_time for row in hold]
 
@@ -138,8 +140,14 @@ def plan_schedule_with(planner: SchedulePlanner, req: ScheduleRequest) -> Schedu
                       settings=req.settings, stop_expelled=stop_expelled)
         return planner.trajectory(sc)
 
-    checked = protocol.check(run, req, guesses) if req.check_protocol else None
-    corrected = protocol.shoot(run, req, guesses) if req.correct else None
+    h = None
+    if req.heating is not None:  # the heating's cycles (its program, cut at each time)
+        from .protocol_dose import mode_for
+
+        h = ProtocolHeatings(planner, req, mode_for(planner, req))
+        run = h.trajectory
+    checked = protocol.check(run, req, guesses, h) if req.check_protocol else None
+    corrected = protocol.shoot(run, req, guesses, h) if req.correct else None
     return _answer(req, model, hold, checked, corrected)
 
 
@@ -180,6 +188,10 @@ def _answer(req: ScheduleRequest, model: str, hold: list[HoldRow],
         note += (" In this front regime the full solver's own answers depend on its grid "
                  "(no interfacial energy in the paper's model): treat its times as uncertain "
                  "by the grid spread shown in each dose's validation.")
+    if req.heating is not None:
+        note = (f"Each heating follows the protocol ({'; '.join(req.heating.texts)}) from "
+                f"T_start = {req.t_start:g} K, then holds at its last temperature; times in "
+                f"tau at its hottest temperature {req.t_end:g} K. " + note)
     return ScheduleAnswer(
         model=model, doses=list(req.doses), rests=list(req.rests), hold=hold,
         protocol_check=checked, corrected=corrected, start_radius=req.start_radius,

@@ -141,17 +141,6 @@ def _drug_schedule(request: Any) -> Any:
                                doses_ug=q.doses_ug, **q.fields())
 
 
-def _protocol_schedule(request: Any) -> Any:
-    from ..heating_cycles import ProtocolScheduleRequest
-
-    q = request.question
-    if q.doses_ug is not None:
-        raise ParameterError("doses_ug", q.doses_ug, "null for a fluid schedule")
-    return ProtocolScheduleRequest(**request.case_fields(), t_end=None,
-                                   protocol=request.heating.steps,
-                                   doses=tuple(q.doses or ()), **q.fields())
-
-
 def _not_built(field: str, what: str) -> Callable[[Any], Any]:
     def build(request: Any) -> Any:
         value = {"protocol": getattr(request.heating, "steps", None),
@@ -277,13 +266,6 @@ def _drug_schedule_run(planner: Any, request: Any) -> ScheduleResult:
     return ScheduleResult(request.cell_name, plan_drug_schedule(planner, request.planned))
 
 
-def _protocol_schedule_run(planner: Any, request: Any) -> ScheduleResult:
-    from ..heating_cycles import plan_protocol_schedule
-
-    return ScheduleResult(request.cell_name, plan_protocol_schedule(planner,
-                                                                    request.planned))
-
-
 _BEAD = Cell(_fluid_dose, _bead_now, _bead_run)
 _DRUG = Cell(_drug_one_dose, _drug_now, _drug_run)
 _DRUG_BATCH = Cell(_drug_batch_dose, _never, _drug_batch_run)
@@ -299,15 +281,14 @@ CELLS: dict[tuple[str, str, str, str], Cell] = {
     ("drug", "batch", "jump", "dose"): _DRUG_BATCH,
     ("drug", "batch", "protocol", "dose"): _DRUG_BATCH,
     ("fluid", "one", "jump", "schedule"): Cell(_fluid_schedule, _schedule_now, _schedule_run),
-    ("fluid", "one", "protocol", "schedule"): Cell(_protocol_schedule, _never,
-                                                   _protocol_schedule_run),
+    ("fluid", "one", "protocol", "schedule"): Cell(_fluid_schedule, _never, _schedule_run),
     ("fluid", "batch", "jump", "schedule"): Cell(_batch_schedule, _never, _batch_schedule_run),
-    ("fluid", "batch", "protocol", "schedule"): Cell(
-        _not_built("protocol", "a batch's schedule under a heating protocol"), _never, _never),
+    ("fluid", "batch", "protocol", "schedule"): Cell(_batch_schedule, _never,
+                                                     _batch_schedule_run),
     ("drug", "one", "jump", "schedule"): Cell(_drug_schedule, _drug_schedule_now,
                                               _drug_schedule_run),
-    ("drug", "one", "protocol", "schedule"): Cell(
-        _not_built("protocol", "a drug schedule under a heating protocol"), _never, _never),
+    ("drug", "one", "protocol", "schedule"): Cell(_drug_schedule, _drug_schedule_now,
+                                                  _drug_schedule_run),
     ("drug", "batch", "jump", "schedule"): Cell(
         _not_built("size_distribution", "a drug batch's schedule"), _never, _never),
     ("drug", "batch", "protocol", "schedule"): Cell(
