@@ -152,3 +152,48 @@ def test_python_plan_dose_answers_a_batch() -> None:
     bead = plan_dose(DoseRequest(gel="ANB", t_start=302, t_end=308, dose_fraction=0.8,
                                  dry_radius_um=50))
     assert ans.seconds == ans.batch.seconds and ans.seconds > 1.1 * bead.seconds
+
+
+@pytest.fixture
+def fake_planner(tmp_path):
+    from concurrent.futures import ThreadPoolExecutor
+
+    from dosing_fakes import FakeSolver
+
+    p = Planner(cache_path=str(tmp_path / "f.sqlite"), executor=ThreadPoolExecutor(2),
+                solver=FakeSolver())
+    yield p
+    p.close()
+    p.jobs.executor.shutdown(wait=True)
+
+
+def test_a_schedule_under_a_protocol_meets_every_dose(fake_planner) -> None:
+    """Every heating follows the protocol (its staircase on the stand-in solver): the
+    corrected times meet each dose, where the hold reading's times do not; its first
+    heating is the protocol dose's own (one heating, nothing before it)."""
+    q = Schedule([0.3, 0.3], rests=[0.5])
+    ans = plan(Request(**CASE, heating=Heating(RAMP), question=q), planner=fake_planner)
+    got = ans.corrected["delivered_fractions"]
+    assert ans.reading == "corrected" and got == pytest.approx([0.3, 0.3], rel=0.01)
+    assert abs(ans.protocol_check["delivered_fractions"][1] / 0.3 - 1.0) > 0.01
+    assert "follows the protocol" in ans.note
+    first = plan(Request(**CASE, heating=Heating(RAMP), question=Dose(0.3)),
+                 planner=fake_planner)
+    assert ans.actuation_times[0] == pytest.approx(first.time, rel=0.01)
+
+
+def test_a_batch_schedule_under_a_protocol(fake_planner) -> None:
+    """Each size runs the protocol in its own tau; a CV of 0 is the single bead's schedule
+    exactly."""
+    q = Schedule([0.3, 0.3], rests=[0.5])
+    case = {**CASE, "dry_radius_um": 2.0}
+    one = plan(Request(**case, heating=Heating(RAMP), question=q), planner=fake_planner)
+    zero = plan(Request(**case, heating=Heating(RAMP), question=q,
+                        population=Batch({"cv": 0.0})), planner=fake_planner)
+    assert zero.actuation_times == one.actuation_times
+    spread = plan(Request(**case, heating=Heating(RAMP), question=q,
+                          population=Batch({"cv": 0.2})), planner=fake_planner)
+    assert spread.cell == "fluid · batch · protocol · schedule"
+    assert spread.corrected["delivered_fractions"] == pytest.approx([0.3, 0.3], rel=0.011)
+    assert spread.actuation_times != one.actuation_times
+    assert "follows the protocol" in spread.note
