@@ -479,3 +479,112 @@ def plan_batch_schedule(req: ScheduleRequest, size_distribution: Any,
 
 __all__ = ["BatchHeatings", "BatchScheduleAnswer", "batch_schedule_with",
            "plan_batch_schedule", "reference_fields", "schedule_sizes"]
+
+
+# ------------------------------------------------------------------ a drug batch's schedule
+DRUG_MODEL = "full+solute-per-size"
+
+
+def node_request(req: Any, node: Node) -> Any:
+    """The drug schedule of one size node: the same drug, doses (fractions of its own load)
+    and heating, its own bead size and interfacial length, the rests in its own tau."""
+    from .drug_schedule import DrugScheduleRequest
+
+    if node.rho == 1.0:
+        return req
+    case = {**req.case_fields(), "dry_radius_um": node.radius_um, "settings": node.settings}
+    return DrugScheduleRequest(**case, drug=req.drug, doses=req.fractions,
+                               rests=[r / node.rho for r in req.rests], check_protocol=False,
+                               correct=False, tolerance=req.tolerance)
+
+
+def drug_batch_schedule_with(planner: SchedulePlanner, req: Any,
+                             size_distribution: Any) -> BatchScheduleAnswer:
+    """A batch's drug schedule: every size node its own drug run of the schedule (its own
+    tau, interfacial length and solute), the batch's release the load-weighted sum (a
+    bead's load ~ R^3: the volume weights), into a perfect sink; the reference bead's hold
+    reading as the first guesses, shot by the one shooting routine on the lifted heatings
+    (``protocol.NodeHeatings``) on the first rule, checked on the next (its quadrature)."""
+    from .drug import runs_for
+    from .drug_dose import DrugHeatings
+    from .drug_schedule import hold_reading
+    from .protocol import Member, NodeHeatings
+
+    sizes = schedule_sizes(req, size_distribution)
+    ref = sizes.mean_um
+    tau = timescale(ref, req.t_end, req.constants).seconds
+    runs = runs_for(planner)
+    hold_model, hold = hold_reading(planner, DrugHeatings(req, runs, req.fractions), tau)
+    guesses = [row.actuation_time for row in hold]
+
+    def lifted(n: int) -> tuple[NodeHeatings, list[Node], str]:
+        r, v, text = rule(sizes, n)
+        nodes = nodes_of(req, r, v, ref)
+        members = [Member(nd.weight, nd.rho, DrugHeatings(node_request(req, nd), runs,
+                                                          req.fractions)) for nd in nodes]
+        return NodeHeatings(members, req.fractions, req.tolerance), nodes, text
+
+    rungs = ladder(sizes)
+    h, nodes, text = lifted(rungs[0])
+    checked = corrected = None
+    if req.check_protocol:
+        got = h.delivered(h.run(guesses), guesses)
+        checked = {"actuation_times": list(guesses), "delivered_fractions": got,
+                   "relative_errors": [g / f - 1.0 for g, f in zip(got, req.fractions,
+                                                                   strict=True)]}
+    times = guesses
+    if req.correct:
+        durations, short = shoot_durations(h, guesses)
+        if short is not None:
+            raise SolverError(f"drug dose {short.k} is not reached by the batch within a "
+                              f"heating of {short.horizon:.4g} (at most {short.most:.4g})",
+                              {"dose": short.k, "horizon": short.horizon})
+        got = h.delivered(h.run(durations), durations)
+        worst = max(abs(g / f - 1.0) for g, f in zip(got, req.fractions, strict=True))
+        corrected = {"actuation_times": durations, "delivered_fractions": got,
+                     "relative_errors": [g / f - 1.0 for g, f in zip(got, req.fractions,
+                                                                     strict=True)],
+                     "runs": h.count, "max_relative_error": worst,
+                     "met": bool(worst <= req.tolerance)}
+        times = durations
+    err, table = 0.0, []
+    if len(rungs) > 1 and (checked or corrected):
+        fine, fine_nodes, _ = lifted(rungs[1])
+        coarse = (corrected or checked)["delivered_fractions"]
+        got = fine.delivered(fine.run(times), times)
+        err = max(abs(g / c - 1.0) for g, c in zip(got, coarse, strict=True))
+        table = [(len(nodes), float(coarse[-1])), (len(fine_nodes), float(got[-1]))]
+    for res in (checked, corrected):
+        if res is not None:
+            res["actuation_seconds"] = [d * tau for d in res["actuation_times"]]
+    quad = Quadrature(text, len(nodes), err, err <= QUADRATURE_SHARE * req.tolerance, table,
+                      rungs[0])
+    worst = None if corrected is None else corrected["max_relative_error"]
+    unc = {
+        "numerical": {"relative": worst, "text": (
+            f"numerical: each drug dose met within the tolerance {req.tolerance:.0%} by the "
+            "shooting (worst " + ("-" if worst is None else f"{worst:.2%}") + "); each node's "
+            "drug run is the truth's mechanics with the solute on its cells")},
+        "quadrature": {"relative": err, "text": (
+            f"quadrature over sizes: {text}, {len(nodes)} nodes, error {err:.1e} (the largest "
+            "change of a delivered dose on the next rule)")},
+        "interfacial_length_range": {"relative": None, "text": (
+            "interfacial length: not measured for a drug batch (a single bead's drug "
+            "schedule states its numerical part; validate the fluid doses for the rest)")},
+        "model_form": {"relative": None, "text": "model form: not measured for a drug batch"},
+    }
+    heating = ("a jump to T_end" if req.heating is None else
+               f"the protocol ({'; '.join(req.heating.texts)})")
+    note = (f"A batch ({sizes.spec.describe()}) of drug-loaded beads releasing into a perfect "
+            f"sink: each size is its own drug run of the schedule in its own time (tau ~ R^2, "
+            f"its own interfacial length), every heating {heating}; doses are fractions of "
+            f"the batch's load (a bead's load ~ R^3), times in the number-weighted mean "
+            f"bead's tau ({ref:.4g} um dry, tau = {tau:.4g} s). The hold reading is the "
+            f"reference bead's ({hold_model}).")
+    return BatchScheduleAnswer(
+        model=DRUG_MODEL, distribution=sizes.spec.to_dict(),
+        description=sizes.spec.describe(), doses=list(req.fractions), rests=list(req.rests),
+        reference_dry_radius_um=ref, timescale_seconds=tau,
+        nodes=_node_dicts(req, nodes, tau), hold=hold, hold_model=hold_model,
+        protocol_check=checked, corrected=corrected, quadrature=quad, uncertainty=unc,
+        truth=truth_text(req), note=note, t_start=req.t_start, t_end=req.t_end)

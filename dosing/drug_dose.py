@@ -177,6 +177,12 @@ class DrugHeatings:
         """The drug each heating releases, fractions of the load."""
         return [rel.released_at(e) - rel.released_at(s) for s, e in self.windows(durations)]
 
+    def released_within(self, rel: Any, durations: Sequence[float], k: int,
+                        x: float) -> float:
+        """What heating k has released ``x`` after its start, fractions of the load."""
+        start = self.windows(durations)[k][0]
+        return rel.released_at(start + x) - rel.released_at(start)
+
     def reach(self, rel: Any, durations: Sequence[float], k: int) -> Reach:
         """Where heating k releases dose k; else the most it releases and its late part (a
         drug the collapsed shell holds releases ever more slowly)."""

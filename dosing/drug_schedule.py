@@ -218,7 +218,8 @@ def _shoot(run: DrugHeatings, guesses: Sequence[float]) -> tuple[dict[str, Any],
     return res, warnings + _leak_warnings(req, res, "corrected")
 
 
-def _hold(planner: Any, run: DrugHeatings, tau: float | None) -> tuple[str, list[DrugHoldRow]]:
+def hold_reading(planner: Any, run: DrugHeatings,
+                 tau: float | None) -> tuple[str, list[DrugHoldRow]]:
     """(model, rows) of the hold reading: the doses read off one continuous heating (with
     D0 = 0 the fluid schedule's, else one drug run read off at each cumulative dose)."""
     req = run.req
@@ -262,7 +263,7 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
     dry = req.bead_dry_radius_um
     tau = timescale(dry, req.t_end, req.constants).seconds if dry is not None else None
     warnings: list[str] = []
-    model, hold = _hold(planner, run, tau)
+    model, hold = hold_reading(planner, run, tau)
     load = req.load_ug
     guesses = [row.actuation_time for row in hold]
     checked = None

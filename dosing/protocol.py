@@ -17,6 +17,7 @@ from dataclasses import asdict, dataclass
 from typing import Any, Protocol
 
 import numpy as np
+from scipy.optimize import brentq
 
 from solver.errors import ParameterError, SolverError
 
@@ -213,6 +214,62 @@ def shoot_durations(h: Heatings, guesses: Sequence[float]) -> tuple[list[float],
             return durations, got
         durations.append(secant(h, durations, k, got.duration, tol))
     return durations, None
+
+
+@dataclass(frozen=True)
+class Member:
+    """One node of a population lifted over: its share ``weight`` of the batch's payload,
+    ``rho`` = its tau over the reference bead's (eq. timescale: (R / R_ref)^2) and its own
+    heatings (durations in its own tau)."""
+
+    weight: float
+    rho: float
+    heatings: Any
+
+
+class NodeHeatings:
+    """A population's heatings (:class:`Heatings`) lifted from its nodes' own (pvlib's one
+    chain over several arrays): durations in the reference bead's tau, node k's in its own
+    (over rho_k); heating k of the batch delivers the weighted sum of the nodes' deliveries,
+    and reaches dose k where that sum does (a root).  Any payload whose heatings say what
+    heating k has delivered ``x`` after its start (``released_within``) lifts."""
+
+    def __init__(self, members: Sequence[Member], targets: Sequence[float],
+                 tolerance: float) -> None:
+        self.members = list(members)
+        self.targets, self.tolerance = tuple(targets), tolerance
+        self.max_horizon = min(m.heatings.max_horizon * m.rho for m in self.members)
+        self.count = 0
+
+    def own(self, m: Member, durations: Sequence[float]) -> list[float]:
+        """``durations`` in node ``m``'s own tau."""
+        return [d / m.rho for d in durations]
+
+    def run(self, durations: Sequence[float]) -> list[Any]:
+        """Every node's run of these actuation times."""
+        self.count += 1
+        return [m.heatings.run(self.own(m, durations)) for m in self.members]
+
+    def delivered(self, result: list[Any], durations: Sequence[float]) -> list[float]:
+        """Each heating's delivery, fractions of the batch's payload (weighted)."""
+        rows = [m.heatings.delivered(r, self.own(m, durations))
+                for m, r in zip(self.members, result, strict=True)]
+        return [sum(m.weight * row[k] for m, row in zip(self.members, rows, strict=True))
+                for k in range(len(durations))]
+
+    def reach(self, result: list[Any], durations: Sequence[float], k: int) -> Reach:
+        """Where the batch's heating k delivers dose k: the root of the weighted sum."""
+        def got(x: float) -> float:
+            return sum(m.weight * m.heatings.released_within(r, self.own(m, durations), k,
+                                                             x / m.rho)
+                       for m, r in zip(self.members, result, strict=True))
+
+        length, target = float(durations[k]), self.targets[k]
+        end = got(length)
+        if end < target:
+            return Reach(None, end, end - got(length / 2.0))
+        return Reach(float(brentq(lambda x: got(x) - target, 0.0, length,
+                                  xtol=1e-13 * length, rtol=1e-12)))
 
 
 class FluidHeatings:

@@ -27,7 +27,6 @@ from dosing.question import (
 )
 from dosing.question.axes import HEATINGS, PAYLOADS, POPULATIONS, QUESTIONS
 from dosing.question.cells import CELLS
-from solver.errors import ParameterError
 
 CASE = {"gel": "ANB", "t_start": 302.0, "dry_radius_um": 50.0}
 # the batch under a ramp at 120 um: its smallest beads stay in the reduced model's region
@@ -35,7 +34,6 @@ RAMP_CASE = {**CASE, "dry_radius_um": 120.0}
 RAMP = ["Heat to 308 K at 5 K/min"]
 CV = {"kind": "lognormal", "cv": 0.2}
 DRUG = {"diffusivity_cm2_s": 1e-6}
-NOT_BUILT = {("drug", "batch", "jump", "schedule"), ("drug", "batch", "protocol", "schedule")}
 
 
 def test_every_cell_has_its_code() -> None:
@@ -45,16 +43,16 @@ def test_every_cell_has_its_code() -> None:
     assert set(CELLS) == keys and len(keys) == 16
 
 
-@pytest.mark.parametrize("key", sorted(NOT_BUILT))
-def test_a_cell_not_built_refuses_naming_its_field(key: tuple[str, ...]) -> None:
+@pytest.mark.parametrize("key", sorted(CELLS))
+def test_every_cell_resolves_its_request(key: tuple[str, ...]) -> None:
+    """Each of the 16 cells takes its request (none is refused for want of code)."""
     payload = Drug(DRUG) if key[0] == "drug" else Fluid()
     population = Batch(CV) if key[1] == "batch" else OneBead()
     heating = Heating(RAMP) if key[2] == "protocol" else Jump(308.0)
-    with pytest.raises(ParameterError) as err:
-        Request(**CASE, heating=heating, question=Schedule([0.3]), payload=payload,
-                population=population)
-    assert err.value.field in ("protocol", "size_distribution")
-    assert "not built yet" in str(err.value)
+    question = Schedule([0.3, 0.3], rests=[0.5]) if key[3] == "schedule" else Dose(0.5)
+    req = Request(**CASE, heating=heating, question=question, payload=payload,
+                  population=population)
+    assert req.cell_key == key and req.planned is not None
 
 
 # (name, request fields, CLI options, HTTP body): the cells answered without a full-solver run

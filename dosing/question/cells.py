@@ -4,9 +4,8 @@ Like scipy's ``METHODS`` table, ``CELLS`` maps a request's axes (``Request.cell_
 one :class:`Cell`: ``build`` resolves the request into the planner's request of the cell
 (validating it: ``ParameterError`` names the field), ``now`` answers without waiting on a
 new full-solver run (a result, a ``Pending`` validation, or None: the cell needs a job) and
-``run`` answers blocking.  Every cell of the 16 is listed; one whose code is not built yet
-refuses in ``build``, naming the field that selects it.  The planner, the question modules
-and the HTTP adapter only look cells up here: none branches on an axis.
+``run`` answers blocking.  Every cell of the 16 is listed and answers.  The planner, the
+question modules and the HTTP adapter only look cells up here: none branches on an axis.
 """
 
 from __future__ import annotations
@@ -141,16 +140,30 @@ def _drug_schedule(request: Any) -> Any:
                                doses_ug=q.doses_ug, **q.fields())
 
 
-def _not_built(field: str, what: str) -> Callable[[Any], Any]:
-    def build(request: Any) -> Any:
-        value = {"protocol": getattr(request.heating, "steps", None),
-                 "size_distribution": getattr(request.population, "sizes", None),
-                 "drug": getattr(request.payload, "model", None)}[field]
-        raise ParameterError(field, value if isinstance(value, (str, float, int, list))
-                             else str(value),
-                             f"null for {request.cell_name} ({what} is not built yet)")
+def _drug_batch_schedule(request: Any) -> Any:
+    """A drug batch's schedule: into a perfect sink, doses of the batch's load, no wait."""
+    from ..batch_schedule import reference_fields, schedule_sizes
+    from ..drug_schedule import DrugScheduleRequest
 
-    return build
+    q, p = request.question, request.payload
+    _one_medium(request)  # a shared medium is planned for a drug batch's dose only
+    if q.doses_ug is not None:
+        raise ParameterError("doses_ug", q.doses_ug, "null for a batch (give doses as "
+                             "fractions of the batch's load)")
+    sizes = request.population.sizes
+    case = {**request.case_fields(), **reference_fields(sizes, request.dry_radius_um,
+                                                        request.swollen_radius_um)}
+    req = DrugScheduleRequest(**case, **request.heating.fields(), **p.fields(),
+                              doses=q.doses, **q.fields())
+    if req.lead > 0.0:
+        raise ParameterError("drug.wait", p.wait if p.wait is not None else p.wait_seconds,
+                             "0 or null for a batch (a wait at T_start is not planned for "
+                             "batches)")
+    if req.drug.release_volume_ul is not None:
+        raise ParameterError("drug.release_volume_ul", req.drug.release_volume_ul,
+                             "null for a batch's schedule (a perfect sink)")
+    schedule_sizes(req, sizes)
+    return req
 
 
 # ------------------------------------------------------------------ fluid doses
@@ -251,6 +264,13 @@ def _batch_schedule_run(planner: Any, request: Any) -> ScheduleResult:
         planner, request.planned, request.population.sizes), tags={"batch": True})
 
 
+def _drug_batch_schedule_run(planner: Any, request: Any) -> ScheduleResult:
+    from ..batch_schedule import drug_batch_schedule_with
+
+    return ScheduleResult(request.cell_name, drug_batch_schedule_with(
+        planner, request.planned, request.population.sizes), tags={"batch": True})
+
+
 def _drug_schedule_now(planner: Any, request: Any) -> ScheduleResult | None:
     from ..drug import carried_by_fluid
 
@@ -269,6 +289,7 @@ def _drug_schedule_run(planner: Any, request: Any) -> ScheduleResult:
 _BEAD = Cell(_fluid_dose, _bead_now, _bead_run)
 _DRUG = Cell(_drug_one_dose, _drug_now, _drug_run)
 _DRUG_BATCH = Cell(_drug_batch_dose, _never, _drug_batch_run)
+_DRUG_BATCH_SCHEDULE = Cell(_drug_batch_schedule, _never, _drug_batch_schedule_run)
 
 CELLS: dict[tuple[str, str, str, str], Cell] = {
     ("fluid", "one", "jump", "dose"): _BEAD,
@@ -289,10 +310,8 @@ CELLS: dict[tuple[str, str, str, str], Cell] = {
                                               _drug_schedule_run),
     ("drug", "one", "protocol", "schedule"): Cell(_drug_schedule, _drug_schedule_now,
                                                   _drug_schedule_run),
-    ("drug", "batch", "jump", "schedule"): Cell(
-        _not_built("size_distribution", "a drug batch's schedule"), _never, _never),
-    ("drug", "batch", "protocol", "schedule"): Cell(
-        _not_built("size_distribution", "a drug batch's schedule"), _never, _never),
+    ("drug", "batch", "jump", "schedule"): _DRUG_BATCH_SCHEDULE,
+    ("drug", "batch", "protocol", "schedule"): _DRUG_BATCH_SCHEDULE,
 }
 
 
