@@ -180,8 +180,8 @@ def test_cli_size_cv_matches_python(cli_on_fake, planner, capsys, tmp_path) -> N
     (["--size-cv", "-0.1", "--dry-radius-um", "2"], "--size-cv"),
     (["--size-cv", "2.5", "--dry-radius-um", "2"], "--size-cv"),
     (["--size-cv", "0.2"], "dry_radius_um"),
-    (["--size-cv", "0.2", "--dry-radius-um", "2", "--drug-diffusivity-cm2-s", "1e-7"],
-     "--size-cv"),
+    (["--size-cv", "0.2", "--dry-radius-um", "2", "--drug-diffusivity-cm2-s", "1e-7",
+      "--wait", "0.1"], "drug.wait"),
     (["--size-cv", "0.2", "--dry-radius-um", "2", "--medium-volume-ml", "1"],
      "--medium-volume-ml"),
 ])
@@ -225,8 +225,10 @@ async def test_http_size_distribution_matches_python(planner, tmp_path) -> None:
                          ({"cv": 0.2, "mean_um": 3.0}, "dry_radius_um")]:
             r = await raw.post("/v1/schedule", json={**body, "size_distribution": bad})
             assert r.status_code == 422 and loc in r.text, r.text
-        r = await raw.post("/v1/schedule", json={**body, "drug": {"diffusivity_cm2_s": 1e-7}})
-        assert r.status_code == 422 and "size_distribution" in r.text, r.text
+        # a drug batch's schedule is planned (issue 35) into a perfect sink, without a wait
+        r = await raw.post("/v1/schedule", json={**body, "drug": {"diffusivity_cm2_s": 1e-7,
+                                                                  "wait": 0.1}})
+        assert r.status_code == 422 and "drug.wait" in r.text, r.text
         assert planner.fake.calls == []
         r = await raw.post("/v1/schedule", json=body)
         assert r.status_code == 202, r.text
