@@ -5,13 +5,17 @@ package with ``executable_path`` (no browser download).  The page must read back
 route's time for ANB 302 -> 308 K, 80 %, 50 um; an out-of-range temperature must show a
 message and send no request; a server error must be shown next to the field it names; a
 design map runs as a sweep job; a saved custom gel is answered as the JSON route answers
-its parameters; a validation's progress is polled to its result.
+its parameters; a validation's progress is polled to its result.  On the fake full solver
+(tests/api_fake_server.py): a batch's dose shows the batch's own time as its headline (its
+mean bead's beside it), and a schedule, a batch's too, is queued as a job and shown with its
+corrected times, the rough hold reading labelled as such.
 Screenshots go to tests/artifacts/ (or $THERMOGEL_ARTIFACTS).  Without Chromium the test
 is skipped, except in CI (CI=true), where it fails.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import signal
@@ -25,7 +29,7 @@ from typing import Any
 
 import httpx
 import pytest
-from api_support import ROOT, _server, free_port
+from api_support import ROOT, _server, fake_server, free_port
 
 CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if Path("/usr/bin/chromium").exists()
                                         else None)
@@ -33,6 +37,7 @@ FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-
          "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 FRONT = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.8,
          "dry_radius_um": 50.0}
+FAKE_DELAY = 0.2  # s per fake full-solver run: a batch schedule's 31 runs stay queued a while
 
 
 def _need_browser() -> object:
@@ -75,13 +80,22 @@ def _serve_gracefully(cache: Path) -> Iterator[str]:
                 pass  # _server kills it
 
 
+@contextmanager
+def _serve_fake(cache: Path) -> Iterator[str]:
+    """The service with its full-solver runs on the fake solver (tests/api_fake_server.py;
+    threads only, so SIGKILL orphans nothing)."""
+    with fake_server(cache, FAKE_DELAY) as (url, _):
+        yield url
+
 
 @contextmanager
-def browser_page(tmp_path: Path) -> Iterator[tuple[str, Any, list[str], list[str]]]:
-    """(url, page, page errors, /v1/ requests sent): a real ``thermogel serve`` and the page
-    loaded in headless Chromium, ready; closed after."""
+def browser_page(tmp_path: Path, serve: Any = None
+                 ) -> Iterator[tuple[str, Any, list[str], list[str]]]:
+    """(url, page, page errors, /v1/ requests sent): a real ``thermogel serve`` (or
+    ``serve(cache)``'s server) and the page loaded in headless Chromium, ready; closed
+    after."""
     sync_playwright = _need_browser()
-    with _serve_gracefully(tmp_path / "cache.sqlite") as url, \
+    with (serve or _serve_gracefully)(tmp_path / "cache.sqlite") as url, \
             tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
         ctx = pw.chromium.launch_persistent_context(
             profile, executable_path=CHROMIUM, args=FLAGS, headless=True,
@@ -274,3 +288,83 @@ def test_protocol_editor_in_headless_chromium(tmp_path: Path) -> None:
             assert errors == []
         finally:
             ctx.close()
+
+
+def _job_result(url: str, vid: str) -> dict:
+    v = httpx.get(f"{url}/v1/validations/{vid}", timeout=60).json()
+    assert v["status"] == "done", v
+    return v["result"]
+
+
+def _schedule_shown(page) -> list[float]:
+    """The schedule panel's headline seconds, checked against its table's first column."""
+    shown = json.loads(page.get_attribute("#schedule-headline", "data-value"))
+    cells = page.locator("#schedule-table td.heat-for")
+    assert [float(cells.nth(k).get_attribute("data-value")) for k in range(cells.count())] \
+        == shown
+    return shown
+
+
+@pytest.mark.slow  # a browser and a server whose full-solver runs are the fake's
+def test_batch_dose_and_schedules_in_headless_chromium(tmp_path: Path) -> None:
+    """A batch's dose: the headline is the batch's own seconds (the HTTP answer's), its mean
+    bead's secondary.  A schedule: queued as a job, then led by its corrected times with the
+    rough hold reading beside them; a batch's schedule likewise, saying it is the batch's."""
+    with browser_page(tmp_path, _serve_fake) as (url, page, errors, sent):
+        batch = {"kind": "lognormal", "cv": 0.2}
+        page.select_option("#gel", "ANB")
+        _fill(page, t_start="302", t_end="308", doses="60", dry_radius_um="50", size_cv="0.2")
+        page.click("#plan")
+        page.wait_for_selector("body[data-state=answered]", timeout=120_000)
+        want = httpx.post(f"{url}/v1/dose-time", json={
+            **FRONT, "dose_fraction": 0.6, "size_distribution": batch}, timeout=60).json()
+        assert want["seconds"] == want["batch"]["seconds"] != want["reference_bead"]["seconds"]
+        assert float(page.get_attribute("#answer-seconds", "data-value")) == want["seconds"]
+        assert page.inner_text("#answer-seconds") == f"{want['seconds']:.4g} s"
+        assert float(page.get_attribute("#answer-time", "data-value")) == want["time"]
+        assert page.inner_text("#answer-headline") == want["headline"]
+        assert float(page.get_attribute("#answer-reference", "data-value")) == \
+            want["reference_bead"]["seconds"]
+        assert page.locator(".batch-mark").count() == 1
+        assert page.inner_text("#schedule-table td.heat-for") == f"{want['seconds']:.4g} s"
+
+        # a schedule of one bead: the job's corrected times lead, the hold reading beside
+        _fill(page, doses="30, 30", size_cv="")
+        page.click("#plan")
+        page.wait_for_selector("body[data-schedule=corrected]", timeout=120_000)
+        assert page.get_attribute("body", "data-schedule-batch") == "false"
+        one = _job_result(url, page.get_attribute("body", "data-schedule-job"))
+        assert one["reading"] == "corrected" and one.get("batch") is None
+        assert _schedule_shown(page) == one["actuation_seconds"] == \
+            one["corrected"]["actuation_seconds"]
+        assert one["actuation_seconds"] != [r["actuation_seconds"] for r in one["hold"]]
+        assert "rough hold reading" in page.inner_text("#schedule-table")
+        assert "corrected" in page.inner_text("#schedule-headline")
+
+        # a batch's schedule: queued (always a job), then the batch's corrected times
+        _fill(page, size_cv="0.2")
+        page.click("#plan")
+        page.wait_for_selector("body[data-schedule=queued], body[data-schedule=running]",
+                               timeout=120_000)
+        assert "batch's schedule (size CV 0.2) is queued" in page.inner_text(
+            "#schedule-headline")
+        vid = page.get_attribute("body", "data-schedule-job")
+        assert page.get_attribute("body", "data-schedule-batch") == "true"
+        body = {k: v for k, v in FRONT.items() if k != "dose_fraction"}
+        again = httpx.post(f"{url}/v1/schedule", json={**body, "doses": [0.3, 0.3],
+                                                       "size_distribution": batch}, timeout=60)
+        assert again.status_code == 202 and again.json()["validation_id"] == vid  # the same
+        page.screenshot(path=str(_artifacts() / "page-batch-schedule-queued.png"),
+                        full_page=True)
+        page.wait_for_selector("body[data-schedule=corrected]", timeout=300_000)
+        res = _job_result(url, vid)
+        assert res["batch"] is True and res["reading"] == "corrected"
+        assert _schedule_shown(page) == res["actuation_seconds"] == \
+            res["corrected"]["actuation_seconds"]
+        assert res["actuation_seconds"] != one["actuation_seconds"]
+        words = page.inner_text("#schedule-batch")
+        assert "size CV 0.2" in words and "50 µm" in words
+        assert page.inner_text("#schedule-headline").startswith("The batch's schedule: heat for")
+        assert "rough hold reading" in page.inner_text("#schedule-table")
+        page.screenshot(path=str(_artifacts() / "page-batch-schedule.png"), full_page=True)
+        assert errors == []

@@ -22,6 +22,7 @@ let fittedGels = {}; // stored fitted gel name -> its parameters (from /v1/gels,
 let bounds = {};
 let requestCount = 0; // requests this page sent to /v1 (shown in the page state)
 let pollTimer = null;
+let scheduleToken = 0; // the latest schedule asked: an older schedule job's poll stops showing
 
 // ----------------------------------------------------------------------------- helpers
 
@@ -30,6 +31,13 @@ function fmt(x, digits = 4) {
   const a = Math.abs(x);
   if (a !== 0 && (a < 1e-3 || a >= 1e5)) return x.toExponential(digits - 1);
   return Number(x.toPrecision(digits)).toString();
+}
+
+function esc(text) {
+  // text for innerHTML
+  const d = document.createElement("span");
+  d.textContent = String(text);
+  return d.innerHTML;
 }
 
 function pct(x) { return x === null || x === undefined ? "–" : `${fmt(100 * x, 3)} %`; }
@@ -196,13 +204,15 @@ function legend(svg, x, y, items) {
 
 function clear(svg) { while (svg.firstChild) svg.removeChild(svg.firstChild); }
 
-function drawCurve(curve, marks, tau) {
-  // radius and front against time (seconds with a bead size), each dose marked
+function drawCurve(curve, marks, tau, batch) {
+  // radius and front against time (seconds with a bead size), each dose marked; a batch
+  // (the curve is its mean bead's): the batch's own dose time as a dashed line
   const svg = $("curve-plot");
   clear(svg);
   const k = tau || 1;
   const t = curve.t.map((x) => x * k);
-  const tMax = Math.max(...marks.map((m) => m.time * k * 1.15), curve.t_stop * k * 0.25);
+  const tMax = Math.max(...marks.map((m) => m.time * k * 1.15), curve.t_stop * k * 0.25,
+    batch ? batch.time * k * 1.15 : 0);
   const keep = t.map((x, i) => i).filter((i) => t[i] <= tMax);
   const ymax = curve.start_radius * 1.05;
   const s = panel(svg, { x: 55, y: 12, w: 445, h: 235 }, [0, tMax], [0, ymax],
@@ -216,6 +226,12 @@ function drawCurve(curve, marks, tau) {
     el("line", { x1: x, x2: x, y1: s.sy(0), y2: s.sy(ymax), stroke: "#b3261e", "stroke-width": 1.2, class: "dose-mark" }, svg);
     el("circle", { cx: x, cy: s.sy(m.radius), r: 4, fill: "#b3261e" }, svg);
     el("text", { x: x + 4, y: s.sy(m.radius) - 6 }, svg, m.label);
+  }
+  if (batch) {
+    const x = s.sx(batch.time * k);
+    el("line", { x1: x, x2: x, y1: s.sy(0), y2: s.sy(ymax), stroke: "#6a3d9a", "stroke-width": 1.5,
+      "stroke-dasharray": "6 3", class: "batch-mark" }, svg);
+    el("text", { x: x + 4, y: s.sy(ymax) + 14 }, svg, batch.label);
   }
   legend(svg, 330, 180, [{ color: "#1f6fb2", label: "bead radius a(t)" },
     { color: "#d9822b", label: "front R_f(t)", dash: "5 3" },
@@ -236,7 +252,7 @@ function releaseAt(curve, time) {
   return (a0 ** 3 - a ** 3) / (a0 ** 3 - 1);
 }
 
-function drawTimeline(rows, rests, tStart, tEnd, tau, curve) {
+function drawTimeline(rows, rests, tStart, tEnd, tau, curve, linearWhy) {
   // the protocol (heat at T_end, rest at T_start) and cumulative release against clock time
   const svg = $("timeline-plot");
   clear(svg);
@@ -266,7 +282,7 @@ function drawTimeline(rows, rests, tStart, tEnd, tau, curve) {
   const bot = panel(svg, { x: 55, y: 115, w: 445, h: 140 }, xl, [0, 100],
     tau ? "clock time (s)" : "clock time (units of τ)", "released (%)");
   polyline(svg, bot, relT, rel, { stroke: "#1f6fb2", id: "timeline-release" });
-  if (!curve) el("text", { x: 62, y: 128 }, svg, "release drawn linearly within each heating (no front-model curve)");
+  if (!curve) el("text", { x: 62, y: 128 }, svg, linearWhy || "release drawn linearly within each heating (no front-model curve)");
   let acc = 0;
   rows.forEach((r, i) => {
     acc += r.end - r.start + (i > 0 && i - 1 < rests.length ? rests[i - 1] : 0);
@@ -275,12 +291,49 @@ function drawTimeline(rows, rests, tStart, tEnd, tau, curve) {
   });
 }
 
-function scheduleTable(rows, tau) {
-  const head = "<tr><th>dose</th><th>cumulative</th><th>heat for</th><th>error</th></tr>";
+function heatFor(seconds, time) {
+  return seconds !== null && seconds !== undefined ? `${fmt(seconds)} s` : `${fmt(time)} τ`;
+}
+
+function scheduleTable(rows, reading) {
+  // leads with the headline times (the corrected ones once corrected); the rough hold
+  // reading beside them when they are corrected, or labelled as such when it is all there is
+  const lead = reading === "corrected" ? "heat for (corrected)" :
+    reading === "hold" ? "heat for (rough hold reading)" : "heat for";
+  const holdCol = reading === "corrected" && rows.some((r) => r.hold_time !== undefined);
+  const errHead = reading === "corrected" ? "dose error" : "error";
+  const head = `<tr><th>dose</th><th>cumulative</th><th>${lead}</th><th>${errHead}</th>` +
+    `${holdCol ? "<th>rough hold reading</th>" : ""}</tr>`;
   const body = rows.map((r) => `<tr><td>${pct(r.dose_fraction)}</td><td>${pct(r.cumulative_fraction)}</td>` +
-    `<td>${r.actuation_seconds !== null && r.actuation_seconds !== undefined ? fmt(r.actuation_seconds) + " s" :
-      fmt(r.actuation_time) + " τ"}</td><td>${pct(r.error_estimate)}</td></tr>`).join("");
+    `<td class="heat-for" data-value="${r.actuation_seconds ?? ""}">${heatFor(r.actuation_seconds, r.actuation_time)}</td>` +
+    `<td>${pct(r.error_estimate)}</td>` +
+    `${holdCol ? `<td class="hold-reading">${r.hold_time === undefined ? "–" : heatFor(r.hold_seconds, r.hold_time)}</td>` : ""}</tr>`).join("");
   $("schedule-table").innerHTML = `<table>${head}${body}</table>`;
+  $("schedule-table").dataset.reading = reading || "";
+}
+
+function scheduleRows(s) {
+  // a schedule answer's rows: its headline times (``actuation_times``/``actuation_seconds``:
+  // the corrected times when ``reading`` is 'corrected', else the hold reading), each with
+  // the rough hold reading's time beside it
+  const hold = s.hold || [];
+  const corrected = s.reading === "corrected" && s.corrected;
+  const times = s.actuation_times || hold.map((r) => r.actuation_time);
+  const secs = s.actuation_seconds || null;
+  const errs = corrected ? (corrected.relative_errors || []).map((e) => Math.abs(e)) :
+    hold.map((r) => r.error_estimate);
+  let cum = 0;
+  let clock = 0;
+  return s.doses.map((d, k) => {
+    cum = hold[k] ? hold[k].cumulative_fraction : cum + d;
+    const start = corrected || !hold[k] ? clock : hold[k].start;
+    const end = corrected || !hold[k] ? clock + times[k] : hold[k].end;
+    clock = end;
+    return { dose_fraction: d, cumulative_fraction: cum, start, end, actuation_time: times[k],
+      actuation_seconds: secs ? secs[k] : null, error_estimate: errs[k],
+      hold_time: hold[k] ? hold[k].actuation_time : undefined,
+      hold_seconds: hold[k] ? hold[k].actuation_seconds : undefined };
+  });
 }
 
 // ----------------------------------------------------------------------------- the form
@@ -339,7 +392,7 @@ function showBatch(bt) {
   if (!bt) { dd.textContent = ""; delete dd.dataset.value; return; }
   const secs = (x) => (x === null || x === undefined ? "–" : `${fmt(x)} s`);
   const p = bt.percentile_seconds || [];
-  dd.innerHTML = `heat for <b id="answer-batch-seconds">${secs(bt.seconds)}</b> ` +
+  dd.innerHTML = `the batch's own time <b id="answer-batch-seconds">${secs(bt.seconds)}</b> ` +
     `(${bt.delay >= 0 ? "+" : ""}${pct(bt.delay)} against the mean bead, t = ${fmt(bt.time)} τ); ` +
     `${pct(bt.fraction_delivered)} of the beads have delivered their own dose by then; ` +
     `the 10th–90th percentile bead's own time ${secs(p[0])} – ${secs(p[2])}. ` +
@@ -349,21 +402,42 @@ function showBatch(bt) {
   dd.dataset.seconds = bt.seconds === null || bt.seconds === undefined ? "" : String(bt.seconds);
 }
 
+function showReference(ref) {
+  // a batch: its mean bead's own time, secondary to the batch's (``reference_bead``)
+  const label = $("answer-reference-label");
+  const dd = $("answer-reference");
+  label.hidden = dd.hidden = !ref;
+  if (!ref) { dd.textContent = ""; delete dd.dataset.value; delete dd.dataset.time; return; }
+  dd.innerHTML = `<span id="answer-reference-seconds">${heatFor(ref.seconds, ref.time)}</span> ` +
+    `<span class="hint">(t = ${fmt(ref.time)} τ: the number-weighted mean bead alone, ` +
+    `${fmt(ref.dry_radius_um)} µm dry, ${ref.model} model)</span>`;
+  dd.dataset.value = ref.seconds === null || ref.seconds === undefined ? "" : String(ref.seconds);
+  dd.dataset.time = String(ref.time);
+}
+
 function showAnswer(a, total) {
+  // the headline is the answer's own (``headline``, ``time``, ``seconds``): a batch's own
+  // time for a batch, its mean bead's beside it (``reference_bead``)
   $("answer-panel").hidden = false;
+  const ref = a.reference_bead || null;
+  $("answer-headline").textContent = a.headline || "";
   const secs = $("answer-seconds");
-  secs.textContent = a.seconds !== null && a.seconds !== undefined ? `${fmt(a.seconds)} s` : `${fmt(a.time)} τ`;
+  secs.textContent = heatFor(a.seconds, a.time);
   secs.dataset.value = a.seconds === null || a.seconds === undefined ? "" : String(a.seconds);
   const t = $("answer-time");
-  t.textContent = `(t = ${fmt(a.time)} in units of τ${total > 1 ? `; all ${total} doses` : ""})`;
+  t.textContent = `(t = ${fmt(a.time)} in units of τ${ref ? " of the mean bead: the batch's own time" : ""}` +
+    `${total > 1 ? `; all ${total} doses` : ""})`;
   t.dataset.value = String(a.time);
+  showReference(ref);
   $("answer-model").textContent = `${a.model} (${a.behaviour})`;
-  $("answer-error").textContent = `± ${pct(a.error_estimate)}`;
+  $("answer-error").textContent = `± ${pct(a.error_estimate)}` + (ref ? " (the mean bead's)" : "");
   $("answer-release").textContent = `${pct(a.dose_fraction)} of the stored fluid` +
     (a.expelled_volume_ul !== null && a.expelled_volume_ul !== undefined ?
       `: ${fmt(a.expelled_volume_ul)} µL of ${fmt(a.stored_volume_ul)} µL; radius ${fmt(a.start_radius)} → ${fmt(a.final_radius)} dry radii (${fmt(a.final_radius_um)} µm)` :
-      `; radius ${fmt(a.start_radius)} → ${fmt(a.final_radius)} dry radii`);
-  $("answer-tau").textContent = a.timescale_seconds ? `${fmt(a.timescale_seconds)} s` : "give a bead size";
+      `; radius ${fmt(a.start_radius)} → ${fmt(a.final_radius)} dry radii`) +
+    (ref ? " (the mean bead's)" : "");
+  $("answer-tau").textContent = (a.timescale_seconds ? `${fmt(a.timescale_seconds)} s` : "give a bead size") +
+    (ref && a.timescale_seconds ? " (the mean bead's: the batch's times are in its units)" : "");
   $("answer-error-parts").textContent = a.error_explanation || "";
   $("answer-note").textContent = `${a.truth ? "Truth: " + a.truth + ". " : ""}${a.note || ""}`;
   showBatch(a.batch);
@@ -403,23 +477,83 @@ function poll(vid, onDone) {
   step();
 }
 
-function pollSchedule(vid, rows, tau) {
-  // a schedule job: when done, the corrected actuation times replace the rough hold reading
+function resetSchedule() {
+  for (const id of ["schedule-headline", "schedule-status", "schedule-note", "schedule-table"]) $(id).textContent = "";
+  $("schedule-caption").textContent = "Schedule: temperature protocol and cumulative release";
+  delete $("schedule-headline").dataset.value;
+  delete $("schedule-headline").dataset.reading;
+  for (const k of ["schedule", "scheduleJob", "scheduleBatch"]) delete document.body.dataset[k];
+}
+
+function batchWords(s) {
+  // a batch schedule's batch: its size CV and its reference bead
+  const cv = s.distribution && s.distribution.cv !== null && s.distribution.cv !== undefined ?
+    `size CV ${fmt(s.distribution.cv, 3)}` : esc(s.description || "a batch");
+  return `${cv}; times in the reference bead's units, the number-weighted mean bead of ` +
+    `${fmt(s.reference_dry_radius_um)} µm dry (τ = ${fmt(s.timescale_seconds)} s)`;
+}
+
+function showSchedule(s, ctx) {
+  // a schedule answer (200, or a schedule job's result): the headline and the table lead
+  // with its headline times, the corrected ones when it was corrected (``reading``)
+  const rows = scheduleRows(s);
+  const corrected = s.reading === "corrected";
+  const batch = s.batch === true;
+  const secs = s.actuation_seconds;
+  const times = secs ? secs.map((x) => `${fmt(x)} s`) : s.actuation_times.map((x) => `${fmt(x)} τ`);
+  const h = $("schedule-headline");
+  const who = batch ? "The batch's schedule: heat" : "Heat";
+  const how = corrected ? "corrected by the full solver" : "the rough hold reading: one continuous heating";
+  h.innerHTML = `${who} for <b id="schedule-seconds">${times.join(", ")}</b> (${how})` +
+    (batch ? `<br><span class="secondary" id="schedule-batch">${batchWords(s)}</span>` : "") +
+    (s.headline ? `<br><span class="secondary">${esc(s.headline)}</span>` : "");
+  h.dataset.reading = s.reading;
+  h.dataset.value = JSON.stringify(secs || s.actuation_times);
+  $("schedule-caption").textContent = corrected ?
+    "Schedule: the corrected heat/rest protocol and cumulative release" :
+    "Schedule: temperature protocol and cumulative release (rough hold reading)";
+  scheduleTable(rows, s.reading);
+  const tau = s.timescale_seconds || ctx.tau;
+  drawTimeline(rows, s.rests && s.rests.length ? s.rests : ctx.rests, ctx.tStart, ctx.tEnd, tau,
+    corrected || batch ? null : ctx.curve,
+    corrected ? "release drawn linearly within each corrected heating" : undefined);
+  const c = s.corrected;
+  $("schedule-note").textContent = corrected ?
+    (batch ? `Corrected by the full solver, every size its own run: the batch's summed release meets each ` +
+      `dose within ${pct(c.max_relative_error)} (quadrature over ${s.quadrature.nodes} sizes).` :
+      `Corrected by the full solver: each heating meets its dose within ${pct(c.max_relative_error)} ` +
+      "in the real heat/rest protocol.") +
+      " The rough hold reading (one continuous heating) is beside it." :
+    "Hold reading only (rough: one continuous heating; the protocol was not corrected).";
+  $("schedule-status").textContent = "";
+  document.body.dataset.schedule = s.reading;  // 'corrected' or 'hold'
+}
+
+function pollSchedule(vid, ctx, token) {
+  // a schedule job (every batch's, and the protocol check and correction by default): its
+  // state while queued or running, then its result's corrected times
+  const started = Date.now();
   const step = async () => {
+    if (token !== scheduleToken) return;
     const res = await api("GET", `/v1/validations/${encodeURIComponent(vid)}`);
+    if (token !== scheduleToken) return;
     if (res.status !== 200) { showServerError(res); return; }
     const v = res.data;
-    if (v.status === "failed") { $("schedule-note").textContent = `Protocol check failed: ${v.error || ""}`; return; }
-    if (v.status !== "done") { setTimeout(step, 1000); return; }
-    const c = v.result && v.result.corrected;
-    if (!c) { $("schedule-note").textContent = "Protocol checked (no correction asked)."; return; }
-    const fixed = rows.map((r, k) => ({ ...r, actuation_time: c.actuation_times[k],
-      actuation_seconds: c.actuation_seconds ? c.actuation_seconds[k] : null,
-      error_estimate: Math.abs(c.relative_errors[k]) }));
-    scheduleTable(fixed, tau);
-    $("schedule-note").textContent = "Corrected by the full solver: each heating meets its dose " +
-      `within ${pct(c.max_relative_error)} in the real heat/rest protocol.`;
-    document.body.dataset.schedule = "corrected";
+    if (v.status === "failed") {
+      $("schedule-status").textContent = "";
+      $("schedule-note").textContent = `The schedule job failed: ${v.error || ""}`;
+      document.body.dataset.schedule = "failed";
+      return;
+    }
+    if (v.status !== "done") {
+      const secs = ((Date.now() - started) / 1000).toFixed(0);
+      $("schedule-status").textContent = `${ctx.batch ? "The batch's schedule" : "The schedule's protocol check"} ` +
+        `is ${v.status === "pending" ? "queued" : "running"} (job ${vid}, ${secs} s).`;
+      document.body.dataset.schedule = v.status === "pending" ? "queued" : "running";
+      setTimeout(step, 1000);
+      return;
+    }
+    showSchedule(v.result, ctx);
   };
   step();
 }
@@ -444,6 +578,8 @@ async function plan(ev) {
 
 async function run(f) {
   const total = f.doses.reduce((a, x) => a + x, 0);
+  const token = ++scheduleToken;  // an earlier schedule job's poll stops showing
+  resetSchedule();
   const phase = $("phase-map");
   phase.hidden = false;
   const gq = typeof f.gel === "string" ? { base: f.gel } : f.gel;
@@ -464,41 +600,64 @@ async function run(f) {
   }
   const a = dose.data;
   showAnswer(a, f.doses.length);
-  let rows;
+  const ref = a.reference_bead || null;  // a batch: a is the batch's own time, ref its mean bead's
+  const tau = a.timescale_seconds;
+  const ctx = { tau, rests: f.rests.length ? f.rests : [], tStart: f.t_start, tEnd: f.t_end, curve,
+    batch: f.size_cv !== undefined };
+  let rows = null;
+  let answered = null;  // a schedule answered at once (200)
+  let job = null;       // a schedule job (202): every batch's, and the correction by default
   if (f.doses.length > 1) {
+    // a batch's schedule is the batch's own (its size_distribution kept): always a job
     const body = { ...doseBody(f, undefined, false), doses: f.doses };
     delete body.dose_fraction;
-    delete body.size_distribution;  // a schedule answers its mean bead
     if (f.rests.length) body.rests = f.rests;
     const sch = await api("POST", "/v1/schedule", body);
     if (sch.status >= 400) { showServerError(sch); document.body.dataset.state = "server-error"; return; }
-    // the protocol check and correction are on by default (as in Python and the CLI): a 202
-    // carries the hold reading, shown as the rough reading it is until the job corrects it
-    rows = sch.data.hold || null;
-    $("schedule-note").textContent = sch.status === 202
-      ? "Hold reading (rough: one continuous heating). Checking the real heat/rest protocol with the full solver…"
-      : "";
-    if (sch.status === 202 && rows) pollSchedule(sch.data.validation_id, rows, a.timescale_seconds);
+    if (sch.status === 200) {
+      answered = sch.data;
+      rows = scheduleRows(answered);
+    } else {
+      // a 202 may carry the hold reading, shown as the rough reading it is until the job
+      // corrects it (a batch's has none: its hold reading needs every size's run)
+      job = sch.data.validation_id;
+      rows = sch.data.hold ? scheduleRows({ doses: f.doses, hold: sch.data.hold, reading: "hold" }) : null;
+      document.body.dataset.schedule = "queued";
+      document.body.dataset.scheduleJob = job;
+      document.body.dataset.scheduleBatch = String(ctx.batch);
+      $("schedule-headline").textContent = ctx.batch ?
+        `The batch's schedule (size CV ${fmt(f.size_cv, 3)}) is queued: every size of the batch ` +
+        "runs on the full solver; its corrected times follow." :
+        "Queued: the full solver checks and corrects the real heat/rest protocol; the corrected times follow.";
+      $("schedule-status").textContent = `queued (job ${job})`;
+      $("schedule-note").textContent = rows ?
+        "Below, the hold reading (rough: one continuous heating) until the job corrects it." : "";
+    }
   } else {
     rows = [{ dose_fraction: a.dose_fraction, cumulative_fraction: a.dose_fraction, start: 0, end: a.time,
       actuation_time: a.time, actuation_seconds: a.seconds, error_estimate: a.error_estimate }];
   }
-  const tau = a.timescale_seconds;
   if (curve) {
-    let cum = 0;
-    const marks = (rows || []).map((r) => {
-      cum = r.cumulative_fraction;
-      const a0 = curve.start_radius;
-      return { time: r.end, radius: Math.cbrt(a0 ** 3 - cum * (a0 ** 3 - 1)), label: pct(cum) };
-    });
-    drawCurve(curve, marks, tau);
+    // the front-model curve is one bead's: a batch marks its mean bead's dose time, and its
+    // own time as a dashed line
+    const a0 = curve.start_radius;
+    const at = (cum) => Math.cbrt(a0 ** 3 - cum * (a0 ** 3 - 1));
+    const holdRows = ref ? [] : answered ? scheduleRows({ ...answered, reading: "hold" }) : rows || [];
+    const marks = ref ? [{ time: ref.time, radius: at(total), label: `${pct(total)} mean bead` }] :
+      holdRows.map((r) => ({ time: r.end, radius: at(r.cumulative_fraction), label: pct(r.cumulative_fraction) }));
+    drawCurve(curve, marks, tau, ref ? { time: a.time, label: `batch ${pct(total)}` } : null);
   } else {
     clear($("curve-plot"));
   }
-  if (rows) {
-    drawTimeline(rows, f.rests.length ? f.rests : [], f.t_start, f.t_end, tau, curve);
-    scheduleTable(rows, tau);
+  clear($("timeline-plot"));
+  if (answered) {
+    showSchedule(answered, ctx);
+  } else if (rows) {
+    drawTimeline(rows, ctx.rests, f.t_start, f.t_end, tau, ref ? null : curve,
+      ref ? "release drawn linearly (a batch: the front-model curve is its mean bead's)" : undefined);
+    scheduleTable(rows, f.doses.length > 1 ? "hold" : undefined);
   }
+  if (job) pollSchedule(job, ctx, token);
   if (a.validation_id) {
     // once validated, the same request is answered with the full solver's verdict
     poll(a.validation_id, async (v) => {
@@ -506,7 +665,7 @@ async function run(f) {
       const again = await api("POST", "/v1/dose-time", doseBody(f, total, false));
       if (again.status !== 200) return;
       showAnswer(again.data, f.doses.length);
-      if (f.doses.length === 1) scheduleTable([{ ...rows[0], error_estimate: again.data.error_estimate }], tau);
+      if (f.doses.length === 1) scheduleTable([{ ...rows[0], error_estimate: again.data.error_estimate }]);
       document.body.dataset.validated = v.id;
     });
   }
