@@ -195,3 +195,59 @@ def test_a_batch_schedule_under_a_protocol(fake_planner) -> None:
     assert spread.corrected["delivered_fractions"] == pytest.approx([0.3, 0.3], rel=0.011)
     assert spread.actuation_times != one.actuation_times
     assert "follows the protocol" in spread.note
+
+
+@pytest.fixture
+def cli_on_fake(monkeypatch, fake_planner):
+    """The CLI's one-shot planner on the fake solver."""
+    import dosing
+
+    real = dosing._one_shot
+    monkeypatch.setattr(dosing, "_one_shot", lambda path, ex, **kw: real(
+        path, ex, solver=fake_planner.solver, **kw))
+
+
+FAKE_CASE = {"gel": "ANB", "t_start": 302.0, "dry_radius_um": 2.0}
+# (name, heating, population, CLI options, HTTP fields): the fluid schedules, each a job
+SCHEDULES = [
+    ("fluid one jump schedule", Jump(308.0), OneBead(), ["--t-end", "308"], {"t_end": 308.0}),
+    ("fluid one protocol schedule", Heating(RAMP), OneBead(), ["--protocol", RAMP[0]],
+     {"protocol": RAMP}),
+    ("fluid batch jump schedule", Jump(308.0), Batch({"cv": 0.2}),
+     ["--t-end", "308", "--size-cv", "0.2"], {"t_end": 308.0, "size_distribution": {"cv": 0.2}}),
+    ("fluid batch protocol schedule", Heating(RAMP), Batch({"cv": 0.2}),
+     ["--protocol", RAMP[0], "--size-cv", "0.2"],
+     {"protocol": RAMP, "size_distribution": {"cv": 0.2}}),
+]
+
+
+@pytest.mark.anyio
+@pytest.mark.parametrize("name,heating,population,cli,body", SCHEDULES,
+                         ids=[c[0] for c in SCHEDULES])
+async def test_a_schedule_reads_the_same_whatever_the_way_in(
+        name, heating, population, cli, body, fake_planner, cli_on_fake, capsys,
+        tmp_path) -> None:
+    """The corrected times lead, the same through Python, the CLI and HTTP (a job)."""
+    import asyncio
+
+    q = Schedule([0.3, 0.3], rests=[0.5])
+    py = plan(Request(**FAKE_CASE, heating=heating, question=q, population=population),
+              planner=fake_planner)
+    assert py.cell == name.replace(" ", " · ") and py.reading == "corrected"
+    assert main(["schedule", "--gel", "ANB", "--t-start", "302", "--dry-radius-um", "2",
+                 "--doses", "0.3", "0.3", "--rests", "0.5", *cli, "--json",
+                 "--cache", str(tmp_path / "c.sqlite")]) == 0
+    out = json.loads(capsys.readouterr().out)
+    async with asgi(create_app(planner=fake_planner, warm=False)) as (api, raw):
+        r = await raw.post("/v1/schedule", json={**FAKE_CASE, "doses": [0.3, 0.3],
+                                                 "rests": [0.5], **body})
+        assert r.status_code == 202, r.text
+        for _ in range(2400):
+            v = await api.validation(r.json()["validation_id"])
+            if v.status in ("done", "failed"):
+                break
+            await asyncio.sleep(0.05)
+    assert v.status == "done", v.error
+    for d in (out, v.result):
+        assert d["cell"] == py.cell and d["reading"] == "corrected"
+        assert d["actuation_times"] == pytest.approx(py.actuation_times, rel=1e-12)
