@@ -258,7 +258,12 @@ class NodeHeatings:
                 for k in range(len(durations))]
 
     def reach(self, result: list[Any], durations: Sequence[float], k: int) -> Reach:
-        """Where the batch's heating k delivers dose k: the root of the weighted sum."""
+        """Where the batch's heating k delivers dose k: the root of the weighted sum (one
+        node of the reference size: its own reading, so that a CV of 0 is the single bead's
+        exactly)."""
+        if len(self.members) == 1 and self.members[0].rho == 1.0:
+            return self.members[0].heatings.reach(result[0], durations, k)
+
         def got(x: float) -> float:
             return sum(m.weight * m.heatings.released_within(r, self.own(m, durations), k,
                                                              x / m.rho)

@@ -251,3 +251,22 @@ async def test_a_schedule_reads_the_same_whatever_the_way_in(
     for d in (out, v.result):
         assert d["cell"] == py.cell and d["reading"] == "corrected"
         assert d["actuation_times"] == pytest.approx(py.actuation_times, rel=1e-12)
+
+
+@pytest.mark.slow
+def test_a_drug_batch_schedule_of_one_size_is_the_single_beads(planner) -> None:
+    """The population seam lifted over one node (CV 0) is the single bead's drug schedule
+    exactly; a spread delays it (real solver, a drug the fluid carries: D0 = 0)."""
+    q = Schedule([0.3, 0.3], rests=[0.1])
+    drug = Drug({"diffusivity_cm2_s": 0.0})
+    one = plan(Request(**CASE, heating=Jump(308.0), question=q, payload=drug),
+               planner=planner)
+    zero = plan(Request(**CASE, heating=Jump(308.0), question=q, payload=drug,
+                        population=Batch({"cv": 0.0})), planner=planner)
+    assert zero.actuation_times == one.actuation_times
+    assert zero.corrected["delivered_fractions"] == one.corrected["delivered_fractions"]
+    spread = plan(Request(**CASE, heating=Jump(308.0), question=q, payload=drug,
+                          population=Batch({"cv": 0.2})), planner=planner)
+    assert spread.corrected["delivered_fractions"] == pytest.approx([0.3, 0.3], rel=0.01)
+    assert all(s > o for s, o in zip(spread.actuation_times, one.actuation_times,
+                                     strict=True))
