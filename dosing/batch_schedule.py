@@ -36,7 +36,6 @@ from itertools import accumulate
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq
 
 from solver.errors import NotApplicableError, ParameterError, SolverError
 
@@ -44,7 +43,15 @@ from .answers import HoldRow
 from .batch import Quadrature
 from .batch_truth import size_settings
 from .heating_cycles import cycle_scenario
-from .protocol import FluidHeatings, Reach, delivery, shoot_durations, windows
+from .protocol import (
+    FluidHeatings,
+    Member,
+    NodeHeatings,
+    Reach,
+    delivery,
+    shoot_durations,
+    windows,
+)
 from .quantity import micrometres
 from .request import ScheduleRequest, _clamp_length
 from .scenario import Scenario, SolverSettings
@@ -142,10 +149,37 @@ def nodes_of(req: ScheduleRequest, radii: np.ndarray, weights: np.ndarray,
     return out
 
 
-class BatchHeatings:
-    """The batch's heatings (:class:`dosing.protocol.Heatings`): durations in the reference
-    bead's tau, the doses of the batch's stored fluid; a run is every node's trajectory of
-    its own protocol (run side by side through ``planner.trajectory``), counted."""
+class FluidNode:
+    """One size node's fluid heatings in its own tau (a member of
+    :class:`dosing.protocol.NodeHeatings`): what each heating delivers of the node's own
+    stored fluid (eq. FluidVolExpelled), the rests over its rho."""
+
+    max_horizon = math.inf
+
+    def __init__(self, req: ScheduleRequest, node: Node) -> None:
+        self.req, self.rests = req, [r / node.rho for r in req.rests]
+
+    def delivered(self, tr: Any, durations: Sequence[float]) -> list[float]:
+        """Each heating's delivery, fractions of the node's stored fluid."""
+        return delivery(tr, durations, self.rests, self.req.start_radius).delivered
+
+    def released_within(self, tr: Any, durations: Sequence[float], k: int, x: float) -> float:
+        """What heating k has delivered ``x`` (own tau) after its start."""
+        start = windows(durations, self.rests)[k][0]
+        a3 = tr.radius_at(start) ** 3
+        return (a3 - tr.radius_at(start + x) ** 3) / (self.req.start_radius**3 - 1.0)
+
+    def reach(self, tr: Any, durations: Sequence[float], k: int) -> Reach:
+        """The single bead's own reading (a node of the reference size)."""
+        return FluidHeatings(lambda steps: tr, self.req).reach(tr, durations, k)
+
+
+class BatchHeatings(NodeHeatings):
+    """The batch's heatings (:class:`dosing.protocol.Heatings`): the population seam
+    (:class:`~dosing.protocol.NodeHeatings`) over each size node's fluid heatings
+    (:class:`FluidNode`), durations in the reference bead's tau, the doses of the batch's
+    stored fluid; a run is every node's trajectory of its own heat/rest cycles, run side by
+    side through the planner (admitted as one group), counted."""
 
     max_horizon = math.inf  # a dose beyond every bead's reach is refused exactly (reach)
 
@@ -153,9 +187,10 @@ class BatchHeatings:
                  nodes: Sequence[Node]) -> None:
         from .protocol_dose import mode_for
 
+        super().__init__([Member(n.weight, n.rho, FluidNode(req, n)) for n in nodes],
+                         req.doses, req.tolerance)
+        self.max_horizon = math.inf
         self.planner, self.req, self.nodes = planner, req, list(nodes)
-        self.targets, self.tolerance = req.doses, req.tolerance
-        self.count = 0
         self.mode = mode_for(planner, req)
         self.tau_ref = timescale(req.bead_dry_radius_um, req.t_end, req.constants).seconds
 
@@ -184,43 +219,23 @@ class BatchHeatings:
 
     def per_node(self, result: list[Any], durations: Sequence[float]) -> list[list[float]]:
         """Each node's delivery per heating (fractions of its own stored fluid)."""
-        return [delivery(tr, [d / n.rho for d in durations], [r / n.rho for r in self.req.rests],
-                         self.req.start_radius).delivered
-                for tr, n in zip(result, self.nodes, strict=True)]
-
-    def delivered(self, result: list[Any], durations: Sequence[float]) -> list[float]:
-        """Each heating's delivery, fractions of the batch's stored fluid (volume-weighted)."""
-        rows = self.per_node(result, durations)
-        return [sum(n.weight * row[k] for n, row in zip(self.nodes, rows, strict=True))
-                for k in range(len(durations))]
+        return [m.heatings.delivered(tr, self.own(m, durations))
+                for tr, m in zip(result, self.members, strict=True)]
 
     def reach(self, result: list[Any], durations: Sequence[float], k: int) -> Reach:
-        """Where the batch's heating k delivers dose k (a root of the weighted sum; one node:
-        the single bead's own reading, so that a CV of 0 is the single bead exactly)."""
-        if len(self.nodes) == 1 and self.nodes[0].rho == 1.0:
-            return FluidHeatings(lambda steps: result[0], self.req).reach(result[0], durations, k)
-        req, target = self.req, self.req.doses[k]
-        scale = req.start_radius**3 - 1.0
-        af3 = req.jump.final_radius**3
-        starts = [windows([d / n.rho for d in durations],
-                          [r / n.rho for r in req.rests])[k][0] for n in self.nodes]
-        a3 = [tr.radius_at(s) ** 3 for tr, s in zip(result, starts, strict=True)]
-        most = sum(n.weight * (a - af3) / scale for n, a in zip(self.nodes, a3, strict=True))
-        if target >= most:
-            raise ParameterError(f"doses[{k}]", target, f"below {most:.4f}",
-                                 "after the earlier doses and rests the batch can give up at "
-                                 "most that fraction of its stored fluid at T_end")
-
-        def got(x: float) -> float:
-            return sum(n.weight * (a - tr.radius_at(s + x / n.rho) ** 3) / scale
-                       for n, a, tr, s in zip(self.nodes, a3, result, starts, strict=True))
-
-        length = float(durations[k])
-        end = got(length)
-        if end < target:
-            return Reach(None, end)
-        return Reach(float(brentq(lambda x: got(x) - target, 0.0, length,
-                                  xtol=1e-13 * length, rtol=1e-12)))
+        """Where the batch's heating k delivers dose k (:meth:`NodeHeatings.reach`); a dose
+        beyond what the batch can still give up at T_end is refused exactly."""
+        if len(self.nodes) > 1 or self.nodes[0].rho != 1.0:
+            req = self.req
+            af3, scale = req.jump.final_radius**3, req.start_radius**3 - 1.0
+            most = sum(m.weight * (tr.radius_at(windows(self.own(m, durations), m.heatings.rests)
+                                                [k][0]) ** 3 - af3) / scale
+                       for tr, m in zip(result, self.members, strict=True))
+            if self.targets[k] >= most:
+                raise ParameterError(f"doses[{k}]", self.targets[k], f"below {most:.4f}",
+                                     "after the earlier doses and rests the batch can give "
+                                     "up at most that fraction of its stored fluid at T_end")
+        return super().reach(result, durations, k)
 
 
 def check(h: BatchHeatings, durations: Sequence[float]) -> dict[str, Any]:
@@ -508,7 +523,6 @@ def drug_batch_schedule_with(planner: SchedulePlanner, req: Any,
     from .drug import runs_for
     from .drug_dose import DrugHeatings
     from .drug_schedule import hold_reading
-    from .protocol import Member, NodeHeatings
 
     sizes = schedule_sizes(req, size_distribution)
     ref = sizes.mean_um
