@@ -270,3 +270,17 @@ def test_a_drug_batch_schedule_of_one_size_is_the_single_beads(planner) -> None:
     assert spread.corrected["delivered_fractions"] == pytest.approx([0.3, 0.3], rel=0.01)
     assert all(s > o for s, o in zip(spread.actuation_times, one.actuation_times,
                                      strict=True))
+
+
+def test_release_takes_the_step_grammar(capsys) -> None:
+    """`thermogel release --protocol` takes the heating grammar as `dose` does (its 0.05 K
+    staircase), and the tau pairs it took before; an until-step is refused naming it."""
+    base = ["release", "--gel", "ANB", "--t-start", "302", "--dry-radius-um", "50",
+            "--drug-diffusivity-cm2-s", "1e-6", "--samples", "50", "--json"]
+    assert main([*base, "--protocol", "Heat to 308 K at 600 K/min; Hold at 308 K for 0.01 tau"
+                 ]) == 0
+    ramp = json.loads(capsys.readouterr().out)
+    assert ramp["released_fraction"][-1] > 0.0 and ramp["timescale_seconds"] > 0.0
+    assert main([*base, "--protocol", "Hold at 308 K until 30 % released"]) == 2
+    assert "protocol[0].until" in capsys.readouterr().err
+    assert main([*base, "--protocol", "0.01:308"]) == 0

@@ -13,7 +13,7 @@ from .common import add_gel_options, gel_from_args, print_json
 from .dose import _viscosity
 from .drug_options import add_drug_options, drug_from_args
 from .outfile import OUT_HELP, request_of, save
-from .simulate import add_protocol_options
+from .simulate import add_protocol_options, protocol_pairs
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -64,11 +64,12 @@ def run(args: argparse.Namespace) -> int:
     if args.protocol is None and (args.t_end is None or args.until is None):
         raise ParameterError("t_end/until", None, "both --t-end and --until, or --protocol")
     gel = gel_from_args(args)
-    temps = [T for _, T in args.protocol] if args.protocol else [args.t_end]
-    t_ref = check_temperature(max(temps), "t_end")
     constants = PhysicalConstants(args.viscosity, args.polymer_volume_m3, args.k0_m2,
                                   **({} if args.mesh_length_nm is None
                                      else {"mesh_length_nm": args.mesh_length_nm}))
+    protocol = protocol_pairs(args, args.dry_radius_um, constants)
+    temps = [T for _, T in protocol] if protocol else [args.t_end]
+    t_ref = check_temperature(max(temps), "t_end")
     # the planner's truth (one set of defaults): the drug dose's mechanics at the bead's ell
     settings = drug_settings(bead_settings(
         SolverSettings(n=args.n, rtol=args.rtol, interfacial_length=args.interfacial_length),
@@ -78,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     drug = drug_from_args(args, always=True)
     solute = drug.solute(a0, t_ref, constants, args.dry_radius_um)
     res, rel = simulate_release(gel, args.t_start, solute, t_end=args.t_end, until=args.until,
-                                protocol=args.protocol, branch=args.branch,
+                                protocol=protocol, branch=args.branch,
                                 grid=settings.grid, n=settings.n,
                                 interfacial_length=settings.interfacial_length,
                                 rtol=settings.rtol, samples=args.samples)

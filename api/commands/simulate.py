@@ -7,6 +7,7 @@ import shutil
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Any
 
 import numpy as np
 
@@ -21,14 +22,39 @@ from .outfile import OUT_HELP, request_of, save
 MOVING_N_FLOOR = 100
 
 
-def _protocol(text: str) -> list[tuple[float, float]]:
+def _pairs(text: str) -> list[tuple[float, float]]:
     """'0.1:308,0.5:302' -> [(0.1, 308.0), (0.5, 302.0)]."""
     try:
         return [(float(d), float(t)) for d, t in (item.split(":") for item in text.split(","))]
     except ValueError:
-        raise argparse.ArgumentTypeError(
-            "expected duration:temperature pairs separated by commas, e.g. 0.1:308,0.5:302"
-        ) from None
+        raise ParameterError("--protocol", text, "duration:temperature pairs separated by "
+                             "commas (e.g. 0.1:308,0.5:302), or steps of the grammar "
+                             "('Heat to 308 K at 5 K/min; Hold at 308 K for 2 min')") from None
+
+
+def protocol_pairs(args: argparse.Namespace, dry_radius_um: float | None = None,
+                   constants: Any = None) -> list[tuple[float, float]] | None:
+    """The --protocol steps as (duration in tau, temperature) pairs: given so ('0.05:308,
+    0.5:302'), or steps of the heating grammar (dosing.heating: 'Heat to 308 K at 5 K/min',
+    'Hold at 308 K for 2 min', baths, traces; repeatable or joined by ';'), run as their
+    staircase of holds (0.05 K stairs, dosing.heating_program.staircase; seconds through tau
+    at the protocol's hottest temperature with a bead size); None without --protocol."""
+    if not args.protocol:
+        return None
+    texts = [t.strip() for arg in args.protocol for t in arg.split(";") if t.strip()]
+    if not any(c.isalpha() for t in texts for c in t):
+        return [pair for t in texts for pair in _pairs(t)]
+    from dosing.heating import Protocol
+    from dosing.heating_program import staircase
+    from dosing.units import timescale
+
+    prot = Protocol(args.t_start, texts)
+    for i in prot.until_steps:
+        raise ParameterError(f"protocol[{i}].until", texts[i], "a step with a duration (an "
+                             "until-step is the planner's: thermogel dose --protocol)")
+    tau_s = None if dry_radius_um is None else timescale(dry_radius_um, prot.hottest,
+                                                          constants).seconds
+    return staircase(prot.program(tau_s), 0.0)
 
 
 def add_protocol_options(p: argparse.ArgumentParser, t_start_help: str) -> None:
@@ -38,8 +64,11 @@ def add_protocol_options(p: argparse.ArgumentParser, t_start_help: str) -> None:
     p.add_argument("--t-end", type=float, default=None, help="end temperature in K (one jump)")
     p.add_argument("--until", type=float, default=None,
                    help="dimensionless duration of the jump (with --t-end)")
-    p.add_argument("--protocol", type=_protocol, default=None, metavar="D:T,...",
-                   help="temperature steps instead of --t-end/--until, e.g. 0.05:308,0.5:302")
+    p.add_argument("--protocol", action="append", default=None, metavar="STEPS",
+                   help="temperature steps instead of --t-end/--until: duration:temperature "
+                        "pairs in tau (0.05:308,0.5:302), or steps of the heating grammar "
+                        "('Heat to 308 K at 5 K/min', 'Hold at 308 K for 2 min'; repeatable "
+                        "or joined by ';'; docs/heating.md), run as their 0.05 K staircase")
     p.add_argument("--branch", choices=["swollen", "shrunken"], default=None,
                    help="start branch (default: swollen when heating, shrunken when cooling)")
 
@@ -130,7 +159,7 @@ def run(args: argparse.Namespace) -> int:
     grid, n, ell = model_options(args)
     with _progress_bar(sys.stderr.isatty()) as progress:
         res = simulate(gel_from_args(args), args.t_start, args.t_end, until=args.until,
-                       protocol=args.protocol, grid=grid, n=n,
+                       protocol=protocol_pairs(args), grid=grid, n=n,
                        integrator=args.integrator, rtol=args.rtol, every=args.every,
                        branch=args.branch, dt=args.dt, max_steps=args.max_steps,
                        progress=progress, interfacial_length=ell)
