@@ -236,3 +236,67 @@ def njit_like(x):
     return np.asarray(x).__class__, _private_helper(x)._y
 """)
     assert _numba_uses(clean, "c") == [] and _private_solver_names(clean, "c") == []
+
+
+# ----------------------------------------------------------- one request (issue 35)
+AXIS_ATTRS = {"heating", "protocol", "size_distribution", "drug", "sizes", "key"}
+AXIS_TYPES = {"Fluid", "Drug", "OneBead", "Batch", "Jump", "Heating", "Dose", "Schedule",
+              "DoseRequest", "ScheduleRequest", "DrugDoseRequest", "DrugScheduleRequest",
+              "Protocol", "SizeDistribution", "DrySizes", "DrugModel"}
+# the planner's question code and the HTTP adapter: they look cells up, never branch on an
+# axis (api/requests.py and dosing/question/legacy.py are where a body or an old request
+# picks its axes' values: exempt)
+NO_AXIS_BRANCH = ("dosing/question/__init__.py", "dosing/question/request.py",
+                  "dosing/question/cells.py", "dosing/question/result.py", "api/service.py")
+
+
+def axis_branches(source: str, where: str) -> list[str]:
+    """Branches on an axis: isinstance against an axis's type, getattr of an axis field, a
+    comparison of an axis field (``req.heating is None``, ``payload.key == "drug"``)."""
+    out = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
+            args = node.args
+            if node.func.id == "isinstance" and len(args) == 2:
+                names = {n.id for n in ast.walk(args[1]) if isinstance(n, ast.Name)}
+                if names & AXIS_TYPES:
+                    out.append(f"{where}:{node.lineno} isinstance {sorted(names)}")
+            if (node.func.id == "getattr" and len(args) >= 2
+                    and isinstance(args[1], ast.Constant) and args[1].value in AXIS_ATTRS):
+                out.append(f"{where}:{node.lineno} getattr {args[1].value}")
+        if isinstance(node, ast.Compare):
+            sides = [node.left, *node.comparators]
+            for side in sides:
+                if isinstance(side, ast.Attribute) and side.attr in AXIS_ATTRS:
+                    out.append(f"{where}:{node.lineno} compares .{side.attr}")
+    return out
+
+
+def test_the_question_code_and_the_http_adapter_do_not_branch_on_an_axis() -> None:
+    found = [hit for rel in NO_AXIS_BRANCH
+             for hit in axis_branches((ROOT / rel).read_text(), rel)]
+    assert not found, found
+
+
+def test_the_axis_branch_checker_can_fail() -> None:
+    source = ("def f(req, body):\n"
+              "    if req.heating is not None: pass\n"
+              "    if isinstance(req.payload, Drug): pass\n"
+              "    if getattr(body, 'size_distribution', None): pass\n"
+              "    if req.payload.key == 'drug': pass\n"
+              "    return req.cell.run(req)\n")
+    hits = axis_branches(source, "x.py")
+    assert len(hits) == 4, hits
+    assert not axis_branches("def f(r):\n    return r.cell.now(r)\n", "y.py")
+
+
+def test_every_combination_of_the_axes_has_a_cell() -> None:
+    """The registry is the product of the axes' values (a new value needs its cells)."""
+    import itertools
+
+    from dosing.question.axes import HEATINGS, PAYLOADS, POPULATIONS, QUESTIONS
+    from dosing.question.cells import CELLS
+
+    product = {tuple(c.key for c in cell) for cell in
+               itertools.product(PAYLOADS, POPULATIONS, HEATINGS, QUESTIONS)}
+    assert set(CELLS) == product

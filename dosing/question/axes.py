@@ -78,6 +78,10 @@ class OneBead:
 
     key: ClassVar[str] = "one"
 
+    def fields(self) -> dict[str, Any]:
+        """Nothing to add: the case's bead."""
+        return {}
+
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
         return {"kind": self.key}
@@ -91,6 +95,10 @@ class Batch:
     sizes: Any
 
     key: ClassVar[str] = "batch"
+
+    def fields(self) -> dict[str, Any]:
+        """A dose request's batch (its number-weighted mean is the case's bead)."""
+        return {"size_distribution": self.sizes}
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""

@@ -46,10 +46,8 @@ def _dose_fields(request: Any) -> dict[str, Any]:
 def _fluid_dose(request: Any) -> Any:
     from ..request import DoseRequest
 
-    sizes = getattr(request.population, "sizes", None)
     return DoseRequest(**request.case_fields(), **request.heating.fields(),
-                       **_dose_fields(request),
-                       **({} if sizes is None else {"size_distribution": sizes}))
+                       **_dose_fields(request), **request.population.fields())
 
 
 def _drug_dose(request: Any) -> Any:
