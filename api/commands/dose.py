@@ -323,7 +323,8 @@ def print_dose(req: Any, ans: Any, batch: Any = None) -> None:
         what = (f"the stored fluid (radius {ans.start_radius:.4g} -> {ans.final_radius:.4g} "
                 "dry radii)")
     print(f"{req.gel.name} {heat}: release {ans.dose_fraction:.1%} of {what}")
-    print(f"  {ans.model} model: {when}")
+    mean = "" if batch is None else " (the batch's number-weighted mean bead)"
+    print(f"  {ans.model} model{mean}: {when}")
     for u in getattr(ans, "until_steps", None) or ():
         end = "" if u.end_seconds is None else f" = {u.end_seconds:.4g} s"
         print(f"  step {u.step} '{u.text}' ends at t = {u.end:.4g} tau{end}")
