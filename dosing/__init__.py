@@ -15,13 +15,20 @@ from typing import TYPE_CHECKING, Any
 from solver.lazy import lazy_names
 from solver.presenters import register as _register_presenters
 
-# the solver's records (runs, fits) get their tables, netCDF and notebook views from this
-# layer (dosing.export, dosing.tables), imported only when one is asked for
+# the solver's records (runs, fits) and the planner's answers get their tables, netCDF and
+# notebook views from this layer (dosing.export, dosing.tables), imported only when asked
 _register_presenters(
     run_dataset="dosing.export:run_dataset", fit_dataset="dosing.export:fit_dataset",
     to_netcdf="dosing.export:to_netcdf", run_frame="dosing.tables:run_frame",
     run_html="dosing.tables:run_html", fit_frame="dosing.tables:fit_frame",
-    fit_html="dosing.tables:fit_html")
+    fit_html="dosing.tables:fit_html",
+    # the planner's own answers, schedules and sweeps (their tables live above them: no
+    # import of dosing.tables / dosing.export from the modules they present)
+    answer_frame="dosing.tables:answer_frame", answer_html="dosing.tables:answer_html",
+    schedule_frame="dosing.tables:schedule_frame",
+    schedule_html="dosing.tables:schedule_html",
+    schedule_dataset="dosing.export:schedule_dataset",
+    sweep_frame="dosing.tables:sweep_frame", sweep_dataset="dosing.export:sweep_dataset")
 
 if TYPE_CHECKING:
     from .answers import (

@@ -14,6 +14,8 @@ import functools
 from dataclasses import dataclass, fields
 from typing import Any
 
+from solver.presenters import presenter
+
 from .truth import Uncertainty
 
 _ATOMS = (str, int, float, type(None))  # immutable leaves (bool is an int)
@@ -160,14 +162,10 @@ class DoseAnswer:
 
     def to_dataframe(self) -> Any:
         """One row: the answer, its error and uncertainty parts, the truth (pandas)."""
-        from .tables import answer_frame
-
-        return answer_frame(self)
+        return presenter("answer_frame")(self)
 
     def _repr_html_(self) -> str:
-        from .tables import answer_html
-
-        return answer_html(self)
+        return presenter("answer_html")(self)
 
 
 @dataclass(frozen=True)

@@ -22,6 +22,7 @@ from itertools import accumulate
 from typing import Any, Protocol
 
 from solver.full import FullResult
+from solver.presenters import presenter
 
 from . import protocol
 from .answers import DoseAnswer, HoldRow
@@ -73,20 +74,14 @@ class ScheduleAnswer:
 
     def to_dataframe(self) -> Any:
         """One row per dose (event): start, duration, temperature, dose, amount (pandas)."""
-        from .tables import schedule_frame
-
-        return schedule_frame(self)
+        return presenter("schedule_frame")(self)
 
     def to_xarray(self, request: Any = None) -> Any:
         """The event table as an xarray Dataset (:func:`dosing.export.schedule_dataset`)."""
-        from .export import schedule_dataset
-
-        return schedule_dataset(self, request)
+        return presenter("schedule_dataset")(self, request)
 
     def _repr_html_(self) -> str:
-        from .tables import schedule_html
-
-        return schedule_html(self)
+        return presenter("schedule_html")(self)
 
 
 def hold_rows(req: ScheduleRequest, answers: Sequence[DoseAnswer]) -> tuple[str, list[HoldRow]]:

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.gel import Gel
 from solver.json_safe import json_safe
+from solver.presenters import presenter
 
 from .jobs import QueueFullError
 from .model_choice import front_answer, jump_class
@@ -310,15 +311,11 @@ class SweepResult:
 
     def to_dataframe(self) -> Any:
         """One row per point, columns ``name [unit]`` (pandas)."""
-        from .tables import sweep_frame
-
-        return sweep_frame(self)
+        return presenter("sweep_frame")(self)
 
     def to_xarray(self, request: Any = None) -> Any:
         """The map over (gel, t_end, dry_radius_um, dose_fraction) as an xarray Dataset."""
-        from .export import sweep_dataset
-
-        return sweep_dataset(self, request)
+        return presenter("sweep_dataset")(self, request)
 
 
 
