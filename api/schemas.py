@@ -737,9 +737,11 @@ class ProtocolDoseResponse(FluidDoseOut):
     reduced model for slow heating inside its measured region, else the full solver at the
     truth's settings; docs/heating.md)."""
 
-    model: Literal["full", "front-slow-sharp"] = Field(
+    model: Literal["full", "front-slow-sharp", "front-slow-sharp+full"] = Field(
         description="'front-slow-sharp': the reduced model for slow heating (inside its "
-                    "region); 'full': the PDE solver")
+                    "region); 'full': the PDE solver; 'front-slow-sharp+full': a batch "
+                    "whose beads inside the region ran on the reduced model and the others "
+                    "on the PDE solver (its batch.uncertainty.nodes says which)")
     protocol: list[str] = Field(description="the protocol's steps as text")
     protocol_steps: list[dict[str, Any]] = Field(description="the steps, structured")
     t_start: float = Field(description="start temperature, K")

@@ -208,17 +208,26 @@ def _batch_jump_run(planner: Any, request: Any) -> DoseResult:
     return _with_batch(_bead_run(planner, request), batch)
 
 
-def _batch_protocol_now(planner: Any, request: Any) -> DoseResult | Pending:
-    from ..batch_protocol import batch_protocol_answer
+def _batch_protocol_now(planner: Any, request: Any) -> DoseResult | Pending | None:
+    """The reduced model at every node (milliseconds); a node outside its region needs
+    the full solver: from the cache when every run is there, else None (a job)."""
+    from ..batch_protocol import OutsideRegion, batch_protocol_answer
 
-    batch = batch_protocol_answer(request.planned, validate=request.validate)
+    try:
+        batch = batch_protocol_answer(request.planned, validate=request.validate)
+    except OutsideRegion:
+        batch = batch_protocol_answer(request.planned, validate=request.validate,
+                                      planner=planner, wait=False)
+        if batch is None:
+            return None
     return _with_batch(_bead_now(planner, request), batch)
 
 
 def _batch_protocol_run(planner: Any, request: Any) -> DoseResult:
     from ..batch_protocol import batch_protocol_answer
 
-    batch = batch_protocol_answer(request.planned, validate=request.validate)
+    batch = batch_protocol_answer(request.planned, validate=request.validate,
+                                  planner=planner)
     return _with_batch(_bead_run(planner, request), batch)
 
 
