@@ -20,6 +20,13 @@ def _plain(value: Any) -> Any:
     return value.to_dict() if hasattr(value, "to_dict") else value
 
 
+def _gel(gel: Any) -> Any:
+    """The gel as asked: a preset's or a stored gel's name (it resolves to the same gel),
+    a custom gel's parameters."""
+    name = getattr(gel, "name", None)
+    return name if isinstance(name, str) and name != "custom" else _plain(gel)
+
+
 @dataclass(frozen=True)
 class Request:
     """What the planner is asked: ``gel`` and ``t_start`` and the bead (``dry_radius_um``
@@ -77,6 +84,7 @@ class Request:
     def to_dict(self) -> dict[str, Any]:
         """The request as asked (JSON-ready): echoed in its answer."""
         case = {k: _plain(v) for k, v in self.case_fields().items()}
+        case["gel"] = _gel(self.gel)
         return {**case, "payload": self.payload.to_dict(),
                 "population": self.population.to_dict(), "heating": self.heating.to_dict(),
                 "question": self.question.to_dict(), "validate": self.validate}
