@@ -377,8 +377,11 @@ class Planner:
         return choice, scs, self._dose(req, choice, scs, trajs if complete else [])
 
     def dose(self, req: DoseRequest, validate: bool = False) -> DoseAnswer:
-        """The actuation time for one dose (front model, or the full solver where needed:
-        blocking; ``validate`` runs the validation too and waits for it)."""
+        """The actuation time for one dose of the request's bead (front model, or the full
+        solver where needed: blocking; ``validate`` runs the validation too and waits for
+        it).  A batch's request is answered here for its number-weighted mean bead; the
+        batch's own answer is the one request's (``dosing.plan_dose``,
+        ``dosing.question.plan``), above the planner."""
         if getattr(req, "heating", None) is not None:  # a dose under a heating protocol
             from . import protocol_dose
 
