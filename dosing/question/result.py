@@ -122,8 +122,11 @@ class ScheduleResult:
         """The answer in one line."""
         secs = self.actuation_seconds
         times = ", ".join(f"{t:.4g}" for t in (secs or self.actuation_times))
+        got, asked = len(self.actuation_times), len(self.answer.doses)
+        short = "" if got >= asked else (
+            f"; dose {got + 1} of {asked} is not reached by any heating: see the warnings")
         return (f"{self.cell}: heat for {times} {'s' if secs else 'tau'} "
-                f"({self.reading} times)")
+                f"({self.reading} times){short}")
 
     def __getattr__(self, name: str) -> Any:
         if name.startswith("__") or name == "answer":
