@@ -10,6 +10,7 @@ from dosing.scenario import GRIDS, METHODS
 from solver.errors import ParameterError
 
 from .common import (
+    add_at_start_options,
     add_gel_options,
     check_bounds,
     checked_cache,
@@ -19,7 +20,6 @@ from .common import (
     print_uncertainty,
     wrap,
 )
-from .drug_cli import add_wait_options
 from .drug_options import add_drug_options, drug_from_args
 from .outfile import add_format_option, figure_path
 
@@ -264,8 +264,6 @@ def run(args: argparse.Namespace) -> int:
                          else f"{r.grid} N = {r.n}" for r in s.rungs())
         print(f"validating with the full solver ({runs}): seconds to minutes the first "
               "time, then cached", file=sys.stderr, flush=True)
-    from .drug_cli import _planner, close_planner
-
     planner = _planner(args)
     try:
         result = run(planner, request)
@@ -282,8 +280,6 @@ def run(args: argparse.Namespace) -> int:
     if result.batch is not None:  # the batch's own time first: the answer asked for
         print(result.headline)
     if result.answer is None:  # a drug batch: its answer is the batch's
-        from .batch_cli import print_drug_batch
-
         print_drug_batch(request.planned, result.batch)
         return 0
     print_dose(request.planned, result.answer, result.batch)
@@ -391,3 +387,43 @@ def _print_drug(ans: Any) -> None:
             print(wrap(f"  {text}"))
     if ans.medium_concentration_ug_per_ul is not None:
         print(f"  release medium concentration {ans.medium_concentration_ug_per_ul:.4g} ug/uL")
+
+
+def add_wait_options(p: argparse.ArgumentParser) -> None:
+    """Time in the medium at T_start before the first heating (drug doses)."""
+    add_at_start_options(p, "wait", "with a drug: time at T_start before heating (default 0)",
+                         drug_only=True)
+
+
+def _planner(args: argparse.Namespace) -> Any:
+    """The command's one-shot planner (``dosing._one_shot``: runs in this process; its
+    executor stops with it, :func:`close_planner`)."""
+    import dosing
+
+    return dosing._one_shot(args.cache, None)
+
+
+def close_planner(planner: Any) -> None:
+    """Close the one-shot planner and stop its executor."""
+    planner.close()
+    planner.jobs.executor.shutdown(wait=True)
+
+
+def print_drug_batch(req: Any, ans: Any) -> None:
+    """A batch's drug dose into a shared medium (or a perfect sink), in words."""
+    secs = "" if ans.seconds is None else f" = {ans.seconds:.4g} s"
+    print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K: a batch ({ans.description}) "
+          f"releases {ans.dose_fraction:.1%} of its drug")
+    print(f"  {ans.model}: heat for t = {ans.time:.4g} (reference tau){secs}")
+    if ans.medium_volume_ml is not None:
+        print(f"  medium {ans.medium_volume_ml:.4g} mL for {ans.bead_count:.4g} beads "
+              f"({ans.medium_over_pore_volume:.3g}x their partition-weighted pore volume): "
+              f"the perfect-sink sum says {ans.sink_time:.4g} and overstates the release at "
+              f"the dose time by {ans.sink_overestimate:.1%}")
+    if ans.medium_concentration_ug_per_ul is not None:
+        print(f"  medium concentration at the dose {ans.medium_concentration_ug_per_ul:.4g} "
+              "ug/uL")
+    print(f"  errors: numerical {ans.numerical_error:.1e} (steps halved), quadrature "
+          f"{ans.quadrature_error:.1e} ({ans.classes} size classes against twice as many); "
+          f"mass balance {ans.mass_balance_error:.1e}")
+    print(wrap(ans.note))

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from solver.errors import ParameterError
 
-from .batch_cli import print_batch_schedule
 from .common import (
     add_at_start_options,
     check_bounds,
@@ -17,14 +17,16 @@ from .common import (
     wrap,
 )
 from .dose import (
+    _planner,
     add_batch_options,
     add_planning_options,
     add_protocol_option,
+    add_wait_options,
+    close_planner,
     planning_values,
     protocol_steps,
     request_from_args,
 )
-from .drug_cli import _planner, _plot, add_wait_options, close_planner
 from .drug_options import add_drug_options, drug_from_args
 
 
@@ -129,3 +131,40 @@ def run(args: argparse.Namespace) -> int:
         print_uncertainty(ans.uncertainty, "the simulated schedule")
     print(wrap(ans.note))
     return 0
+
+
+def _plot(planner: Any, req: Any, ans: Any, path: str) -> None:
+    """Cumulative drug through the corrected (else the checked) protocol."""
+    from api.plots.release import draw_schedule_release
+    from dosing.drug import runs_for
+    from dosing.drug_dose import DrugHeatings
+
+    res = ans.corrected if ans.corrected and ans.corrected.get("actuation_times") \
+        else ans.protocol_check
+    if not res:
+        raise ParameterError("plot", path, "used with the protocol check or the correction")
+    rel = DrugHeatings(req, runs_for(planner), req.fractions).run(res["actuation_times"])
+    print(f"wrote {draw_schedule_release(ans.to_dict(), rel, path)}")
+
+
+def print_batch_schedule(req: Any, ans: Any) -> None:
+    """A batch's schedule (dosing.batch_schedule) in words: its readings, nodes and errors."""
+    print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K, a batch ({ans.description}), "
+          f"doses {', '.join(f'{d:.0%}' for d in ans.doses)} of its stored fluid, rests "
+          f"{', '.join(f'{r:.4g}' for r in ans.rests) or '-'} (reference tau "
+          f"{ans.timescale_seconds:.4g} s, {ans.reference_dry_radius_um:.4g} um dry)")
+    print(table_row(f"hold ({ans.hold_model}):", [h.actuation_time for h in ans.hold]))
+    for name, res in (("protocol check", ans.protocol_check), ("corrected", ans.corrected)):
+        if not res:
+            continue
+        print(table_row(f"{name}: actuation times", res["actuation_times"]))
+        print(table_row("  actuation seconds", res["actuation_seconds"]))
+        print(table_row("  batch delivered (of stored)", res["delivered_fractions"]))
+        print(table_row("  relative error", res["relative_errors"], "{:+.2%}"))
+    print("  nodes (dry um, fluid share, ell): " + ", ".join(
+        f"{n['dry_radius_um']:.4g} {n['volume_weight']:.3f} {n['interfacial_length']:.3g}"
+        for n in ans.nodes))
+    for part in ans.uncertainty.values():
+        print(wrap(part["text"]))
+    print(wrap(f"truth of each node's runs: {ans.truth}"))
+    print(wrap(ans.note))
