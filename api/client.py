@@ -24,7 +24,6 @@ import httpx
 from pydantic import BaseModel
 
 from . import schemas as s
-from .drug_schemas import DrugDoseResponse, DrugScheduleResponse
 
 M = TypeVar("M", bound=BaseModel)
 DEFAULT_URL = "http://127.0.0.1:8000"
@@ -61,8 +60,8 @@ def _body(req: BaseModel | dict[str, Any] | None, fields: dict[str, Any]) -> dic
     return {k: v for k, v in merged.items() if v is not None}
 
 
-_DRUG_ANSWERS: dict[type, type] = {s.DoseTimeResponse: DrugDoseResponse,
-                                   s.ScheduleResponse: DrugScheduleResponse}
+_DRUG_ANSWERS: dict[type, type] = {s.DoseTimeResponse: s.DrugDoseResponse,
+                                   s.ScheduleResponse: s.DrugScheduleResponse}
 
 
 def _answer(resp: httpx.Response, model: type[M]) -> M:
@@ -78,7 +77,7 @@ def _answer(resp: httpx.Response, model: type[M]) -> M:
     if resp.status_code == 202:
         return s.PendingResponse.model_validate(resp.json())  # type: ignore[return-value]
     data = resp.json()
-    if isinstance(data, dict) and data.get("drug") is True:  # a drug answer (api.drug_schemas)
+    if isinstance(data, dict) and data.get("drug") is True:  # a drug answer (api.schemas.DrugOut)
         model = _DRUG_ANSWERS.get(model, model)  # type: ignore[assignment]
     return model.model_validate(data)
 

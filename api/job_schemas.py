@@ -14,11 +14,12 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field
 
-from .drug_schemas import DrugDoseResponse, DrugScheduleResponse
 from .outputs import Out
 from .schemas import (
     BatchScheduleResponse,
     DoseTimeResponse,
+    DrugDoseResponse,
+    DrugScheduleResponse,
     ProtocolDoseResponse,
     ScheduleResponse,
     ValidationReport,

@@ -1,5 +1,5 @@
 """The base of every answer model and the uncertainty parts fluid and drug answers share
-(a leaf: api.schemas and api.drug_schemas both import it)."""
+(a leaf: api.schemas imports it)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The ``drug`` field of the dose and schedule routes (api/drug_schemas.py, api/service.py)."""
+"""The ``drug`` field of the dose and schedule routes (api/schemas.py DrugOut, api/service.py)."""
 
 from __future__ import annotations
 

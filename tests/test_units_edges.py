@@ -9,14 +9,14 @@ import inspect
 import pytest
 from pydantic import BaseModel, ValidationError
 
-from api import drug_schemas, fit_schemas, schemas, sensitivity_schemas
+from api import fit_schemas, schemas, sensitivity_schemas
 from api.cli import main
 from dosing.quantity import UNITS, field_kind, from_edge
 
 
 def _request_models() -> list[type[BaseModel]]:
     out = []
-    for mod in (schemas, drug_schemas, fit_schemas, sensitivity_schemas):
+    for mod in (schemas, fit_schemas, sensitivity_schemas):
         for _, cls in inspect.getmembers(mod, inspect.isclass):
             if (issubclass(cls, BaseModel) and cls.model_config.get("strict")
                     and cls.model_config.get("extra") == "forbid"):

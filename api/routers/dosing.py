@@ -9,7 +9,6 @@ from fastapi.responses import JSONResponse
 
 from .. import schemas as s
 from ..deps import PlannerDep, StateDep, service_state
-from ..drug_schemas import DrugDoseResponse, DrugScheduleResponse
 from ..safe_route import SafeRoute
 from ..service import Accepted, dose_time, schedule
 from .compute import compute
@@ -31,7 +30,7 @@ def answer_or_pending(out: dict[str, Any] | Accepted) -> Any:
                         headers={"Location": out.validation_url})
 
 
-@router.post("/dose-time", response_model=s.DoseTimeResponse | DrugDoseResponse
+@router.post("/dose-time", response_model=s.DoseTimeResponse | s.DrugDoseResponse
              | s.ProtocolDoseResponse, responses={
     202: {"model": s.PendingResponse, "headers": _LOCATION,
           "description": "needs the full solver: poll validation_url, then ask again (a "
@@ -44,7 +43,7 @@ async def dose(body: s.DoseTimeRequest, planner: PlannerDep, request: Request) -
     return answer_or_pending(await compute(dose_time, planner, body, service_state(request)))
 
 
-@router.post("/schedule", response_model=s.ScheduleResponse | DrugScheduleResponse,
+@router.post("/schedule", response_model=s.ScheduleResponse | s.DrugScheduleResponse,
              responses={
     202: {"model": s.PendingResponse, "headers": _LOCATION,
           "description": "queued as a job: poll validation_url"},
