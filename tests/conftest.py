@@ -27,3 +27,18 @@ def planner(tmp_path):
     yield p
     p.close()
     p.jobs.executor.shutdown(wait=True)
+
+
+@pytest.fixture
+def fake_planner(tmp_path):
+    """A planner on the fake full solver (``dosing_fakes.FakeSolver``, as ``.fake``: its
+    closed-form a(t) in milliseconds), a two-thread executor, a temporary cache."""
+    from dosing_fakes import FakeSolver
+
+    fake = FakeSolver()
+    p = Planner(cache_path=tmp_path / "fake.sqlite", executor=ThreadPoolExecutor(2),
+                solver=fake)
+    p.fake = fake
+    yield p
+    p.close()
+    p.jobs.executor.shutdown(wait=True)

@@ -33,13 +33,8 @@ OUT_UM = 50.0  # a CV 0.2 batch's beads under 50 um are outside the region (thei
 
 
 @pytest.fixture
-def planner(tmp_path):
-    fake = FakeSolver()
-    p = Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(2), solver=fake)
-    p.fake = fake
-    yield p
-    p.close()
-    p.jobs.executor.shutdown(wait=True)
+def planner(fake_planner):
+    return fake_planner
 
 
 def _req(radius: float = OUT_UM, cv: float = 0.2) -> DoseRequest:

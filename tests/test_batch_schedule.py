@@ -3,14 +3,12 @@
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
 import pytest
 from dosing_fakes import FakeSolver
 from scipy.special import ndtri
 
-from dosing import Planner, ScheduleRequest
+from dosing import ScheduleRequest
 from dosing.batch_schedule import batch_schedule_with, schedule_sizes
 from dosing.protocol import delivery, heat_cool_protocol
 from solver.errors import ParameterError
@@ -20,13 +18,8 @@ RADIUS = 2.0  # um: ell = 2e-3 at the mean, so the fake's rate depends on each b
 
 
 @pytest.fixture
-def planner(tmp_path):
-    fake = FakeSolver()
-    p = Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(2), solver=fake)
-    p.fake = fake
-    yield p
-    p.close()
-    p.jobs.executor.shutdown(wait=True)
+def planner(fake_planner):
+    return fake_planner
 
 
 def _req(**kw) -> ScheduleRequest:

@@ -143,19 +143,6 @@ def test_python_plan_dose_answers_a_batch() -> None:
     assert ans.seconds == ans.batch.seconds and ans.seconds > 1.1 * bead.seconds
 
 
-@pytest.fixture
-def fake_planner(tmp_path):
-    from concurrent.futures import ThreadPoolExecutor
-
-    from dosing_fakes import FakeSolver
-
-    p = Planner(cache_path=str(tmp_path / "f.sqlite"), executor=ThreadPoolExecutor(2),
-                solver=FakeSolver())
-    yield p
-    p.close()
-    p.jobs.executor.shutdown(wait=True)
-
-
 def test_a_schedule_under_a_protocol_meets_every_dose(fake_planner) -> None:
     """Every heating follows the protocol (its staircase on the stand-in solver): the
     corrected times meet each dose, where the hold reading's times do not; its first
