@@ -262,3 +262,77 @@ def test_release_takes_the_step_grammar(capsys) -> None:
     assert main([*base, "--protocol", "Hold at 308 K until 30 % released"]) == 2
     assert "protocol[0].until" in capsys.readouterr().err
     assert main([*base, "--protocol", "0.01:308"]) == 0
+
+
+TWO = {"kind": "table", "sizes_um": [45.0, 55.0]}
+D0 = {"diffusivity_cm2_s": 0.0}  # a drug the fluid carries: the cheapest drug runs
+# (name, heating, population, question, CLI options, HTTP fields): the drug cells
+DRUG_CELLS = [
+    ("drug one protocol dose", Heating(RAMP), OneBead(), Dose(0.5),
+     ["dose", "--protocol", RAMP[0], "--fraction", "0.5"],
+     {"protocol": RAMP, "dose_fraction": 0.5}),
+    ("drug batch jump dose", Jump(308.0), Batch(CV), Dose(0.5),
+     ["dose", "--t-end", "308", "--fraction", "0.5", "--size-cv", "0.2"],
+     {"t_end": 308.0, "dose_fraction": 0.5, "size_distribution": CV}),
+    ("drug one jump schedule", Jump(308.0), OneBead(), Schedule([0.3, 0.3], rests=[0.1]),
+     ["schedule", "--t-end", "308", "--doses", "0.3", "0.3", "--rests", "0.1"],
+     {"t_end": 308.0, "doses": [0.3, 0.3], "rests": [0.1]}),
+    ("drug one protocol schedule", Heating(RAMP), OneBead(), Schedule([0.3, 0.3], rests=[0.1]),
+     ["schedule", "--protocol", RAMP[0], "--doses", "0.3", "0.3", "--rests", "0.1"],
+     {"protocol": RAMP, "doses": [0.3, 0.3], "rests": [0.1]}),
+    ("drug batch jump schedule", Jump(308.0), Batch(CV), Schedule([0.3, 0.3], rests=[0.1]),
+     ["schedule", "--t-end", "308", "--doses", "0.3", "0.3", "--rests", "0.1", "--size-cv",
+      "0.2"], {"t_end": 308.0, "doses": [0.3, 0.3], "rests": [0.1], "size_distribution": CV}),
+    ("drug batch protocol dose", Heating(RAMP), Batch(CV), Dose(0.5),
+     ["dose", "--protocol", RAMP[0], "--fraction", "0.5", "--size-cv", "0.2"],
+     {"protocol": RAMP, "dose_fraction": 0.5, "size_distribution": CV}),
+    # a measured table of two sizes (exact, no second rule): the costliest cell, 47 s here
+    ("drug batch protocol schedule", Heating(RAMP), Batch(TWO), Schedule([0.3]),
+     ["schedule", "--protocol", RAMP[0], "--doses", "0.3", "--sizes", "{sizes}"],
+     {"protocol": RAMP, "doses": [0.3], "size_distribution": TWO}),
+]
+
+
+def _headline(d: dict) -> list[float]:
+    return d["actuation_times"] if d["question"] == "schedule" else [d["time"]]
+
+
+@pytest.mark.slow
+@pytest.mark.anyio
+@pytest.mark.parametrize("name,heating,population,question,cli,body", DRUG_CELLS,
+                         ids=[c[0] for c in DRUG_CELLS])
+async def test_a_drug_cell_reads_the_same_whatever_the_way_in(
+        name, heating, population, question, cli, body, capsys, tmp_path) -> None:
+    """The drug cells on the real solver (a drug the fluid carries), through Python, the
+    CLI and HTTP (a job) on one cache: one headline."""
+    import asyncio
+    from concurrent.futures import ThreadPoolExecutor
+
+    cache = str(tmp_path / "drug.sqlite")
+    sizes = tmp_path / "sizes.csv"
+    sizes.write_text("radius_um\n45\n55\n")
+    cli = [str(sizes) if c == "{sizes}" else c for c in cli]
+    with Planner(cache_path=cache, executor=ThreadPoolExecutor(2)) as p:
+        py = plan(Request(**CASE, heating=heating, question=question, payload=Drug(D0),
+                          population=population), planner=p).to_dict()
+        assert py["cell"] == name.replace(" ", " · ") and py["drug"] is True
+        assert main([cli[0], "--gel", "ANB", "--t-start", "302", "--dry-radius-um", "50",
+                     "--drug-diffusivity-cm2-s", "0", *cli[1:], "--json",
+                     "--cache", cache]) == 0
+        out = json.loads(capsys.readouterr().out)
+        route = "/v1/schedule" if question.key == "schedule" else "/v1/dose-time"
+        async with asgi(create_app(planner=p, warm=False)) as (api, raw):
+            r = await raw.post(route, json={**CASE, "drug": D0, **body})
+            assert r.status_code in (200, 202), r.text
+            got = r.json()
+            if r.status_code == 202:
+                for _ in range(6000):
+                    v = await api.validation(got["validation_id"])
+                    if v.status in ("done", "failed"):
+                        break
+                    await asyncio.sleep(0.05)
+                assert v.status == "done", v.error
+                got = v.result
+    for d in (out, got):
+        assert d["cell"] == py["cell"]
+        assert _headline(d) == pytest.approx(_headline(py), rel=1e-9)
