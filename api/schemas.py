@@ -39,8 +39,8 @@ from solver.limits import (
     TRUTH_LADDER_START_RANGE,
 )
 
+from .outputs import EnvelopeFields, UncertaintyOut, UncertaintyPart
 from .outputs import Out as _Out
-from .outputs import UncertaintyOut, UncertaintyPart
 
 # the ranges are solver.limits' (one definition): temperatures, the ladder's coarsest ell
 # (its rungs go down to ell / 4) and a direct run's ell
@@ -629,7 +629,7 @@ class PendingResponse(_Out):
                           "reading (one continuous heating, doses read off cumulatively)")
 
 
-class AnswerOut(_Out):
+class AnswerOut(EnvelopeFields):
     """What every dose and schedule answer states, fluid or drug: the truth behind it (its
     runs' model and interfacial length, in words and in numbers), tau and caveats."""
 
@@ -879,7 +879,7 @@ class ScheduleOut(AnswerOut):
         None, description="actuation times meeting every dose within the tolerance")
 
 
-class BatchScheduleResponse(_Out):
+class BatchScheduleResponse(EnvelopeFields):
     """A batch's schedule (dosing.batch_schedule.BatchScheduleAnswer): actuation times in
     the reference (number-weighted mean) bead's tau and seconds whose summed release meets
     each dose of the batch's stored fluid; the size nodes run and the quadrature."""

@@ -253,6 +253,25 @@ class Planner:
         """Queue the full-solver run for ``sc`` (deduplicated by key); returns its future."""
         return self.jobs.submit_group(sc.key(), [self._job(sc, need_radius, need_time)])[0]
 
+    def run_here(self, sc: Scenario, need_radius: float | None = None,
+                 budget: float = 30.0) -> Trajectory:
+        """The trajectory for ``sc``, stored or run in this thread (not queued behind the
+        pool's validations) within ``budget`` seconds of wall time, and stored: for the
+        sub-second runs an answer's envelope needs (the delayed-law lattice)."""
+        traj = self.cached(sc, need_radius)
+        if traj is not None:
+            return traj
+        meta, blob = run_scenario(sc.to_dict(), self.horizon, need_radius, budget=budget,
+                                  solver=self.solver)
+        self.cache.put_if_longer(meta["key"], meta, blob)
+        traj = Trajectory.from_npz(blob, meta)
+        with self._mem_lock:
+            self._mem[sc.key()] = traj
+            self._mem.move_to_end(sc.key())
+            while len(self._mem) > 64:
+                self._row_digest.pop(self._mem.popitem(last=False)[0], None)
+        return traj
+
     def trajectory(self, sc: Scenario, need_radius: float | None = None,
                    need_time: float = 0.0) -> Trajectory:
         """The full-solver trajectory for ``sc`` covering the need (blocking, cached)."""

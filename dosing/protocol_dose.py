@@ -393,6 +393,17 @@ def reduced_dose(req: DoseRequest, mode: Mode, choice: heating_reduced.Choice
     return _answer(req, prot, untils, pieces, time, traj, out, tau_s)
 
 
+def lattice_scenario(req: DoseRequest, settings: Any, target: float) -> Scenario:
+    """The protocol's run under ``settings`` (the delayed-law lattice of an answer's
+    envelope): its until-steps ended where the reduced model ends them, its program
+    continuous in T(t) with the truth's mobility, stopping at ``target``."""
+    resolved = resolve_untils(req, reduced_getter(req))
+    assert not isinstance(resolved, Pending)
+    pieces = resolved[0].program(_tau_seconds(req))
+    return Scenario(req.gel, req.t_start, branch=req.branch, settings=settings,
+                    program=program_spec(pieces, Mode().mobility, req.t_end), stop=target)
+
+
 def _report(scs: list[Scenario], trajs: list[Any], a0: float, target: float) -> Any:
     """The runs' report at the dose radius; a run stopped at it by its terminal event may
     end a rounding short of it (1e-7), so then the report reads the crossing of a radius

@@ -19,11 +19,13 @@ from .common import (
 from .dose import (
     _planner,
     add_batch_options,
+    add_explain_option,
     add_planning_options,
     add_protocol_option,
     add_wait_options,
     close_planner,
     planning_values,
+    print_lead,
     protocol_steps,
     request_from_args,
 )
@@ -56,6 +58,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_drug_options(p)
     add_wait_options(p)
     add_batch_options(p)
+    add_explain_option(p)
     p.set_defaults(func=run)
 
 
@@ -103,6 +106,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print_json(result.to_dict())
         return 0
+    print_lead(result, f"heat for ({result.reading} times)", args.explain)
     print(result.headline)
     if hasattr(ans, "nodes"):  # a batch's schedule: its nodes and quadrature
         print_batch_schedule(req, ans)

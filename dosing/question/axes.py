@@ -34,6 +34,8 @@ class Fluid:
 
     key: ClassVar[str] = "fluid"
     tags: ClassVar[dict[str, Any]] = {}  # what its answers add to their JSON
+    # its dimensionless answer is free of tau (the seconds scale with it: eq. timescale)
+    tau_free: ClassVar[bool] = True
 
     def fields(self) -> dict[str, Any]:
         """Nothing to add: the fluid is the bead's own."""
@@ -59,6 +61,7 @@ class Drug:
 
     key: ClassVar[str] = "drug"
     tags: ClassVar[dict[str, Any]] = {"drug": True}  # its answers say so (api DrugOut)
+    tau_free: ClassVar[bool] = False  # D0 / D_gel moves with the constants
 
     def fields(self) -> dict[str, Any]:
         """The drug request's fields (the medium is the population's to use)."""
@@ -113,10 +116,19 @@ class Jump:
     t_end: Any
 
     key: ClassVar[str] = "jump"
+    tau_free: ClassVar[bool] = True
 
     def fields(self) -> dict[str, Any]:
         """The request's T_end."""
         return {"t_end": self.t_end}
+
+    @staticmethod
+    def lattice(planned: Any, settings: Any, target: float) -> Any:
+        """The jump's run under ``settings`` (the envelope's delayed-law lattice)."""
+        from ..scenario import Scenario
+
+        return Scenario(planned.gel, planned.t_start, planned.t_end, branch=planned.branch,
+                        settings=settings)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
@@ -132,10 +144,18 @@ class Heating:
     steps: Any
 
     key: ClassVar[str] = "protocol"
+    tau_free: ClassVar[bool] = False  # its rates and times are in seconds: tau moves them
 
     def fields(self) -> dict[str, Any]:
         """The request's protocol (its hottest temperature is T_end)."""
         return {"t_end": None, "protocol": self.steps}
+
+    @staticmethod
+    def lattice(planned: Any, settings: Any, target: float) -> Any:
+        """The protocol's run under ``settings`` (the envelope's delayed-law lattice)."""
+        from ..protocol_dose import lattice_scenario
+
+        return lattice_scenario(planned, settings, target)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
