@@ -136,6 +136,9 @@ class KineticsFitRequest(_In):
                                "0 < beta < 10: fixed, or the start of its fit")
     interfacial_length: float | None = Field(None, ge=0, description="full solver's ell")
     size_rel_sigma: float = Field(0.01, gt=0, description="relative size noise")
+    compare_laws: bool = Field(True, description="also fit under both front laws (Maxwell "
+                                                 "and delayed, about a second) and compare "
+                                                 "them by AIC (issue 36: on by default)")
 
     @model_validator(mode="after")
     def _one_bead_size(self) -> KineticsFitRequest:

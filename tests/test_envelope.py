@@ -103,3 +103,48 @@ def test_an_envelope_rerun_queues_nothing(planner) -> None:
         StoredOnly(planner).submit(None)
     with pytest.raises(_NeedsRuns):
         StoredOnly(planner).jobs.submit_group("k", [])
+
+
+@pytest.mark.slow
+def test_a_calibrated_gels_envelope_contains_the_truth(tmp_path, capsys, monkeypatch) -> None:
+    """Issue 36: a shrinking curve made with the Maxwell truth (the regularized model on the
+    moving grid at the bead's own ell) at tau = 300 s, 0.5 % size noise, fitted with
+    `thermogel fit kinetics ... --save NAME` (both laws compared by default): `dose --gel
+    NAME` gives an envelope that contains the truth and is at most 2x wide."""
+    import json
+
+    import numpy as np
+
+    from api.cli import main
+    from dosing.scenario import Scenario, SolverSettings
+    from dosing.units import radius_after_dose
+    from solver.gel import ANB
+
+    monkeypatch.setenv("THERMOGEL_GELS", str(tmp_path / "gels"))
+    cache = str(tmp_path / "c.sqlite")
+    tau, dry = 300.0, 50.0
+    truth = SolverSettings(grid="moving", n=200, interfacial_length=8e-5, rtol=1e-5)
+    from solver.equilibrium import equilibrium
+
+    a80 = radius_after_dose(equilibrium(ANB, 302.0).stretch, 0.8)
+    with Planner(cache_path=cache) as p:
+        traj = p.trajectory(Scenario(ANB, 302.0, 308.0, settings=truth), need_radius=1.2,
+                            need_time=0.3)
+    t80 = traj.time_to_radius(a80)
+    td = np.linspace(0.0, 0.3, 40)
+    size = 2 * dry * np.interp(td, traj.step_t, traj.step_radius)
+    size *= 1 + 0.005 * np.random.default_rng(3).standard_normal(td.size)
+    csv = tmp_path / "curve.csv"
+    csv.write_text("time_s,diameter_um\n" + "\n".join(
+        f"{t * tau:.6g},{y:.6g}" for t, y in zip(td, size, strict=True)))
+    assert main(["fit", "kinetics", str(csv), "--gel", "ANB", "--t-start", "302",
+                 "--t-end", "308", "--dry-radius-um", str(dry), "--size-rel-sigma", "0.005",
+                 "--save", "cal", "--cache", cache, "--json"]) == 0
+    fit = json.loads(capsys.readouterr().out)
+    assert fit["front_laws"]["preferred"] == "maxwell"
+    assert main(["dose", "--gel", "cal", "--t-start", "302", "--t-end", "308", "--fraction",
+                 "0.8", "--dry-radius-um", str(dry), "--cache", cache, "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    lo, hi = d["envelope_seconds"]
+    assert lo <= t80 * tau <= hi and hi / lo <= 2.0, (lo, t80 * tau, hi)
+    assert d["uncertainty"]["timescale"]["calibrated"] is True

@@ -15,7 +15,13 @@ from fastapi import APIRouter
 from fastapi.responses import JSONResponse
 
 from dosing import PhysicalConstants, SolverSettings, UnknownValidationError
-from dosing.fit import data_dict, fit_shrinking, fit_swelling, kinetics_data, swelling_data
+from dosing.fit import (
+    data_dict,
+    fit_swelling,
+    kinetics_data,
+    kinetics_report,
+    swelling_data,
+)
 from dosing.gel_store import GelStore, check_name
 from solver.errors import ParameterError
 from solver.fit import fit_gel
@@ -73,15 +79,14 @@ def _kinetics(planner: Any, body: KineticsFitRequest) -> dict[str, Any]:
     data = kinetics_data(body.time_s, body.size, body.size_kind, body.weight)
     settings = SolverSettings() if body.interfacial_length is None else SolverSettings(
         interfacial_length=body.interfacial_length)
-    res = fit_shrinking(data, to_gel(body.gel), body.t_start, body.t_end, branch=body.branch,
-                        dry_radius_um=body.dry_radius_um,
-                        swollen_radius_um=body.swollen_radius_um,
-                        constants=PhysicalConstants(body.viscosity_pa_s,
-                                                    body.polymer_volume_m3),
-                        fit_beta=body.fit_beta, beta=body.beta, model=body.model,
-                        settings=settings, size_rel_sigma=body.size_rel_sigma,
-                        planner=planner)
-    report = json_safe(res.to_dict())
+    _, report = kinetics_report(
+        data, to_gel(body.gel), body.t_start, body.t_end, compare_laws=body.compare_laws,
+        branch=body.branch, dry_radius_um=body.dry_radius_um,
+        swollen_radius_um=body.swollen_radius_um,
+        constants=PhysicalConstants(body.viscosity_pa_s, body.polymer_volume_m3),
+        fit_beta=body.fit_beta, beta=body.beta, model=body.model, settings=settings,
+        size_rel_sigma=body.size_rel_sigma, planner=planner)
+    report = json_safe(report)
     if body.save:
         store = GelStore()
         g = Gel.from_dict({**report["gel"], "name": body.save})

@@ -353,6 +353,12 @@ def front_law_part(planner: Any, request: Any, result: Any) -> Part:
             f"1.05-2.65, so the bracket x{lo:g}-{hi:g} is stated"), measured=False,
             details={"ratio": None})
     ratio = t_d / point if point > 0.0 else 1.0
+    cal = calibration_ratio(planned)
+    calibrated = ""
+    if cal is not None:  # tau absorbed the law on the calibration jump
+        ratio, calibrated = ratio / cal, (
+            f"; over {cal:.3g}, the laws' ratio on the kinetics fit's own curve (its tau "
+            "absorbed the law there: the seconds are right on that jump under either law)")
     where = ("at the mean bead (the batch's beads share its dimensionless curve)"
              if getattr(result, "batch", None) is not None else "")
     first = ("measured on the first heating's dose, the same factor stated for the "
@@ -362,9 +368,29 @@ def front_law_part(planner: Any, request: Any, result: Any) -> Part:
         f"front law: x{ratio:.3g}. This answer is the local-equilibrium (Maxwell) front; the "
         f"other consistent law, a delayed (hysteretic) transition, reaches the same radius "
         f"at t = {t_d:.5g} against {point:.5g} tau (the ell = 0 Lagrangian lattice, N = "
-        f"{settings.n}, under the same heating{'; ' + note if note else ''}). Which law "
+        f"{settings.n}, under the same heating{'; ' + note if note else ''}{calibrated}). "
+        "Which law "
         "holds is for experiment to decide (docs/interfacial.md sec. 10)"),
         details={"ratio": ratio, "delayed_time": t_d, "maxwell_time": point})
+
+
+def calibration_ratio(planned: Any) -> float | None:
+    """delayed / Maxwell time on a calibrated gel's own kinetics curve (the Maxwell fit's
+    tau over the delayed fit's, both stored by ``dosing.fit.kinetics_report``), or None."""
+    constants = getattr(planned, "constants", None)
+    if constants is None or not getattr(constants, "calibrated", False):
+        return None
+    from ..gel_store import record_for
+
+    try:
+        rec = record_for(planned.gel) or {}
+    except (ParameterError, OSError, ValueError):
+        return None
+    laws = (((rec.get("kinetics") or {}).get("fit") or {}).get("front_laws") or {})
+    taus = {k: (v or {}).get("tau_s") for k, v in (laws.get("laws") or {}).items()}
+    if not taus.get("maxwell") or not taus.get("delayed"):
+        return None
+    return float(taus["maxwell"]) / float(taus["delayed"])
 
 
 def _truth() -> Any:
