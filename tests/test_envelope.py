@@ -148,3 +148,20 @@ def test_a_calibrated_gels_envelope_contains_the_truth(tmp_path, capsys, monkeyp
     lo, hi = d["envelope_seconds"]
     assert lo <= t80 * tau <= hi and hi / lo <= 2.0, (lo, t80 * tau, hi)
     assert d["uncertainty"]["timescale"]["calibrated"] is True
+
+
+@pytest.mark.slow
+def test_a_sieved_drug_carries_its_mesh_part(planner) -> None:
+    """Issue 36: a 1.5 nm solute's dose (carried by the fluid, D0 = 0): the sieving rerun
+    over xi_dry 2-8 nm and both stretch bounds moves it by more than the numerical part;
+    the envelope counts it (2 nm: the dose is never reached, said in words)."""
+    from dosing.question import Drug
+
+    d = plan(Request("ANB", 302, Jump(308), Dose(0.5), dry_radius_um=50,
+                     payload=Drug({"diffusivity_cm2_s": 0.0, "solute_radius_nm": 1.5})),
+             planner).to_dict()
+    mesh = _parts(d)["mesh"]
+    assert mesh["counted"] and mesh["factor"] > 2.0, mesh["text"]
+    assert "xi_dry" in mesh["text"] and "stretch" in mesh["text"]
+    lo, hi = d["envelope_seconds"]
+    assert lo < d["seconds"] * mesh["low"] * 1.0001

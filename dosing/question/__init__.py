@@ -33,18 +33,18 @@ def answer(planner: Any, request: Request) -> Result | Pending | None:
     return out
 
 
-def _finish(planner: Any, request: Request, out: Result) -> None:
+def _finish(planner: Any, request: Request, out: Result, blocking: bool = False) -> None:
     """The answer's echo of its request, its payload's tags and its envelope."""
     from .envelope import envelope
 
     out.request, out.tags = request.to_dict(), {**out.tags, **request.payload.tags}
-    out.envelope = envelope(planner, request, out)
+    out.envelope = envelope(planner, request, out, blocking)
 
 
 def run(planner: Any, request: Request) -> Result:
     """The answer, blocking (full-solver runs on the planner, cached)."""
     out = request.cell.run(planner, request)
-    _finish(planner, request, out)
+    _finish(planner, request, out, blocking=True)
     return out
 
 

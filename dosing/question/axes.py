@@ -41,6 +41,11 @@ class Fluid:
         """Nothing to add: the fluid is the bead's own."""
         return {}
 
+    @staticmethod
+    def mesh_variants(planned: Any) -> list[tuple[str, Any]]:
+        """No sieving: no mesh part."""
+        return []
+
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
         return {"kind": self.key}
@@ -66,6 +71,24 @@ class Drug:
     def fields(self) -> dict[str, Any]:
         """The drug request's fields (the medium is the population's to use)."""
         return {"drug": self.model, "wait": self.wait, "wait_seconds": self.wait_seconds}
+
+    def mesh_variants(self, planned: Any) -> list[tuple[str, Any]]:
+        """The payloads of the mesh part (issue 36): a sieved drug at xi_dry / 2 and 2 xi_dry
+        (its own mesh_size_nm, so the bead's mechanics and their runs stay) and with the
+        other stretch bound (J^(1/3) vs the smallest principal stretch); none when nothing
+        sieves it (no solute radius, no hindrance)."""
+        from dataclasses import replace
+
+        drug = planned.drug
+        if drug.hindrance == "none" or drug.solute_radius() is None:
+            return []
+        xi = drug.dry_mesh_nm(planned.start_radius, planned.constants)
+        swollen = xi * planned.start_radius
+        other = "volume" if drug.mesh_stretch == "smallest" else "smallest"
+        return [(f"xi_dry {f * xi:.3g} nm", replace(self, model=replace(
+                    drug, mesh_size_nm=f * swollen))) for f in (0.5, 2.0)] + [
+                (f"mesh stretch '{other}'", replace(self, model=replace(
+                    drug, mesh_stretch=other)))]
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""

@@ -428,16 +428,43 @@ def batch_parts(result: Any) -> list[Part]:
                       else f"quadrature: {100 * rel:.2g}%")]
 
 
-def drug_parts(request: Any) -> list[Part]:
-    """A sieved drug's mesh part: listed, not yet measured (its reruns need new solute
-    marches)."""
-    if getattr(request.payload, "tau_free", True):
+def mesh_part(planner: Any, request: Any, result: Any, blocking: bool) -> list[Part]:
+    """A sieved drug's mesh part: the cell rerun at xi_dry / 2 and 2 xi_dry and with the
+    other stretch bound (the bead's mechanics cached: solute marches only; blocking only
+    where the answer itself was, else from what is stored)."""
+    variants = request.payload.mesh_variants(request.planned)
+    if not variants:
         return []
-    return [Part("mesh", 1.0, 1.0, (
-        "mesh: not measured in this answer: a solute near the gel's mesh size is sieved by "
-        "a length (xi_dry 2-8 nm) and a stretch bound (smallest principal stretch or "
-        "J^(1/3)) that can move its release by 1-78 % (honest-answers review); give "
-        "mesh_size_nm from a measurement"), counted=False, measured=False)]
+    point = _points(result)
+    times, missing = [], []
+    for label, payload in variants:
+        try:
+            req = dataclasses.replace(request, payload=payload, validate=False)
+            out = (req.cell.run(planner, req) if blocking
+                   else req.cell.now(StoredOnly(planner), req))
+        except _NeedsRuns:
+            out = None
+        except (ParameterError, NotApplicableError, SolverError, ValueError) as exc:
+            missing.append(f"{label} ({str(exc)[:100]})")
+            continue
+        if out is None or isinstance(out, Pending) or not point[0] > 0.0:
+            missing.append(f"{label} (its runs are not stored)")
+            continue
+        times.append((label, max(t / p for t, p in zip(_points(out), point, strict=True))))
+    if not times:
+        return [Part("mesh", 1.0, 1.0, (
+            "mesh: not measured in this answer (its reruns need solute runs not stored: "
+            f"{', '.join(missing)}); a solute near the gel's mesh size can move its release "
+            "by 1-78 % over xi_dry 2-8 nm and the stretch bound"), counted=False,
+            measured=False)]
+    ratios = [r for _, r in times]
+    low, high = min(min(ratios), 1.0), max(max(ratios), 1.0)
+    listing = ", ".join(f"{label}: x{r:.3g}" for label, r in times)
+    return [Part("mesh", low, high, (
+        f"mesh: x{high / low:.3g}, the sieving rerun over the mesh's plausible range and "
+        f"both stretch bounds ({listing}"
+        + (f"; not run: {', '.join(missing)}" if missing else "") + ")"),
+        details={"variants": dict(times)})]
 
 
 def parameter_parts(ans: Any) -> list[Part]:
@@ -453,13 +480,15 @@ def parameter_parts(ans: Any) -> list[Part]:
                  .strip())]
 
 
-def envelope(planner: Any, request: Any, result: Any) -> Envelope:
-    """The envelope of ``result`` (the answer to ``request`` on ``planner``)."""
+def envelope(planner: Any, request: Any, result: Any, blocking: bool = False) -> Envelope:
+    """The envelope of ``result`` (the answer to ``request`` on ``planner``; ``blocking``:
+    the answer itself waited on runs, so may its mesh reruns)."""
     ans = result.answer if result.answer is not None else getattr(result, "batch", None)
     parts: list[Part] = error_parts(ans)
     ts = timescale_part(planner, request, result)
     if ts is not None:
         parts.append(ts)
     parts.append(front_law_part(planner, request, result))
-    parts += batch_parts(result) + drug_parts(request) + parameter_parts(result.answer)
+    parts += (batch_parts(result) + mesh_part(planner, request, result, blocking)
+              + parameter_parts(result.answer))
     return Envelope(_points(result), _seconds_of(result), tuple(parts))
