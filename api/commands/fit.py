@@ -1,4 +1,5 @@
-"""``thermogel fit``: fit a gel to measured swelling (eq. EqlEqn) or shrinking data.
+"""``thermogel fit``: fit a gel to measured swelling (eq. EqlEqn) or shrinking data; the
+empirical release models to a release profile (``fit empirical``, api/commands/empirical.py).
 
     thermogel fit swelling curve.csv [--json] [--plot fit.png] [--save NAME]
     thermogel fit kinetics shrink.csv --gel NAME --t-start 302 --t-end 308 --dry-radius-um 50
@@ -130,6 +131,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--plot", default=None, metavar="PNG",
                    help="draw data, fit and its 95%% band (matplotlib)")
     r.set_defaults(func=run_release)
+    from .empirical import add_empirical
+
+    add_empirical(fs)
 
 
 def _common(p: argparse.ArgumentParser) -> None:

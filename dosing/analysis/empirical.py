@@ -368,20 +368,21 @@ def _rank(fits: dict[str, ModelFit], n_all: int) -> tuple[str | None, list[str]]
     return best, ranked
 
 
-def _fit_one(model: EmpiricalModel, t: np.ndarray, f: np.ndarray, w: np.ndarray | None,
-             lag: bool, window: float | None, time_unit: str) -> ModelFit:
-    import lmfit
-    from scipy import stats
+def _lag_starts(t: np.ndarray, f: np.ndarray) -> list[float]:
+    """Lag starts: none, and midway from the last point below 1 % to the first above it."""
+    above = np.nonzero(f > 1.0)[0]
+    if not above.size or above[0] == 0:
+        return [0.0]
+    i = above[0]
+    return [0.0, 0.5 * float(t[i - 1] + t[i])]
 
-    use_lag = lag and model.lag is not None
-    p_free = len(model.params) + (1 if use_lag else 0)
-    if t.size < p_free + 1:
-        where = f" at or below {window:g} % released" if window is not None else ""
-        raise ParameterError(model.name, f"{t.size} points{where}",
-                             f"at least {p_free + 1} points for {p_free} parameters")
-    lm = lmfit.Model(model.function, independent_vars=["t"])
+
+def _params(lm: Any, model: EmpiricalModel, t: np.ndarray, f: np.ndarray, lag0: float,
+            use_lag: bool) -> Any:
+    """lmfit Parameters: starts from the curve shifted by ``lag0``, bounds, the fixed ones."""
     params = lm.make_params()
-    start = model.start(t, f)
+    shifted = np.maximum(t - lag0, 0.0)
+    start = model.start(shifted, f)
     for par in model.params:
         v = float(start[par.name])
         if not math.isfinite(v):
@@ -394,10 +395,31 @@ def _fit_one(model: EmpiricalModel, t: np.ndarray, f: np.ndarray, w: np.ndarray 
         params[name].set(value=value, vary=False)
     if model.lag is not None:
         first = t[np.argmax(f > 1.0)] if np.any(f > 1.0) else t[-1]
-        params[model.lag].set(value=0.0, min=0.0, max=max(float(first), 1e-12),
+        params[model.lag].set(value=lag0, min=0.0, max=max(float(first), 1e-12),
                               vary=use_lag)
-    with np.errstate(all="ignore"):
-        res = lm.fit(f, params, t=t, weights=w, nan_policy="raise", max_nfev=4000)
+    return params
+
+
+def _fit_one(model: EmpiricalModel, t: np.ndarray, f: np.ndarray, w: np.ndarray | None,
+             lag: bool, window: float | None, time_unit: str) -> ModelFit:
+    import lmfit
+    from scipy import stats
+
+    use_lag = lag and model.lag is not None
+    p_free = len(model.params) + (1 if use_lag else 0)
+    if t.size < p_free + 1:
+        where = f" at or below {window:g} % released" if window is not None else ""
+        raise ParameterError(model.name, f"{t.size} points{where}",
+                             f"at least {p_free + 1} points for {p_free} parameters")
+    lm = lmfit.Model(model.function, independent_vars=["t"])
+    res = None
+    for lag0 in _lag_starts(t, f) if use_lag else [0.0]:
+        params = _params(lm, model, t, f, lag0, use_lag)
+        with np.errstate(all="ignore"):
+            trial = lm.fit(f, params, t=t, weights=w, nan_policy="raise", max_nfev=4000)
+        if res is None or trial.chisqr < res.chisqr:
+            res = trial
+    assert res is not None
     fitted = np.asarray(res.best_fit, dtype=float)
     resid = f - fitted
     ww = np.ones_like(f) if w is None else w

@@ -24,10 +24,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
+from statistics import NormalDist
 from typing import Any
 
 import numpy as np
-from scipy.stats import norm
 
 from solver.errors import ParameterError
 
@@ -248,14 +248,15 @@ def bca_interval(draws: np.ndarray, estimate: float, jack: np.ndarray,
     Shah et al. 1998), with z0 and a."""
     b = draws.size
     share = (np.sum(draws < estimate) + 0.5 * np.sum(draws == estimate)) / b
-    z0 = float(norm.ppf(np.clip(share, 0.5 / b, 1 - 0.5 / b)))
+    norm = NormalDist()
+    z0 = norm.inv_cdf(float(np.clip(share, 0.5 / b, 1 - 0.5 / b)))
     d = jack.mean() - jack if jack.size else np.zeros(1)
     s2 = float(np.sum(d * d))
     a = float(np.sum(d**3) / (6.0 * s2**1.5)) if s2 > 0 else 0.0
     alpha = (1.0 - confidence) / 2.0
     qs = []
-    for z in (norm.ppf(alpha), norm.ppf(1 - alpha)):
-        qs.append(float(norm.cdf(z0 + (z0 + z) / (1.0 - a * (z0 + z)))))
+    for z in (norm.inv_cdf(alpha), norm.inv_cdf(1 - alpha)):
+        qs.append(norm.cdf(z0 + (z0 + z) / (1.0 - a * (z0 + z))))
     return [float(v) for v in np.quantile(draws, qs)], z0, a
 
 
@@ -285,3 +286,41 @@ def _bootstrap(ref: Profile, test: Profile, keep: np.ndarray, n_boot: int, seed:
                        "the lower bound is below 50: similarity not shown")
                     + " (Shah et al. 1998)"),
     }
+
+
+def measured_against_predicted(measured: Profile, time_s: Any, predicted: Any, *,
+                               n_boot: int = N_BOOT, seed: int = 0) -> dict[str, Any]:
+    """A prediction (released fraction at ``time_s``, interpolated to the measured times)
+    against a measured profile: f1/f2 under the FDA rules with the measured profile as the
+    reference (a bootstrap over its units when it has several), beside the residuals and the
+    chi-square under the units' standard error of the mean."""
+    ts = np.asarray(time_s, float)
+    yp = 100.0 * np.asarray(predicted, float)
+    mt = measured.time_s
+    beyond = np.nonzero(mt > ts.max() * (1 + 1e-9))[0]
+    if beyond.size:
+        i = int(beyond[0])
+        raise ParameterError(measured.where(i), f"{measured.times[i]:g} {measured.time_unit}",
+                             f"times within the prediction's horizon ({ts.max():.6g} s)",
+                             "measured after the prediction ends")
+    at = np.interp(mt, ts, yp)
+    pred = Profile(measured.times, at[:, None], measured.time_unit, measured.seconds_per_unit,
+                   "predicted")
+    c = compare(measured, pred, n_boot=n_boot, seed=seed)
+    resid = measured.mean - at
+    out: dict[str, Any] = {
+        "similarity": {**c.to_dict(), "meaning": "FDA similarity (1997 guidance rules) of "
+                       "the prediction and the measured profile as two dissolution "
+                       "profiles, the measured one the reference"},
+        "time": measured.times.tolist(), "time_unit": measured.time_unit,
+        "measured_percent": measured.mean.tolist(), "predicted_percent": at.tolist(),
+        "residuals_percent": resid.tolist(),
+        "rms_residual_percent": float(np.sqrt(np.mean(resid**2)))}
+    sd = measured.sd
+    if sd is not None:
+        sem = np.maximum(sd / math.sqrt(measured.n_units), 1e-6)
+        chi2 = float(np.sum((resid / sem) ** 2))
+        out.update(chi2=chi2, chi2_dof=int(resid.size), chi2_reduced=chi2 / resid.size,
+                   chi2_meaning="sum ((measured mean - prediction) / SEM of the units)^2 "
+                                "over the measured times (no parameter fitted)")
+    return out
