@@ -3,15 +3,19 @@ with the FDA rules and Shah's bootstrap, measured against predicted; every way i
 
 from __future__ import annotations
 
+import asyncio
 import json
 import math
 import time
 from pathlib import Path
 
+import httpx
+
 import numpy as np
 import pytest
 
 from api.cli import main
+from api.http import create_app
 from dosing.analysis import MODELS, fit_empirical, from_arrays, read_profile
 from dosing.analysis.similarity import (
     bootstrap_draws,
@@ -396,3 +400,69 @@ def test_cli_release_compare_states_f2_beside_the_residuals(tmp_path, capsys) ->
     meas.write_text("time_s,released (%)\n30,20\n60,30\n120,42\n900,57\n")
     assert main(args) == 2
     assert "measured.csv: line 5, column 1 (time_s)" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------------ HTTP
+@pytest.fixture
+def anyio_backend() -> str:
+    return "asyncio"
+
+
+def _shah_body(name: str) -> dict:
+    p = read_profile(SHAH[name])
+    return {"time": p.times.tolist(), "time_unit": "min", "units": p.units.T.tolist(),
+            "released_unit": "percent"}
+
+
+@pytest.mark.anyio
+async def test_http_empirical_is_a_job_and_compare_answers_at_once(tmp_path) -> None:
+    """The same numbers as Python: ``POST /v1/fit/empirical`` a job polled at /v1/jobs/{id}
+    and /v1/fit/jobs/{id}; ``POST /v1/compare`` at once; bad data a 422 naming the field."""
+    prof = weibull_profile(1)
+    body = {"time": prof.times.tolist(), "time_unit": "min", "released": prof.mean.tolist(),
+            "released_unit": "percent"}
+    py = fit_empirical(prof)
+    cmp_py = compare(read_profile(SHAH["ref"]), read_profile(SHAH["test1"]), seed=2)
+    app = create_app(warm=False, cache_path=str(tmp_path / "v.sqlite"))
+    async with app.router.lifespan_context(app):
+        transport = httpx.ASGITransport(app=app)
+        async with httpx.AsyncClient(base_url="http://t", transport=transport) as c:
+            r = await c.post("/v1/fit/empirical", json=body)
+            assert r.status_code == 202 and r.json()["kind"] == "empirical", r.text
+            url = "/v1/jobs/" + r.json()["id"]
+            deadline = time.monotonic() + 60
+            while (j := (await c.get(url)).json())["status"] not in ("done", "failed"):
+                assert time.monotonic() < deadline
+                await asyncio.sleep(0.05)
+            assert j["status"] == "done", j
+            own = (await c.get(r.headers["location"])).json()
+            assert own["result"] == j["result"] and own["kind"] == "empirical"
+            rep = j["result"]
+            assert rep["best"] == py.best == "weibull"
+            assert rep["models"]["weibull"]["parameters"]["Td"] == pytest.approx(
+                py.fits["weibull"].parameters["Td"], rel=1e-9)
+            bad = await c.post("/v1/fit/empirical", json={**body, "time": body["time"][::-1]})
+            assert bad.status_code == 422 and bad.json()["detail"][0]["loc"] == ["body", "time",
+                                                                                 1]
+            r = await c.post("/v1/compare", json={"reference": _shah_body("ref"),
+                                                  "test": _shah_body("test1"), "seed": 2})
+            assert r.status_code == 200, r.text
+            out = r.json()
+            assert out["f2"] == pytest.approx(cmp_py.f2, abs=1e-12)
+            assert out["bootstrap"]["interval_bca"] == pytest.approx(
+                cmp_py.bootstrap["interval_bca"], abs=1e-12)
+            test = _shah_body("test1")
+            test["units"][3][2] = 120.0
+            bad = await c.post("/v1/compare", json={"reference": _shah_body("ref"),
+                                                    "test": test})
+            assert bad.status_code == 422
+            assert bad.json()["detail"][0]["loc"] == ["body", "test", "units", 3, 2]
+            test = _shah_body("test1")
+            test["time"][2] = 91.0
+            bad = await c.post("/v1/compare", json={"reference": _shah_body("ref"),
+                                                    "test": test})
+            assert bad.status_code == 422 and "unequal time grids" in bad.text
+            assert bad.json()["detail"][0]["loc"] == ["body", "test", "time", 2]
+            short = {"time": [1, 2], "released": [0.1, 0.2]}
+            bad = await c.post("/v1/compare", json={"reference": short, "test": short})
+            assert bad.status_code == 422 and "at least 3" in bad.text

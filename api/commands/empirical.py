@@ -10,7 +10,6 @@ The CSV: a time column with its unit and one release column per dosage unit (fra
 from __future__ import annotations
 
 import argparse
-from typing import Any
 
 from .common import print_json
 from .outfile import add_format_option, figure_path
@@ -40,21 +39,6 @@ def add_empirical(fs: argparse._SubParsersAction) -> None:
     e.set_defaults(func=run_empirical)
 
 
-def empirical_report(result: Any, curve_points: int = 200) -> dict[str, Any]:
-    """The report with each model's smooth curve (for plots and the page)."""
-    import numpy as np
-
-    from dosing.analysis.empirical import curve
-
-    rep = result.to_dict()
-    t = result.profile.times
-    tt = np.linspace(0.0, float(t.max()), curve_points)
-    for name, fit in result.fits.items():
-        rep["models"][name]["curve_time"] = tt.tolist()
-        rep["models"][name]["curve"] = curve(fit, tt).tolist()
-    return rep
-
-
 def run_empirical(args: argparse.Namespace) -> int:
     """Read, fit, print (or JSON), plot."""
     from dosing.analysis import fit_empirical, read_profile
@@ -63,7 +47,7 @@ def run_empirical(args: argparse.Namespace) -> int:
     models = None if args.models is None else [
         m.strip() for m in args.models.split(",") if m.strip()]
     res = fit_empirical(prof, models, lag=args.lag, kp_window=args.kp_window)
-    rep = empirical_report(res)
+    rep = res.report()
     if args.plot:
         from api.plots.release_analysis import draw_empirical
 

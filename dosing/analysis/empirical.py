@@ -289,6 +289,16 @@ class EmpiricalResult:
                     "r2_adjusted": "1 - (1 - R^2)(n - 1)/(n - p)"},
                 "profile": self.profile.to_dict(), "notes": list(self.notes)}
 
+    def report(self, curve_points: int = 200) -> dict[str, Any]:
+        """``to_dict`` with each model's curve on ``curve_points`` times from 0 to the last
+        (``curve_time``, ``curve``: for plots and the page)."""
+        rep = self.to_dict()
+        tt = np.linspace(0.0, float(self.profile.times.max()), curve_points)
+        for name, fit in self.fits.items():
+            rep["models"][name]["curve_time"] = tt.tolist()
+            rep["models"][name]["curve"] = curve(fit, tt).tolist()
+        return rep
+
     def to_dataframe(self) -> Any:
         """One row per model and parameter (pandas, imported here)."""
         import pandas as pd
