@@ -150,6 +150,22 @@ def test_mass_and_fraction_columns(tmp_path) -> None:
     assert read_profile(p).mean.tolist() == [25.0, 50.0, 75.0]
 
 
+def test_fitting_and_comparing_import_neither_matplotlib_nor_fastapi() -> None:
+    """The layer rule (docs/architecture.md) holds while the analyses run, not only at import:
+    the fits are scipy's least squares (lmfit would import matplotlib and pandas)."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from dosing.analysis import fit_empirical, from_arrays; "
+            "from dosing.analysis.similarity import compare; "
+            "p = from_arrays([1, 2, 3, 4], units=[[10, 20, 30, 40], [12, 21, 33, 41]], "
+            "released_unit='percent'); fit_empirical(p); compare(p, p); "
+            "print([m for m in ('fastapi', 'matplotlib', 'lmfit') if m in sys.modules])")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0 and done.stdout.strip() == "[]", done.stdout + done.stderr
+
+
 # ------------------------------------------------------------------------ bad files
 BAD = {
     "non_monotone": ("time_min,unit 1 (%),unit 2 (%)\n5,10,11\n10,20,21\n8,30,31\n20,40,41\n",

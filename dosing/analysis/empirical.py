@@ -17,12 +17,15 @@ profile's unit (the parameters' units say it), s = max(t - tlag, 0) with a lag:
 * Peppas-Sahlin     F = k1 t^m + k2 t^(2m), m = 0.43 for a sphere (Peppas & Sahlin 1989),
   on the points up to 60 %
 
-Fitted with lmfit (Levenberg-Marquardt) on the mean profile, weighted by 1/SD of the units
-when replicates are given (relative weights: the covariance is scaled by the reduced
-chi-square).  Per model: parameters, 95 % intervals (linearised, Student t), R^2 adjusted,
-AIC = n ln(WSSR/n) + 2p, MSC = ln(SS_tot/WSSR) - 2p/n (the MicroMath model selection
-criterion), residuals.  ``best`` is the lowest AIC among the models fitted on the same points
-as the whole curve (a model on its 60 % window is ranked only against the others there).
+Fitted by bounded least squares (scipy's trust-region reflective ``least_squares``; the
+covariance from the Jacobian, ``solver.fit.result``) on the mean profile, weighted by 1/SD
+of the units when replicates are given (relative weights: the covariance is scaled by the
+reduced chi-square).  Not lmfit: importing it imports matplotlib and pandas (3.6 s here),
+which ``dosing`` must not.  Per model: parameters, 95 % intervals (linearised, Student t),
+R^2 adjusted, AIC = n ln(WSSR/n) + 2p, MSC = ln(SS_tot/WSSR) - 2p/n (the MicroMath model
+selection criterion), residuals.  ``best`` is the lowest AIC among the models fitted on the
+same points as the whole curve (a model on its 60 % window is ranked only against the
+others there).
 """
 
 from __future__ import annotations
@@ -387,52 +390,56 @@ def _lag_starts(t: np.ndarray, f: np.ndarray) -> list[float]:
     return [0.0, 0.5 * float(t[i - 1] + t[i])]
 
 
-def _params(lm: Any, model: EmpiricalModel, t: np.ndarray, f: np.ndarray, lag0: float,
-            use_lag: bool) -> Any:
-    """lmfit Parameters: starts from the curve shifted by ``lag0``, bounds, the fixed ones."""
-    params = lm.make_params()
-    shifted = np.maximum(t - lag0, 0.0)
-    start = model.start(shifted, f)
-    for par in model.params:
-        v = float(start[par.name])
-        if not math.isfinite(v):
-            v = 1.0
-        v = min(max(v, par.lower if par.lower > -INF else v), par.upper)
-        if par.lower == 0.0 and v <= 0:
-            v = 1e-6
-        params[par.name].set(value=v, min=par.lower, max=par.upper, vary=True)
-    for name, value in model.fixed:
-        params[name].set(value=value, vary=False)
-    if model.lag is not None:
-        first = t[np.argmax(f > 1.0)] if np.any(f > 1.0) else t[-1]
-        params[model.lag].set(value=lag0, min=0.0, max=max(float(first), 1e-12),
-                              vary=use_lag)
-    return params
+def _start_vector(model: EmpiricalModel, t: np.ndarray, f: np.ndarray, lag0: float,
+                  names: list[str], bounds: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """Starts from the curve shifted by ``lag0``, inside the bounds."""
+    start = {**model.start(np.maximum(t - lag0, 0.0), f), **({model.lag: lag0}
+                                                           if model.lag else {})}
+    x0 = np.array([float(start[n]) for n in names])
+    x0[~np.isfinite(x0)] = 1.0
+    lo, hi = bounds
+    span = np.where(np.isfinite(hi - lo), hi - lo, np.maximum(np.abs(x0), 1.0))
+    return np.clip(x0, lo + 1e-9 * span, hi - 1e-9 * span)
 
 
 def _fit_one(model: EmpiricalModel, t: np.ndarray, f: np.ndarray, w: np.ndarray | None,
              lag: bool, window: float | None, time_unit: str) -> ModelFit:
-    import lmfit
-    from scipy import stats
+    from scipy.optimize import least_squares
+
+    from solver.fit.result import covariance_from_jacobian, t_quantile
 
     use_lag = lag and model.lag is not None
-    p_free = len(model.params) + (1 if use_lag else 0)
+    names = [par.name for par in model.params] + ([model.lag] if use_lag else [])
+    p_free = len(names)
     if t.size < p_free + 1:
         where = f" at or below {window:g} % released" if window is not None else ""
         raise ParameterError(model.name, f"{t.size} points{where}",
                              f"at least {p_free + 1} points for {p_free} parameters")
-    lm = lmfit.Model(model.function, independent_vars=["t"])
+    fixed = {k: float(v) for k, v in model.fixed}
+    lag_max = max(float(t[np.argmax(f > 1.0)] if np.any(f > 1.0) else t[-1]), 1e-12)
+    lo = np.array([par.lower for par in model.params] + ([0.0] if use_lag else []))
+    hi = np.array([par.upper for par in model.params] + ([lag_max] if use_lag else []))
+    ww = np.ones_like(f) if w is None else w
+
+    def predict(x: np.ndarray, tt: np.ndarray = t) -> np.ndarray:
+        return model.function(tt, **dict(zip(names, x, strict=True)), **fixed)
+
+    def fun(x: np.ndarray) -> np.ndarray:
+        with np.errstate(all="ignore"):
+            r = ww * (predict(x) - f)
+        return np.where(np.isfinite(r), r, 1e10)
+
     res = None
     for lag0 in _lag_starts(t, f) if use_lag else [0.0]:
-        params = _params(lm, model, t, f, lag0, use_lag)
-        with np.errstate(all="ignore"):
-            trial = lm.fit(f, params, t=t, weights=w, nan_policy="raise", max_nfev=4000)
-        if res is None or trial.chisqr < res.chisqr:
+        x0 = _start_vector(model, t, f, lag0, names, (lo, hi))
+        trial = least_squares(fun, x0, bounds=(lo, hi), method="trf", x_scale="jac",
+                              xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=2000 * p_free)
+        if res is None or trial.cost < res.cost:
             res = trial
     assert res is not None
-    fitted = np.asarray(res.best_fit, dtype=float)
+    cov, _ = covariance_from_jacobian(res.jac, res.fun, p_free)
+    fitted = predict(res.x)
     resid = f - fitted
-    ww = np.ones_like(f) if w is None else w
     wssr = max(float(np.sum((ww * resid) ** 2)), 1e-300)
     ybar = float(np.sum(ww**2 * f) / np.sum(ww**2))
     sst = float(np.sum((ww * (f - ybar)) ** 2))
@@ -442,25 +449,23 @@ def _fit_one(model: EmpiricalModel, t: np.ndarray, f: np.ndarray, w: np.ndarray 
     aic = n * math.log(wssr / n) + 2 * p
     bic = n * math.log(wssr / n) + p * math.log(n)
     msc = (math.log(sst / wssr) if sst > 0 else INF) - 2.0 * p / n
-    tq = float(stats.t.ppf(0.5 + CONFIDENCE / 2, max(n - p, 1)))
-    names = [par.name for par in model.params] + ([model.lag] if use_lag else [])
+    tq = t_quantile(n - p, CONFIDENCE)
     units = {par.name: par.unit.format(t=time_unit) for par in model.params}
     if model.lag is not None:
         units[model.lag] = time_unit
     values, errs, ivs = {}, {}, {}
     warns = []
-    for name in names:
-        par = res.params[name]
-        values[name] = float(par.value)
-        se = par.stderr
-        ok = se is not None and math.isfinite(se)
-        errs[name] = float(se) if ok else None
-        ivs[name] = [values[name] - tq * se, values[name] + tq * se] if ok else None
-        at_top = par.max < INF and abs(par.value - par.max) <= 1e-9 * max(1.0, abs(par.max))
-        at_bottom = par.min > 0.0 and abs(par.value - par.min) <= 1e-9 * par.min
+    for k, name in enumerate(names):
+        v = float(res.x[k])
+        values[name] = v
+        se = math.sqrt(cov[k, k]) if cov[k, k] >= 0 else math.nan
+        ok = math.isfinite(se) and se < 1e100
+        errs[name] = se if ok else None
+        ivs[name] = [v - tq * se, v + tq * se] if ok else None
+        at_top = hi[k] < INF and abs(v - hi[k]) <= 1e-6 * max(1.0, abs(hi[k]))
+        at_bottom = lo[k] > 0.0 and abs(v - lo[k]) <= 1e-6 * lo[k]
         if at_top or at_bottom:
-            warns.append(f"{name} at its bound [{par.min:g}, {par.max:g}]")
-    fixed = {k: float(v) for k, v in model.fixed}
+            warns.append(f"{name} at its bound [{lo[k]:g}, {hi[k]:g}]")
     if not res.success:
         warns.append(f"the fit did not converge ({res.message})")
     if not any(e is not None for e in errs.values()):
