@@ -13,6 +13,7 @@ from api.schemas import RequestModel
 
 MAX_TIMES = 200  # a dissolution profile has a few to a few dozen times
 MAX_UNITS = 48  # dosage units (vessels) per profile
+MAX_CSV_CHARS = 200_000  # a profile's CSV is a few kB
 ModelName = Literal["zero_order", "first_order", "higuchi", "korsmeyer_peppas",
                     "hixson_crowell", "weibull", "peppas_sahlin"]  # dosing.analysis.MODELS
 
@@ -21,8 +22,13 @@ class ProfileIn(RequestModel):
     """One release profile: its times, and either one ``released`` profile or ``units``
     (one profile per dosage unit, each at every time)."""
 
-    time: list[float] = Field(max_length=MAX_TIMES, description="times from the start, in "
-                                                                "time_unit, increasing")
+    csv: str | None = Field(None, max_length=MAX_CSV_CHARS, description="the profile as a "
+                            "lab's CSV text (time with its unit, one release column per unit), "
+                            "read as the command line reads a file; instead of time and "
+                            "released/units (released_unit and time_unit then come from the "
+                            "header)")
+    time: list[float] | None = Field(None, max_length=MAX_TIMES, description="times from the "
+                                     "start, in time_unit, increasing")
     time_unit: Literal["s", "min", "h", "d"] = Field("s", description="the times' unit (the "
                                                      "empirical parameters are stated in it)")
     released: list[float] | None = Field(None, max_length=MAX_TIMES,
@@ -36,8 +42,18 @@ class ProfileIn(RequestModel):
 
     def profile(self, label: str = "") -> Any:
         """The checked ``dosing.analysis.Profile`` (a ParameterError names the field)."""
-        from dosing.analysis import from_arrays
+        from dosing.analysis import from_arrays, read_profile
+        from solver.errors import ParameterError
 
+        pre = f"{label}." if label else ""
+        if self.csv is not None:
+            if self.time is not None or self.released is not None or self.units is not None:
+                raise ParameterError(f"{pre}csv", "csv and arrays", "either csv, or time with "
+                                     "released or units")
+            text = self.csv if self.csv.endswith("\n") else self.csv + "\n"  # text, no path
+            return read_profile(text, self.loaded_ug, label=f"{pre}csv")
+        if self.time is None:
+            raise ParameterError(f"{pre}time", None, "times (with released or units), or csv")
         return from_arrays(self.time, self.released, self.units, time_unit=self.time_unit,
                            released_unit=self.released_unit, loaded_ug=self.loaded_ug,
                            label=label)

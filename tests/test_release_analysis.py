@@ -478,6 +478,18 @@ async def test_http_empirical_is_a_job_and_compare_answers_at_once(tmp_path) -> 
                                                     "test": test})
             assert bad.status_code == 422 and "unequal time grids" in bad.text
             assert bad.json()["detail"][0]["loc"] == ["body", "test", "time", 2]
+            # the CSV text itself, read as the command line reads the file
+            r = await c.post("/v1/compare", json={"reference": {"csv": SHAH["ref"].read_text()},
+                                                  "test": {"csv": SHAH["test1"].read_text()},
+                                                  "seed": 2})
+            assert r.status_code == 200 and r.json()["f2"] == pytest.approx(cmp_py.f2)
+            bad_csv = "time_min,unit 1 (%),unit 2 (%)\n5,10,11\n10,20,21\n8,30,31\n"
+            bad = await c.post("/v1/compare", json={"reference": {"csv": bad_csv},
+                                                    "test": {"csv": bad_csv}})
+            assert bad.status_code == 422
+            assert "reference.csv: line 4, column 1 (time_min)" in bad.json()["detail"][0]["msg"]
+            bad = await c.post("/v1/fit/empirical", json={"csv": "/etc/hostname"})
+            assert bad.status_code == 422  # CSV text, never a path on the server
             short = {"time": [1, 2], "released": [0.1, 0.2]}
             bad = await c.post("/v1/compare", json={"reference": short, "test": short})
             assert bad.status_code == 422 and "at least 3" in bad.text

@@ -358,6 +358,8 @@ def fit_empirical(profile: Profile, models: list[str] | tuple[str, ...] | None =
                                   lag, window, profile.time_unit)
         except ParameterError as exc:
             errors[name] = str(exc)
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            errors[name] = f"the least squares failed on this curve ({exc})"
     best, ranked = _rank(fits, t.size)
     notes = [f"times in {profile.time_unit}; F in % of the load"]
     if w is not None:
@@ -438,7 +440,10 @@ def _fit_one(model: EmpiricalModel, t: np.ndarray, f: np.ndarray, w: np.ndarray 
             res = trial
     assert res is not None
     cov, _ = covariance_from_jacobian(res.jac, res.fun, p_free)
-    fitted = predict(res.x)
+    with np.errstate(all="ignore"):
+        fitted = predict(res.x)
+    if not np.all(np.isfinite(fitted)) or not np.all(np.isfinite(res.x)):
+        raise ValueError("the model is not finite at the fitted parameters")
     resid = f - fitted
     wssr = max(float(np.sum((ww * resid) ** 2)), 1e-300)
     ybar = float(np.sum(ww**2 * f) / np.sum(ww**2))
