@@ -493,3 +493,41 @@ async def test_http_empirical_is_a_job_and_compare_answers_at_once(tmp_path) -> 
             short = {"time": [1, 2], "released": [0.1, 0.2]}
             bad = await c.post("/v1/compare", json={"reference": short, "test": short})
             assert bad.status_code == 422 and "at least 3" in bad.text
+
+
+@pytest.mark.slow  # a real server and a browser
+def test_the_analysis_page_uploads_csv_files(tmp_path) -> None:
+    """GET /analysis: a CSV uploaded fits the models (the job polled) and two uploaded CSVs
+    are compared, in headless Chromium; a bad file's line and column are shown."""
+    from test_page_browser import CHROMIUM, FLAGS, _need_browser, _serve_gracefully
+
+    sync_playwright = _need_browser()
+    bad = tmp_path / "bad.csv"
+    bad.write_text(BAD["non_monotone"][0])
+    with _serve_gracefully(tmp_path / "cache.sqlite") as url, sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+        try:
+            page = browser.new_page(viewport={"width": 1300, "height": 900})
+            errors: list[str] = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(url + "/analysis")
+            page.set_input_files("#emp-file", str(DATA.parent.parent.parent / "docs" /
+                                                  "examples" / "release_reference.csv"))
+            page.click("#emp-go")
+            page.wait_for_selector("body[data-emp=done]", timeout=60_000)
+            assert "best by AIC: weibull" in page.inner_text("#emp-best")
+            assert page.locator("#emp-plot polyline").count() == 7
+            page.set_input_files("#cmp-ref", str(SHAH["ref"]))
+            page.set_input_files("#cmp-test", str(SHAH["test1"]))
+            page.click("#cmp-go")
+            page.wait_for_selector("body[data-cmp=done]", timeout=60_000)
+            assert "f2 = 60.03" in page.inner_text("#cmp-f2")
+            assert "BCa" in page.inner_text("#cmp-boot-out")
+            page.screenshot(path=str(tmp_path / "analysis.png"), full_page=True)
+            page.set_input_files("#cmp-test", str(bad))
+            page.click("#cmp-go")
+            page.wait_for_selector("body[data-cmp=error]", timeout=60_000)
+            assert "line 4, column 1 (time_min)" in page.inner_text("#cmp-error")
+            assert errors == []
+        finally:
+            browser.close()

@@ -1,14 +1,15 @@
 """Release analysis over HTTP (issue 38): ``POST /v1/fit/empirical`` fits the empirical
 release models as a stored job (202 + poll at ``/v1/fit/jobs/{id}`` or ``/v1/jobs/{id}``);
 ``POST /v1/compare`` answers f1/f2 with the FDA rules and Shah's bootstrap at once (a few
-milliseconds: vectorised).  Bad data are a 422 naming the field and index."""
+milliseconds: vectorised).  Bad data are a 422 naming the field and index.  ``GET /analysis``
+is a small page over both: CSV files uploaded, results as tables and plots."""
 
 from __future__ import annotations
 
 from typing import Any
 
 from fastapi import APIRouter
-from fastapi.responses import JSONResponse
+from fastapi.responses import FileResponse, HTMLResponse, JSONResponse
 
 from solver.json_safe import json_safe
 
@@ -23,6 +24,7 @@ from ..deps import StateDep
 from ..safe_route import SafeRoute
 from .compute import compute
 from .fit import KINDS
+from .page import STATIC
 
 router = APIRouter(tags=["fit"], route_class=SafeRoute)
 
@@ -70,3 +72,15 @@ async def compare_route(body: CompareRequest) -> Any:
     rules, the outcome in the guidance's words) and Shah et al.'s bootstrap f2 (90 % BCa)
     when replicate units are given."""
     return await compute(_compare, body)
+
+
+@router.get("/analysis", response_class=HTMLResponse, include_in_schema=False)
+async def analysis_page() -> HTMLResponse:
+    """The release-analysis page: CSV uploads to the two routes above."""
+    return HTMLResponse((STATIC / "analysis.html").read_text(encoding="utf-8"))
+
+
+@router.get("/analysis.js", include_in_schema=False)
+async def analysis_script() -> FileResponse:
+    """Its script."""
+    return FileResponse(str(STATIC / "analysis.js"), media_type="text/javascript")

@@ -166,7 +166,8 @@ def compare(reference: Profile, test: Profile, *, n_boot: int = N_BOOT, seed: in
 def _side(p: Profile) -> dict[str, Any]:
     sd = p.sd
     cv = _cv(p)
-    return {"label": p.label, "n_units": p.n_units, "mean_percent": p.mean.tolist(),
+    return {"label": p.label, "n_units": p.n_units, "time": p.times.tolist(),
+            "mean_percent": p.mean.tolist(),
             "sd_percent": None if sd is None else sd.tolist(),
             "cv_percent": None if cv is None else [None if not np.isfinite(c) else float(c)
                                                    for c in cv]}
