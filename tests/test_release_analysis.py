@@ -246,6 +246,9 @@ def test_f2_of_twelve_units_is_the_fda_formula_on_the_means(batch: str) -> None:
     assert (similar in c.outcome) == (SHAH_PRINTED[batch] >= 50)
     assert "An f2 value between 50 and 100 suggests that the two dissolution profiles are " \
            "similar" in c.outcome
+    df = c.to_dataframe()
+    assert df["used"].all() and df["reference_mean_percent"].tolist() == pytest.approx(r)
+    assert df.attrs["f2"] == c.f2
 
 
 def test_the_85_percent_rule_keeps_one_point_after_both_pass_it() -> None:

@@ -4,6 +4,8 @@ with the FDA rules and Shah's bootstrap (``similarity``)."""
 
 from .empirical import MODELS, EmpiricalModel, EmpiricalResult, ModelFit, fit_empirical
 from .profiles import Profile, from_arrays, read_profile
+from .similarity import Comparison
+from .similarity import compare as compare_profiles
 
-__all__ = ["MODELS", "EmpiricalModel", "EmpiricalResult", "ModelFit", "Profile",
-           "fit_empirical", "from_arrays", "read_profile"]
+__all__ = ["MODELS", "Comparison", "EmpiricalModel", "EmpiricalResult", "ModelFit", "Profile",
+           "compare_profiles", "fit_empirical", "from_arrays", "read_profile"]

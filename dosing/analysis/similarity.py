@@ -122,6 +122,23 @@ class Comparison:
         """Plain data (JSON-ready)."""
         return asdict(self)
 
+    def to_dataframe(self) -> Any:
+        """One row per time: both means, SDs and CVs, and whether f2 used it (pandas,
+        imported here)."""
+        import pandas as pd
+
+        rows = {"time": self.reference["time"], "used": [
+            i in self.points_used for i in range(len(self.reference["time"]))]}
+        for side, d in (("reference", self.reference), ("test", self.test)):
+            rows[f"{side}_mean_percent"] = d["mean_percent"]
+            n = len(d["mean_percent"])
+            rows[f"{side}_sd_percent"] = d["sd_percent"] or [None] * n
+            rows[f"{side}_cv_percent"] = d["cv_percent"] or [None] * n
+        df = pd.DataFrame(rows)
+        df.attrs.update(f1=self.f1, f2=self.f2, time_unit=self.time_unit,
+                        outcome=self.outcome)
+        return df
+
 
 def compare(reference: Profile, test: Profile, *, n_boot: int = N_BOOT, seed: int = 0,
             confidence: float = CONFIDENCE, bootstrap: bool = True) -> Comparison:
