@@ -80,7 +80,7 @@ def similarity_of_fit(time_s: Any, measured: Any, predicted: Any) -> dict[str, A
     ts = np.asarray(time_s, float)
     meas = Profile(ts, 100.0 * np.asarray(measured, float)[:, None], "s", 1.0, "measured")
     pred = Profile(ts, 100.0 * np.asarray(predicted, float)[:, None], "s", 1.0, "predicted")
-    c = compare(meas, pred, bootstrap=False)
+    c = compare(meas, pred, bootstrap=False, prediction=True)
     return {"f2": c.f2, "f1": c.f1, "times_used_s": c.times_used, "points_used": c.points_used,
             "conditions": c.conditions, "conditions_met": c.conditions_met,
             "outcome": c.outcome, "f1_outcome": c.f1_outcome,

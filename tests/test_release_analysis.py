@@ -348,6 +348,8 @@ def test_measured_against_predicted() -> None:
     s = out["similarity"]
     assert s["f2"] == pytest.approx(100.0) and out["chi2"] == pytest.approx(0.0, abs=1e-9)
     assert s["bootstrap"] is not None and "measured" in s["meaning"]
+    assert s["conditions"]["units"]["found"] == 3 and not s["conditions"]["units"]["met"]
+    assert "prediction is one curve" in s["conditions"]["units"]["rule"]
     off = measured_against_predicted(measured, ts, same + 0.10)
     assert off["similarity"]["f2"] == pytest.approx(50 * math.log10(100 / math.sqrt(101)))
     assert off["residuals_percent"] == pytest.approx([-10.0] * 4)

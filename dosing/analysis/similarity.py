@@ -141,9 +141,11 @@ class Comparison:
 
 
 def compare(reference: Profile, test: Profile, *, n_boot: int = N_BOOT, seed: int = 0,
-            confidence: float = CONFIDENCE, bootstrap: bool = True) -> Comparison:
+            confidence: float = CONFIDENCE, bootstrap: bool = True,
+            prediction: bool = False) -> Comparison:
     """f1/f2 of ``test`` against ``reference`` under the FDA rules, and Shah's bootstrap
-    when either has replicate units (module doc)."""
+    when either has replicate units (module doc); ``prediction``: the test is a model's
+    curve, so the 12-unit rule applies to the reference alone."""
     same_grid(reference, test)
     if not (1000 <= n_boot <= MAX_BOOT):
         raise ParameterError("n_boot", n_boot, f"1000 ... {MAX_BOOT} draws")
@@ -157,7 +159,7 @@ def compare(reference: Profile, test: Profile, *, n_boot: int = N_BOOT, seed: in
                              "time points after zero in both profiles")
     f1 = f1_value(r[keep], t[keep])
     f2 = f2_value(r[keep], t[keep])
-    cond = _conditions(reference, test, keep)
+    cond = _conditions(reference, test, keep, prediction)
     met = all(c["met"] for c in cond.values())
     words = (f"f2 = {f2:.2f}, between 50 and 100: the two dissolution profiles are similar "
              f"(FDA 1997: '{F2_WORDS}')" if f2 >= 50.0 else
@@ -190,7 +192,8 @@ def _side(p: Profile) -> dict[str, Any]:
                                                    for c in cv]}
 
 
-def _conditions(ref: Profile, test: Profile, keep: np.ndarray) -> dict[str, dict[str, Any]]:
+def _conditions(ref: Profile, test: Profile, keep: np.ndarray,
+                prediction: bool = False) -> dict[str, dict[str, Any]]:
     """The guidance's conditions, each with its rule, whether met, and what was found."""
     n_used = int(keep.sum())
     after = keep & (ref.mean > LIMIT_85) & (test.mean > LIMIT_85)
@@ -205,6 +208,10 @@ def _conditions(ref: Profile, test: Profile, keep: np.ndarray) -> dict[str, dict
                   "met": ref.n_units >= UNITS_REQUIRED and test.n_units >= UNITS_REQUIRED,
                   "found": [ref.n_units, test.n_units]},
     }
+    if prediction:
+        out["units"] = {"rule": f"{UNITS_REQUIRED} units of the measured profile (the "
+                                "prediction is one curve)",
+                        "met": ref.n_units >= UNITS_REQUIRED, "found": ref.n_units}
     idx = np.nonzero(keep)[0]
     bad = []
     checked = False
@@ -324,7 +331,7 @@ def measured_against_predicted(measured: Profile, time_s: Any, predicted: Any, *
     at = np.interp(mt, ts, yp)
     pred = Profile(measured.times, at[:, None], measured.time_unit, measured.seconds_per_unit,
                    "predicted")
-    c = compare(measured, pred, n_boot=n_boot, seed=seed)
+    c = compare(measured, pred, n_boot=n_boot, seed=seed, prediction=True)
     resid = measured.mean - at
     out: dict[str, Any] = {
         "similarity": {**c.to_dict(), "meaning": "FDA similarity (1997 guidance rules) of "
