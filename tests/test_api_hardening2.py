@@ -44,6 +44,9 @@ POSTS: dict[str, tuple[dict[str, Any], list[Any]]] = {
                         ["body", "gel"]),
     "/v1/sensitivity": ({"gel": SURROGATE, "vary": [{"name": "dry_radius_um", "low": 20.0,
                                                      "high": 80.0}]}, ["body", "gel"]),
+    "/v1/fit/empirical": ({"csv": SURROGATE}, ["body", "csv"]),  # issue 38
+    "/v1/compare": ({"reference": {"csv": SURROGATE}, "test": {"csv": "t,r\n1,2\n"}},
+                    ["body", "reference", "csv"]),
 }
 
 

@@ -1,4 +1,5 @@
-"""``thermogel fit``: fit a gel to measured swelling (eq. EqlEqn) or shrinking data.
+"""``thermogel fit``: fit a gel to measured swelling (eq. EqlEqn) or shrinking data; the
+empirical release models to a release profile (``fit empirical``, api/commands/empirical.py).
 
     thermogel fit swelling curve.csv [--json] [--plot fit.png] [--save NAME]
     thermogel fit kinetics shrink.csv --gel NAME --t-start 302 --t-end 308 --dry-radius-um 50
@@ -131,6 +132,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--plot", default=None, metavar="PNG",
                    help="draw data, fit and its 95%% band (matplotlib)")
     r.set_defaults(func=run_release)
+    from .empirical import add_empirical
+
+    add_empirical(fs)
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -364,8 +368,10 @@ def run_release(args: argparse.Namespace) -> int:
           f"{_interval(rep['intervals']['drug_diffusivity_cm2_s'])}; effective "
           f"{rep['effective_diffusivity_cm2_s']:.4g} cm^2/s (hindrance {rep['hindrance']}, "
           f"factor {rep['hindrance_factor']:.3g})")
-    print(f"  f2 of the fit against the data {rep['f2']:.1f} (>= 50: similar); rms "
-          f"{rep['rms_residual']:.3g} of the load")
+    print(f"  goodness of fit: rms residual {rep['rms_residual']:.3g} of the load, chi2/dof "
+          f"{rep['chi2_reduced']:.3g}")
+    print(f"  similarity of prediction and data (FDA rules, not a goodness of fit): "
+          f"{rep['similarity']['outcome']}")
     for w in rep["warnings"] + [f"not pinned: {x}" for x in rep["not_pinned"]]:
         print(f"  {w}")
     return 0
@@ -386,7 +392,7 @@ def _plot_release(rep: dict[str, Any], path: str) -> str:
     ax.set_xlabel("time (s)")
     ax.set_ylabel("released fraction")
     ax.set_title(f"D0 = {rep['parameters']['drug_diffusivity_cm2_s']:.3g} cm^2/s, "
-                 f"f2 = {rep['f2']:.1f}", fontsize=9)
+                 f"similarity f2 = {rep['f2']:.1f}", fontsize=9)
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)

@@ -48,6 +48,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="draw cumulative release and concentration profiles (matplotlib)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--profiles", action="store_true", help="with --json: include the profiles")
+    p.add_argument("--compare", default=None, metavar="MEASURED.csv",
+                   help="state f1/f2 (FDA rules; a bootstrap over replicate units) between the "
+                        "prediction and this measured profile (needs --dry-radius-um), beside "
+                        "the residuals and chi-square (dosing.analysis)")
+    p.add_argument("--measured-loaded-ug", type=float, default=None,
+                   help="the load, when the measured profile is given as a mass")
     p.set_defaults(func=run)
 
 
@@ -63,6 +69,14 @@ def run(args: argparse.Namespace) -> int:
 
     if args.protocol is None and (args.t_end is None or args.until is None):
         raise ParameterError("t_end/until", None, "both --t-end and --until, or --protocol")
+    measured = None
+    if args.compare is not None:
+        from dosing.analysis import read_profile
+
+        if args.dry_radius_um is None:
+            raise ParameterError("dry_radius_um", None, "a dry radius in um with --compare "
+                                 "(the prediction in seconds)")
+        measured = read_profile(args.compare, args.measured_loaded_ug)
     gel = gel_from_args(args)
     constants = PhysicalConstants(args.viscosity, args.polymer_volume_m3, args.k0_m2,
                                   **({} if args.mesh_length_nm is None
@@ -109,6 +123,11 @@ def run(args: argparse.Namespace) -> int:
         out["medium_concentration_ug_per_ul"] = _medium(rel, drug, args, a0)
     if saved is not None:
         out["file"] = str(saved)
+    if measured is not None:
+        from dosing.analysis.similarity import measured_against_predicted
+
+        out["compare"] = measured_against_predicted(measured, out["seconds"],
+                                                    rel.released_fraction)
     if args.json:
         if args.profiles:
             out.update(profile_t=rel.profile_t, profiles=rel.profiles,
@@ -125,7 +144,23 @@ def run(args: argparse.Namespace) -> int:
               f"{rel.squeezed_fraction[k]:8.4f}  {rel.expelled_fraction[k]:8.4f}")
     if saved is not None:
         print(f"wrote {saved}")
+    if measured is not None:
+        _print_compare(out["compare"], measured.label)
     return 0
+
+
+def _print_compare(c: dict, label: str) -> None:
+    """Measured against predicted: residuals, chi-square, the FDA similarity."""
+    s = c["similarity"]
+    chi = (f", chi2 {c['chi2']:.4g} on {c['chi2_dof']} points (SEM of the units)"
+           if "chi2" in c else "")
+    print(f"measured ({label}) against predicted: rms residual "
+          f"{c['rms_residual_percent']:.3g} % of the load{chi}")
+    print(f"  {s['notes'][0]}")
+    print(f"  {s['f1_outcome']}")
+    print(f"  {s['outcome']}")
+    if s["bootstrap"]:
+        print(f"  {s['bootstrap']['outcome']}")
 
 
 def _medium(rel: object, drug: object, args: argparse.Namespace, a0: float) -> list | None:

@@ -29,6 +29,7 @@ from solver.gel import Gel
 from solver.json_safe import json_safe
 
 from .. import stored_jobs
+from ..analysis_schemas import EmpiricalFitJobResponse
 from ..deps import StateDep
 from ..fit_schemas import (
     FitJobResponse,
@@ -42,7 +43,8 @@ from ..service import to_gel
 from .compute import compute
 
 router = APIRouter(tags=["fit"], route_class=SafeRoute)
-KINDS = {"swelling": "fit-swelling", "kinetics": "fit-kinetics", "release": "fit-release"}
+KINDS = {"swelling": "fit-swelling", "kinetics": "fit-kinetics", "release": "fit-release",
+         "empirical": "fit-empirical"}  # empirical: api/routers/analysis.py
 
 
 def _swelling_data(body: SwellingFitRequest) -> Any:
@@ -196,7 +198,8 @@ def _status(state: Any, job_id: str) -> dict[str, Any]:
     return {**out, "kind": kind, "status_url": f"/v1/fit/jobs/{job_id}"}
 
 
-@router.get("/v1/fit/jobs/{job_id}", response_model=ReleaseFitJobResponse | FitJobResponse,
+@router.get("/v1/fit/jobs/{job_id}",
+            response_model=ReleaseFitJobResponse | EmpiricalFitJobResponse | FitJobResponse,
             responses={404: {"description": "no such fit job"}})
 async def fit_job(job_id: str, state: StateDep) -> Any:
     """A fit job's state, with the report when done or the error when failed (kept in the

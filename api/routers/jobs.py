@@ -16,6 +16,7 @@ from fastapi.responses import Response
 from dosing import UnknownValidationError
 
 from .. import schemas as s
+from ..analysis_schemas import EmpiricalFitJobResponse
 from ..deps import PlannerDep, StateDep
 from ..errors import job_kind
 from ..fit_schemas import FitJobResponse, ReleaseFitJobResponse
@@ -29,7 +30,8 @@ from .sweep import SweepStatus, _render
 router = APIRouter(tags=["jobs"], route_class=SafeRoute)
 
 
-JobResponse = ValidationJob | ReleaseFitJobResponse | FitJobResponse | SweepStatus
+JobResponse = (ValidationJob | ReleaseFitJobResponse | EmpiricalFitJobResponse | FitJobResponse
+               | SweepStatus)
 
 
 @router.get("/v1/jobs/{job_id}", response_model=JobResponse,
