@@ -17,15 +17,15 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import math
-import subprocess
 from collections.abc import Mapping, Sequence
-from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from solver.json_safe import json_safe
+
+from .provenance import code_version, resolved, version_info
 
 if TYPE_CHECKING:  # pragma: no cover
     import xarray as xr
@@ -42,27 +42,6 @@ CONVENTIONS = "CF-1.8"
 
 
 # ---------------------------------------------------------------------------- provenance
-@lru_cache(maxsize=1)
-def code_version() -> str:
-    """thermogel's package version, plus ``git describe --always --dirty`` of the checkout
-    the code runs from when there is one (e.g. '0.1.0+981cd97-dirty')."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        v = version("thermogel")
-    except PackageNotFoundError:
-        v = "unknown"
-    try:
-        here = Path(__file__).resolve().parent
-        git = subprocess.run(["git", "describe", "--always", "--dirty", "--tags"], cwd=here,
-                             capture_output=True, text=True, timeout=5, check=False)
-        if git.returncode == 0 and git.stdout.strip():
-            v += "+" + git.stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        pass
-    return v
-
-
 def _jsonable(obj: Any) -> Any:
     if hasattr(obj, "to_dict"):
         obj = obj.to_dict()
@@ -71,6 +50,12 @@ def _jsonable(obj: Any) -> Any:
 
         obj = asdict(obj)
     return json_safe(obj)
+
+
+def _request(request: Any) -> Any:
+    """The request as exported: resolved, with the unit of every physical field."""
+    value = _jsonable(request)
+    return resolved(value) if isinstance(value, dict) else value
 
 
 def provenance(kind: str, request: Any = None, truth: str | None = None,
@@ -85,7 +70,8 @@ def provenance(kind: str, request: Any = None, truth: str | None = None,
         "thermogel_version": code_version(),
         "history": f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')} "
                    f"created by thermogel {code_version()}",
-        "request": json.dumps(_jsonable(request)) if request is not None else "",
+        "version": json.dumps(version_info()),
+        "request": json.dumps(_request(request)) if request is not None else "",
         "truth": truth or "",
     }
     for k, v in extra.items():

@@ -14,13 +14,24 @@ OUT_HELP = ("save to this file: .npz, .nc (netCDF: units, long names, the code v
             "at the output times; the profiles long form in FILE.profiles.csv)")
 
 
+# units of options whose names do not carry theirs (dosing.provenance.unit_of reads the rest)
+ARG_UNITS = {"viscosity": "Pa s", "k0_m2": "m^2", "until": "tau", "every": "tau",
+             "rests": "tau", "dt": "tau", "interfacial_length": "dry radii"}
+
+
 def request_of(args: argparse.Namespace) -> dict[str, Any]:
-    """The command's arguments as the export's request (what made the result)."""
+    """The command's arguments as resolved (every option, defaults filled) with the unit of
+    each physical one in ``units``: the request an export's attributes and a JSON answer
+    carry (what made the result)."""
+    from dosing.provenance import resolved
+
     plain = (str, int, float, bool, type(None), list, tuple, dict)
     out = {k: (v if isinstance(v, plain) else str(v)) for k, v in vars(args).items()
            if k not in ("func",) and not callable(v)}
     out["command"] = getattr(args, "command", None)
-    return out
+    res = resolved(out)
+    res["units"].update({k: u for k, u in ARG_UNITS.items() if out.get(k) is not None})
+    return res
 
 
 class Saved(str):
