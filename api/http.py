@@ -23,7 +23,7 @@ from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from dosing.jobs import exit_with_parent
 
-from . import errors, guard, openapi_spec
+from . import docs_pages, errors, guard, openapi_spec
 from .auth import TokenAuth
 from .routers import dosing, fit, jobs, page, physics, service, sweep, validations
 from .routers import sensitivity as sensitivity_routes
@@ -73,7 +73,8 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
         description="Plan drug release from thermo-responsive gel beads (Butler & "
                     "Montenegro-Johnson). Temperatures in K; dimensionless lengths in dry "
                     "radii and times in units of tau (eq. timescale).",
-        responses=openapi_spec.APP_RESPONSES)
+        responses=openapi_spec.APP_RESPONSES, **docs_pages.offline_kwargs())
+    docs_pages.install(app)  # /docs and /redoc with their assets from this server
     app.state.service = state
     errors.install(app)
     guard.add(app)
