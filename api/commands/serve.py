@@ -136,8 +136,9 @@ def run(args: argparse.Namespace) -> int:
     if args.warmup_only:
         return warm_only()
     from api.auth import is_loopback
+    from dosing.settings import settings
 
-    if not is_loopback(args.host) and not (args.token or os.environ.get("THERMOGEL_API_TOKEN")):
+    if not is_loopback(args.host) and not (args.token or settings().api_token):
         raise ParameterError("--token", None, "a token (--token or $THERMOGEL_API_TOKEN)",
                              f"--host {args.host} is reachable beyond this machine, so the "
                              "service needs a token: clients then send 'Authorization: "
