@@ -108,6 +108,11 @@ def run(args: argparse.Namespace) -> int:
            "solute_seconds": rel.diagnostics.get("wall_time")}
     if args.release_volume_ul is not None:
         out["medium_concentration_ug_per_ul"] = _medium(rel, drug, args, a0)
+    from dosing.drug import sieved_out
+
+    warning = sieved_out(solute, a0, float(rel.released_fraction[-1]),
+                         float(np.max(rel.expelled_fraction)))
+    out["warnings"] = [warning] if warning else []
     if saved is not None:
         out["file"] = str(saved)
         out["files"] = [str(f) for f in saved.files]
@@ -122,6 +127,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"{gel.name} from {args.t_start:g} K: drug D0 = {out['drug_diffusivity_cm2_s']:.3g} "
           f"cm^2/s, hindered to {d_eff:.3g} cm^2/s at the start (gel's D = {d_gel:.3g})"
           f"{secs}; mass balance {rel.mass_balance_error:.1e}")
+    for w in out["warnings"]:
+        print(f"  WARNING: {w}")
     print("       t   released  squeezed  expelled fluid")
     for k in np.unique(np.linspace(0, rel.t.size - 1, 11).astype(int)):
         print(f"  {rel.t[k]:8.4f}  {rel.released_fraction[k]:8.4f}  "
