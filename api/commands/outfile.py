@@ -70,8 +70,14 @@ def save(path: str, save_npz: Callable[[str], Path], dataset: Callable[[], Any])
         return Saved(files[0], files, notes)
     if suffix in (".nc", ".xlsx"):
         from dosing import export
+        from solver.errors import ParameterError
 
-        return Saved(export.save(dataset(), path))
+        try:
+            return Saved(export.save(dataset(), path))
+        except ImportError as exc:  # xarray / pandas (the extra data), openpyxl for .xlsx
+            raise ParameterError("--out", path, ".npz, or .nc / .csv with the extra data "
+                                 "(xarray, pandas); .xlsx also needs openpyxl",
+                                 str(exc)) from None
     return Saved(save_npz(path))
 
 
