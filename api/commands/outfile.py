@@ -64,6 +64,9 @@ def save(path: str, save_npz: Callable[[str], Path], dataset: Callable[[], Any])
 
         try:
             files, notes = export.write_csv(dataset(), path)
+        except ImportError as exc:  # xarray / pandas: the extra data
+            raise ParameterError("--out", path, ".npz, or .csv / .nc with the extra data "
+                                 "(xarray, pandas)", str(exc)) from None
         except export.CsvTooLarge as exc:
             raise ParameterError("--out", path, "a .nc file (or fewer outputs) for a run this "
                                  "size", str(exc)) from None
