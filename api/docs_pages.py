@@ -1,8 +1,11 @@
 """The API manual served offline: Swagger UI at ``/docs`` and ReDoc at ``/redoc`` load
 their scripts, styles and icon from this server (``/docs-assets/``: the minified assets
 the ``fastapi-offline`` package ships), never from a CDN, and load no web font; Swagger
-UI's validator badge (an image from an outside host) is off.  ``tests/test_docs_offline.py``
-parses both pages and the assets for outside URLs."""
+UI's validator badge (an image from an outside host) is off, and the pages'
+Content-Security-Policy lets the browser load from this server only (ReDoc's footer logo
+sits on its CDN).  ``tests/test_docs_offline.py`` parses both pages for outside URLs;
+``tests/test_docs_browser.py`` renders them in Chromium with the network beyond the
+service refused."""
 
 from __future__ import annotations
 
@@ -22,6 +25,17 @@ ASSETS_URL = "/docs-assets"
 DOCS_URL, REDOC_URL = "/docs", "/redoc"
 OAUTH2_REDIRECT_URL = "/docs/oauth2-redirect"
 SWAGGER_PARAMETERS = {"validatorUrl": None}  # no badge fetched from validator.swagger.io
+# the pages may load from this server only: ReDoc's footer names an image on its CDN, which
+# the browser then does not fetch (scripts and styles inline in FastAPI's page, the spec's
+# worker from a blob)
+CSP = ("default-src 'self'; script-src 'self' 'unsafe-inline'; style-src 'self' "
+       "'unsafe-inline'; img-src 'self' data:; font-src 'self' data:; connect-src 'self'; "
+       "worker-src 'self' blob:; frame-src 'none'; object-src 'none'; base-uri 'self'")
+
+
+def _offline(page: HTMLResponse) -> HTMLResponse:
+    page.headers["Content-Security-Policy"] = CSP
+    return page
 
 
 def assets_dir() -> Path:
@@ -43,13 +57,13 @@ def install(app: FastAPI) -> None:
     @app.get(DOCS_URL, include_in_schema=False)
     async def swagger_ui(request: Request) -> HTMLResponse:
         r = root(request)
-        return get_swagger_ui_html(
+        return _offline(get_swagger_ui_html(
             openapi_url=f"{r}{app.openapi_url}", title=f"{app.title} - API manual",
             swagger_js_url=f"{r}{ASSETS_URL}/swagger-ui-bundle.js",
             swagger_css_url=f"{r}{ASSETS_URL}/swagger-ui.css",
             swagger_favicon_url=f"{r}{ASSETS_URL}/favicon.png",
             oauth2_redirect_url=f"{r}{OAUTH2_REDIRECT_URL}",
-            swagger_ui_parameters={**(app.swagger_ui_parameters or {}), **SWAGGER_PARAMETERS})
+            swagger_ui_parameters={**(app.swagger_ui_parameters or {}), **SWAGGER_PARAMETERS}))
 
     @app.get(OAUTH2_REDIRECT_URL, include_in_schema=False)
     async def swagger_ui_redirect() -> HTMLResponse:
@@ -58,11 +72,11 @@ def install(app: FastAPI) -> None:
     @app.get(REDOC_URL, include_in_schema=False)
     async def redoc(request: Request) -> HTMLResponse:
         r = root(request)
-        return get_redoc_html(openapi_url=f"{r}{app.openapi_url}",
+        return _offline(get_redoc_html(openapi_url=f"{r}{app.openapi_url}",
                               title=f"{app.title} - API manual (ReDoc)",
                               redoc_js_url=f"{r}{ASSETS_URL}/redoc.standalone.js",
                               redoc_favicon_url=f"{r}{ASSETS_URL}/favicon.png",
-                              with_google_fonts=False)
+                              with_google_fonts=False))
 
 
 def offline_kwargs() -> dict[str, Any]:

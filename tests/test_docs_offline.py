@@ -52,6 +52,9 @@ async def test_the_manual_loads_nothing_from_outside(page: str, tmp_path) -> Non
         outside = [u for u in urls if OUTSIDE.match(u)]
         assert outside == [], outside
         assert "fonts.googleapis" not in r.text and "cdn.jsdelivr" not in r.text
+        # and what the scripts would fetch at run time (ReDoc's footer logo) the browser may not
+        assert "default-src 'self'" in r.headers["content-security-policy"]
+        assert "img-src 'self' data:;" in r.headers["content-security-policy"]
         for url in urls:
             if url.startswith("/docs-assets/"):
                 asset = await raw.get(url)
