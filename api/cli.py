@@ -46,6 +46,10 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point: parse, run, and turn input errors into exit code 2 with a message."""
     parser = build_parser(chosen_commands(sys.argv[1:] if argv is None else argv))
     args = parser.parse_args(argv)
+    from .commands.common import set_request
+    from .commands.outfile import request_of
+
+    set_request(request_of(args))
     try:
         return int(args.func(args) or 0)
     except (ParameterError, NotApplicableError) as exc:

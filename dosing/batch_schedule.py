@@ -84,7 +84,7 @@ def schedule_sizes(req: ScheduleRequest, size_distribution: Any) -> DrySizes:
     elif not math.isclose(d.number_mean_um(), size, rel_tol=1e-9):
         raise ParameterError(own, size, f"the size_distribution's number-weighted mean "
                              f"{d.number_mean_um():.6g} um")
-    sizes = d.resolve(req.start_radius)
+    sizes = d.resolve(req.start_radius, req.t_start)
     if d.kind == "table" and len(sizes.nodes(0)[0]) > MAX_TABLE_SIZES:
         raise ParameterError(f"{F}.sizes_um", f"{len(sizes.nodes(0)[0])} distinct sizes",
                              f"at most {MAX_TABLE_SIZES} distinct sizes for a schedule (one "

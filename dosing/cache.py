@@ -114,11 +114,11 @@ def _add_checksum_column(con: sqlite3.Connection) -> None:
 
 
 def default_path() -> Path:
-    """$THERMOGEL_CACHE, else ~/.cache/thermogel/validations.sqlite."""
-    env = os.environ.get(ENV)
-    if env:
-        return Path(env).expanduser()
-    return Path.home() / ".cache" / "thermogel" / "validations.sqlite"
+    """$THERMOGEL_CACHE, else the user cache folder's validations.sqlite
+    (~/.cache/thermogel/ on Linux; dosing.settings)."""
+    from .settings import settings
+
+    return settings().cache_path
 
 
 def _sound(meta_text: Any, blob: bytes, digest: str | None) -> bool:

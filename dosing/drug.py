@@ -683,3 +683,34 @@ class StatedTruth:
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
         return asdict(self)
+
+
+def sieved_out(solute: Any, start_radius: float, released: float | None = None,
+               expelled: float | None = None) -> str | None:
+    """A warning when the gel's mesh holds the solute in (issue 37), or None when it can
+    leave.  Either at the swollen start state (stretch ``start_radius``) neither diffusion
+    nor the fluid can carry it out (hindered D = 0 and convective transmission W = 0:
+    r_s >= xi), so it releases nothing however the bead is heated; or the run released
+    almost nothing (``released`` < 0.1 % of the load) while the bead expelled fluid
+    (``expelled`` > 1 % of the stored fluid): the mesh, tighter still in the collapsed
+    shell, sieved it out."""
+    h = solute.hindrance
+    if h.code == 0 and not h.convective:
+        return None
+    phi0 = 1.0 - 1.0 / start_radius**3
+    f = float(h.factor(phi0, start_radius))
+    w = float(h.sieving(phi0, start_radius)) if h.convective else 1.0
+    ratio = h.mesh_ratio / start_radius
+    got = "" if released is None else f"; it released {released:.4f} of its load"
+    fix = ("A larger mesh (--mesh-size-nm / drug.mesh_size_nm), a smaller drug "
+           "(--solute-radius-nm) or hindrance 'none' lets it out")
+    if f <= 0.0 and w <= 0.0:
+        return (f"the drug is sieved out: its radius is {ratio:.2f} x the swollen mesh at "
+                f"T_start (r_s / xi >= 1), so neither diffusion nor the expelled fluid can "
+                f"carry it out of the gel{got}.  {fix}")
+    if released is not None and expelled is not None and released < 1e-3 and expelled > 0.01:
+        return (f"the drug is sieved out: it released {released:.4f} of its load while the "
+                f"bead expelled {expelled:.0%} of its fluid (its radius is {ratio:.2f} x the "
+                f"swollen mesh at T_start, hindered {f:.2g} x D0 there; the collapsed shell's "
+                f"tighter mesh holds it in).  {fix}")
+    return None

@@ -105,7 +105,7 @@ def test_run_round_trip(run: FullResult, tmp_path: Path) -> None:
     np.testing.assert_array_equal(ds["radius_um"].values, run.radius * 50.0)
     assert ds["seconds"].attrs["units"] == "s" and ds["radius_um"].attrs["units"] == "um"
     assert ds.attrs["truth"] == "the paper's model"
-    assert json.loads(ds.attrs["request"]) == {"why": "test"}
+    assert json.loads(ds.attrs["request"]) == {"why": "test", "units": {}}  # resolved: units
 
 
 def test_run_table_and_html(run: FullResult) -> None:

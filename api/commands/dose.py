@@ -195,8 +195,9 @@ def batch_distribution(args: argparse.Namespace) -> Any:
     state = "swollen" if args.swollen_radius_um is not None else "dry"
     if args.sizes is not None:
         try:
+            # the column's header says dry or swollen; --swollen-radius-um says swollen
             return read_sizes_csv(args.sizes, "--sizes", weighting=args.size_weighting,
-                                  state=state)
+                                  state="swollen" if state == "swollen" else None)
         except ParameterError as exc:
             if exc.field.startswith("--sizes"):
                 raise

@@ -100,7 +100,8 @@ def run(args: argparse.Namespace) -> int:
     tau = timescale(args.dry_radius_um, t_ref, constants) if args.dry_radius_um else None
     d_gel = constants.diffusivity(t_ref) * 1e4
     d_eff = rel.effective_diffusivity * d_gel
-    saved = save(args.out, rel.save, lambda: _dataset(rel, args, tau)) if args.out else None
+    saved = (save(args.out, rel.save, lambda: _dataset(rel, args, tau, settings))
+             if args.out else None)
     if args.plot:
         from api.plots.release import draw_release
 
@@ -121,8 +122,15 @@ def run(args: argparse.Namespace) -> int:
            "solute_seconds": rel.diagnostics.get("wall_time")}
     if args.release_volume_ul is not None:
         out["medium_concentration_ug_per_ul"] = _medium(rel, drug, args, a0)
+    from dosing.drug import sieved_out
+
+    warning = sieved_out(solute, a0, float(rel.released_fraction[-1]),
+                         float(np.max(rel.expelled_fraction)))
+    out["warnings"] = [warning] if warning else []
     if saved is not None:
         out["file"] = str(saved)
+        out["files"] = [str(f) for f in saved.files]
+        out["file_notes"] = saved.notes
     if measured is not None:
         from dosing.analysis.similarity import measured_against_predicted
 
@@ -138,12 +146,14 @@ def run(args: argparse.Namespace) -> int:
     print(f"{gel.name} from {args.t_start:g} K: drug D0 = {out['drug_diffusivity_cm2_s']:.3g} "
           f"cm^2/s, hindered to {d_eff:.3g} cm^2/s at the start (gel's D = {d_gel:.3g})"
           f"{secs}; mass balance {rel.mass_balance_error:.1e}")
+    for w in out["warnings"]:
+        print(f"  WARNING: {w}")
     print("       t   released  squeezed  expelled fluid")
     for k in np.unique(np.linspace(0, rel.t.size - 1, 11).astype(int)):
         print(f"  {rel.t[k]:8.4f}  {rel.released_fraction[k]:8.4f}  "
               f"{rel.squeezed_fraction[k]:8.4f}  {rel.expelled_fraction[k]:8.4f}")
     if saved is not None:
-        print(f"wrote {saved}")
+        print("\n".join(saved.report()))
     if measured is not None:
         _print_compare(out["compare"], measured.label)
     return 0
@@ -178,11 +188,14 @@ def _medium(rel: object, drug: object, args: argparse.Namespace, a0: float) -> l
     return (rel.released_fraction * load / (args.release_volume_ul + grown)).tolist()  # type: ignore[attr-defined]
 
 
-def _dataset(rel: object, args: argparse.Namespace, tau: object) -> object:
-    """The release run as an xarray Dataset with units and provenance."""
+def _dataset(rel: object, args: argparse.Namespace, tau: object, settings: object) -> object:
+    """The release run as an xarray Dataset with units and provenance (the run's own grid,
+    cells and interfacial length: the resolved settings, whatever the options left unset)."""
     from dosing.export import release_dataset
 
+    ell = settings.interfacial_length  # type: ignore[attr-defined]
     return release_dataset(
         rel, args.dry_radius_um, tau and tau.seconds, request_of(args),  # type: ignore[arg-type,attr-defined]
-        f"full solver (Lagrangian grid, N = {args.n}) with the drug carried by the pore "
-        f"fluid; interfacial length {args.interfacial_length:g}")
+        f"full solver ({settings.grid} grid, N = {settings.n}) with the drug carried by the "  # type: ignore[attr-defined]
+        "pore fluid; " + (f"interfacial length {ell:g}" if ell
+                          else "the paper's model (no interfacial energy)"))
