@@ -90,6 +90,7 @@ class Route:
 
 S, F, J, SW, P, SE = ("api.schemas", "api.fit_schemas", "api.routers.jobs", "api.routers.sweep",
                       "api.routers.page", "api.sensitivity_schemas")
+A = "api.analysis_schemas"
 PENDING = f"{S}:PendingResponse"
 ROUTES: tuple[Route, ...] = (
     Route("health", "GET", "/health", (f"{S}:HealthResponse",),
@@ -116,6 +117,12 @@ ROUTES: tuple[Route, ...] = (
           accepted=f"{F}:FitJobResponse", doc="fit a shrinking curve (a job)"),
     Route("fit_release", "POST", "/v1/fit/release", body=f"{F}:ReleaseFitRequest",
           accepted=f"{F}:ReleaseFitJobResponse", doc="fit a drug's D0 to a release curve"),
+    Route("fit_empirical", "POST", "/v1/fit/empirical", body=f"{A}:EmpiricalFitRequest",
+          accepted=f"{A}:EmpiricalFitJobResponse",
+          doc="fit the empirical release models (DDSolver's zoo) to a profile (a job)"),
+    Route("compare", "POST", "/v1/compare", (f"{A}:CompareResponse",),
+          body=f"{A}:CompareRequest", doc="f1 and f2 of two release profiles (FDA rules, "
+          "bootstrap)"),
     Route("fit_job", "GET", "/v1/fit/jobs/{job_id}",
           (f"{F}:ReleaseFitJobResponse", f"{F}:FitJobResponse"), doc="a fit job's state"),
     Route("sweep", "POST", "/v1/sweep", body=f"{SW}:SweepRequest",
