@@ -67,7 +67,7 @@ def _check_events(res, key: tuple[str, ...]) -> list[dict]:
             assert e["program"].startswith("Heat to ") and e["program"].endswith("at 5 K/min")
             ramp_end = 302.0 + 5.0 / 60.0 * e["duration_s"]
             assert e["temperature_K"] == pytest.approx(min(ramp_end, 308.0), rel=1e-9)
-    else:
+    elif key[2] == "jump":
         assert all(e["program"] is None and e["temperature_K"] == 308.0 for e in heats)
     return ev
 
@@ -222,3 +222,20 @@ def test_cli_acceptance_events_and_csv(tmp_path, capsys) -> None:
         "heat", "rest"]
     assert main([*args, "--out", str(tmp_path / "s.txt")]) != 0
     assert "--out" in capsys.readouterr().err
+
+
+def test_a_repeated_protocol_heating_is_written_out_in_its_events(fake_planner) -> None:
+    """Every heating follows a protocol with a repeat ('2 x (...)'): each heat event's
+    program is the protocol written out and cut at the heating's time, in the grammar's
+    words, its set temperature the one at its end."""
+    req = Request(**FAKE_CASE, heating=Heating(["2 x (Hold at 308 K for 0.1 s; Rest at 302 K "
+                                                "for 0.2 s)", "Hold at 308 K"]),
+                  question=Schedule([0.3, 0.3], rests=[0.5]))
+    res = plan(req, planner=fake_planner)
+    ev = _check_events(res, ("fluid", "one", "repeat"))
+    for e in (x for x in ev if x["kind"] == "heat"):
+        steps = e["program"].split("; ")
+        assert steps[:4] == ["Hold at 308 K for 0.1 s", "Hold at 302 K for 0.2 s"] * 2
+        assert steps[4].startswith("Hold at 308 K for ") and len(steps) == 5
+        assert e["duration_s"] == pytest.approx(0.6 + float(steps[4].split()[-2]), rel=1e-3)
+        assert e["temperature_K"] == 308.0
