@@ -398,6 +398,15 @@ def _events_shown(page, res: dict) -> None:
     assert "shooting residual" in page.inner_text("#schedule-table")
     assert page.get_attribute("#timeline-release", "data-reading") == "corrected"
     assert "corrected" in page.inner_text("#schedule-caption")
+    # the steps as CSV, as the CLI's --out writes them: a header with units, a row per step
+    from urllib.parse import unquote
+
+    href = page.get_attribute("#schedule-download", "href")
+    lines = unquote(href.split(",", 1)[1]).strip().splitlines()
+    assert lines[0].startswith("step [1],kind,start_s [s],duration_s [s],temperature_K [K]")
+    assert [x.split(",")[1] for x in lines[1:]] == [e["kind"] for e in res["events"]]
+    assert [float(x.split(",")[3]) for x in lines[1:]] == [e["duration_s"]
+                                                           for e in res["events"]]
 
 
 @pytest.mark.slow  # a browser and a server whose full-solver runs are the fake's

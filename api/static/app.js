@@ -660,8 +660,30 @@ function eventsTable(s) {
   const cap = rough ? "The hold reading (rough: one continuous heating, not checked on the full solver)" :
     reading === "corrected" ? "The corrected schedule: each step as a bath controller or a lab notebook takes it" :
       "The hold times as the full solver runs them (not corrected)";
-  $("schedule-table").innerHTML = `<table><caption>${cap}</caption>${head}${body}</table>`;
+  const csv = `data:text/csv;charset=utf-8,${encodeURIComponent(eventsCsv(ev))}`;
+  $("schedule-table").innerHTML = `<table><caption>${cap}</caption>${head}${body}</table>` +
+    `<p class="hint"><a id="schedule-download" href="${csv}" download="schedule-events.csv">` +
+    "The steps as CSV</a> (one row per step, units in the headers)</p>";
   $("schedule-table").dataset.reading = reading || "";
+}
+
+// the events' columns as the CSV export names them (dosing.question.events.EVENT_COLUMNS)
+const EVENT_UNITS = [["step", "1"], ["kind", ""], ["start_s", "s"], ["duration_s", "s"],
+  ["temperature_K", "K"], ["dose_fraction", "1"], ["released_fraction", "1"], ["amount_ul", "uL"],
+  ["amount_ug", "ug"], ["target_fraction", "1"], ["dose_error", "1"], ["uptake_fraction", "1"],
+  ["heating", "1"], ["start_tau", "1"], ["duration_tau", "1"], ["program", ""], ["reading", ""],
+  ["rough", "1"]];
+
+function eventsCsv(ev) {
+  // the events as tidy CSV ('name [unit]' headers), for a bath controller or a notebook
+  const cell = (v) => {
+    if (v === null || v === undefined) return "";
+    if (typeof v === "boolean") return v ? "1" : "0";
+    const t = String(v);
+    return /[",\n]/.test(t) ? `"${t.replace(/"/g, '""')}"` : t;
+  };
+  const head = EVENT_UNITS.map(([n, u]) => (u ? `${n} [${u}]` : n)).join(",");
+  return [head, ...ev.map((e) => EVENT_UNITS.map(([n]) => cell(e[n])).join(","))].join("\n") + "\n";
 }
 
 function drawEvents(s, ctx) {
