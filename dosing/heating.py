@@ -553,6 +553,17 @@ class Origin:
         return _Where(self.index, text, ctx, self.sub)
 
 
+def _non_finite(value: Any) -> bool:
+    """True when a structured step holds a NaN or an infinite number (at any depth)."""
+    if isinstance(value, float):
+        return not math.isfinite(value)
+    if isinstance(value, dict):
+        return any(_non_finite(v) for v in value.values())
+    if isinstance(value, (list, tuple)):
+        return any(_non_finite(v) for v in value)
+    return False
+
+
 def _repeat_of(value: Any, index: int) -> tuple[int, list[Any]] | None:
     """(times, steps) of a repeat item ('3 x (a; b; c)' or {'step': 'repeat', 'times': 3,
     'steps': [...]}), else None."""
@@ -748,6 +759,9 @@ class Protocol:
             raise ParameterError("protocol", self.steps, "at least one step: " + GRAMMAR)
         if len(raw) > 1000:
             raise ParameterError("protocol", f"{len(raw)} steps", "1-1000 steps")
+        for i, value in enumerate(raw):  # non-strict JSON first, wherever it sits (a 422
+            if _non_finite(value):       # names the step that holds it)
+                raise ParameterError(f"protocol[{i}]", "NaN or Infinity", "finite numbers")
         expanded, origins = expand_steps(raw, self.files)
         if len(expanded) > 1000:
             raise ParameterError("protocol", f"{len(expanded)} steps with the repeats written "
