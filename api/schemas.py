@@ -10,6 +10,7 @@ radius, time by tau of eq. timescale).  Fields ending in ``_um``, ``_ul``, ``_ug
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Annotated, Any, Literal
 
 from pydantic import (
@@ -96,6 +97,17 @@ def temperature_field(what: str, example: float) -> Any:
                  description=f"{what} in K; liquid water, {T_MIN}-{T_MAX} K")
 
 
+def _has_non_finite(value: Any) -> bool:
+    """True when a JSON value holds NaN or an infinite number at any depth."""
+    if isinstance(value, float):
+        return not math.isfinite(value)
+    if isinstance(value, dict):
+        return any(_has_non_finite(v) for v in value.values())
+    if isinstance(value, list):
+        return any(_has_non_finite(v) for v in value)
+    return False
+
+
 def _positive_zero(value: Any) -> Any:
     """-0.0 -> 0.0, also inside lists and dicts (a request never echoes a negative zero)."""
     if isinstance(value, float):
@@ -119,6 +131,15 @@ class RequestModel(BaseModel):
     @classmethod
     def _no_negative_zero(cls, value: Any) -> Any:
         return _positive_zero(value)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _finite_inside(cls, value: Any) -> Any:
+        """NaN and +-Infinity are refused inside free-form lists and dicts too (a protocol's
+        structured steps), naming the field, before any check across fields."""
+        if isinstance(value, (list, dict)) and _has_non_finite(value):
+            raise ValueError("NaN and Infinity are not numbers here (give finite numbers)")
+        return value
 
     @field_validator("*", mode="before")
     @classmethod
