@@ -97,6 +97,9 @@ def temperature_field(what: str, example: float) -> Any:
                  description=f"{what} in K; liquid water, {T_MIN}-{T_MAX} K")
 
 
+FREE_FORM = ("protocol",)  # request fields whose items are free-form JSON (no typed floats)
+
+
 def _has_non_finite(value: Any) -> bool:
     """True when a JSON value holds NaN or an infinite number at any depth."""
     if isinstance(value, float):
@@ -134,10 +137,11 @@ class RequestModel(BaseModel):
 
     @field_validator("*", mode="before")
     @classmethod
-    def _finite_inside(cls, value: Any) -> Any:
-        """NaN and +-Infinity are refused inside free-form lists and dicts too (a protocol's
-        structured steps), naming the field, before any check across fields."""
-        if isinstance(value, (list, dict)) and _has_non_finite(value):
+    def _finite_inside(cls, value: Any, info: ValidationInfo) -> Any:
+        """NaN and +-Infinity are refused inside a free-form field too (a protocol's
+        structured steps: typed fields refuse them themselves), naming the field, before
+        any check across fields."""
+        if info.field_name in FREE_FORM and _has_non_finite(value):
             raise ValueError("NaN and Infinity are not numbers here (give finite numbers)")
         return value
 
