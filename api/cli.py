@@ -16,7 +16,7 @@ import sys
 from solver.errors import NotApplicableError, ParameterError, SolverError  # a leaf module
 
 COMMANDS = ["equilibrium", "classify", "phase_map", "serve", "front", "dose", "schedule",
-            "simulate", "plot", "bench", "sweep", "fit", "release", "sensitivity"]
+            "simulate", "plot", "bench", "sweep", "fit", "release", "sensitivity", "design"]
 
 
 def build_parser(commands: list[str] | None = None) -> argparse.ArgumentParser:

@@ -33,7 +33,7 @@ _ID_PARAM = {"sweep": "sweep_id", "fit": "job_id", "schedule": "validation_id",
 
 def job_kind(job_id: Any) -> str:
     """The kind of job an id names (its prefix; a dose validation has none)."""
-    for kind in ("sweep", "fit", "schedule", "drug-dose", "batch-schedule", "dose"):
+    for kind in ("sweep", "fit", "design", "schedule", "drug-dose", "batch-schedule", "dose"):
         if str(job_id).startswith(kind + "-"):
             return kind
     return "validation"

@@ -454,12 +454,16 @@ def _unreachable(search: _Search, target_s: float) -> ParameterError:
     fast = min(got, key=lambda p: p.seconds)
     slow = max(got, key=lambda p: p.seconds)
     nearest = fast if target_s < fast.seconds else slow
+    side = (f"at least {fast.seconds:.4g} s" if nearest is fast
+            else f"at most {slow.seconds:.4g} s")
     return ParameterError(
         "at", t.at_seconds,
-        f"{fast.seconds:.4g}-{slow.seconds:.4g} s (reached over {name} {_fmt(slow.x)}-"
-        f"{_fmt(fast.x)} {unit} of the search range {lo:g}-{hi:g} {unit})",
+        f"{side} (reached {fast.seconds:.4g}-{slow.seconds:.4g} s over {name} "
+        f"{_fmt(slow.x)}-{_fmt(fast.x)} {unit} of the search range {lo:g}-{hi:g} {unit})",
         f"no {t.mode} in the range delivers the dose at {t.at_seconds:g} s; the nearest "
-        f"reachable time is {nearest.seconds:.4g} s ({t.words(nearest.x)})")
+        f"reachable time is {nearest.seconds:.4g} s ({t.words(nearest.x)})"
+        + ("" if t.full else "; searched where the reduced models answer at once (the full "
+           "solver's region was not searched)"))
 
 
 # ------------------------------------------------------------------ the truth
