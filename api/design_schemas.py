@@ -70,6 +70,8 @@ class ExperimentDesignRequest(RequestModel):
     jumps: list[Temperature] | None = Field(None, max_length=12, description="candidate "
                                             "jump temperatures of the experiment, K")
     criterion: Literal["d-optimal", "interval"] = "d-optimal"
+    simulate: int = Field(0, ge=0, le=500, description="also check the Fisher interval "
+                          "with this many simulated fits")
 
 
 class DesignJobResponse(BaseModel):

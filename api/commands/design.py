@@ -111,6 +111,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--criterion", choices=["d-optimal", "interval"], default="d-optimal",
                    help="sampling times: robust D-optimal for tau (default) or the widest "
                         "predicted dose-time interval minimised")
+    e.add_argument("--simulate", type=int, default=0, metavar="N",
+                   help="also check the Fisher interval with N simulated fits over noise "
+                        "seeds (default none)")
     e.add_argument("--out", default=None, metavar="plan.csv",
                    help="write the sampling table a lab fills in (time_s, radius_um)")
     e.add_argument("--cache", default=None, help="validation cache file")
@@ -178,7 +181,8 @@ def experiment_ask(args: argparse.Namespace) -> Any:
                          args.dry_radius_um, size_noise=args.size_noise,
                          max_duration_s=args.max_duration, n_points=args.n_points,
                          min_interval_s=args.min_interval, sizes_um=args.sizes_um,
-                         jumps=args.jumps, criterion=args.criterion)
+                         jumps=args.jumps, criterion=args.criterion,
+                         simulate=args.simulate)
 
 
 def run_experiment(args: argparse.Namespace) -> int:

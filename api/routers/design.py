@@ -48,7 +48,7 @@ def experiment_ask(body: ExperimentDesignRequest) -> Any:
                          min_interval_s=body.min_interval_s,
                          sizes_um=None if body.sizes_um is None else tuple(body.sizes_um),
                          jumps=None if body.jumps is None else tuple(body.jumps),
-                         criterion=body.criterion)
+                         criterion=body.criterion, simulate=body.simulate)
 
 
 def _heating(planner: Any, body: HeatingDesignRequest) -> dict[str, Any]:

@@ -83,6 +83,7 @@ class ExperimentAsk:
     sizes_um: tuple[float, ...] | None = None
     jumps: tuple[float, ...] | None = None
     criterion: str = "d-optimal"
+    simulate: int = 0  # also check the Fisher interval with this many simulated fits
     constants: Any = None
     branch: str | None = None
 
@@ -101,6 +102,8 @@ class ExperimentAsk:
                                  f"{int(self.max_duration_s / max(self.min_interval_s, 1e-9)) + 1}"
                                  f" samples {self.min_interval_s:g} s apart within "
                                  f"{self.max_duration_s:g} s (max_duration)")
+        if not 0 <= int(self.simulate) <= 500:
+            raise ParameterError("simulate", self.simulate, "0-500 simulated fits")
         if self.criterion not in CRITERIA:
             raise ParameterError("criterion", self.criterion, " | ".join(CRITERIA))
         for r in self.sizes_um or ():
@@ -130,7 +133,7 @@ class ExperimentAsk:
                 "min_interval_s": self.min_interval_s,
                 "sizes_um": None if self.sizes_um is None else list(self.sizes_um),
                 "jumps": None if self.jumps is None else list(self.jumps),
-                "criterion": self.criterion}
+                "criterion": self.criterion, "simulate": self.simulate}
 
 
 # ------------------------------------------------------------------ the curves
@@ -302,6 +305,7 @@ class ExperimentDesign:
     point_seconds: float
     t_start: float
     expected: dict[str, Any] = field(default_factory=dict)
+    simulated: dict[str, Any] | None = None
 
     @property
     def envelope_before_factor(self) -> float:
@@ -312,6 +316,12 @@ class ExperimentDesign:
         lo = math.prod(p.low for p in self.after_parts if p.counted)
         hi = math.prod(p.high for p in self.after_parts if p.counted)
         return hi / lo
+
+    def _factor_without(self, name: str) -> float:
+        """The predicted envelope's width without one part (the front law's, were the
+        envelope to drop it once a fit has decided the law)."""
+        ps = [p for p in self.after_parts if p.counted and p.name != name]
+        return math.prod(p.high for p in ps) / math.prod(p.low for p in ps)
 
     def steps(self) -> list[str]:
         b = self.best
@@ -360,6 +370,8 @@ class ExperimentDesign:
                 f"grid of {len(self.tau_grid_s)} tau values across the timescale part's "
                 "bracket; the other parts of the answer's envelope held"),
             "timescale_factor_after": math.exp(2 * b.tau_half_width),
+            "envelope_after_factor_law_pinned": self._factor_without("front_law"),
+            "simulated_fits": self.simulated,
             "law_separation_sigma": b.separation,
             "law_separation_by_tau": [{"tau_s": t, "sigma": s} for t, s in
                                       zip(self.tau_grid_s, b.separations, strict=True)],
@@ -542,9 +554,43 @@ def design_experiment(ask: ExperimentAsk, planner: Any = None) -> ExperimentDesi
     expected = {"maxwell": (best.dry_radius_um * cv.maxwell(s)).tolist(),
                 "delayed": (best.dry_radius_um * cv.delayed(s)).tolist()}
     taus_best = best.tau_nominal_s * np.geomspace(d_used / hi_d, d_used / lo_d, TAU_GRID)
+    sim = None if not ask.simulate else simulated_fits(
+        cv, best, taus_best, ask.size_noise, int(ask.simulate), tq)
     return ExperimentDesign(ask, best, cands, env, after(best),
                             [float(t) for t in taus_best], law_focus, float(res.seconds),
-                            float(planned.t_start), expected)
+                            float(planned.t_start), expected, sim)
+
+
+def simulated_fits(cv: Curves, best: Candidate, taus: np.ndarray, noise: float, seeds: int,
+                   tq: float) -> dict[str, Any]:
+    """The Fisher prediction checked: ``seeds`` noisy Maxwell curves at the design's times,
+    at the tau of the grid where the predicted interval is widest, each fitted as ``fit
+    kinetics`` fits (solver.fit.kinetics, tau and scale free): the spread of log tau, the
+    fits' own 95 % half-width (median) and how often their intervals cover the truth."""
+    from solver.fit.kinetics import KineticsData, fit_kinetics
+
+    sds = [tau_sd(cv.maxwell, best.times_s, t, noise) for t in taus]
+    tau = float(taus[int(np.argmax(sds))])
+    rng = np.random.default_rng(39)
+    y0 = best.dry_radius_um * cv.maxwell(best.times_s / tau)
+    logs, halves, cover = [], [], 0
+    for _ in range(seeds):
+        y = y0 * (1.0 + noise * rng.standard_normal(y0.size))
+        r = fit_kinetics(KineticsData(best.times_s, y, "radius"), lambda beta: cv.maxwell,
+                         size_rel_sigma=noise)
+        t_fit, iv = r.parameters["tau"], r.intervals["tau"]
+        logs.append(math.log(t_fit / tau))
+        if iv:
+            halves.append(0.5 * math.log(iv[1] / iv[0]))
+            cover += int(iv[0] <= tau <= iv[1])
+    return {"seeds": seeds, "tau_s": tau, "fisher_sd_log_tau": max(sds),
+            "fisher_half_width": tq * max(sds),
+            "simulated_sd_log_tau": float(np.std(logs)),
+            "simulated_bias_log_tau": float(np.mean(logs)),
+            "median_fit_half_width": float(np.median(halves)) if halves else None,
+            "coverage": cover / seeds,
+            "method": "simulated fits over noise seeds (the Maxwell curve at the widest "
+                      "tau of the grid), each fitted as fit kinetics fits"}
 
 
 __all__ = ["ASSUMPTIONS", "ExperimentAsk", "ExperimentDesign", "design_experiment",
