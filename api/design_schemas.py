@@ -69,7 +69,9 @@ class ExperimentDesignRequest(RequestModel):
         None, max_length=20, description="the dry radii the lab can make, um")
     jumps: list[Temperature] | None = Field(None, max_length=12, description="candidate "
                                             "jump temperatures of the experiment, K")
-    criterion: Literal["d-optimal", "interval"] = "d-optimal"
+    criterion: Literal["d-optimal", "interval"] = Field(
+        "d-optimal", description="sampling times: robust D-optimal for tau, or the widest "
+        "predicted dose-time interval minimised")
     simulate: int = Field(0, ge=0, le=500, description="also check the Fisher interval "
                           "with this many simulated fits")
 
@@ -78,9 +80,10 @@ class DesignJobResponse(BaseModel):
     """A design job: pending, running, done (``result``) or failed (``error``)."""
 
     model_config = ConfigDict(extra="allow")
-    id: str
-    kind: Literal["design-heating", "design-experiment"]
-    status: str
-    status_url: str | None = None
-    result: dict[str, Any] | None = None
-    error: str | None = None
+    id: str = Field(description="the job's id: its kind and the request's hash")
+    kind: Literal["design-heating", "design-experiment"] = Field(description="the kind")
+    status: str = Field(description="pending, running, done or failed")
+    status_url: str | None = Field(None, description="where to poll it")
+    result: dict[str, Any] | None = Field(None, description="the design (dosing.design: "
+                                          "to_dict), when done")
+    error: str | None = Field(None, description="why it failed, when failed")

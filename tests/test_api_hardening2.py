@@ -44,6 +44,10 @@ POSTS: dict[str, tuple[dict[str, Any], list[Any]]] = {
                         ["body", "gel"]),
     "/v1/sensitivity": ({"gel": SURROGATE, "vary": [{"name": "dry_radius_um", "low": 20.0,
                                                      "high": 80.0}]}, ["body", "gel"]),
+    "/v1/design/heating": ({"gel": SURROGATE, "t_start": 302.0, "at_seconds": 60.0,
+                            "fraction": 0.5, "dry_radius_um": 50.0}, ["body", "gel"]),
+    "/v1/design/experiment": ({"gel": SURROGATE, "t_start": 302.0, "t_end": 308.0,
+                               "fraction": 0.8, "dry_radius_um": 50.0}, ["body", "gel"]),
 }
 
 
