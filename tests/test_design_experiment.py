@@ -105,7 +105,20 @@ def test_the_plan_csv_and_impossible_designs(planner, tmp_path, capsys) -> None:
     text = capsys.readouterr().out
     assert "measure: Rest at 302 K for 30 min; Hold at 308 K" in text
     lines = [x for x in csv.read_text().splitlines() if not x.startswith("#")]
-    assert lines[0].startswith("time_s,radius_um") and len(lines) == 9
+    assert lines[0] == "time_s,radius_um" and len(lines) == 9
+    # filled in (here with the expected Maxwell radii), fit kinetics reads it as it is
+    exp = [float(x.split(": ")[1].split(" / ")[0]) for x in csv.read_text().splitlines()
+           if x.startswith("#   ")]
+    filled = tmp_path / "filled.csv"
+    filled.write_text("\n".join([x for x in csv.read_text().splitlines() if x[0] == "#"]
+                                + ["time_s,radius_um"]
+                                + [f"{x.rstrip(',')},{r:.6g}" for x, r in
+                                   zip(lines[1:], exp, strict=True)]) + "\n")
+    assert main(["fit", "kinetics", str(filled), "--gel", "ANB", "--t-start", "302",
+                 "--t-end", "308", "--dry-radius-um", "50", "--size-rel-sigma", "0.005",
+                 "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["n_points"] == 8
     with pytest.raises(ParameterError) as e:
         ExperimentAsk("ANB", 302.0, 308.0, 0.8, 50.0, n_points=50, min_interval_s=100.0,
                       max_duration_s=600.0)

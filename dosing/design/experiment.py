@@ -414,16 +414,20 @@ class ExperimentDesign:
 
     def csv(self) -> str:
         """The sampling table a lab fills in (time_s, radius_um), '#' lines describing the
-        experiment; ``fit kinetics`` reads it once the radii are written."""
+        experiment and the expected radii; ``fit kinetics`` reads it as it is once the radii
+        are written."""
         d = self.to_dict()
+        table = self.table()
         head = [f"# thermogel design experiment: {d['experiment']['protocol']}",
                 f"# bead: {self.best.dry_radius_um:g} um dry radius; size noise "
-                f"{self.ask.size_noise:g} (relative)",
+                f"{self.ask.size_noise:g} (relative); write each measured radius (um)",
                 f"# then: {d['experiment']['fit']}",
-                "# expected radius (um) at the nominal tau: Maxwell law / delayed law",
-                "time_s,radius_um,expected_maxwell_um,expected_delayed_um"]
-        rows = [f"{r['time_s']:.6g},,{r['expected_radius_um_maxwell']:.6g},"
-                f"{r['expected_radius_um_delayed']:.6g}" for r in self.table()]
+                "# expected radius (um) at the nominal tau, sample: Maxwell law / delayed law",
+                *(f"#   {r['sample']:3d} at {r['time_s']:.6g} s: "
+                  f"{r['expected_radius_um_maxwell']:.5g} / "
+                  f"{r['expected_radius_um_delayed']:.5g}" for r in table),
+                "time_s,radius_um"]
+        rows = [f"{r['time_s']:.6g}," for r in table]
         return "\n".join(head + rows) + "\n"
 
 
