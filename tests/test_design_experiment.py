@@ -168,6 +168,9 @@ async def test_design_jobs_over_http(tmp_path, monkeypatch) -> None:
                 "dry_radius_um": 50.0, "size_noise": 0.0})
             assert r.status_code == 422 and "size_noise" in r.text
             assert (await c.get("/v1/design/jobs/design-heating-nope")).status_code == 404
+            page = await c.get("/design")  # the page over the two routes, no network
+            assert page.status_code == 200 and "/v1/design/experiment" in page.text
+            assert "http://" not in page.text and "https://" not in page.text
     # a restart: the finished job is answered from the cache
     app2 = create_app(warm=False, cache_path=cache)
     async with app2.router.lifespan_context(app2):

@@ -1,13 +1,15 @@
 """``POST /v1/design/heating`` and ``/v1/design/experiment`` (issue 39): stored jobs (202 +
 poll at ``/v1/design/jobs/{id}`` or ``/v1/jobs/{id}``), bounded like the fit jobs (a 429
-when the job queue is full) and kept in the cache, so they survive a restart."""
+when the job queue is full) and kept in the cache, so they survive a restart; ``GET
+/design`` a small page over them."""
 
 from __future__ import annotations
 
+from importlib.resources import files
 from typing import Any
 
 from fastapi import APIRouter
-from fastapi.responses import JSONResponse
+from fastapi.responses import HTMLResponse, JSONResponse
 
 from dosing import UnknownValidationError
 from solver.json_safe import json_safe
@@ -108,3 +110,11 @@ def status(state: Any, job_id: str) -> dict[str, Any]:
 async def design_job(job_id: str, state: StateDep) -> Any:
     """A design job's state, with the result when done or the error when failed."""
     return await compute(status, state, job_id)
+
+
+@router.get("/design", response_class=HTMLResponse, include_in_schema=False)
+async def design_page() -> HTMLResponse:
+    """A small page over the two design routes (api/static/design.html: plain HTML and JS,
+    no network): the heating's form and the experiment's, the jobs polled, the sampling
+    table and its CSV."""
+    return HTMLResponse((files("api") / "static" / "design.html").read_text(encoding="utf-8"))
