@@ -445,6 +445,20 @@ ASSUMPTIONS = [
 ]
 
 
+def front_region(gel: Any, t_start: float, branch: str) -> list[float]:
+    """The jumps from ``t_start`` (every JUMP_STEP_K up to 20 K) where a front forms."""
+    from ..model_choice import choose_model
+
+    front = []
+    for t in np.arange(t_start + JUMP_STEP_K, t_start + 20.0, JUMP_STEP_K):
+        try:
+            if choose_model(gel, t_start, float(t), branch)[0] == "front":
+                front.append(float(t))
+        except (ParameterError, ValueError):
+            continue
+    return front
+
+
 def _candidate_jumps(ask: ExperimentAsk, gel: Any, branch: str) -> list[float]:
     """The experiment's jumps: given, or the front model's region from T_start sampled
     (the answer's own T_end among them when the front applies there)."""
@@ -452,14 +466,7 @@ def _candidate_jumps(ask: ExperimentAsk, gel: Any, branch: str) -> list[float]:
 
     if ask.jumps:
         return sorted(set(float(t) for t in ask.jumps))
-    grid = np.arange(float(ask.t_start) + JUMP_STEP_K, float(ask.t_start) + 20.0, JUMP_STEP_K)
-    front = []
-    for t in grid:
-        try:
-            if choose_model(gel, float(ask.t_start), float(t), branch)[0] == "front":
-                front.append(float(t))
-        except (ParameterError, ValueError):
-            continue
+    front = front_region(gel, float(ask.t_start), branch)
     if not front:
         return [float(ask.t_end)]
     pick = [front[int(round(i))] for i in np.linspace(0, len(front) - 1, min(N_JUMPS,
@@ -507,8 +514,12 @@ def design_experiment(ask: ExperimentAsk, planner: Any = None) -> ExperimentDesi
     for te in jumps:
         try:
             if choose_model(gel, float(ask.t_start), te, branch)[0] != "front":
-                raise ParameterError("jumps", te, "a jump the front model answers (the "
-                                     "curve fit kinetics fits): a front forms")
+                region = front_region(gel, float(ask.t_start), branch)
+                where = (f"{region[0]:g}-{region[-1]:g} K (sampled every {JUMP_STEP_K:g} K)"
+                         if region else "none within 20 K of t_start")
+                raise ParameterError("jumps", te, f"a jump from {float(ask.t_start):g} K "
+                                     f"where a front forms: {where}", "the curve fit "
+                                     "kinetics fits there is the front model's")
             cv = curves_of[te] = jump_curves(planner, gel, float(ask.t_start), te, branch)
         except ParameterError:
             if ask.jumps:
