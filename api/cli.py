@@ -17,7 +17,7 @@ from solver.errors import NotApplicableError, ParameterError, SolverError  # a l
 
 COMMANDS = ["equilibrium", "classify", "phase_map", "serve", "front", "dose", "schedule",
             "simulate", "plot", "bench", "sweep", "fit", "release", "sensitivity",
-            "compare"]
+            "compare", "design"]
 
 
 def build_parser(commands: list[str] | None = None) -> argparse.ArgumentParser:

@@ -25,7 +25,18 @@ from dosing.jobs import exit_with_parent
 
 from . import docs_pages, errors, guard, openapi_spec
 from .auth import TokenAuth
-from .routers import analysis, dosing, fit, jobs, page, physics, service, sweep, validations
+from .routers import (
+    analysis,
+    design,
+    dosing,
+    fit,
+    jobs,
+    page,
+    physics,
+    service,
+    sweep,
+    validations,
+)
 from .routers import sensitivity as sensitivity_routes
 from .service import ServiceState
 from .version import package_version
@@ -84,7 +95,7 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
         app.add_middleware(TrustedHostMiddleware, allowed_hosts=allowed_hosts)
     for router in (service.router, physics.router, dosing.router, validations.router,
                    fit.router, sweep.router, page.router, sensitivity_routes.router,
-                   jobs.router, analysis.router):
+                   design.router, jobs.router, analysis.router):
         add_routes(app, router)
     return app
 

@@ -164,6 +164,16 @@ def test_a_generated_client_calls_every_route(tmp_path: Path) -> None:
         any_job = call("jobs", "job_route_v1_jobs_job_id_get", fit.parsed.id)
         assert type(any_job.parsed).__name__ == "FitJobResponse"
         call("jobs", "job_route_v1_jobs_job_id_get", "fit-nope", want=(404,))
+        dh = call("design", "design_heating_route_v1_design_heating_post", want=(202,),
+                  body=models.HeatingDesignRequest.from_dict(
+                      {"gel": "ANB", "t_start": 302.0, "fraction": 0.5, "at_seconds": 60.0,
+                       "dry_radius_um": 50.0, "full": False}))
+        done = _wait(call, "design_job_v1_design_jobs_job_id_get", dh.parsed.id, "design")
+        assert done.parsed.status == "done", done.content[:300]
+        call("design", "design_experiment_route_v1_design_experiment_post", want=(202,),
+             body=models.ExperimentDesignRequest.from_dict(
+                 {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "fraction": 0.8,
+                  "dry_radius_um": 50.0, "jumps": [308.0], "n_points": 6}))
         call("sensitivity", "post_sensitivity_v1_sensitivity_post",
              body=models.SensitivityRequest.from_dict(
                  {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.5,
@@ -189,4 +199,4 @@ def test_a_generated_client_calls_every_route(tmp_path: Path) -> None:
         with pkg.Client(base_url=url, raise_on_unexpected_status=True) as fresh:
             call("service", "health_health_get", client=fresh)  # the cap is per open one
     ops = sum(len(o) for o in create_app(warm=False).openapi()["paths"].values())
-    assert len(called) == ops == 21, sorted(called)
+    assert len(called) == ops == 24, sorted(called)

@@ -47,6 +47,10 @@ POSTS: dict[str, tuple[dict[str, Any], list[Any]]] = {
     "/v1/fit/empirical": ({"csv": SURROGATE}, ["body", "csv"]),  # issue 38
     "/v1/compare": ({"reference": {"csv": SURROGATE}, "test": {"csv": "t,r\n1,2\n"}},
                     ["body", "reference", "csv"]),
+    "/v1/design/heating": ({"gel": SURROGATE, "t_start": 302.0, "at_seconds": 60.0,
+                            "fraction": 0.5, "dry_radius_um": 50.0}, ["body", "gel"]),
+    "/v1/design/experiment": ({"gel": SURROGATE, "t_start": 302.0, "t_end": 308.0,
+                               "fraction": 0.8, "dry_radius_um": 50.0}, ["body", "gel"]),
 }
 
 

@@ -30,6 +30,9 @@ _WHERE: dict[str, str] = {
     # release data as a lab analyses it (docs/release_analysis.md)
     "read_profile": "dosing.analysis", "fit_empirical": "dosing.analysis",
     "compare_profiles": "dosing.analysis",
+    # design: the heating that meets a target, the experiment that pins the model
+    "HeatingTarget": "dosing.design", "design_heating": "dosing.design",
+    "ExperimentAsk": "dosing.design", "design_experiment": "dosing.design",
     # units at the edges
     "to_unit": "dosing.quantity", "kelvin": "dosing.quantity", "seconds": "dosing.quantity",
     "micrometres": "dosing.quantity",
