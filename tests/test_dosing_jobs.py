@@ -257,3 +257,67 @@ def test_default_executor_does_not_rerun_an_unguarded_script(tmp_path: Path) -> 
     assert done.returncode == 0, done.stderr
     assert done.stdout.count("script body ran") == 1
     assert "result 3" in done.stdout
+
+
+# ----------------------------------------------------------------------------- issue 40, R1/R2
+
+def test_errors_from_a_pool_worker_come_back_and_the_pool_survives() -> None:
+    """A solver error (ParameterError: picklable now) and an error that does not pickle
+    (a WorkerError naming it) come back as errors; the pool is never broken by them."""
+    import pool_jobs
+
+    from dosing.jobs import WorkerError
+    from solver.errors import ParameterError
+
+    runner = JobRunner(max_pending=8)
+    try:
+        with pytest.raises(ParameterError) as err:
+            runner.submit("p", pool_jobs.bad_parameter).result(60)
+        assert err.value.field == "steps[0].duration" and err.value.value == 4e7
+        with pytest.raises(WorkerError, match="Unpicklable: 1/2"):
+            runner.submit("l", pool_jobs.bad_local).result(60)
+        assert runner.submit("ok", pool_jobs.slow, 5, 0.0).result(60) == 5
+        assert runner.pool_status()["restarts"] == 0
+    finally:
+        runner.shutdown(wait=False)
+
+
+def test_a_dead_worker_fails_its_job_only_and_the_pool_is_replaced() -> None:
+    """A worker killed while it runs a job: that job fails (WorkerDied, not retried), the
+    jobs queued behind it run on the replacement pool, /health's pool status counts it."""
+    import pool_jobs
+
+    from dosing.jobs import WorkerDied
+
+    runner = JobRunner(max_pending=8)
+    try:
+        dead = runner.submit("die", pool_jobs.die)
+        queued = [runner.submit(f"q{i}", pool_jobs.slow, i) for i in range(3)]
+        with pytest.raises(WorkerDied, match="died while it ran"):
+            dead.result(60)
+        assert [f.result(60) for f in queued] == [0, 1, 2]
+        status = runner.pool_status()
+        assert status["status"] == "ok" and status["restarts"] == 1
+        assert runner.state("die") == "failed"
+    finally:
+        runner.shutdown(wait=False)
+
+
+def test_a_job_past_its_hard_limit_is_killed_and_failed() -> None:
+    """A job that never returns (a loop that holds the worker) is killed at the runner's
+    hard limit; the job after it runs."""
+    import pool_jobs
+
+    from dosing.jobs import WorkerDied
+
+    runner = JobRunner(max_pending=8, hard_seconds=2.0)
+    try:
+        t0 = time.monotonic()
+        stuck = runner.submit("spin", pool_jobs.spin)
+        after = runner.submit("after", pool_jobs.slow, "after")
+        with pytest.raises(WorkerDied, match="hard limit of 2 s"):
+            stuck.result(60)
+        assert time.monotonic() - t0 < 30
+        assert after.result(60) == "after"
+    finally:
+        runner.shutdown(wait=False)
