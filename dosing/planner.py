@@ -47,7 +47,15 @@ from .model_choice import (
 )
 from .request import DoseRequest, ScheduleRequest
 from .restart import Start, restartable, stopped_as_run
-from .scenario import Scenario, Solver, SolverSettings, Trajectory, run_scenario
+from .scenario import (
+    Scenario,
+    Solver,
+    SolverSettings,
+    Trajectory,
+    hard_limit,
+    run_budget,
+    run_scenario,
+)
 from .truth import delayed_settings, is_model_form_run, range_settings
 from .validation import error_estimate, failure, validation_report
 
@@ -136,7 +144,8 @@ class Planner:
         self._solver = solver  # None: solver.full.simulate, imported when a run is queued
         self.cache = ValidationCache(cache_path)
         self.jobs = JobRunner(executor, max_pending, leases=self.cache,
-                              lease_seconds=lease_seconds)
+                              lease_seconds=lease_seconds,
+                              hard_seconds=hard_limit(run_budget()))
         self.horizon = float(horizon)
         self._mem: OrderedDict[str, Trajectory] = OrderedDict()
         self._row_digest: dict[str, str] = {}  # the cache row each _mem entry came from

@@ -109,3 +109,19 @@ def test_wall_clock_budget_stops_a_run_with_a_clear_error() -> None:
     assert np.all(np.isfinite(res.radius))
     with pytest.raises(ParameterError, match="max_seconds"):
         simulate("ANB", 302, 308, until=0.05, n=60, max_seconds=-1.0)
+
+
+def test_a_step_that_cannot_shrink_fails_instead_of_spinning() -> None:
+    """Issue 40, R2: a protocol step of 1e-12 tau (an until-step's jump, 'Rest at 290 K
+    until ...') after a hold at 308 K: its one step is rejected, and the controller's
+    smaller step snaps back to the step's end (within 1e-12 of it), so the compiled loop
+    retried the same step for ever at 100 % CPU.  Now the run fails at once, naming it."""
+    from solver.heating import Hold, Program
+
+    prog = Program((Hold(308.0, 0.0272), Hold(290.0, 1e-12)), "kT", 308.0)
+    with pytest.raises(SolverError, match="stalled") as err:
+        simulate(ANB, 302.0, protocol=prog, stop=2.6, grid="moving", n=400,
+                 interfacial_length=8e-5, max_seconds=300)
+    d = err.value.diagnostics
+    assert d["grid"] == "moving" and d["n"] == 400 and d["t"] == pytest.approx(0.0272)
+    assert d["program"]["steps"][1]["duration"] == 1e-12

@@ -242,6 +242,17 @@ C_RHS, C_JAC, C_STEPS, C_REJECTED, C_MERGES = 0, 1, 2, 3, 4
 # run status
 RUN_REACHED, RUN_RECORD_FULL, RUN_BUDGET, RUN_UNDERFLOW, RUN_BAD_STATE = 0, 1, 2, 3, 4
 RUN_EVENT = 5
+# a rejected step to the segment's end whose retry is that very step again: the controller's
+# smaller step snaps back to the end (it is within 1e-12 of it), so the retry would repeat
+# the same arithmetic and be rejected for ever (a segment shorter than the snapping
+# tolerance whose one step fails; issue 40, R2).  Returned before the first repetition:
+# no run that ever finished took this branch, so it changes no step.
+RUN_STALLED = 6
+# PAUSE_ATTEMPTS step attempts (accepted or rejected) in one call: back to the driver, which
+# checks its wall-clock budget and calls again with the same state (all of the loop's
+# state is in ``state`` and ``control``: the steps are those of one uninterrupted call)
+RUN_PAUSED = 7
+PAUSE_ATTEMPTS = 4096
 CTRL_SIZE = 8  # [h, last h, last error, Jacobian valid, stop target, dir, step target, dir]
 
 
@@ -272,7 +283,9 @@ def rodas_run(grid, state, t_stop, t_seg, budget, par, heat, geo, band, buf, met
     (empty: constant ``par``).  An accepted step is linearized at once (f and J at the new
     state; an unphysical new state rejects it).  control.rec = (4, capacity) record of
     (t, a, da/dt, edge-cell porosity) per accepted step, its count in counters[5].
-    Returns a RUN_* status.
+    Returns a RUN_* status; RUN_PAUSED after PAUSE_ATTEMPTS attempts (call again: the
+    steps are those of one call), RUN_STALLED when a rejected step would be retried
+    unchanged.
     """
     y, f, yold, fold, tt = state.y, state.f, state.yold, state.fold, state.tt
     lower, upper = band.lower, band.upper
@@ -286,11 +299,15 @@ def rodas_run(grid, state, t_stop, t_seg, budget, par, heat, geo, band, buf, met
     ia = radius_index(grid, n)
     floor = underflow(grid)
     expo = tableau[1]
+    attempts = 0
     while tt[0] < t_stop:
         if counters[C_STEPS] >= max_steps:
             return RUN_BUDGET
         if counters[5] >= rec.shape[1]:
             return RUN_RECORD_FULL
+        if attempts >= PAUSE_ATTEMPTS:
+            return RUN_PAUSED
+        attempts += 1
         t = tt[0]
         if ctrl[3] == 0.0:
             calls = linearize(grid, y, f, par_at(par, heat, t), geo, work, lower, upper,
@@ -330,6 +347,8 @@ def rodas_run(grid, state, t_stop, t_seg, budget, par, heat, geo, band, buf, met
                 ctrl[0] = 0.25 * h
             else:
                 ctrl[0] = h * max(FAC_MIN, min(1.0, SAFETY * err**-expo))
+            if last and t + ctrl[0] >= t_seg - 1e-12 * max(1.0, abs(t_seg)):
+                return RUN_STALLED  # the retry would be this step again
             continue
         quot = max(1.0 / FAC_MAX, min(1.0 / FAC_MIN, max(err, 1e-12) ** expo / SAFETY))
         if ctrl[1] > 0.0:
