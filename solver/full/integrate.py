@@ -315,11 +315,7 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
     k_out = 0
     reasons = {ros.RUN_BUDGET: f"step budget exhausted ({max_steps} steps)",
                ros.RUN_UNDERFLOW: "step size underflow",
-               ros.RUN_BAD_STATE: "unphysical state",
-               ros.RUN_STALLED: "stalled: the step to the end of a protocol step is rejected "
-                                "and cannot shrink (the step is within the 1e-12 snapping "
-                                "tolerance of that end), so it would be retried unchanged "
-                                "for ever"}
+               ros.RUN_BAD_STATE: "unphysical state"}
     first = True
     rezoned = rezoner is not None and rezoner.every > 0
     land = rezoned and rezoner.land  # output times end steps
