@@ -405,7 +405,9 @@ def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: fl
     wall = time.perf_counter()
     budget = run_budget() if budget is None else float(budget)
 
-    def left() -> float:  # what the next run may spend of the budget
+    def left() -> float:  # what the next call may spend of the budget (the first: all)
+        if runs == 0:
+            return budget
         spent = time.perf_counter() - wall
         if spent >= budget:
             raise BudgetExceeded(

@@ -321,3 +321,43 @@ def test_a_job_past_its_hard_limit_is_killed_and_failed() -> None:
         assert after.result(60) == "after"
     finally:
         runner.shutdown(wait=False)
+
+
+def test_a_runs_budget_covers_all_its_solver_calls(monkeypatch: pytest.MonkeyPatch) -> None:
+    """run_scenario's budget (THERMOGEL_RUN_SECONDS when set) is for the whole run: a jump
+    extended x4 while its radius is short of the need stops at the budget with a
+    BudgetExceeded naming the settings, not after a budget per call."""
+    from dosing_fakes import FakeSolver
+
+    from dosing.scenario import (
+        RUN_BUDGET_S,
+        Scenario,
+        SolverSettings,
+        hard_limit,
+        run_budget,
+        run_scenario,
+    )
+    from solver.errors import BudgetExceeded
+    from solver.gel import preset
+
+    monkeypatch.delenv("THERMOGEL_RUN_SECONDS", raising=False)
+    assert run_budget() == RUN_BUDGET_S and hard_limit(RUN_BUDGET_S) == 900.0
+    for bad in ("", "x", "-1", "nan", "0"):
+        monkeypatch.setenv("THERMOGEL_RUN_SECONDS", bad)
+        assert run_budget() == RUN_BUDGET_S
+    monkeypatch.setenv("THERMOGEL_RUN_SECONDS", "0.5")
+    assert run_budget() == 0.5 and hard_limit(0.5) == 60.5
+
+    class Slow(FakeSolver):
+        def __call__(self, *args, **kw):
+            time.sleep(0.2)
+            return super().__call__(*args, **kw)
+
+    solver = Slow()
+    sc = Scenario(preset("ANB"), 300.0, 303.0, settings=SolverSettings(grid="lagrangian",
+                                                                       n=40))
+    t0 = time.monotonic()
+    with pytest.raises(BudgetExceeded, match=r"lagrangian grid, N = 40.*0 s budget") as err:
+        run_scenario(sc.to_dict(), horizon=0.01, need_radius=1.0001, solver=solver)
+    assert time.monotonic() - t0 < 2.0 and 2 <= len(solver.calls) <= 4
+    assert err.value.diagnostics["scenario"]["settings"]["n"] == 40
