@@ -449,6 +449,10 @@ class ValidationCache:
                     "WHERE id = ?", (status, None if result is None else json.dumps(result),
                                      error, time.time(), job_id))
 
+    def forget_job(self, job_id: str) -> None:
+        """Drop a job's row (a run's remembered failure, asked for again)."""
+        self._write("DELETE FROM jobs WHERE id = ?", (job_id,))
+
     def get_job(self, job_id: str) -> dict[str, Any] | None:
         """The job: id, kind, request, status, result, error; or None."""
         row = self._con().execute("SELECT id, kind, request, status, result, error FROM jobs "

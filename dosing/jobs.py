@@ -387,6 +387,10 @@ class JobRunner:
         self._restarts = 0
         self._last_break: str | None = None
         self._broken: str | None = None  # the pool is broken and not replaced: why
+        # called with (key, error) when a job's worker died while it ran (or was killed at
+        # the hard limit): the planner remembers it, so a poll after a restart does not run
+        # it into the same death (dosing.planner)
+        self.on_worker_died: Callable[[str, BaseException], None] | None = None
     @property
     def executor(self) -> Executor:
         """The executor (the default process pool is created on first use: background
@@ -589,6 +593,11 @@ class JobRunner:
         pool = "replaced" if replaced else "not replaced (a pool this runner was lent)"
         err = WorkerDied(f"the job failed: {why}; the pool was {pool}, and this job is not "
                          "run again unless asked again")
+        if (was_running or killed) and self.on_worker_died is not None:
+            try:
+                self.on_worker_died(entry.job.key, err)
+            except Exception:
+                pass
         self._release(entry)
         self._settle(entry.outer, error=err)
         return True

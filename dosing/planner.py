@@ -39,7 +39,7 @@ from .answers import (
     plain,
 )
 from .cache import ValidationCache
-from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner
+from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner, WorkerDied
 from .model_choice import (
     build_answer,
     front_time,
@@ -73,6 +73,7 @@ MOVING_HORIZON = 0.1
 # a run that falls short is extended (x4) like every other
 MODEL_FORM_REACH = 4.0
 VERDICTS = 1024  # front-model verdicts remembered per planner (keyed by cache generation)
+RUN_FAILURE = "run-failure-"  # the id prefix of a run whose worker died (the cache's jobs)
 
 
 class UnknownValidationError(KeyError):
@@ -146,6 +147,7 @@ class Planner:
         self.jobs = JobRunner(executor, max_pending, leases=self.cache,
                               lease_seconds=lease_seconds,
                               hard_seconds=hard_limit(run_budget()))
+        self.jobs.on_worker_died = self._remember_death
         self.horizon = float(horizon)
         self._mem: OrderedDict[str, Trajectory] = OrderedDict()
         self._row_digest: dict[str, str] = {}  # the cache row each _mem entry came from
@@ -487,17 +489,41 @@ class Planner:
         record = {"scenarios": [sc.to_dict() for sc in scs], "keys": keys,
                   "start_radius": req.start_radius, "target_radius": choice.radius,
                   "fraction": f, "front_time": choice.front_time}
-        self._advance(record, vid)  # admitted whole or not at all (QueueFullError)
+        self._advance(record, vid, retry=True)  # admitted whole or not (QueueFullError)
         if self.cache.get_validation(vid) is None:
             self.cache.put_validation(vid, record)
         return vid
 
-    def _advance(self, record: dict[str, Any], vid: str) -> tuple[list[Any], list[str]]:
+    def _remember_death(self, key: str, err: BaseException) -> None:
+        """A run whose pool worker died while it ran (killed by the OS, or at the hard
+        limit): kept in the cache, so that a poll (here or after a restart) reports it
+        failed instead of running it into the same death; asking again runs it."""
+        jid = RUN_FAILURE + key
+        self.cache.put_job(jid, "run-failure", {"key": key})
+        self.cache.finish_job(jid, "failed", error=str(err))
+
+    def _died(self, key: str, retry: bool) -> BaseException | None:
+        """The remembered death of run ``key`` (None: none; ``retry`` forgets it)."""
+        row = self.cache.get_job(RUN_FAILURE + key)
+        if row is None:
+            return None
+        if retry:
+            self.cache.forget_job(RUN_FAILURE + key)
+            return None
+        return WorkerDied(row["error"] or "its pool worker died while it ran")
+
+    def _advance(self, record: dict[str, Any], vid: str,
+                 retry: bool = False) -> tuple[list[Any], list[str]]:
         """Per run: a covering trajectory, an exception, or None and its job state in the
-        second list (submitting what is neither cached nor queued, as one group ``vid``)."""
+        second list (submitting what is neither cached nor queued, as one group ``vid``;
+        a run whose worker died is not run again unless ``retry``: the request asked
+        again, not polled)."""
         need_r, need_t = record["target_radius"], record["front_time"] or 0.0
         scs = [Scenario.from_dict(scd) for scd in record["scenarios"]]
         trajs = [self.cached(sc, need_r, need_t) for sc in scs]
+        for i, sc in enumerate(scs):
+            if trajs[i] is None and self.jobs.state(sc.key()) is None:
+                trajs[i] = self._died(sc.key(), retry)
         todo = [sc for sc, traj in zip(scs, trajs, strict=True) if traj is None
                 and self.jobs.state(sc.key()) not in ("pending", "running", "failed")]
         if todo:  # never run, or short of the dose

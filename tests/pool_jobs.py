@@ -36,3 +36,11 @@ def slow(x: object, seconds: float = 0.3) -> object:
 def spin() -> None:
     while True:
         pass
+
+
+def dying_solver(*args: object, **kwargs: object) -> None:
+    """A stand-in for solver.full.simulate whose worker dies (as under the OOM killer); it
+    appends a line to $THERMOGEL_TEST_CALLS first."""
+    with open(os.environ["THERMOGEL_TEST_CALLS"], "a") as fh:
+        fh.write(f"{os.getpid()}\n")
+    die()

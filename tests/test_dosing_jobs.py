@@ -361,3 +361,35 @@ def test_a_runs_budget_covers_all_its_solver_calls(monkeypatch: pytest.MonkeyPat
         run_scenario(sc.to_dict(), horizon=0.01, need_radius=1.0001, solver=solver)
     assert time.monotonic() - t0 < 2.0 and 2 <= len(solver.calls) <= 4
     assert err.value.diagnostics["scenario"]["settings"]["n"] == 40
+
+
+@pytest.mark.slow
+def test_a_run_that_killed_its_worker_is_not_run_again_by_a_poll(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A validation whose runs kill their worker fails (WorkerDied); polled by a planner
+    started afresh on the same cache, it is failed at once, nothing run (the deaths are
+    kept in the cache); asked again (submitted), it runs again."""
+    import pool_jobs
+
+    from dosing import SolverSettings
+
+    calls = tmp_path / "calls"
+    monkeypatch.setenv("THERMOGEL_TEST_CALLS", str(calls))
+    req = DoseRequest("HHT", 304, 307.6, dose_fraction=0.5,
+                      settings=SolverSettings(n=50, interfacial_length=0.0))
+    with Planner(cache_path=tmp_path / "c.sqlite", solver=pool_jobs.dying_solver) as planner:
+        vid = planner.submit_validation(req)
+        st = planner.wait_validation(vid, 120.0)
+        assert st.status == "failed" and "died while it ran" in st.error, st.error
+        assert planner.jobs.pool_status()["restarts"] >= 1
+    ran = calls.read_text().count("\n")
+    assert ran == 2  # the truth and its check run, each killed its worker once
+    with Planner(cache_path=tmp_path / "c.sqlite", solver=pool_jobs.dying_solver) as planner:
+        st = planner.validation(vid)  # a poll after a restart
+        assert st.status == "failed" and "died while it ran" in st.error, st.error
+        time.sleep(1.0)
+        assert calls.read_text().count("\n") == ran  # nothing ran
+        assert planner.jobs.pool_status()["restarts"] == 0
+        assert planner.submit_validation(req) == vid  # asked again: run again
+        assert planner.wait_validation(vid, 120.0).status == "failed"
+        assert calls.read_text().count("\n") == 2 * ran
