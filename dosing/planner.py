@@ -19,6 +19,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
+import sqlite3
 import threading
 import time
 from collections import OrderedDict
@@ -292,28 +293,44 @@ class Planner:
                 while len(self._mem) > 64:
                     self._mem.popitem(last=False)
         if states:
+            new = []
             with self._mem_lock:
                 for st in states:
                     if st.stopped:
                         continue
                     j = st.steps
                     key = _prefix(sc, j).key()
+                    if self._starts.get(key) != (sc, j):
+                        new.append((key, sc.to_dict(), j))
                     self._starts[key] = (sc, j)
                     self._starts.move_to_end(key)
                 while len(self._starts) > 4096:
                     self._starts.popitem(last=False)
+            try:  # kept in the cache too: a restarted planner starts from the same states
+                self.cache.put_starts(new)
+            except sqlite3.Error:
+                pass  # only where a run starts is lost (a full disk): it starts earlier
         return traj
 
     def _start(self, sc: Scenario) -> Start | None:
         """Where ``sc``'s protocol run starts: the state after its longest prefix that a
-        run this planner has seen kept, or a stored run of that prefix itself (the run
-        store keeps each run's states: another process's runs serve too); None: t = 0."""
+        run this planner, or one before it on this cache, has seen kept (the cache's
+        ``starts``: a job resumed after a restart starts where it would have), or a stored
+        run of that prefix itself (the run store keeps each run's states: another
+        process's runs serve too); None: t = 0."""
         if sc.protocol is None or len(sc.protocol) < 2:
             return None
         for j in range(len(sc.protocol) - 1, 0, -1):
             pre = _prefix(sc, j)
             with self._mem_lock:
                 hit = self._starts.get(pre.key())
+            if hit is None:
+                try:
+                    row = self.cache.get_start(pre.key())
+                except sqlite3.Error:
+                    row = None
+                if row is not None:
+                    hit = (Scenario.from_dict(row[0]), row[1])
             stored = self.cached(pre if hit is None else hit[0])
             start = None if stored is None else Start.of(stored, j if hit is None else hit[1])
             if start is not None:
