@@ -49,7 +49,7 @@ from solver.solute import Hindrance, ReleaseResult, Solute, crank_sphere
 from solver.solute.result import RELEASE_ARRAYS
 
 from .cache import ValidationCache
-from .scenario import Scenario, SolverSettings, Step, code_version, run_budget
+from .scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
 from .units import (
     BOLTZMANN,
     REFERENCE_TEMPERATURE_K,
@@ -431,7 +431,10 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
     from solver.full.moving import MeshOptions
 
     s = drug_settings(settings)
-    budget = run_budget() if budget is None else budget
+    if budget is None:
+        from .scenario import run_budget
+
+        budget = run_budget(RUN_BUDGET_S)
     run = [(float(d), temp) for d, temp in steps if d > 0.0]
     if not run:
         raise ParameterError("protocol", steps, "at least one step of positive duration")

@@ -40,7 +40,7 @@ from .answers import (
     plain,
 )
 from .cache import ValidationCache
-from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner, WorkerDied
+from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner
 from .model_choice import (
     build_answer,
     front_time,
@@ -527,6 +527,8 @@ class Planner:
         if retry:
             self.cache.forget_job(RUN_FAILURE + key)
             return None
+        from .jobs import WorkerDied
+
         return WorkerDied(row["error"] or "its pool worker died while it ran")
 
     def _advance(self, record: dict[str, Any], vid: str,

@@ -222,16 +222,16 @@ RUN_BUDGET_S = 600.0  # wall time of one validation run (the default ladder's la
 RUN_BUDGET_ENV = "THERMOGEL_RUN_SECONDS"  # the service's setting of that budget
 
 
-def run_budget() -> float:
+def run_budget(default: float = RUN_BUDGET_S) -> float:
     """The wall seconds one full-solver run may take (all its calls of the solver):
-    $THERMOGEL_RUN_SECONDS when set to a number > 0, else RUN_BUDGET_S.  Read where the run
+    $THERMOGEL_RUN_SECONDS when set to a number > 0, else ``default``.  Read where the run
     starts (a pool worker inherits the service's environment)."""
     raw = os.environ.get(RUN_BUDGET_ENV, "")
     try:
-        x = float(raw) if raw.strip() else RUN_BUDGET_S
+        x = float(raw) if raw.strip() else default
     except ValueError:
-        return RUN_BUDGET_S
-    return x if math.isfinite(x) and x > 0.0 else RUN_BUDGET_S
+        return default
+    return x if math.isfinite(x) and x > 0.0 else default
 
 
 def hard_limit(budget: float) -> float:
