@@ -130,19 +130,21 @@ def test_no_worker_outlives_a_kill_9_of_its_server_mid_run(tmp_path: Path) -> No
     a kill -9 of the server; so are the watchdog and the resource tracker."""
     with serve_process(tmp_path / "c.sqlite", "--no-warmup") as (url, proc), \
             httpx.Client(base_url=url, timeout=120) as c:
-        r = c.post("/v1/dose-time", json=R2)
-        assert r.status_code == 202, r.text
+        for body in (R2, *({**SMOOTH, "t_start": t} for t in (300.0, 300.5, 301.0))):
+            r = c.post("/v1/dose-time", json=body)  # work for the one worker, queued
+            assert r.status_code == 202, r.text
         server = psutil.Process(proc.pid)
         deadline = time.monotonic() + 120
         busy = None
         while busy is None and time.monotonic() < deadline:
             for p in server.children(recursive=True):
                 try:
-                    if p.cpu_times().user > 2.0 and p.ppid() == proc.pid:
+                    if (p.ppid() == proc.pid and p.cpu_times().user > 1.0
+                            and p.status() == psutil.STATUS_RUNNING):
                         busy = p
                 except psutil.NoSuchProcess:
                     continue
-            time.sleep(0.2)
+            time.sleep(0.1)
         assert busy is not None, "no pool worker got busy"
         children = [p.pid for p in server.children(recursive=True)]
         assert len(children) >= 3, children  # a worker, its watchdog, the resource tracker
