@@ -134,8 +134,9 @@ def app_from_env() -> FastAPI:
     THERMOGEL_CACHE (cache file), THERMOGEL_MAX_PENDING (validations queued or running),
     THERMOGEL_MAX_BODY (bytes), THERMOGEL_LEASE_SECONDS, THERMOGEL_WARMUP ('0' skips the
     warm-up), THERMOGEL_API_TOKEN (the bearer token), THERMOGEL_ALLOWED_HOSTS (comma-
-    separated Host names).  A uvicorn worker process (``--workers`` > 1) ends itself when the
-    supervisor it was started by is gone.
+    separated Host names), THERMOGEL_RUN_SECONDS (the wall-clock budget of one full-solver run,
+    read by dosing.scenario.run_budget; default 600).  A uvicorn worker process
+    (``--workers`` > 1) ends itself when the supervisor it was started by is gone.
     """
     from dosing.settings import settings
 

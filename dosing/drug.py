@@ -419,7 +419,7 @@ def step_outputs(duration: float, k: int) -> np.ndarray:
 
 
 def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
-                      settings: SolverSettings, budget: float = RUN_BUDGET_S,
+                      settings: SolverSettings, budget: float | None = None,
                       start: Any = None) -> Any:
     """The mechanics of a protocol: one ``simulate`` of its steps of positive duration,
     sampled densely after every step's start (:func:`step_outputs`; on the moving grid
@@ -431,6 +431,10 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
     from solver.full.moving import MeshOptions
 
     s = drug_settings(settings)
+    if budget is None:
+        from .scenario import run_budget
+
+        budget = run_budget(RUN_BUDGET_S)
     run = [(float(d), temp) for d, temp in steps if d > 0.0]
     if not run:
         raise ParameterError("protocol", steps, "at least one step of positive duration")
@@ -469,7 +473,7 @@ def mechanics_prefix(res: Any, steps: tuple[Step, ...]) -> Any:
     return cut
 
 
-def run_drug_scenario(scenario: dict[str, Any], budget: float = RUN_BUDGET_S,
+def run_drug_scenario(scenario: dict[str, Any], budget: float | None = None,
                       start: Any = None, keep: bool = False,
                       solute_from: ReleaseResult | None = None) -> tuple[Any, ...]:
     """A drug run: plain data in, (metadata, npz blob) out (for any executor); ``start``

@@ -38,12 +38,13 @@ import numpy as np
 
 from solver.errors import ParameterError
 from solver.gel import T_MAX, T_MIN
+from solver.limits import PROGRAM_STEP_MAX
 
 from .quantity import kelvin, kelvin_offset, parse, to_unit
 
 RATE_RANGE_K_PER_MIN = (1e-3, 1e6)  # 0.001 K/min (a day per 1.4 K) to 10^6 K/min (~a jump)
 DURATION_MAX_S = 1.0e7  # about 116 days
-TAU_MAX = 1.0e6  # the solver's longest step (solver.full.run)
+TAU_MAX = PROGRAM_STEP_MAX  # the solver's longest step (solver.limits)
 TIME_CONSTANT_RANGE_S = (1e-3, 1e6)
 TRACE_MAX_ROWS = 100_000
 TRACE_TEMPERATURE_RANGE = (T_MIN, T_MAX)  # 273.15-373.15 K: liquid water
