@@ -90,7 +90,7 @@ class Route:
 
 S, F, J, SW, P, SE = ("api.schemas", "api.fit_schemas", "api.routers.jobs", "api.routers.sweep",
                       "api.routers.page", "api.sensitivity_schemas")
-A = "api.analysis_schemas"
+A, D = "api.analysis_schemas", "api.design_schemas"
 PENDING = f"{S}:PendingResponse"
 ROUTES: tuple[Route, ...] = (
     Route("health", "GET", "/health", (f"{S}:HealthResponse",),
@@ -123,6 +123,13 @@ ROUTES: tuple[Route, ...] = (
     Route("compare", "POST", "/v1/compare", (f"{A}:CompareResponse",),
           body=f"{A}:CompareRequest", doc="f1 and f2 of two release profiles (FDA rules, "
           "bootstrap)"),
+    Route("design_heating", "POST", "/v1/design/heating", body=f"{D}:HeatingDesignRequest",
+          accepted=f"{D}:DesignJobResponse", doc="the heating that meets a target (a job)"),
+    Route("design_experiment", "POST", "/v1/design/experiment",
+          body=f"{D}:ExperimentDesignRequest", accepted=f"{D}:DesignJobResponse",
+          doc="the experiment that pins the model (a job)"),
+    Route("design_job", "GET", "/v1/design/jobs/{job_id}", (f"{D}:DesignJobResponse",),
+          doc="a design job's state"),
     Route("fit_job", "GET", "/v1/fit/jobs/{job_id}",
           (f"{F}:ReleaseFitJobResponse", f"{F}:FitJobResponse"), doc="a fit job's state"),
     Route("sweep", "POST", "/v1/sweep", body=f"{SW}:SweepRequest",

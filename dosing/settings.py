@@ -20,6 +20,9 @@ Every variable thermogel reads is a field here, under the name it has always had
 ``THERMOGEL_MAX_CONNECTIONS``          open connections in all
 ``THERMOGEL_SUPERVISOR_PID``           (set by ``thermogel serve --workers``) the supervisor
 ``THERMOGEL_ARTIFACTS``                where the browser test writes its screenshots
+``THERMOGEL_RUN_SECONDS``              the wall-clock budget of one full-solver run, s
+                                       (default 600; read where a run starts:
+                                       ``dosing.scenario.run_budget``)
 =====================================  ====================================================
 
 An empty variable is unset; a value of the wrong type is a ``ParameterError`` naming the
@@ -74,6 +77,8 @@ def _settings_class() -> type:
         max_connections: int | None = Field(None, ge=1)
         supervisor_pid: int | None = Field(None, description="the supervisor process")
         artifacts: Path | None = Field(None, description="the browser test's screenshots")
+        run_seconds: float | None = Field(None, gt=0.0, description="one full-solver run's "
+                                          "wall-clock budget, s (default 600)")
 
         @property
         def cache_path(self) -> Path:
