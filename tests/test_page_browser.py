@@ -145,6 +145,13 @@ def test_page_in_headless_chromium(tmp_path: Path) -> None:
         assert float(page.get_attribute("#answer-seconds", "data-value")) == want["seconds"]
         assert page.inner_text("#answer-seconds") == f"{want['seconds']:.4g} s"
         assert want["error_explanation"] in page.inner_text("#answer-error-parts")
+        # issue 36: the envelope first, as a bar of its parts, with the dominant one
+        lo, hi = want["envelope_seconds"]
+        assert float(page.get_attribute("#answer-envelope-range", "data-low")) == lo
+        assert float(page.get_attribute("#answer-envelope-range", "data-high")) == hi
+        segs = page.locator("#answer-envelope-bar span")
+        assert segs.count() >= 2 and "timescale" in segs.nth(0).inner_text()
+        assert "dominant: timescale" in page.inner_text("#answer-envelope-dominant")
         assert page.locator("#curve-radius").count() == 1  # the front curve is drawn
         assert page.locator(".dose-mark").count() == 1
         assert page.locator("#timeline-release").count() == 1

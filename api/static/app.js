@@ -541,6 +541,40 @@ function showReference(ref) {
   dd.dataset.time = String(ref.time);
 }
 
+function showEnvelope(a) {
+  // issue 36: what the user cannot rule out first, as a bar of its parts (ln factor each)
+  const range = $("answer-envelope-range"), bar = $("answer-envelope-bar");
+  const dom = $("answer-envelope-dominant");
+  const env = a.envelope;
+  bar.innerHTML = "";
+  if (!env) { range.textContent = "—"; dom.textContent = ""; return; }
+  const secs = a.envelope_seconds, tau = a.envelope_time;
+  const pair = secs && typeof secs[0] === "number" ? secs : (tau && typeof tau[0] === "number" ? tau : null);
+  const unit = secs ? "s" : "τ";
+  range.textContent = pair ? `${fmt2(pair[0])}–${fmt2(pair[1])} ${unit}` : "per heating: see the table";
+  range.dataset.low = pair ? String(pair[0]) : "";
+  range.dataset.high = pair ? String(pair[1]) : "";
+  const parts = Object.values(env.parts || {}).filter((p) => p.counted && p.factor > 1.0001 &&
+    (secs || p.name !== "timescale"));
+  const total = parts.reduce((s, p) => s + Math.log(p.factor), 0) || 1;
+  for (const p of parts.sort((x, y) => y.factor - x.factor)) {
+    const seg = document.createElement("span");
+    seg.className = p.name;
+    seg.style.width = `${(100 * Math.log(p.factor)) / total}%`;
+    seg.textContent = `${p.name.replace("_", " ")} ×${p.factor.toPrecision(3)}`;
+    seg.title = p.text;
+    bar.appendChild(seg);
+  }
+  const d = a.dominant_uncertainty;
+  dom.textContent = d ? `dominant: ${d.name.replace("_", " ")} ×${d.factor.toPrecision(3)}; to pin it: ${d.how_to_pin}` : "";
+}
+
+function fmt2(x) {
+  // two significant figures, no exponent for everyday sizes
+  if (x === null || x === undefined) return "—";
+  return Math.abs(x) >= 1e-3 && Math.abs(x) < 1e7 ? Number(x.toPrecision(2)).toLocaleString("en-US") : x.toPrecision(2);
+}
+
 function showAnswer(a, total) {
   // the headline is the answer's own (``headline``, ``time``, ``seconds``): a batch's own
   // time for a batch, its mean bead's beside it (``reference_bead``)
@@ -555,6 +589,7 @@ function showAnswer(a, total) {
     `${total > 1 ? `; all ${total} doses` : ""})`;
   t.dataset.value = String(a.time);
   showReference(ref);
+  showEnvelope(a);
   $("answer-model").textContent = a.behaviour ? `${a.model} (${a.behaviour})` : a.model;
   $("answer-error").textContent = `± ${pct(a.error_estimate)}` + (ref ? " (the mean bead's)" : "");
   $("answer-release").textContent = `${pct(a.dose_fraction)} of the ${a.drug ? "drug load" : "stored fluid"}` +
