@@ -19,12 +19,11 @@ from typing import Any
 from fastapi import APIRouter, FastAPI
 from fastapi.concurrency import run_in_threadpool
 from fastapi.routing import APIRoute
-from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from dosing.jobs import exit_with_parent
 
 from . import errors, guard, openapi_spec
-from .auth import TokenAuth
+from .auth import HostCheck, TokenAuth
 from .routers import dosing, fit, jobs, page, physics, service, sweep, validations
 from .routers import sensitivity as sensitivity_routes
 from .service import ServiceState
@@ -48,7 +47,9 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
     stopped.  ``warm``: warm every numba kernel first.  ``max_body_bytes``: larger request
     bodies are refused with 413 before they are read.  ``api_token``: every route but
     /health needs ``Authorization: Bearer <token>`` (:mod:`api.auth`).  ``allowed_hosts``:
-    Host headers accepted (Starlette's TrustedHostMiddleware; default any).
+    Host headers accepted (:class:`api.auth.HostCheck`: a name with any port, or
+    ``name:port``; default any; ``thermogel serve`` on loopback defaults to
+    ``api.auth.LOOPBACK_HOSTS``).
     """
     options: dict[str, Any] = {"cache_path": cache_path}
     if executor is not None:
@@ -80,7 +81,7 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
     if api_token:
         app.add_middleware(TokenAuth, token=api_token)
     if allowed_hosts:
-        app.add_middleware(TrustedHostMiddleware, allowed_hosts=allowed_hosts)
+        app.add_middleware(HostCheck, allowed=allowed_hosts)
     for router in (service.router, physics.router, dosing.router, validations.router,
                    fit.router, sweep.router, page.router, sensitivity_routes.router,
                    jobs.router):

@@ -24,16 +24,23 @@ def to_gel(spec: str | s.GelParameters) -> Gel:
                                        exclude_none=True))
 
 
+def http_protocol(t_start: float, steps: Any) -> Any:
+    """The one parser of a protocol sent over HTTP (every route): steps as text or data, a
+    measured trace as CSV text or lists; a step naming a file ('Trace from <path>') is a
+    422 naming it (``protocol[i].trace``): no route opens a path a request names."""
+    from dosing.heating import Protocol
+
+    return Protocol(t_start, steps, files=False)
+
+
 def _heating(body: Any) -> Jump | Heating:
     """A jump to t_end, or the protocol (no file paths over HTTP)."""
     if getattr(body, "protocol", None) is None:
         return Jump(body.t_end)
-    from dosing.heating import Protocol
-
     if body.t_end is not None:
         raise ParameterError("t_end", body.t_end, "absent when a protocol is given (the "
                              "protocol's steps set the heating)")
-    return Heating(Protocol(body.t_start, body.protocol, files=False))
+    return Heating(http_protocol(body.t_start, body.protocol))
 
 
 def _payload(body: Any) -> Fluid | Drug:

@@ -521,6 +521,11 @@ GRAMMAR = ("'Heat to 308 K at 5 K/min', 'Cool to 302 K at 2 K/min', 'Hold at 308
            "structured step {'step': 'heat'|'cool'|'hold'|'rest'|'bath'|'trace', ...}")
 
 
+PATHS_REFUSED = ("the trace as data: {'step': 'trace', 'csv': '<CSV text>'} or 'time' and "
+                 "'temperature' lists; file paths are refused here (the service never reads "
+                 "a file a request names)")
+
+
 def parse_step(value: Any, index: int = 0, files: bool = True) -> Step:
     """One step from its text, a structured dict or a step object; ``files`` allows
     'Trace from <path>' to read a CSV file (Python and the CLI; HTTP sends the CSV text)."""
@@ -551,8 +556,7 @@ def parse_step(value: Any, index: int = 0, files: bool = True) -> Step:
                         _until(g["until"], where) if g.get("until") else None)
         path = g["path"].strip()
         if not files:
-            raise where.error("trace", path, "a structured trace step {'step': 'trace', "
-                                             "'csv': '<text>'} (no file paths here)")
+            raise where.error("trace", path[:MAX_QUANTITY_CHARS], PATHS_REFUSED)
         try:
             with open(path, encoding="utf-8") as fh:
                 body = fh.read()

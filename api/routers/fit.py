@@ -31,6 +31,7 @@ from ..fit_schemas import (
     ReleaseFitRequest,
     SwellingFitRequest,
 )
+from ..requests import http_protocol
 from ..safe_route import SafeRoute
 from ..service import to_gel
 from .compute import compute
@@ -112,9 +113,10 @@ def _release(_: Any, body: ReleaseFitRequest) -> dict[str, Any]:
     from dosing.release_fit import fit_release
 
     t, y = _release_data(body)
+    prot = None if body.protocol is None else http_protocol(body.t_start, body.protocol)
     return json_safe(fit_release(
         t, y, to_gel(body.gel), body.t_start, body.t_end, body.dry_radius_um,
-        protocol=body.protocol, hindrance=body.hindrance, mesh_size_nm=body.mesh_size_nm,
+        protocol=prot, hindrance=body.hindrance, mesh_size_nm=body.mesh_size_nm,
         fiber_radius_nm=body.fiber_radius_nm, settings=_release_settings(body)))
 
 
@@ -134,7 +136,7 @@ def _check(body: SwellingFitRequest | KineticsFitRequest | ReleaseFitRequest) ->
 
             if body.t_end is not None:
                 raise ParameterError("t_end", body.t_end, "null when a protocol is given")
-            parse_protocol(body.t_start, body.protocol)
+            parse_protocol(body.t_start, http_protocol(body.t_start, body.protocol))
         elif body.t_end is not None and body.t_end != body.t_start:
             raise ParameterError("t_end", body.t_end, f"equal to t_start = {body.t_start:g} "
                                  "K (isothermal), or give a protocol")
