@@ -8,7 +8,6 @@ import ast
 import os
 import sys
 import threading
-from pathlib import Path
 from typing import Any
 
 import pytest

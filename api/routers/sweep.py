@@ -43,7 +43,7 @@ from ..schemas import (
     temperature_field,
 )
 from ..service import to_gel
-from .compute import compute
+from .compute import RENDER, compute
 
 router = APIRouter(tags=["design maps"], route_class=SafeRoute)
 
@@ -293,7 +293,7 @@ async def sweep_status(
     ``/v1/sweeps/{id}/table.csv``).  Serialised off the event loop; a final table (every
     validation settled) is serialised once.  (``?format=csv``, undocumented, is the CSV
     route's older spelling.)"""
-    body, media = await compute(_render, request, sweep_id, format)
+    body, media = await render(request, sweep_id, format)
     return Response(body, media_type=media)
 
 
@@ -304,13 +304,22 @@ async def sweep_status(
     409: {"model": ErrorResponse, "description": "not done yet (poll the sweep)"}})
 async def sweep_csv(sweep_id: str, request: Request) -> Response:
     """The finished sweep's table as CSV, one row per point (a 409 while it runs)."""
-    body, media = await compute(_render, request, sweep_id, "csv")
+    body, media = await render(request, sweep_id, "csv")
     if media != _MEDIA["csv"]:
         state = json.loads(body).get("status")
         return JSONResponse({"detail": [{"loc": ["path", "sweep_id"], "type": "not_done",
                                          "msg": f"sweep {sweep_id} is {state}: poll "
                                                 f"/v1/sweeps/{sweep_id}"}]}, status_code=409)
     return Response(body, media_type=media)
+
+
+async def render(request: Request, sweep_id: str, fmt: str) -> tuple[bytes, str]:
+    """A sweep poll's answer as bytes: a final table's from memory at once, else rendered
+    on the render executor (a 20,000-row table is not serialised on the compute threads)."""
+    hit = _sweeps(request).cached((sweep_id, fmt))
+    if hit is not None:
+        return hit, _MEDIA[fmt]
+    return await RENDER.run(_render, request, sweep_id, fmt)
 
 
 def _render(request: Request, sweep_id: str, fmt: str) -> tuple[bytes, str]:
@@ -345,8 +354,12 @@ async def sweep_plot(
         gel: Annotated[int, Query(ge=0, description="which gel of the grid")] = 0,
 ) -> Response:
     """Heat maps of the finished sweep: actuation time and its error over T_end x radius
-    (drawn once per final table and gel, off the event loop)."""
-    return await compute(_plot, request, sweep_id, gel)
+    (drawn once per final table and gel, on the render executor: at most 8 doses drawn, so
+    seconds; kept)."""
+    hit = _sweeps(request).cached((sweep_id, f"svg{gel}"))
+    if hit is not None:
+        return Response(hit, media_type=_MEDIA["svg"])
+    return await RENDER.run(_plot, request, sweep_id, gel)
 
 
 def _plot(request: Request, sweep_id: str, gel: int) -> Response:
