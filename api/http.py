@@ -62,11 +62,13 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
 
     @asynccontextmanager
     async def lifespan(_: FastAPI):
+        unwatch = errors.watch_faults(state)  # /health degraded on a logged cache failure
         await run_in_threadpool(state.start, warm)
         try:
             yield
         finally:
             await run_in_threadpool(state.stop)
+            unwatch()
 
     app = guard.GuardedFastAPI(
         title="thermogel planner", version=package_version(), lifespan=lifespan,

@@ -388,6 +388,8 @@ def _unit_of(header: str) -> str | None:
 
 
 def _temperature_unit(unit: str | None, field: str) -> str:
+    if unit is not None and not isinstance(unit, str):
+        raise ParameterError(field, unit, "K or degC (a string)")
     u = (unit or "K").strip().lower().replace("deg c", "degc")
     if u in ("k", "kelvin"):
         return "K"
@@ -397,6 +399,8 @@ def _temperature_unit(unit: str | None, field: str) -> str:
 
 
 def _time_scale(unit: str | None, field: str) -> float:
+    if unit is not None and not isinstance(unit, str):
+        raise ParameterError(field, unit, "s, min or h (a string)")
     u = (unit or "s").strip().lower()
     if u not in _TIME_UNITS:
         raise ParameterError(field, unit, "s, min or h")
@@ -412,7 +416,15 @@ def trace_from_csv(text: str, time_unit: str | None = None,
     and the column: time not increasing, a value that is not a finite number, a temperature
     outside 273.15-373.15 K, more than 100,000 rows, fewer than 2."""
     where = _Where(index, f"Trace from {name}")
-    rows = list(csv.reader(io.StringIO(text)))
+    if not isinstance(text, str):
+        raise where.error("trace", type(text).__name__, "CSV text")
+    # any line ending (CR alone too); a field over csv's limit is refused, not a crash
+    text = text.replace("\r\n", "\n").replace("\r", "\n")
+    try:
+        rows = list(csv.reader(io.StringIO(text)))
+    except csv.Error as exc:
+        raise where.error("trace", f"CSV text ({exc})", "CSV text with a time and a "
+                          "temperature column, a number in each cell") from None
     rows = [(k + 1, r) for k, r in enumerate(rows) if r and any(c.strip() for c in r)
             and not r[0].lstrip().startswith("#")]
     if not rows:
@@ -448,7 +460,7 @@ def trace_from_csv(text: str, time_unit: str | None = None,
                 x = math.nan
             if not math.isfinite(x):
                 raise where.error("trace", f"line {line}, column {col + 1} "
-                                  f"({'time' if col == 0 else 'temperature'}): {cell!r}",
+                                  f"({'time' if col == 0 else 'temperature'}): {cell[:40]!r}",
                                   "a finite number")
             out[j] = x
     return _trace_checked(times * scale, temps + offset, name, where,
@@ -480,7 +492,7 @@ def _trace_checked(times: np.ndarray, temps: np.ndarray, name: str, where: _Wher
 
 
 def _trace_step(d: dict[str, Any], where: _Where) -> Trace:
-    name = str(d.get("name") or "trace")
+    name = str(d.get("name") or "trace")[:MAX_QUANTITY_CHARS]
     if "csv" in d:
         try:
             return trace_from_csv(str(d["csv"]), d.get("time_unit"), d.get("temperature_unit"),
@@ -723,6 +735,7 @@ class Protocol:
         out, cur = [], self.t_start
         for i, st in enumerate(self.steps):
             end = _end_temperature(st, cur)
+            _check_physical(i, st, tau_s, cur)
             if isinstance(st, Ramp):
                 out.append(Piece("ramp", cur, st.to_k, abs(st.to_k - cur) / st.rate_tau(tau_s),
                                  step=i))
@@ -758,6 +771,33 @@ class Protocol:
         if hot_since is not None:
             out.append((hot_since, None))
         return out
+
+
+def _check_physical(i: int, st: Step, tau_s: float | None, cur: float) -> None:
+    """A step's bounds on its physical values, once tau is known: a rate in K/tau within
+    RATE_RANGE_K_PER_MIN (and its ramp within the solver's longest step, TAU_MAX tau), a
+    duration in tau within DURATION_MAX_S (issue 40, R8)."""
+    where = _Where(i, st.text)
+    if isinstance(st, Ramp) and st.rate_unit == "K/tau":
+        r_tau = st.rate
+        if not (math.isfinite(r_tau) and r_tau > 0.0
+                and abs(st.to_k - cur) / r_tau <= TAU_MAX):
+            raise where.error("rate", st.text.rsplit(" at ", 1)[-1],
+                              f"a ramp of at most {TAU_MAX:g} tau (a faster rate)")
+        if tau_s is not None:
+            lo, hi = RATE_RANGE_K_PER_MIN
+            k_min = 60.0 * st.rate / tau_s
+            if not lo <= k_min <= hi:
+                raise where.error("rate", f"{st.rate:g} K/tau = {k_min:.3g} K/min (tau = "
+                                  f"{tau_s:.3g} s)", f"{lo:g}-{hi:g} K/min")
+    spans = [("for", getattr(st, "duration", None)),
+             ("time_constant", getattr(st, "time_constant", None))]
+    for name, span in spans:
+        if isinstance(span, Span) and span.unit == "tau" and tau_s is not None:
+            secs = span.value * tau_s
+            if not 0.0 < secs <= DURATION_MAX_S:
+                raise where.error(name, f"{span.value:g} tau = {secs:.3g} s (tau = "
+                                  f"{tau_s:.3g} s)", f"0 s < {name} <= {DURATION_MAX_S:g} s")
 
 
 def _end_temperature(st: Step, cur: float) -> float:

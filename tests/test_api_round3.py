@@ -7,7 +7,6 @@ from __future__ import annotations
 import ast
 import os
 import sys
-import threading
 from typing import Any
 
 import pytest
@@ -191,4 +190,216 @@ def test_a_loopback_server_checks_the_host_by_default(monkeypatch) -> None:
         assert os.environ.get("THERMOGEL_ALLOWED_HOSTS") == want, argv
 
 
-_ = threading  # used by later sections
+
+# ----------------------------------------------------------------------------- R6 inputs
+def _trace(**kw: Any) -> dict[str, Any]:
+    return {**FRONT, "t_end": None, "protocol": [{"step": "trace", **kw}]}
+
+
+def _sens(vary: dict[str, Any], **kw: Any) -> dict[str, Any]:
+    return {"gel": "ANB", "vary": [vary], "samples": 4, "method": "morris", **kw}
+
+
+def _batch(sd: dict[str, Any]) -> dict[str, Any]:
+    return {**FRONT, "dry_radius_um": None, "size_distribution": sd}
+
+
+TWO = "0,302\n60,308\n"
+# the 16 inputs that were a 500 (issue 40, R6), reconstructed from their descriptions
+SIXTEEN: list[tuple[str, str, dict[str, Any], list[Any]]] = [
+    ("huge CSV field", "/v1/dose-time",
+     _trace(csv="time,T\n0," + "1" * 200_000 + "\n60,308\n"), ["body", "protocol", 0]),
+    ("CSV field over csv's limit, quoted", "/v1/dose-time",
+     _trace(csv='time,T\n0,"' + "1" * 140_000 + '"\n60,308\n'), ["body", "protocol", 0]),
+    ("time_unit 5 (CSV)", "/v1/dose-time", _trace(csv=TWO, time_unit=5),
+     ["body", "protocol", 0]),
+    ("temperature_unit 5 (CSV)", "/v1/dose-time", _trace(csv=TWO, temperature_unit=5),
+     ["body", "protocol", 0]),
+    ("time_unit 5 (lists)", "/v1/dose-time",
+     _trace(time=[0, 60], temperature=[302, 308], time_unit=5), ["body", "protocol", 0]),
+    ("temperature_unit [1] (lists)", "/v1/dose-time",
+     _trace(time=[0, 60], temperature=[302, 308], temperature_unit=[1]),
+     ["body", "protocol", 0]),
+    ("log radius 1e-300..1e300", "/v1/sensitivity",
+     _sens({"name": "dry_radius_um", "low": 1e-300, "high": 1e300, "log": True}),
+     ["body", "vary"]),
+    ("log permeability 1e-300..1e300", "/v1/sensitivity",
+     _sens({"name": "permeability_m2", "low": 1e-300, "high": 1e300, "log": True}),
+     ["body", "vary"]),
+    ("t_end 0..1e308", "/v1/sensitivity", _sens({"name": "t_end", "low": 0, "high": 1e308}),
+     ["body", "vary"]),
+    ("base radius '1e308 um'", "/v1/sensitivity",
+     _sens({"name": "a0", "low": 0.1, "high": 0.2}, dry_radius_um="1e308 um"),
+     ["body", "dry_radius_um"]),
+    ("lognormal mean 5e-324", "/v1/dose-time",
+     _batch({"kind": "lognormal", "mean_um": 5e-324, "cv": 0.2}),
+     ["body", "size_distribution", "mean_um"]),
+    ("normal mean 5e-324", "/v1/dose-time",
+     _batch({"kind": "normal", "mean_um": 5e-324, "cv": 0.2}),
+     ["body", "size_distribution", "mean_um"]),
+    ("lognormal median 5e-324", "/v1/dose-time",
+     _batch({"kind": "lognormal", "median_um": 5e-324, "gsd": 2.0}),
+     ["body", "size_distribution", "median_um"]),
+    ("table size 5e-324", "/v1/dose-time",
+     _batch({"kind": "table", "sizes_um": [5e-324, 1.0]}),
+     ["body", "size_distribution", "sizes_um", 0]),
+    ("table size 1e308", "/v1/dose-time",
+     _batch({"kind": "table", "sizes_um": [1e308, 1.0]}),
+     ["body", "size_distribution", "sizes_um", 0]),
+    ("a binary file through R3", "/v1/dose-time",
+     {**FRONT, "t_end": None, "protocol": ["Trace from /bin/sh"]}, ["body", "protocol", 0]),
+]
+
+
+@pytest.mark.anyio
+@pytest.mark.parametrize("what, route, body, loc", SIXTEEN, ids=[c[0] for c in SIXTEEN])
+async def test_the_sixteen_inputs_are_4xx_naming_the_field(raw, what, route, body, loc):
+    """R6: each of the 16 inputs that gave a 500 is a 422 whose loc names the field."""
+    r = await raw.post(route, json=body)
+    assert r.status_code == 422, (what, r.text[:400])
+    assert any(got[:len(loc)] == loc for got in _locs(r)), (what, _locs(r))
+
+
+@pytest.mark.anyio
+async def test_a_cr_only_trace_is_read(raw) -> None:
+    """R6: a trace CSV with CR-only line ends (an old spreadsheet's) is read, not a 500."""
+    r = await raw.post("/v1/dose-time", json=_trace(csv="time,T\r0,302\r60,308\r"))
+    assert r.status_code in (200, 202), r.text
+
+
+# ----------------------------------------------------------------------------- R8 units
+@pytest.mark.anyio
+@pytest.mark.parametrize("step, field", [
+    ("Heat to 308 K at 500 percent", "rate"),
+    ("Hold at 308 K for 10 radian", "for"),
+    ("Bath at 308 K with a time constant of 5 percent", "time_constant"),
+    ("Hold at 308 K until radius 5 percent", "until"),
+    ("Hold at 308 K until 5 radian released", "until"),
+    ("Heat to 308 K at 1e-300 K/tau", "rate"),
+    ("Heat to 308 K at 1e300 K/tau", "rate"),
+    ("Heat to 308 K at 1e-9 K/tau", "rate"),
+    ("Hold at 308 K for 1e5 tau", "for"),
+])
+async def test_bounds_hold_after_unit_conversion(raw, step, field) -> None:
+    """R8: a dimensionless unit inside a step ('500 percent', '10 radian') is refused, and a
+    rate or duration per tau is bounded by its physical value once tau is known (a rate in
+    K/tau was unbounded below: an answer of 7e303 s)."""
+    r = await raw.post("/v1/dose-time", json={**FRONT, "t_end": None, "protocol": [step]})
+    assert r.status_code == 422, r.text
+    assert any(loc[:3] == ["body", "protocol", 0] and (len(loc) < 4 or loc[3] == field)
+               for loc in _locs(r)), _locs(r)
+
+
+@pytest.mark.anyio
+async def test_a_batch_mean_below_the_minimum_size_is_refused(raw) -> None:
+    """R8: a batch whose mean (after conversion) is below 1e-3 um was answered 0 s."""
+    for sd in ({"kind": "normal", "mean_um": 5e-4, "cv": 0.2},
+               {"kind": "lognormal", "mean_um": "0.5 nm", "cv": 0.2},
+               {"kind": "lognormal", "mean_um": 0.002, "cv": 0.2, "state": "swollen"}):
+        r = await raw.post("/v1/dose-time", json=_batch(sd))
+        assert r.status_code == 422, (sd, r.text)
+        assert all(loc[:2] in (["body", "size_distribution"], ["body", "dry_radius_um"])
+                   for loc in _locs(r)), _locs(r)
+
+
+def test_dimensionless_units_are_refused_for_physical_fields() -> None:
+    from dosing.quantity import to_unit
+    from solver.errors import ParameterError
+
+    assert to_unit("308", "temperature", "t") == 308.0  # a bare number: the field's unit
+    for text, kind in (("500 percent", "temperature_rate"), ("10 radian", "time"),
+                       ("5 %", "length")):
+        with pytest.raises(ParameterError):
+            to_unit(text, kind, "f")
+
+
+# ----------------------------------------------------------------------------- R9 fits
+@pytest.mark.anyio
+@pytest.mark.parametrize("route, body, loc", [
+    ("/v1/fit/release", {**RELEASE, "time_s": [], "released": []}, ["body", "time_s"]),
+    ("/v1/fit/release", {**RELEASE, "time_s": [1.0, 2.0], "released": [0.1, 0.2]},
+     ["body", "time_s"]),
+    ("/v1/fit/release", {**RELEASE, "dry_radius_um": 5e-324}, ["body", "dry_radius_um"]),
+    ("/v1/fit/release", {**RELEASE, "dry_radius_um": 1e308}, ["body", "dry_radius_um"]),
+    ("/v1/fit/kinetics", {"time_s": [], "radius": [], "gel": "ANB", "t_start": 302.0,
+                          "t_end": 308.0}, ["body", "time_s"]),
+    ("/v1/fit/kinetics", {"time_s": [0.0], "radius": [1.0], "gel": "ANB", "t_start": 302.0,
+                          "t_end": 308.0}, ["body", "time_s"]),
+])
+async def test_fit_inputs_are_refused_at_submission(raw, route, body, loc) -> None:
+    """R9: inputs a fit job would refuse are a 422 at submission, not a 202 then a failed
+    job."""
+    r = await raw.post(route, json=body)
+    assert r.status_code == 422, r.text
+    assert loc in _locs(r), _locs(r)
+
+
+def test_job_errors_are_in_plain_words() -> None:
+    """R9: a failed job's error names the field in words, never a Python class name."""
+    from api.stored_jobs import plain_error
+    from solver.errors import ParameterError, SolverError
+
+    msgs = [plain_error(ParameterError("time_s", "2 points", "at least 3 points")),
+            plain_error(SolverError("step size underflow")),
+            plain_error(ValueError("x and y arrays must be equal in length")),
+            plain_error(KeyError("gel"))]
+    assert "time_s" in msgs[0] and "at least 3 points" in msgs[0]
+    for m in msgs:
+        assert not any(name in m for name in ("Error:", "KeyError", "ValueError",
+                                              "ParameterError", "Traceback")), m
+
+
+# ----------------------------------------------------------------------------- R10 locs
+def test_error_locations_name_fields_the_request_has() -> None:
+    """R10: an error found deep in the planner (a solver's 'targets', a fit's 'data') points
+    at the body or the deepest field the request has, never at one it lacks."""
+    from api import schemas as s
+    from api.errors import known_loc
+    from api.sensitivity_schemas import SensitivityRequest
+
+    body = ["body"]
+    assert known_loc([*body, "targets"], s.DoseTimeRequest) == body
+    assert known_loc([*body, "dose_fraction"], s.DoseTimeRequest) == [*body, "dose_fraction"]
+    assert known_loc([*body, "size_distribution", "mean_um"], s.DoseTimeRequest) == \
+        [*body, "size_distribution", "mean_um"]
+    assert known_loc([*body, "size_distribution", "bogus"], s.DoseTimeRequest) == \
+        [*body, "size_distribution"]
+    assert known_loc([*body, "protocol", 2, "rate"], s.DoseTimeRequest) == \
+        [*body, "protocol", 2, "rate"]
+    assert known_loc([*body, "vary", "a0"], SensitivityRequest) == [*body, "vary"]
+    assert known_loc([*body, "validate"], s.DoseTimeRequest) == [*body, "validate"]
+
+
+@pytest.mark.anyio
+async def test_health_is_degraded_on_a_malformed_cache(planner, raw, monkeypatch) -> None:
+    """R10: /health says 'degraded' once a request met a malformed cache (it said 'ok'
+    while the log said otherwise)."""
+    import sqlite3
+
+    def malformed(*args: object, **kwargs: object) -> None:
+        raise sqlite3.DatabaseError("database disk image is malformed")
+
+    assert (await raw.get("/health")).json()["status"] == "ok"
+    monkeypatch.setattr(planner.cache, "get_many", malformed, raising=False)
+    monkeypatch.setattr(planner.cache, "get", malformed)
+    r = await raw.post("/v1/dose-time", json={**FRONT, "t_start": 300.0, "t_end": 303.0,
+                                              "dose_fraction": 0.2})
+    assert r.status_code == 503, r.text
+    h = (await raw.get("/health")).json()
+    assert h["status"] == "degraded" and "malformed" in h["planner"]["degraded_because"]
+
+
+@pytest.mark.anyio
+async def test_health_is_degraded_on_a_cache_failure_logged_off_the_requests(raw) -> None:
+    """R10: a malformed cache met off the requests (a job thread, a validation) and logged
+    makes /health 'degraded' too."""
+    import logging
+    import sqlite3
+
+    assert (await raw.get("/health")).json()["status"] == "ok"
+    try:
+        raise sqlite3.DatabaseError("database disk image is malformed")
+    except sqlite3.Error:
+        logging.getLogger("thermogel.cache").exception("a job met the cache")
+    h = (await raw.get("/health")).json()
+    assert h["status"] == "degraded" and "malformed" in h["planner"]["degraded_because"]
