@@ -448,22 +448,24 @@ def trace_from_csv(text: str, time_unit: str | None = None,
     except ParameterError as exc:
         raise where.error(exc.field, exc.value, exc.valid) from None
     offset = kelvin_offset(kunit)
-    times = np.empty(len(rows))
-    temps = np.empty(len(rows))
-    for j, (line, r) in enumerate(rows):
-        if len(r) < 2:
-            raise where.error("trace", f"line {line}", "two columns: time, temperature")
-        for col, (cell, out) in enumerate(((r[0], times), (r[1], temps))):
-            try:
-                x = float(cell)
-            except ValueError:
-                x = math.nan
-            if not math.isfinite(x):
-                raise where.error("trace", f"line {line}, column {col + 1} "
-                                  f"({'time' if col == 0 else 'temperature'}): {cell[:40]!r}",
-                                  "a finite number")
-            out[j] = x
-    return _trace_checked(times * scale, temps + offset, name, where,
+    short = next((line for line, r in rows if len(r) < 2), None)
+    if short is not None:
+        raise where.error("trace", f"line {short}", "two columns: time, temperature")
+    cols = []
+    for col in (0, 1):  # whole columns at once (100,000 rows in milliseconds)
+        cells = [r[col] for _, r in rows]
+        try:
+            cols.append(np.array(cells, dtype=float))
+        except ValueError:
+            for (line, _), cell in zip(rows, cells, strict=True):
+                try:
+                    float(cell)
+                except ValueError:
+                    raise where.error("trace", f"line {line}, column {col + 1} "
+                                      f"({'time' if col == 0 else 'temperature'}): "
+                                      f"{cell[:40]!r}", "a finite number") from None
+            raise
+    return _trace_checked(cols[0] * scale, cols[1] + offset, name, where,
                           [line for line, _ in rows], kunit)
 
 
@@ -473,7 +475,11 @@ def _trace_checked(times: np.ndarray, temps: np.ndarray, name: str, where: _Wher
         raise where.error("trace", f"{times.size} rows", f"2-{TRACE_MAX_ROWS} rows")
     lines = list(lines) if lines is not None else [k + 1 for k in range(times.size)]
     lo, hi = TRACE_TEMPERATURE_RANGE
-    for j in range(times.size):
+    with np.errstate(invalid="ignore"):  # the first bad row, in the order rows are read
+        bad = (~np.isfinite(times) | ~np.isfinite(temps) | (temps < lo) | (temps > hi)
+               | np.concatenate([[False], ~(np.diff(times) > 0.0)]))
+    first = np.flatnonzero(bad)
+    for j in first[:1].tolist():
         for col, x in ((1, times[j]), (2, temps[j])):
             if not math.isfinite(x):
                 raise where.error("trace", f"line {lines[j]}, column {col} "
