@@ -9,14 +9,13 @@ thread, ``SWEEP_QUEUE`` queued before 429) and spreads its chunks over the plann
 executor, so a planner on a Dask cluster sweeps on the cluster.  Validations the request
 selects are the planner's own (poll /v1/validations/{id}); each poll of the sweep fills
 those done, and the table is stored again once they all are.  Only rendered bodies of
-final tables are kept in memory (the last ``SWEEPS_KEPT``).
+final tables are kept in memory (the last ``SWEEPS_KEPT``, ``RENDERED_BYTES`` at most).
 """
 
 from __future__ import annotations
 
 import json
 import threading
-from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
 from typing import Annotated, Any, Literal
 
@@ -25,6 +24,7 @@ from fastapi.responses import JSONResponse, Response
 from pydantic import BaseModel, ConfigDict, Field, create_model, field_validator, model_validator
 
 from dosing import JobRunner, SolverSettings, UnknownValidationError
+from dosing.lru import ByteLRU
 from dosing.sweep import COLUMNS, SweepGrid, SweepResult, fill_validations, run_sweep
 from solver.errors import ParameterError
 from solver.json_safe import json_safe
@@ -51,6 +51,7 @@ MAX_SERVICE_POINTS = 20_000  # points in one sweep request (the CLI takes up to 
 SWEEP_QUEUE = 4  # sweeps queued or running before 429
 SWEEP_PREFIX = "sweep-"
 SWEEPS_KEPT = 8  # final sweep tables kept rendered in memory (20,000 rows: tens of MB)
+RENDERED_BYTES = 64e6  # ... and their bodies' bytes at most
 Temperature = Annotated[float, Field(ge=T_MIN, le=T_MAX)]
 Radius = Annotated[float, Field(ge=1.0e-3, le=1.0e5)]
 Fraction = Annotated[float, Field(gt=0.0, le=1.0)]
@@ -159,7 +160,8 @@ class _Sweeps:
         self.runner = JobRunner(ThreadPoolExecutor(1, thread_name_prefix="sweep"),
                                 max_pending=SWEEP_QUEUE, what="sweeps")
         self.progress: dict[str, list[int]] = {}
-        self.rendered: OrderedDict[tuple[str, str], bytes] = OrderedDict()  # JSON, CSV, SVG
+        # JSON, CSV, SVG bodies: RENDERED_BYTES at most (dosing.lru: bytes, not entries)
+        self.rendered: ByteLRU = ByteLRU(RENDERED_BYTES, sizeof=len)
         self.lock = threading.Lock()
 
     def keep(self, key: tuple[str, str], body: bytes) -> None:
