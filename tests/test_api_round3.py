@@ -403,3 +403,20 @@ async def test_health_is_degraded_on_a_cache_failure_logged_off_the_requests(raw
         logging.getLogger("thermogel.cache").exception("a job met the cache")
     h = (await raw.get("/health")).json()
     assert h["status"] == "degraded" and "malformed" in h["planner"]["degraded_because"]
+
+
+def test_a_release_fit_the_data_do_not_pin_has_a_finite_interval() -> None:
+    """Found by the fuzz: a release curve D0 does not move (a flat model) made the fit's
+    interval exp(q + t sd) overflow (a job failing on an OverflowError); it is D0's whole
+    range instead, with a warning."""
+    import numpy as np
+
+    from dosing.release_fit import D_BOUNDS, _fit_log_d0
+
+    t = np.array([30.0, 60.0, 120.0])
+    y = np.array([0.2, 0.3, 0.4])
+    rep = _fit_log_d0(t, y, lambda d0, tt: np.full(np.shape(tt), 0.3), 1e-7)
+    lo, hi = rep["intervals"]["drug_diffusivity_cm2_s"]
+    assert D_BOUNDS[0] <= lo <= hi <= D_BOUNDS[1] * (1 + 1e-9)
+    assert np.isfinite(rep["stderr"]["drug_diffusivity_cm2_s"])
+    assert any("do not pin" in w for w in rep["warnings"])
