@@ -147,14 +147,18 @@ def rule_for(exc: Exception) -> Rule | None:
     return None
 
 
-def error_response(exc: Exception, model: Any = None) -> JSONResponse:
+def error_response(exc: Exception, model: Any = None, body: Any = None) -> JSONResponse:
     """The answer to a table exception (``model``: the route's body model, whose fields a
-    ``loc`` under 'body' must name: :func:`known_loc`)."""
+    ``loc`` under 'body' must name: :func:`known_loc`; ``body``: the request's JSON, where
+    a derived value's field must be given, not null or absent)."""
     rule = rule_for(exc)
     assert rule is not None, type(exc)
     loc = rule.loc(exc)
     if model is not None and loc[:1] == ["body"]:
         loc = known_loc(loc, model)
+    if (isinstance(body, dict) and len(loc) > 1 and loc[0] == "body"
+            and body.get(loc[1]) is None and getattr(exc, "value", None) is not None):
+        loc = ["body"]  # a value the planner derived (a batch's mean) for a field not given
     detail: Any = (rule.msg(exc) if rule.plain else
                    [_item(loc, rule.msg(exc), rule.kind, **rule.extra(exc))])
     return JSONResponse({"detail": detail}, status_code=rule.status, headers=rule.headers(exc))
@@ -203,7 +207,9 @@ def known_loc(loc: list[str | int], model: Any) -> list[str | int]:
 def _route_model(request: Request) -> Any:
     route = request.scope.get("route")
     body = getattr(route, "body_field", None)
-    return _model_in(getattr(body, "type_", None) or getattr(body, "annotation", None))
+    info = getattr(body, "field_info", None)
+    return _model_in(getattr(body, "type_", None) or getattr(body, "annotation", None)
+                     or getattr(info, "annotation", None))
 
 
 async def _table_handler(request: Request, exc: Exception) -> JSONResponse:
@@ -211,7 +217,20 @@ async def _table_handler(request: Request, exc: Exception) -> JSONResponse:
         state = getattr(request.app.state, "service", None)
         if state is not None and hasattr(state, "record_fault"):
             state.record_fault(exc.reason)
-    return error_response(exc, _route_model(request))
+    return error_response(exc, _route_model(request), _json_body(request))
+
+
+def _json_body(request: Request) -> Any:
+    """The request's JSON body as the route read it (kept on the request), or None."""
+    raw = getattr(request, "_body", None)
+    if not raw or len(raw) > (4 << 20):
+        return None
+    try:
+        import json
+
+        return json.loads(raw)
+    except ValueError:
+        return None
 
 
 async def _validation_handler(_: Request, exc: Exception) -> JSONResponse:

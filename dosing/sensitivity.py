@@ -233,8 +233,12 @@ def _base(gel: Gel | str | dict[str, Any], t_start: Any, t_end: Any, dose_fracti
 
     c = (constants if isinstance(constants, PhysicalConstants)
          else PhysicalConstants.from_dict(constants))
+    radius = micrometres(dry_radius_um, "dry_radius_um")
+    lo, hi = RANGES["dry_radius_um"]
+    if not lo <= radius <= hi:  # after the unit's conversion
+        raise ParameterError("dry_radius_um", dry_radius_um, f"{lo:g}-{hi:g} um")
     base = Base(resolve_gel(gel), kelvin(t_start, "t_start"), kelvin(t_end, "t_end"),
-                float(dose_fraction), micrometres(dry_radius_um, "dry_radius_um"), c, branch)
+                float(dose_fraction), radius, c, branch)
     # the base request itself must be answerable by the front model
     DoseTimeModel(base, []).one({})
     return base

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from solver.errors import ParameterError
-from solver.limits import SIZE_UM_RANGE
+from solver.limits import DRY_RADIUS_UM_RANGE, SIZE_UM_RANGE
 
 from .quantity import micrometres
 
@@ -607,6 +607,12 @@ def request_sizes(req: Any) -> None:
         d = d.with_mean(micrometres(size, own))
     else:
         mean = d.number_mean_um()
+        lo, hi = DRY_RADIUS_UM_RANGE if d.state == "dry" else SIZE_UM_RANGE
+        if not (math.isfinite(mean) and lo <= mean <= hi):  # the reference bead's size
+            where = next((f"{F}.{n}" for n in ("mean_um", "median_um", "sizes_um")
+                          if getattr(d, n) is not None), F)
+            raise ParameterError(where, f"a number-weighted mean of {mean:.4g} um",
+                                 f"a {d.state} mean size {lo:g}-{hi:g} um")
         if size is None:
             object.__setattr__(req, own, mean)
         elif not math.isclose(micrometres(size, own), mean, rel_tol=1e-9):

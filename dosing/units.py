@@ -16,7 +16,6 @@ from typing import Any
 
 from solver.errors import ParameterError, require_finite_positive
 from solver.gel import check_temperature
-from solver.limits import DRY_RADIUS_UM_RANGE
 
 BOLTZMANN = 1.380649e-23  # J/K (exact, SI 2019)
 UM3_PER_UL = 1.0e9  # 1 uL = 1 mm^3 = 1e9 um^3
@@ -175,9 +174,6 @@ def timescale(dry_radius_um: float, t_end: float,
     """tau = eta Omega_p R^2 / (k0 k_B T_end) for a dry radius in micrometres (eq. timescale)."""
     c = constants or PhysicalConstants()
     r_um = require_finite_positive("dry_radius_um", dry_radius_um)
-    lo, hi = DRY_RADIUS_UM_RANGE
-    if not lo <= r_um <= hi:  # after any conversion (a batch's mean, a swollen size / a0)
-        raise ParameterError("dry_radius_um", dry_radius_um, f"a dry radius {lo:g}-{hi:g} um")
     t1 = check_temperature(t_end, "t_end")
     d = c.diffusivity(t1)
     r_m = r_um * 1.0e-6
