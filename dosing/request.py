@@ -132,13 +132,10 @@ def resolve_dry_radius(dry_radius_um: float | None, swollen_radius_um: float | N
     if dry_radius_um is not None and swollen_radius_um is not None:
         raise ParameterError("swollen_radius_um", swollen_radius_um,
                              "None when dry_radius_um is given (give one bead size)")
-    lo, hi = DRY_RADIUS_UM_RANGE  # the reference bead's, after any conversion
-    if dry_radius_um is not None:
-        dry = require_finite_positive("dry_radius_um", dry_radius_um)
-        if not lo <= dry <= hi:
-            raise ParameterError("dry_radius_um", dry_radius_um, f"{lo:g}-{hi:g} um")
-        return dry
+    if dry_radius_um is not None:  # bounded where a user gives it (HTTP, CLI; a batch's
+        return require_finite_positive("dry_radius_um", dry_radius_um)  # nodes: beyond)
     if swollen_radius_um is not None:
+        lo, hi = DRY_RADIUS_UM_RANGE  # after the conversion: a subnormal tau otherwise
         dry = require_finite_positive("swollen_radius_um", swollen_radius_um) / start_radius
         if not lo <= dry <= hi:
             raise ParameterError("swollen_radius_um", swollen_radius_um,
