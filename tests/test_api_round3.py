@@ -435,3 +435,15 @@ async def test_a_solver_field_is_not_a_request_location(raw) -> None:
 
         fields = set(s.DoseTimeRequest.model_fields) | {"validate"}
         assert all(len(loc) == 1 or loc[1] in fields for loc in _locs(r)), _locs(r)
+
+
+def test_validation_run_errors_are_in_plain_words() -> None:
+    """R9: a validation's failed run says why without a Python class name."""
+    from dosing.validation import run_failure
+    from solver.errors import SolverError
+
+    for exc in (SolverError("step size underflow"), OSError("worker lost"), RuntimeError(""),
+                None):
+        msg = run_failure(exc)
+        assert msg and not any(n in msg for n in ("SolverError", "OSError", "RuntimeError",
+                                                  "Error:")), msg
