@@ -16,7 +16,8 @@ import sys
 from solver.errors import NotApplicableError, ParameterError, SolverError  # a leaf module
 
 COMMANDS = ["equilibrium", "classify", "phase_map", "serve", "front", "dose", "schedule",
-            "simulate", "plot", "bench", "sweep", "fit", "release", "sensitivity"]
+            "simulate", "plot", "bench", "sweep", "fit", "release", "sensitivity",
+            "compare", "design"]
 
 
 def build_parser(commands: list[str] | None = None) -> argparse.ArgumentParser:
@@ -45,6 +46,10 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point: parse, run, and turn input errors into exit code 2 with a message."""
     parser = build_parser(chosen_commands(sys.argv[1:] if argv is None else argv))
     args = parser.parse_args(argv)
+    from .commands.common import set_request
+    from .commands.outfile import request_of
+
+    set_request(request_of(args))
     try:
         return int(args.func(args) or 0)
     except (ParameterError, NotApplicableError) as exc:

@@ -5,7 +5,6 @@ Light (no uvicorn import): ``thermogel serve`` builds its options' defaults from
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
@@ -29,8 +28,16 @@ class ConnectionLimits:
     total: int = TOTAL
 
     @classmethod
-    def from_env(cls, env: Mapping[str, str] = os.environ) -> ConnectionLimits:
-        """The limits set in ``env`` (the defaults for those not set)."""
+    def from_env(cls, env: Mapping[str, str] | None = None) -> ConnectionLimits:
+        """The limits set in ``env`` (default: the process's environment, read through
+        dosing.settings; the defaults for those not set)."""
+        if env is None:
+            from dosing.settings import settings
+
+            s = settings()
+            return cls(**{k: v for k, v in (("read_timeout", s.read_timeout),
+                                            ("per_client", s.max_connections_per_client),
+                                            ("total", s.max_connections)) if v is not None})
         given: dict[str, Any] = {}
         for f in fields(cls):
             raw = env.get(ENV[f.name])

@@ -28,14 +28,14 @@ from .safe_route import printable
 
 RETRY_AFTER_SECONDS = 5
 # the path parameter of each kind's own poll route (a 404 names the id where it was given)
-_ID_PARAM = {"sweep": "sweep_id", "fit": "job_id", "schedule": "validation_id",
+_ID_PARAM = {"sweep": "sweep_id", "fit": "job_id", "design": "job_id", "schedule": "validation_id",
              "drug-dose": "validation_id", "batch-schedule": "validation_id",
              "dose": "validation_id", "validation": "validation_id"}
 
 
 def job_kind(job_id: Any) -> str:
     """The kind of job an id names (its prefix; a dose validation has none)."""
-    for kind in ("sweep", "fit", "schedule", "drug-dose", "batch-schedule", "dose"):
+    for kind in ("sweep", "fit", "design", "schedule", "drug-dose", "batch-schedule", "dose"):
         if str(job_id).startswith(kind + "-"):
             return kind
     return "validation"

@@ -136,6 +136,9 @@ class KineticsFitRequest(_In):
                                "0 < beta < 10: fixed, or the start of its fit")
     interfacial_length: float | None = Field(None, ge=0, description="full solver's ell")
     size_rel_sigma: float = Field(0.01, gt=0, description="relative size noise")
+    compare_laws: bool = Field(True, description="also fit under both front laws (Maxwell "
+                                                 "and delayed, about a second) and compare "
+                                                 "them by AIC (issue 36: on by default)")
 
     @model_validator(mode="after")
     def _one_bead_size(self) -> KineticsFitRequest:
@@ -221,8 +224,15 @@ class ReleaseFitReport(BaseModel):
     intervals: dict[str, list[float]] = Field(description="95% intervals")
     stderr: dict[str, float] = Field(description="standard errors")
     interval_kind: str = Field(description="how the intervals are made")
-    f2: float = Field(description="FDA similarity factor, fit against data (>= 50: similar)")
+    f2: float = Field(description="FDA similarity factor (1997 rules) of the prediction and "
+                                  "the data as two profiles: a similarity, not a goodness "
+                                  "of fit (50-100: similar)")
     f2_meaning: str = Field(description="f2 in words")
+    similarity: dict[str, Any] | None = Field(
+        None, description="f1, f2, the points used, the FDA conditions and the outcome in the "
+                          "guidance's words (dosing.analysis.similarity)")
+    residuals: list[float] | None = Field(None, description="data - fit at the measured "
+                                                            "times, fraction of the load")
     rms_residual: float = Field(description="rms misfit, fraction of the load")
     chi2_reduced: float = Field(description="residual variance per degree of freedom")
     n_points: int = Field(description="points fitted")

@@ -22,9 +22,20 @@ from fastapi.routing import APIRoute
 
 from dosing.jobs import exit_with_parent
 
-from . import errors, guard, openapi_spec
+from . import docs_pages, errors, guard, openapi_spec
 from .auth import HostCheck, TokenAuth
-from .routers import dosing, fit, jobs, page, physics, service, sweep, validations
+from .routers import (
+    analysis,
+    design,
+    dosing,
+    fit,
+    jobs,
+    page,
+    physics,
+    service,
+    sweep,
+    validations,
+)
 from .routers import sensitivity as sensitivity_routes
 from .service import ServiceState
 from .version import package_version
@@ -76,7 +87,8 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
         description="Plan drug release from thermo-responsive gel beads (Butler & "
                     "Montenegro-Johnson). Temperatures in K; dimensionless lengths in dry "
                     "radii and times in units of tau (eq. timescale).",
-        responses=openapi_spec.APP_RESPONSES)
+        responses=openapi_spec.APP_RESPONSES, **docs_pages.offline_kwargs())
+    docs_pages.install(app)  # /docs and /redoc with their assets from this server
     app.state.service = state
     errors.install(app)
     guard.add(app)
@@ -86,7 +98,7 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
         app.add_middleware(HostCheck, allowed=allowed_hosts)
     for router in (service.router, physics.router, dosing.router, validations.router,
                    fit.router, sweep.router, page.router, sensitivity_routes.router,
-                   jobs.router):
+                   design.router, jobs.router, analysis.router):
         add_routes(app, router)
     return app
 
@@ -119,23 +131,25 @@ def add_routes(app: FastAPI, router: APIRouter) -> None:
 
 
 def app_from_env() -> FastAPI:
-    """App factory for ``uvicorn --factory`` (``thermogel serve``): options from the environment.
+    """App factory for ``uvicorn --factory`` (``thermogel serve``): options from the environment
+    (read once, through :func:`dosing.settings.settings`).
 
     THERMOGEL_CACHE (cache file), THERMOGEL_MAX_PENDING (validations queued or running),
     THERMOGEL_MAX_BODY (bytes), THERMOGEL_LEASE_SECONDS, THERMOGEL_WARMUP ('0' skips the
     warm-up), THERMOGEL_API_TOKEN (the bearer token), THERMOGEL_ALLOWED_HOSTS (comma-
-    separated Host names).  A uvicorn worker process (``--workers`` > 1) ends itself when the
-    supervisor it was started by is gone.
+    separated Host names), THERMOGEL_RUN_SECONDS (the wall-clock budget of one full-solver run,
+    read by dosing.scenario.run_budget; default 600).  A uvicorn worker process
+    (``--workers`` > 1) ends itself when the supervisor it was started by is gone.
     """
-    supervisor = os.environ.get(SUPERVISOR_ENV)
-    if supervisor and supervisor.isdigit() and int(supervisor) != os.getpid():
-        exit_with_parent(int(supervisor))
-    env = os.environ.get
-    return create_app(cache_path=env("THERMOGEL_CACHE") or None,
-                      max_pending=int(env("THERMOGEL_MAX_PENDING") or 0) or None,
-                      max_body_bytes=int(env("THERMOGEL_MAX_BODY") or DEFAULT_MAX_BODY),
-                      lease_seconds=float(env("THERMOGEL_LEASE_SECONDS") or 0) or None,
-                      warm=env("THERMOGEL_WARMUP", "1") != "0",
-                      api_token=env("THERMOGEL_API_TOKEN") or None,
-                      allowed_hosts=[h.strip() for h in (env("THERMOGEL_ALLOWED_HOSTS") or "")
-                                     .split(",") if h.strip()] or None)
+    from dosing.settings import settings
+
+    env = settings()  # THERMOGEL_* (dosing.settings: one Settings object)
+    supervisor = env.supervisor_pid
+    if supervisor and supervisor != os.getpid():
+        exit_with_parent(supervisor)
+    return create_app(cache_path=str(env.cache) if env.cache else None,
+                      max_pending=env.max_pending or None,
+                      max_body_bytes=env.max_body or DEFAULT_MAX_BODY,
+                      lease_seconds=env.lease_seconds or None,
+                      warm=env.warmup, api_token=env.api_token or None,
+                      allowed_hosts=env.hosts)

@@ -67,9 +67,51 @@ def _fill(code: str, response: dict[str, Any]) -> None:
         response.setdefault("headers", {}).update(LOCATION)
 
 
+# every JSON answer's provenance (api/stamp.py, dosing/provenance.py)
+PROVENANCE = {
+    "request": {"type": "object", "additionalProperties": True, "title": "Request",
+                "description": "the request as the route resolved it (every default filled; "
+                               "path and query parameters; 'route'), with 'units': the unit "
+                               "of each physical field"},
+    "version": {"$ref": "#/components/schemas/VersionOut"},
+}
+VERSION_SCHEMA = {
+    "type": "object", "title": "VersionOut", "required": ["package", "code", "solver"],
+    "description": "the versions that made an answer",
+    "properties": {"package": {"type": "string", "description": "thermogel's version"},
+                   "code": {"type": "string", "description": "the package version and the "
+                            "checkout's git describe"},
+                   "solver": {"type": "string", "description": "digest of the full solver's "
+                              "sources (the validation cache's key)"}},
+}
+
+
+def _refs(schema: dict[str, Any]) -> list[str]:
+    if "$ref" in schema:
+        return [schema["$ref"].rsplit("/", 1)[-1]]
+    return [r for key in ("anyOf", "oneOf") for sub in schema.get(key, []) for r in _refs(sub)]
+
+
+def _provenance(spec: dict[str, Any]) -> None:
+    """``request`` and ``version`` on every model a 2xx JSON answer is."""
+    schemas = spec.setdefault("components", {}).setdefault("schemas", {})
+    schemas.setdefault("VersionOut", VERSION_SCHEMA)
+    for ops in spec.get("paths", {}).values():
+        for op in ops.values():
+            for code, response in op.get("responses", {}).items():
+                js = response.get("content", {}).get("application/json", {}).get("schema")
+                if not code.startswith("2") or not js:
+                    continue
+                for name in _refs(js):
+                    props = schemas.get(name, {}).setdefault("properties", {})
+                    for key, value in PROVENANCE.items():
+                        props.setdefault(key, value)
+
+
 def complete(spec: dict[str, Any]) -> dict[str, Any]:
     """Complete ``spec`` (FastAPI's OpenAPI dict) in place (module doc); return it."""
     _error_schemas(spec)
+    _provenance(spec)
     for path, ops in spec.get("paths", {}).items():
         for op in ops.values():
             responses = op.setdefault("responses", {})

@@ -20,17 +20,79 @@ class UncertaintyPart(Out):
     text: str = Field(description="what it is and how it was measured, in words")
 
 
-class UncertaintyOut(Out):
-    """The direct truth's uncertainty in three parts (dosing.truth.Uncertainty)."""
+class EnvelopePart(UncertaintyPart):
+    """One typed part of an answer's uncertainty (dosing.question.envelope.Part): the
+    time's factors at its ends, in words, and how to pin it."""
 
-    numerical: UncertaintyPart = Field(
-        description="grid and time step: the relative gap of the run at n and n / 2 cells")
-    interfacial_length_range: UncertaintyPart = Field(
-        description="the largest relative change of the time over ell = xi_dry / a_d with "
-                    "xi_dry over its plausible range (needs a bead size)")
-    model_form: UncertaintyPart = Field(
-        description="the delayed-transition front law (the ell = 0 lattice) against this "
-                    "local-equilibrium (Maxwell) answer: |ratio - 1|; not in the estimate")
+    name: str | None = Field(None, description="numerical | reduction | interfacial_length | "
+                                               "front_law | timescale | mesh | quadrature | "
+                                               "parameters")
+    low: float | None = Field(None, description="the time's factor at the part's low end")
+    high: float | None = Field(None, description="the time's factor at its high end")
+    factor: float | None = Field(None, description="high / low")
+    counted: bool | None = Field(None, description="in the envelope (false: listed only)")
+    measured: bool | None = Field(None, description="false: a stated bracket, not a run")
+    how_to_pin: str | None = Field(None, description="the measurement or fit that pins it")
+    ratio: float | None = Field(None, description="front_law: delayed / Maxwell time")
+
+
+class DominantOut(Out):
+    """The widest part of the envelope and how to pin it."""
+
+    name: str = Field(description="the part's name")
+    factor: float = Field(description="its width, high / low")
+    how_to_pin: str = Field(description="the measurement or fit that pins it")
+    text: str = Field("", description="the part in words")
+
+
+class EnvelopeOut(Out):
+    """What the user cannot rule out: the point times the counted parts' factors."""
+
+    seconds: list[list[float]] | None = Field(
+        None, description="[lo, hi] s per answer time (null without a bead size)")
+    time: list[list[float]] = Field(description="[lo, hi] tau per answer time (the "
+                                                "timescale part aside)")
+    low: float = Field(description="the product of the counted parts' low factors")
+    high: float = Field(description="the product of their high factors")
+    parts: dict[str, EnvelopePart] = Field(description="every part, by name")
+    dominant: DominantOut | None = Field(None, description="the widest counted part")
+
+
+class EnvelopeFields(Out):
+    """The envelope's fields on every dose and schedule answer (issue 36)."""
+
+    envelope_seconds: list[float] | list[list[float]] | None = Field(
+        None, description="[lo, hi] s (a schedule: one per heating): the bracket the user "
+                          "cannot rule out with what they gave; the point stays as seconds")
+    envelope_time: list[float] | list[list[float]] | None = Field(
+        None, description="the same in tau (without the timescale part)")
+    dominant_uncertainty: DominantOut | None = Field(
+        None, description="the largest part and the measurement that pins it")
+    envelope: EnvelopeOut | None = Field(None, description="the ranges and every part")
+
+
+class UncertaintyOut(Out):
+    """An answer's uncertainty by part: the typed parts of its envelope (reduction,
+    numerical, interfacial_length, front_law, timescale, mesh, quadrature, parameters) and,
+    for a validated direct answer, the truth's three parts (dosing.truth.Uncertainty)."""
+
+    numerical: UncertaintyPart | None = Field(
+        None, description="grid and time step: the relative gap of the run at n and n / 2 "
+                          "cells")
+    interfacial_length_range: UncertaintyPart | None = Field(
+        None, description="the largest relative change of the time over ell = xi_dry / a_d "
+                          "with xi_dry over its plausible range (needs a bead size)")
+    model_form: UncertaintyPart | None = Field(
+        None, description="validated: the delayed-transition front law (the ell = 0 "
+                          "lattice) against this local-equilibrium (Maxwell) answer")
+    reduction: EnvelopePart | None = Field(None, description="a reduced model's gap to its "
+                                                             "truth")
+    interfacial_length: EnvelopePart | None = Field(None, description="the mesh length's part")
+    front_law: EnvelopePart | None = Field(None, description="delayed vs Maxwell front law")
+    timescale: EnvelopePart | None = Field(None, description="the timescale constants")
+    mesh: EnvelopePart | None = Field(None, description="a sieved drug's mesh")
+    quadrature: EnvelopePart | None = Field(None, description="a batch's quadrature")
+    parameters: EnvelopePart | None = Field(None, description="a fitted gel's parameters")
     interfacial_lengths: list[float] | None = Field(
         None, description="the ends of the ell range that were run, dry radii")
     interfacial_length_times: list[float] | None = Field(

@@ -18,6 +18,8 @@ from fastapi import Request, Response
 from fastapi.exceptions import RequestValidationError
 from fastapi.routing import APIRoute
 
+from .stamp import stamp_response
+
 _ESCAPE = re.compile(rb"\\u[dD][89abcdefABCDEF]")  # the escape of a surrogate half
 _SURROGATE = re.compile("[\ud800-\udfff]")
 MSG = "a lone UTF-16 surrogate (e.g. \\ud800) is not text: remove it"
@@ -70,13 +72,14 @@ async def check_body(request: Request) -> None:
 
 
 class SafeRoute(APIRoute):
-    """An APIRoute whose JSON body is checked by :func:`check_body` first."""
+    """An APIRoute whose JSON body is checked by :func:`check_body` first, and whose JSON
+    answers carry ``request`` and ``version`` (:func:`api.stamp.stamp_response`)."""
 
     def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:
         handler = super().get_route_handler()
 
         async def safe_handler(request: Request) -> Response:
             await check_body(request)
-            return await handler(request)
+            return await stamp_response(self, request, await handler(request))
 
         return safe_handler

@@ -41,8 +41,8 @@ from solver.limits import (
     TRUTH_LADDER_START_RANGE,
 )
 
+from .outputs import EnvelopeFields, UncertaintyOut, UncertaintyPart
 from .outputs import Out as _Out
-from .outputs import UncertaintyOut, UncertaintyPart
 
 # the ranges are solver.limits' (one definition): temperatures, the ladder's coarsest ell
 # (its rungs go down to ell / 4) and a direct run's ell
@@ -118,6 +118,20 @@ def temperature_field(what: str, example: float) -> Any:
                  description=f"{what} in K; liquid water, {T_MIN}-{T_MAX} K")
 
 
+FREE_FORM = ("protocol",)  # request fields whose items are free-form JSON (no typed floats)
+
+
+def _has_non_finite(value: Any) -> bool:
+    """True when a JSON value holds NaN or an infinite number at any depth."""
+    if isinstance(value, float):
+        return not math.isfinite(value)
+    if isinstance(value, dict):
+        return any(_has_non_finite(v) for v in value.values())
+    if isinstance(value, list):
+        return any(_has_non_finite(v) for v in value)
+    return False
+
+
 def _positive_zero(value: Any) -> Any:
     """-0.0 -> 0.0, also inside lists and dicts (a request never echoes a negative zero)."""
     if isinstance(value, float):
@@ -141,6 +155,16 @@ class RequestModel(BaseModel):
     @classmethod
     def _no_negative_zero(cls, value: Any) -> Any:
         return _positive_zero(value)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _finite_inside(cls, value: Any, info: ValidationInfo) -> Any:
+        """NaN and +-Infinity are refused inside a free-form field too (a protocol's
+        structured steps: typed fields refuse them themselves), naming the field, before
+        any check across fields."""
+        if info.field_name in FREE_FORM and _has_non_finite(value):
+            raise ValueError("NaN and Infinity are not numbers here (give finite numbers)")
+        return value
 
     @field_validator("*", mode="before")
     @classmethod
@@ -652,7 +676,7 @@ class PendingResponse(_Out):
                           "reading (one continuous heating, doses read off cumulatively)")
 
 
-class AnswerOut(_Out):
+class AnswerOut(EnvelopeFields):
     """What every dose and schedule answer states, fluid or drug: the truth behind it (its
     runs' model and interfacial length, in words and in numbers), tau and caveats."""
 
@@ -882,8 +906,53 @@ class ScheduleRequest(RequestModel):
         return self
 
 
+class EventOut(_Out):
+    """One step of a schedule as a lab runs it (dosing.question.events)."""
+
+    step: int = Field(description="step number, 1 = first")
+    kind: Literal["heat", "rest", "hold"] = Field(
+        description="heat (a heating: a jump to T_end or the protocol's steps), rest (at "
+                    "T_start between heatings), hold (a drug's wait at T_start before the "
+                    "first heating)")
+    start_s: float | None = Field(None, description="start on the protocol's clock, s (null "
+                                                    "without a bead size)")
+    duration_s: float | None = Field(None, description="duration, s (null without a bead "
+                                                       "size)")
+    temperature_K: float = Field(description="set temperature, K (a protocol heating: at "
+                                             "its end)")
+    dose_fraction: float | None = Field(
+        None, description="what the step delivers: a fraction of the stored fluid (a drug: "
+                          "of the load; a drug's rest or wait: what leaks)")
+    released_fraction: float = Field(description="cumulative release at the step's end")
+    amount_ul: float | None = Field(None, description="fluid the step delivers, uL")
+    amount_ug: float | None = Field(None, description="drug the step delivers, ug")
+    target_fraction: float | None = Field(None, description="the dose asked of a heating")
+    dose_error: float | None = Field(
+        None, description="delivered / asked - 1 on the full solver (the corrected reading: "
+                          "the shooting residual); null for the hold reading")
+    uptake_fraction: float | None = Field(
+        None, description="fluid a rest takes back up, a fraction of the stored fluid")
+    heating: int = Field(description="heating number (0: not a heating)")
+    start_tau: float = Field(description="start, units of tau of the reference bead")
+    duration_tau: float = Field(description="duration, units of tau of the reference bead")
+    program: str | None = Field(None, description="a protocol heating's steps cut at its "
+                                                  "time, in the step grammar's words")
+    reading: Literal["corrected", "checked", "hold"] = Field(
+        description="corrected (shot on the full solver), checked (the hold times as the "
+                    "full solver runs them) or hold (one continuous heating)")
+    rough: bool = Field(description="true for the hold reading (the check was off)")
+
+
+EVENTS_DESCRIPTION = ("the schedule as a bath controller or a lab notebook takes it: one row "
+                      "per step (heat, rest, a drug's wait), the corrected times when "
+                      "corrected, else the checked hold times, else the hold reading "
+                      "(rough)")
+
+
 class ScheduleOut(AnswerOut):
     """A schedule's answer, fluid or drug: its actuation times under each reading."""
+
+    events: list[EventOut] = Field(default_factory=list, description=EVENTS_DESCRIPTION)
 
     model: str = Field(description="which model(s) gave the hold times (a drug schedule: "
                                    "what answered)")
@@ -903,12 +972,13 @@ class ScheduleOut(AnswerOut):
         None, description="actuation times meeting every dose within the tolerance")
 
 
-class BatchScheduleResponse(_Out):
+class BatchScheduleResponse(EnvelopeFields):
     """A batch's schedule (dosing.batch_schedule.BatchScheduleAnswer): actuation times in
     the reference (number-weighted mean) bead's tau and seconds whose summed release meets
     each dose of the batch's stored fluid; the size nodes run and the quadrature."""
 
     batch: Literal[True] = Field(True, description="always true: a batch's schedule")
+    events: list[EventOut] = Field(default_factory=list, description=EVENTS_DESCRIPTION)
     model: str = Field(description="which model ran each size ('full-solver-per-size')")
     description: str = Field(description="the batch in words")
     distribution: dict[str, Any] = Field(description="the size distribution as resolved")

@@ -176,9 +176,13 @@ class ServiceState:
         self._fault = (time.monotonic(), reason)
 
     def fault(self) -> str | None:
-        """Why the service is degraded (a recent cache fault, a failed cache probe), or None."""
+        """Why the service is degraded (a recent cache fault, a failed cache probe, a broken
+        full-solver pool not replaced yet), or None."""
         if self._fault is not None and time.monotonic() - self._fault[0] < FAULT_SECONDS:
             return f"the validation cache failed: {self._fault[1]}"
+        pool = _pool_status(self.planner)
+        if pool.get("status") == "degraded":
+            return f"the full-solver pool is broken: {pool.get('broken_because')}"
         return None
 
     def describe(self) -> dict[str, Any]:
@@ -192,6 +196,7 @@ class ServiceState:
                                "validations_unfinished": _unfinished(p.jobs),
                                "max_pending": p.jobs.max_pending}
         out["jobs_unfinished"] = 0 if self._jobs is None else _unfinished(self._jobs)
+        out["pool"] = _pool_status(p)
         return out
 
     def probe(self) -> Any:
@@ -228,6 +233,12 @@ class ServiceState:
         if self.owns_planner and self.planner is not None:
             self.planner.close()
             self.planner = None
+
+
+def _pool_status(planner: Any) -> dict[str, Any]:
+    """The full-solver pool's health (dosing.jobs.JobRunner.pool_status), {} without one."""
+    status = getattr(getattr(planner, "jobs", None), "pool_status", None)
+    return status() if callable(status) else {}
 
 
 # ----------------------------------------------------------------------------- dosing

@@ -1,13 +1,8 @@
-"""The installed thermogel version."""
+"""The installed thermogel version, and the version every answer carries
+(dosing.provenance: package, code and solver versions)."""
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
+from dosing.provenance import package_version, version_info
 
-
-def package_version() -> str:
-    """thermogel's version, or 'unknown' when run from an uninstalled tree."""
-    try:
-        return version("thermogel")
-    except PackageNotFoundError:
-        return "unknown"
+__all__ = ["package_version", "version_info"]

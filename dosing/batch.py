@@ -259,7 +259,7 @@ def batch_sizes(req: DoseRequest) -> DrySizes:
     """The request's batch as dry radii (swollen sizes over a0)."""
     if req.size_distribution is None:
         raise ParameterError("size_distribution", None, "a size distribution for a batch")
-    return req.size_distribution.resolve(req.start_radius)
+    return req.size_distribution.resolve(req.start_radius, req.t_start)
 
 
 def batch_answer(req: DoseRequest, tol: float = QUADRATURE_TOL) -> BatchAnswer:

@@ -279,7 +279,7 @@ def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
                              "0 or None for a batch (a wait at T_start is not planned for "
                              "batches yet)")
     req, spec = reference_bead(req, size_distribution)
-    sizes = spec.resolve(req.start_radius)
+    sizes = spec.resolve(req.start_radius, req.t_start)
     ml = medium_volume_ml(medium_volume)
     v0 = None
     n_beads = None

@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
 from itertools import accumulate
 from typing import Any
 
@@ -53,6 +53,7 @@ from .protocol import (
     windows,
 )
 from .quantity import micrometres
+from .question.events import schedule_events
 from .request import ScheduleRequest, _clamp_length
 from .scenario import Scenario, SolverSettings
 from .schedule import SchedulePlanner, hold_schedule
@@ -84,7 +85,7 @@ def schedule_sizes(req: ScheduleRequest, size_distribution: Any) -> DrySizes:
     elif not math.isclose(d.number_mean_um(), size, rel_tol=1e-9):
         raise ParameterError(own, size, f"the size_distribution's number-weighted mean "
                              f"{d.number_mean_um():.6g} um")
-    sizes = d.resolve(req.start_radius)
+    sizes = d.resolve(req.start_radius, req.t_start)
     if d.kind == "table" and len(sizes.nodes(0)[0]) > MAX_TABLE_SIZES:
         raise ParameterError(f"{F}.sizes_um", f"{len(sizes.nodes(0)[0])} distinct sizes",
                              f"at most {MAX_TABLE_SIZES} distinct sizes for a schedule (one "
@@ -273,12 +274,21 @@ class BatchScheduleAnswer:
     note: str
     t_start: float
     t_end: float
+    # the schedule as a lab runs it, one row per step (dosing.question.events)
+    events: list[dict[str, Any]] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
         d = asdict(self)
         d["quadrature"] = self.quadrature.to_dict()
         return d
+
+    def to_dataframe(self) -> Any:
+        """The events, one row per step (pandas; ``dosing.question.events``)."""
+        from .question.events import events_frame
+
+        return events_frame(self.events, {"model": self.model, "truth": self.truth,
+                                          "note": self.note})
 
 
 def _node_dicts(req: ScheduleRequest, nodes: Sequence[Node], tau_ref: float) -> list[dict]:
@@ -470,12 +480,14 @@ def _answer(req: ScheduleRequest, sizes: DrySizes, nodes: Sequence[Node], tau: f
             f"each heating delivers its dose of the batch's stored fluid within "
             f"{req.tolerance:.0%}. Quadrature: {quad.rule}, {quad.nodes} nodes, error "
             f"{quad.error:.1e}. Volumes are fluid volumes." + heating)
-    return BatchScheduleAnswer(
+    ans = BatchScheduleAnswer(
         model=MODEL, distribution=sizes.spec.to_dict(), description=sizes.spec.describe(),
         doses=list(req.doses), rests=list(req.rests), reference_dry_radius_um=ref,
         timescale_seconds=tau, nodes=_node_dicts(req, nodes, tau), hold=hold[1],
         hold_model=hold[0], protocol_check=checked, corrected=corrected, quadrature=quad,
         uncertainty=unc, truth=truth_text(req), note=note, t_start=req.t_start, t_end=req.t_end)
+    ans.events = schedule_events(ans, req)
+    return ans
 
 
 def plan_batch_schedule(req: ScheduleRequest, size_distribution: Any,
@@ -595,10 +607,12 @@ def drug_batch_schedule_with(planner: SchedulePlanner, req: Any,
             f"the batch's load (a bead's load ~ R^3), times in the number-weighted mean "
             f"bead's tau ({ref:.4g} um dry, tau = {tau:.4g} s). The hold reading is the "
             f"reference bead's ({hold_model}).")
-    return BatchScheduleAnswer(
+    ans = BatchScheduleAnswer(
         model=DRUG_MODEL, distribution=sizes.spec.to_dict(),
         description=sizes.spec.describe(), doses=list(req.fractions), rests=list(req.rests),
         reference_dry_radius_um=ref, timescale_seconds=tau,
         nodes=_node_dicts(req, nodes, tau), hold=hold, hold_model=hold_model,
         protocol_check=checked, corrected=corrected, quadrature=quad, uncertainty=unc,
         truth=truth_text(req), note=note, t_start=req.t_start, t_end=req.t_end)
+    ans.events = schedule_events(ans, req)
+    return ans

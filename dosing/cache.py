@@ -28,7 +28,7 @@ import socket
 import sqlite3
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -58,6 +58,11 @@ CREATE TABLE IF NOT EXISTS leases (
     key TEXT PRIMARY KEY,
     owner TEXT NOT NULL,
     expires REAL NOT NULL
+);
+CREATE TABLE IF NOT EXISTS starts (
+    prefix TEXT PRIMARY KEY,
+    scenario TEXT NOT NULL,
+    steps INTEGER NOT NULL
 );
 CREATE TABLE IF NOT EXISTS jobs (
     id TEXT PRIMARY KEY,
@@ -114,11 +119,11 @@ def _add_checksum_column(con: sqlite3.Connection) -> None:
 
 
 def default_path() -> Path:
-    """$THERMOGEL_CACHE, else ~/.cache/thermogel/validations.sqlite."""
-    env = os.environ.get(ENV)
-    if env:
-        return Path(env).expanduser()
-    return Path.home() / ".cache" / "thermogel" / "validations.sqlite"
+    """$THERMOGEL_CACHE, else the user cache folder's validations.sqlite
+    (~/.cache/thermogel/ on Linux; dosing.settings)."""
+    from .settings import settings
+
+    return settings().cache_path
 
 
 def _sound(meta_text: Any, blob: bytes, digest: str | None) -> bool:
@@ -390,6 +395,23 @@ class ValidationCache:
     def __len__(self) -> int:
         return int(self._con().execute("SELECT COUNT(*) FROM trajectories").fetchone()[0])
 
+    # protocol starts (dosing.planner: which stored run kept its state at a prefix) ------
+    def put_starts(self, rows: Sequence[tuple[str, dict[str, Any], int]]) -> None:
+        """Remember, per protocol prefix key, the run (its scenario) that kept its state
+        after that prefix's ``steps`` steps (the last one seen wins)."""
+        if not rows:
+            return
+        with self._transaction() as con:
+            con.executemany("INSERT OR REPLACE INTO starts (prefix, scenario, steps) "
+                            "VALUES (?, ?, ?)",
+                            [(k, json.dumps(sc, sort_keys=True), int(j)) for k, sc, j in rows])
+
+    def get_start(self, prefix: str) -> tuple[dict[str, Any], int] | None:
+        """(scenario, steps) of the run remembered for a prefix key, or None."""
+        row = self._con().execute("SELECT scenario, steps FROM starts WHERE prefix = ?",
+                                  (prefix,)).fetchone()
+        return None if row is None else (json.loads(row[0]), int(row[1]))
+
     # validation records --------------------------------------------------------------
     def put_validation(self, vid: str, record: dict[str, Any]) -> None:
         """Remember a validation request (id -> scenario keys and dose) across restarts."""
@@ -448,6 +470,10 @@ class ValidationCache:
         self._write("UPDATE jobs SET status = ?, result = ?, error = ?, updated = ? "
                     "WHERE id = ?", (status, None if result is None else json.dumps(result),
                                      error, time.time(), job_id))
+
+    def forget_job(self, job_id: str) -> None:
+        """Drop a job's row (a run's remembered failure, asked for again)."""
+        self._write("DELETE FROM jobs WHERE id = ?", (job_id,))
 
     def get_job(self, job_id: str) -> dict[str, Any] | None:
         """The job: id, kind, request, status, result, error; or None."""

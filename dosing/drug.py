@@ -420,7 +420,7 @@ def step_outputs(duration: float, k: int) -> np.ndarray:
 
 
 def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
-                      settings: SolverSettings, budget: float = RUN_BUDGET_S,
+                      settings: SolverSettings, budget: float | None = None,
                       start: Any = None) -> Any:
     """The mechanics of a protocol: one ``simulate`` of its steps of positive duration,
     sampled densely after every step's start (:func:`step_outputs`; on the moving grid
@@ -432,6 +432,10 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
     from solver.full.moving import MeshOptions
 
     s = drug_settings(settings)
+    if budget is None:
+        from .scenario import run_budget
+
+        budget = run_budget(RUN_BUDGET_S)
     run = [(float(d), temp) for d, temp in steps if d > 0.0]
     if not run:
         raise ParameterError("protocol", steps, "at least one step of positive duration")
@@ -470,7 +474,7 @@ def mechanics_prefix(res: Any, steps: tuple[Step, ...]) -> Any:
     return cut
 
 
-def run_drug_scenario(scenario: dict[str, Any], budget: float = RUN_BUDGET_S,
+def run_drug_scenario(scenario: dict[str, Any], budget: float | None = None,
                       start: Any = None, keep: bool = False,
                       solute_from: ReleaseResult | None = None) -> tuple[Any, ...]:
     """A drug run: plain data in, (metadata, npz blob) out (for any executor); ``start``
@@ -684,3 +688,34 @@ class StatedTruth:
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
         return asdict(self)
+
+
+def sieved_out(solute: Any, start_radius: float, released: float | None = None,
+               expelled: float | None = None) -> str | None:
+    """A warning when the gel's mesh holds the solute in (issue 37), or None when it can
+    leave.  Either at the swollen start state (stretch ``start_radius``) neither diffusion
+    nor the fluid can carry it out (hindered D = 0 and convective transmission W = 0:
+    r_s >= xi), so it releases nothing however the bead is heated; or the run released
+    almost nothing (``released`` < 0.1 % of the load) while the bead expelled fluid
+    (``expelled`` > 1 % of the stored fluid): the mesh, tighter still in the collapsed
+    shell, sieved it out."""
+    h = solute.hindrance
+    if h.code == 0 and not h.convective:
+        return None
+    phi0 = 1.0 - 1.0 / start_radius**3
+    f = float(h.factor(phi0, start_radius))
+    w = float(h.sieving(phi0, start_radius)) if h.convective else 1.0
+    ratio = h.mesh_ratio / start_radius
+    got = "" if released is None else f"; it released {released:.4f} of its load"
+    fix = ("A larger mesh (--mesh-size-nm / drug.mesh_size_nm), a smaller drug "
+           "(--solute-radius-nm) or hindrance 'none' lets it out")
+    if f <= 0.0 and w <= 0.0:
+        return (f"the drug is sieved out: its radius is {ratio:.2f} x the swollen mesh at "
+                f"T_start (r_s / xi >= 1), so neither diffusion nor the expelled fluid can "
+                f"carry it out of the gel{got}.  {fix}")
+    if released is not None and expelled is not None and released < 1e-3 and expelled > 0.01:
+        return (f"the drug is sieved out: it released {released:.4f} of its load while the "
+                f"bead expelled {expelled:.0%} of its fluid (its radius is {ratio:.2f} x the "
+                f"swollen mesh at T_start, hindered {f:.2g} x D0 there; the collapsed shell's "
+                f"tighter mesh holds it in).  {fix}")
+    return None

@@ -31,6 +31,7 @@ from .answers import HoldRow
 from .drug import DrugRuns, StatedTruth, carried_by_fluid, drug_settings, leak_time, runs_for
 from .drug_dose import DrugCase, DrugHeatings, first_heating
 from .protocol import Short, read_off, shoot_durations
+from .question.events import schedule_events
 from .request import ScheduleCase, ScheduleRequest
 from .schedule import hold_schedule
 from .truth import Part, Uncertainty, truth_text
@@ -113,6 +114,15 @@ class DrugScheduleAnswer(StatedTruth):
     timescale_seconds: float | None
     note: str
     uncertainty: Uncertainty | None = None
+    # the schedule as a lab runs it, one row per step (dosing.question.events)
+    events: list[dict[str, Any]] = field(default_factory=list)
+
+    def to_dataframe(self) -> Any:
+        """The events, one row per step (pandas; ``dosing.question.events``)."""
+        from .question.events import events_frame
+
+        return events_frame(self.events, {"model": self.model, "truth": self.truth,
+                                          "note": self.note})
 
 
 def _reading(run: DrugHeatings, rel: Any, durations: Sequence[float]) -> dict[str, Any]:
@@ -297,7 +307,7 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
         note += (" With D0 = 0 the hold times are the front model's sharp-interface limit "
                  "(ell -> 0) while the protocol runs use the ladder's coarsest ell, whose front "
                  "first has to nucleate at the edge: part of the correction is that delay.")
-    return DrugScheduleAnswer(
+    ans = DrugScheduleAnswer(
         model=model, doses=list(req.fractions),
         doses_ug=None if load is None else [f * load for f in req.fractions], load_ug=load,
         rests=list(req.rests), wait=req.lead, hold=hold, protocol_check=checked,
@@ -307,3 +317,5 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
         timescale_seconds=tau, note=note, interfacial_length=s.interfacial_length,
         bead_dry_radius_um=req.bead_dry_radius_um, truth=truth_text(req),
         uncertainty=unc)
+    ans.events = schedule_events(ans, req)
+    return ans

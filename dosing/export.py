@@ -17,15 +17,15 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import math
-import subprocess
 from collections.abc import Mapping, Sequence
-from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from solver.json_safe import json_safe
+
+from .provenance import code_version, resolved, version_info
 
 if TYPE_CHECKING:  # pragma: no cover
     import xarray as xr
@@ -42,27 +42,6 @@ CONVENTIONS = "CF-1.8"
 
 
 # ---------------------------------------------------------------------------- provenance
-@lru_cache(maxsize=1)
-def code_version() -> str:
-    """thermogel's package version, plus ``git describe --always --dirty`` of the checkout
-    the code runs from when there is one (e.g. '0.1.0+981cd97-dirty')."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        v = version("thermogel")
-    except PackageNotFoundError:
-        v = "unknown"
-    try:
-        here = Path(__file__).resolve().parent
-        git = subprocess.run(["git", "describe", "--always", "--dirty", "--tags"], cwd=here,
-                             capture_output=True, text=True, timeout=5, check=False)
-        if git.returncode == 0 and git.stdout.strip():
-            v += "+" + git.stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        pass
-    return v
-
-
 def _jsonable(obj: Any) -> Any:
     if hasattr(obj, "to_dict"):
         obj = obj.to_dict()
@@ -71,6 +50,12 @@ def _jsonable(obj: Any) -> Any:
 
         obj = asdict(obj)
     return json_safe(obj)
+
+
+def _request(request: Any) -> Any:
+    """The request as exported: resolved, with the unit of every physical field."""
+    value = _jsonable(request)
+    return resolved(value) if isinstance(value, dict) else value
 
 
 def provenance(kind: str, request: Any = None, truth: str | None = None,
@@ -85,7 +70,8 @@ def provenance(kind: str, request: Any = None, truth: str | None = None,
         "thermogel_version": code_version(),
         "history": f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')} "
                    f"created by thermogel {code_version()}",
-        "request": json.dumps(_jsonable(request)) if request is not None else "",
+        "version": json.dumps(version_info()),
+        "request": json.dumps(_request(request)) if request is not None else "",
         "truth": truth or "",
     }
     for k, v in extra.items():
@@ -156,8 +142,13 @@ def run_dataset(res: FullResult, dry_radius_um: float | None = None,
                       else "dry coordinate rho / dry radius")
         coords["cell"] = _var("cell", res.coords, "1", f"cell centre, {coord_name}")
         if res.nodes.size:
-            data["nodes"] = _var(("time", "node"), res.nodes, "1",
-                                 "dry node radii / dry radius (moving grid)")
+            nodes = np.asarray(res.nodes, dtype=float)
+            data["nodes"] = _var(("time", "node"), nodes, "1",
+                                 "dry node radii / dry radius (moving grid)", csv="omit")
+            if nodes.shape[1] == res.phi.shape[1] + 1:
+                data["cell_radius"] = _var(("time", "cell"), 0.5 * (nodes[:, 1:] + nodes[:, :-1]),
+                                           "1", "dry radius of the cell centre / dry radius "
+                                           "(moving grid: the cells follow the interface)")
     if res.step_t.size:
         data["step_time"] = _var("step", res.step_t, "1", "time of each accepted step / tau")
         for name, long in (("step_radius", "bead radius a / dry radius at each step"),
@@ -422,10 +413,70 @@ def header(name: str, unit: str | None) -> str:
     return f"{name} [{unit}]" if unit else name
 
 
+# A CSV export is bounded: every table is estimated before it is written (rows x columns x
+# CSV_CELL_BYTES) and a table above CSV_MAX_BYTES is not written (the series: refused
+# whole; the profiles: left out, with a note naming .nc, which stores them compactly).
+CSV_MAX_BYTES = 50 * 2**20
+CSV_CELL_BYTES = 22  # a float64 written by pandas (repr: up to 17 digits, sign, exponent, comma)
+# a table's file beside the series' (run.csv -> run.profiles.csv), by the dimension it adds
+TABLE_NAMES = {"cell": "profiles", "step": "steps", "node": "nodes",
+               "parameter_": "covariance"}
+# provenance lines written before the header of every CSV table
+CSV_ATTRS = ("thermogel_kind", "thermogel_version", "version", "history", "truth", "request")
+
+
+def _groups(ds: xr.Dataset) -> list[tuple[tuple[str, ...], list[str]]]:
+    """The data variables grouped by their dimensions, the series' group (most variables,
+    then fewest dimensions) first."""
+    by: dict[tuple[str, ...], list[str]] = {}
+    for name, var in ds.data_vars.items():
+        by.setdefault(tuple(var.dims), []).append(str(name))
+    order = sorted(by.items(), key=lambda kv: (-len(kv[1]), len(kv[0])))
+    if not order:
+        return []
+    main, rest = order[0], order[1:]
+    # a variable on fewer dimensions joins a wider table that holds them all (the profiles'
+    # cell radii beside the profiles), never the series'
+    merged: list[tuple[tuple[str, ...], list[str]]] = []
+    for dims, names in sorted(rest, key=lambda kv: -len(kv[0])):
+        home = next((m for m in merged if set(dims) < set(m[0])), None)
+        if home is None:
+            merged.append((dims, list(names)))
+        else:
+            home[1].extend(names)
+    return [main, *merged]
+
+
+def _table_name(dims: tuple[str, ...], main_dims: tuple[str, ...]) -> str:
+    extra = [d for d in dims if d not in main_dims] or list(dims)
+    for d in extra:
+        if d in TABLE_NAMES:
+            return TABLE_NAMES[d]
+    return "_".join(extra)
+
+
+def table_size(ds: xr.Dataset, names: Sequence[str]) -> tuple[int, int]:
+    """(rows, columns) of the tidy table of the variables ``names`` (long form over their
+    dimensions, with their coordinates)."""
+    dims = sorted({d for n in names for d in ds[n].dims})
+    rows = int(np.prod([ds.sizes[d] for d in dims])) if dims else 1
+    coords = [c for c in ds.coords if set(ds[c].dims) <= set(dims)]
+    return rows, len(names) + len(coords) + len(dims)
+
+
 def dataset_frame(ds: xr.Dataset) -> Any:
     """A tidy pandas DataFrame of ``ds`` (one row per coordinate combination), its columns
-    named ``name [unit]`` and the provenance in ``DataFrame.attrs``."""
+    named ``name [unit]`` and the provenance in ``DataFrame.attrs``.  For a Dataset whose
+    variables have different dimensions (a run's series, profiles and steps) it is the
+    series' table (:func:`csv_tables` gives the others)."""
+    groups = _groups(ds)
+    if len(groups) > 1:
+        ds = ds[groups[0][1]]
     df = ds.to_dataframe().reset_index()
+    return _named(ds, df)
+
+
+def _named(ds: xr.Dataset, df: Any) -> Any:
     names = {}
     for col in df.columns:
         var = ds[col] if col in ds.variables else None
@@ -435,17 +486,78 @@ def dataset_frame(ds: xr.Dataset) -> Any:
     return df
 
 
-def to_csv(ds: xr.Dataset, path: str | Path) -> Path:
-    """Write ``ds`` as tidy CSV (``name [unit]`` headers; provenance as '# key: value'
-    comment lines before the header)."""
+class CsvTooLarge(ValueError):
+    """A table too large for CSV (the message names .nc)."""
+
+
+def csv_tables(ds: xr.Dataset, max_bytes: int = CSV_MAX_BYTES
+               ) -> tuple[list[tuple[str, Any]], list[str]]:
+    """The tidy tables of ``ds``: ``[("", series), (name, table), ...]`` (a table per
+    further set of dimensions, long form: one row per time and cell for the profiles) and
+    notes on the tables left out because they would exceed ``max_bytes`` of CSV.  The
+    series' table above ``max_bytes`` raises :class:`CsvTooLarge`."""
+    omit = [str(n) for n, v in ds.data_vars.items() if v.attrs.get("csv") == "omit"]
+    ds = ds.drop_vars(omit)
+    groups = _groups(ds)
+    tables: list[tuple[str, Any]] = []
+    notes: list[str] = [f"{', '.join(omit)} only in .nc"] if omit else []
+    main_dims = groups[0][0] if groups else ()
+    for i, (dims, names) in enumerate(groups):
+        rows, cols = table_size(ds, names)
+        size = rows * cols * CSV_CELL_BYTES
+        name = "" if i == 0 else _table_name(dims, main_dims)
+        if size > max_bytes:
+            what = (f"{', '.join(names)} over {' x '.join(dims)}: {rows:,} rows, about "
+                    f"{size / 2**20:,.0f} MB of CSV (at most {max_bytes / 2**20:,.0f} MB)")
+            if i == 0:
+                raise CsvTooLarge(f"the table {what}: write .nc (netCDF keeps it in binary), "
+                                  "or ask for fewer outputs")
+            notes.append(f"{name} not written as CSV ({what}): write .nc for them")
+            continue
+        sub = ds[names]
+        frame = sub.to_dataframe().reset_index()
+        keep = [c for c in frame.columns if c in sub.variables]
+        tables.append((name, _named(sub, frame[keep])))
+    return tables, notes
+
+
+def csv_path(path: str | Path, name: str) -> Path:
+    """The file of table ``name`` beside ``path`` (run.csv -> run.profiles.csv)."""
     p = Path(path)
-    df = dataset_frame(ds)
-    lines = [f"# {k}: {v}" for k, v in ds.attrs.items()
-             if k in ("thermogel_kind", "thermogel_version", "history", "truth", "request")]
+    return p if not name else p.with_name(f"{p.stem}.{name}{p.suffix or '.csv'}")
+
+
+def _write_csv(ds: xr.Dataset, p: Path, df: Any, notes: Sequence[str] = ()) -> None:
+    lines = [f"# {k}: {v}" for k, v in ds.attrs.items() if k in CSV_ATTRS]
+    lines += [f"# note: {n}" for n in notes]
     with p.open("w", encoding="utf-8", newline="") as fh:
         fh.write("\n".join(lines) + ("\n" if lines else ""))
         df.to_csv(fh, index=False, lineterminator="\n")
-    return p
+
+
+def write_csv(ds: xr.Dataset, path: str | Path, max_bytes: int = CSV_MAX_BYTES
+              ) -> tuple[list[Path], list[str]]:
+    """Write ``ds`` as tidy CSV tables: the series at ``path`` and each further table
+    (profiles long form, steps) beside it (``run.csv`` -> ``run.profiles.csv``), every one
+    with ``name [unit]`` headers and the provenance as '# key: value' lines before the
+    header (``pandas.read_csv(path, comment="#")`` reads it back).  Returns the files and
+    the notes on tables left out (too large: .nc holds them)."""
+    tables, notes = csv_tables(ds, max_bytes)
+    written = []
+    others = [csv_path(path, name).name for name, _ in tables if name]
+    for name, df in tables:
+        p = csv_path(path, name)
+        extra = list(notes)
+        if not name and others:
+            extra.insert(0, "further tables: " + ", ".join(others))
+        _write_csv(ds, p, df, extra if not name else ())
+        written.append(p)
+    return written, notes
+
+
+def to_csv(ds: xr.Dataset, path: str | Path) -> Path:
+    """Write ``ds`` as tidy CSV (:func:`write_csv`); the series' file."""
+    return write_csv(ds, path)[0][0]
 
 
 def save(ds: xr.Dataset, path: str | Path) -> Path:
@@ -455,7 +567,12 @@ def save(ds: xr.Dataset, path: str | Path) -> Path:
     if p.suffix == ".csv":
         return to_csv(ds, p)
     if p.suffix == ".xlsx":
-        dataset_frame(ds).to_excel(p, index=False)
+        tables, _ = csv_tables(ds)
+        import pandas as pd
+
+        with pd.ExcelWriter(p) as xl:
+            for name, df in tables:
+                df.to_excel(xl, sheet_name=name or "series", index=False)
         return p
     return to_netcdf(ds, p)
 

@@ -33,7 +33,7 @@ from .heating import Protocol
 from .heating_program import program_spec, solver_program
 from .lru import ByteLRU
 from .request import bead_settings
-from .scenario import RUN_BUDGET_S, SolverSettings
+from .scenario import SolverSettings, run_budget
 from .units import PhysicalConstants, timescale
 
 SAMPLES = 600  # mechanics outputs over the horizon (the solute's steps adapt within them)
@@ -96,7 +96,7 @@ def protocol_mechanics(gel: Any, prot: Protocol, dry_radius_um: float, horizon_s
     res = simulate(gel, prot.t_start, protocol=solver_program(spec), until=horizon,
                    every=horizon / SAMPLES, grid=s.grid, n=s.n, integrator=s.integrator,
                    rtol=s.rtol, branch="swollen", interfacial_length=s.interfacial_length,
-                   max_seconds=RUN_BUDGET_S)
+                   max_seconds=run_budget())
     mech = ReleaseMechanics(res, tau, t_ref, equilibrium(gel, prot.t_start, "swollen").stretch,
                             s, time.process_time() - started, tuple(prot.texts))
     with _LOCK:

@@ -122,6 +122,16 @@ def sample_dose_times(record: dict[str, Any], gel: Gel, t_start: float, t_end: f
     return np.array(out), failed
 
 
+def objective_spread(rec: dict[str, Any]) -> float:
+    """|ln ratio| of the two objectives' dose times where a stored swelling fit's report
+    flagged them as disagreeing (0 otherwise)."""
+    dj = ((rec.get("swelling") or {}).get("fit") or {}).get("dose_time_by_objective") or {}
+    ratio = dj.get("ratio")
+    if not dj.get("disagree") or not ratio or not math.isfinite(ratio) or ratio <= 0:
+        return 0.0
+    return abs(math.log(ratio))
+
+
 def attach_parameter_interval(req: Any, answer: Any) -> Any:
     """Set ``answer.timescale_uncertainty`` (every answer: the seconds' range from the
     timescale constants, or the kinetics fit's interval of D) and, for a dose of a stored
@@ -158,6 +168,17 @@ def attach_parameter_interval(req: Any, answer: Any) -> Any:
         else:
             iv["note"] += ("; the seconds also carry the timescale constants' uncertainty "
                            "(timescale_uncertainty), not included here")
+        spread = objective_spread(rec)
+        if spread:  # the objectives disagreed when the gel was fitted (dosing.fit)
+            rel += spread
+            iv["relative_half_width"] = iv["relative_half_width"] + spread
+            if iv.get("time") is not None and iv.get("time_center") is not None:
+                t0 = iv["time_center"]
+                w = iv["relative_half_width"]
+                iv["time"] = [t0 * math.exp(-w), t0 * math.exp(w)]
+            iv["note"] += (f"; widened by {spread:.3g} in ln t: the swelling fit's two "
+                           "objectives disagreed on its dose time (ratio "
+                           f"{math.exp(spread):.3g})")
         s = answer.seconds
         iv["seconds"] = [s * math.exp(-rel), s * math.exp(rel)]
         iv["seconds_relative_half_width"] = rel

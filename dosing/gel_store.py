@@ -18,7 +18,6 @@ from typing import Any
 from solver.errors import ParameterError
 from solver.gel import PRESETS, Gel
 
-from .cache import default_path
 from .scenario import code_version
 
 ENV = "THERMOGEL_GELS"
@@ -30,9 +29,10 @@ NAMES_SHOWN = 5  # stored names an unknown gel's error lists
 
 
 def default_dir() -> Path:
-    """$THERMOGEL_GELS, else gels/ beside the validation cache."""
-    env = os.environ.get(ENV)
-    return Path(env).expanduser() if env else default_path().parent / "gels"
+    """$THERMOGEL_GELS, else gels/ beside the validation cache (dosing.settings)."""
+    from .settings import settings
+
+    return settings().gels_dir
 
 
 def check_name(name: str) -> str:

@@ -38,12 +38,13 @@ import numpy as np
 
 from solver.errors import ParameterError
 from solver.gel import T_MAX, T_MIN
+from solver.limits import PROGRAM_STEP_MAX
 
 from .quantity import kelvin, kelvin_offset, parse, to_unit
 
 RATE_RANGE_K_PER_MIN = (1e-3, 1e6)  # 0.001 K/min (a day per 1.4 K) to 10^6 K/min (~a jump)
 DURATION_MAX_S = 1.0e7  # about 116 days
-TAU_MAX = 1.0e6  # the solver's longest step (solver.full.run)
+TAU_MAX = PROGRAM_STEP_MAX  # the solver's longest step (solver.limits)
 TIME_CONSTANT_RANGE_S = (1e-3, 1e6)
 TRACE_MAX_ROWS = 100_000
 TRACE_TEMPERATURE_RANGE = (T_MIN, T_MAX)  # 273.15-373.15 K: liquid water
@@ -96,8 +97,11 @@ MAX_QUANTITY_CHARS = 80
 class _Where:
     """Names the step of an error: field ``protocol[i].<name>``, reason quoting the text."""
 
-    def __init__(self, index: int, text: str) -> None:
-        self.index, self.text = index, text
+    def __init__(self, index: int, text: str, context: str = "",
+                 sub: int | None = None) -> None:
+        # a step of a repeat: ``sub`` its place in the repeat (field protocol[i].steps[k]),
+        # ``context`` which repetition (" (repeat 2 of 3)")
+        self.index, self.text, self.context, self.sub = index, text, context, sub
 
     def guard(self, value: Any, name: str) -> Any:
         """A quantity string pint may evaluate: no powers (pint computes '9**9**9' exactly,
@@ -109,9 +113,11 @@ class _Where:
         return value
 
     def error(self, name: str, value: Any, valid: str) -> ParameterError:
-        return ParameterError(f"protocol[{self.index}].{name}" if name else
-                              f"protocol[{self.index}]", value, valid,
-                              f"in step {self.index}: {self.text!r}")
+        head = f"protocol[{self.index}]" + ("" if self.sub is None else f".steps[{self.sub}]")
+        where = (f"step {self.index}" if self.sub is None else
+                 f"step {self.sub} of the repeat in step {self.index}")
+        return ParameterError(f"{head}.{name}" if name else head, value, valid,
+                              f"in {where}{self.context}: {self.text!r}")
 
     def temperature(self, value: Any, name: str) -> float:
         self.guard(value, name)
@@ -295,9 +301,7 @@ class Hold:
     @property
     def text(self) -> str:
         """As written in the grammar."""
-        tail = (f" for {self.duration.text}" if self.duration is not None else
-                f" until {self.until.text}" if self.until is not None else "")
-        return f"{self.kind.capitalize()} at {self.at_k:g} K{tail}"
+        return f"{self.kind.capitalize()} at {self.at_k:g} K{_end_text(self)}"
 
     def to_dict(self) -> dict[str, Any]:
         """Structured form."""
@@ -319,9 +323,8 @@ class Bath:
     @property
     def text(self) -> str:
         """As written in the grammar."""
-        tail = (f" for {self.duration.text}" if self.duration is not None else
-                f" until {self.until.text}" if self.until is not None else "")
-        return f"Bath at {self.at_k:g} K with a time constant of {self.time_constant.text}{tail}"
+        return (f"Bath at {self.at_k:g} K with a time constant of {self.time_constant.text}"
+                f"{_end_text(self)}")
 
     def to_dict(self) -> dict[str, Any]:
         """Structured form."""
@@ -361,6 +364,14 @@ class Trace:
 
 
 Step = Ramp | Hold | Bath | Trace
+
+
+def _end_text(step: Hold | Bath) -> str:
+    """' for 2 min', ' until 30 % released', ' for 10 min or until 30 % released' or ''."""
+    out = "" if step.duration is None else f" for {step.duration.text}"
+    if step.until is not None:
+        out += f"{' or' if out else ''} until {step.until.text}"
+    return out
 
 
 def _with_end(d: dict[str, Any], step: Hold | Bath) -> dict[str, Any]:
@@ -523,20 +534,26 @@ def _trace_step(d: dict[str, Any], where: _Where) -> Trace:
 
 # ----------------------------------------------------------------------------- parsing
 _T = r"(?P<T>.+?)"
+# a step's end: 'for D', 'until X', or 'for D or until X' (whichever comes first)
+_ENDS = (r"(?:\s+for\s+(?P<dur>.+?)(?:\s+or\s+until\s+(?P<until>.+))?"
+         r"|\s+until\s+(?P<until_only>.+))")
+_REPEAT = re.compile(r"^(?:repeat\s+)?(?P<n>[-+]?\d+)\s*(?:x|×|\*|times)\s*:?\s*"
+                     r"\((?P<body>.*)\)$", re.I)
+REPEAT_MAX = 100
 _PATTERNS = (
     ("ramp", re.compile(rf"^(?P<kind>heat|cool)\s+(?:up\s+|down\s+)?to\s+{_T}\s+at\s+"
                         r"(?P<rate>.+)$", re.I)),
     ("bath", re.compile(rf"^bath\s+at\s+{_T}\s+with\s+(?:a\s+)?time\s+constant\s+(?:of\s+)?"
-                        r"(?P<tc>.+?)(?:\s+for\s+(?P<dur>.+)|\s+until\s+(?P<until>.+))?$",
-                        re.I)),
-    ("hold", re.compile(rf"^(?P<kind>hold|rest)\s+at\s+{_T}(?:\s+for\s+(?P<dur>.+)|"
-                        r"\s+until\s+(?P<until>.+))?$", re.I)),
+                        rf"(?P<tc>.+?){_ENDS}?$", re.I)),
+    ("hold", re.compile(rf"^(?P<kind>hold|rest)\s+at\s+{_T}{_ENDS}?$", re.I)),
     ("trace", re.compile(r"^trace\s+(?:from\s+)?(?P<path>.+)$", re.I)),
 )
 GRAMMAR = ("'Heat to 308 K at 5 K/min', 'Cool to 302 K at 2 K/min', 'Hold at 308 K for 2 min', "
-           "'Hold at 308 K until 30 % released', 'Rest at 302 K for 10 min', "
-           "'Bath at 308 K with a time constant of 30 s', 'Trace from run.csv', or a "
-           "structured step {'step': 'heat'|'cool'|'hold'|'rest'|'bath'|'trace', ...}")
+           "'Hold at 308 K until 30 % released', 'Hold at 308 K for 10 min or until 30 % "
+           "released', 'Rest at 302 K for 10 min', 'Bath at 308 K with a time constant of "
+           "30 s', 'Trace from run.csv', '3 x (Heat to 308 K at 5 K/min; Hold at 308 K for "
+           "2 min; Cool to 302 K at 5 K/min)', or a structured step {'step': 'heat'|'cool'|"
+           "'hold'|'rest'|'bath'|'trace'|'repeat', ...}")
 
 
 PATHS_REFUSED = ("the trace as data: {'step': 'trace', 'csv': '<CSV text>'} or 'time' and "
@@ -544,17 +561,110 @@ PATHS_REFUSED = ("the trace as data: {'step': 'trace', 'csv': '<CSV text>'} or '
                  "a file a request names)")
 
 
-def parse_step(value: Any, index: int = 0, files: bool = True) -> Step:
+@dataclass(frozen=True)
+class Origin:
+    """Where a protocol's step came from: item ``index`` of the steps as given, and in a
+    repeat its place ``sub`` and repetition ``rep`` of ``times``."""
+
+    index: int
+    sub: int | None = None
+    rep: int = 1
+    times: int = 1
+
+    def where(self, text: str) -> _Where:
+        """The error namer of this step."""
+        ctx = "" if self.sub is None else f" (repeat {self.rep} of {self.times})"
+        return _Where(self.index, text, ctx, self.sub)
+
+
+def _non_finite(value: Any) -> bool:
+    """True when a structured step holds a NaN or an infinite number (at any depth)."""
+    if isinstance(value, float):
+        return not math.isfinite(value)
+    if isinstance(value, dict):
+        return any(_non_finite(v) for v in value.values())
+    if isinstance(value, (list, tuple)):
+        return any(_non_finite(v) for v in value)
+    return False
+
+
+def _repeat_of(value: Any, index: int) -> tuple[int, list[Any]] | None:
+    """(times, steps) of a repeat item ('3 x (a; b; c)' or {'step': 'repeat', 'times': 3,
+    'steps': [...]}), else None."""
+    if isinstance(value, dict):
+        if str(value.get("step", value.get("type", ""))).lower() != "repeat":
+            return None
+        where = _Where(index, str(value))
+        extra = sorted(set(value) - {"step", "type", "times", "steps"})
+        if extra:
+            raise where.error(extra[0], value[extra[0]], "one of steps, times")
+        n, body = value.get("times"), value.get("steps")
+        if isinstance(body, (str, dict)):
+            body = [body]
+        if not isinstance(body, list):
+            raise where.error("steps", body, "a list of 1 or more steps to repeat")
+    elif isinstance(value, str):
+        m = _REPEAT.match(" ".join(value.split()))
+        if m is None:
+            return None
+        where = _Where(index, " ".join(value.split()))
+        n = int(m.group("n"))
+        body = [b.strip() for b in m.group("body").split(";")]
+    else:
+        return None
+    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= REPEAT_MAX:
+        raise where.error("times", n, f"a whole number of repeats, 1-{REPEAT_MAX}")
+    if not body or any(b == "" or b is None for b in body):
+        raise where.error("steps", body, "1 or more steps separated by ';', none empty: "
+                                         "'3 x (Heat to 308 K at 5 K/min; Hold at 308 K for "
+                                         "2 min; Cool to 302 K at 5 K/min)'")
+    return n, body
+
+
+def expand_steps(raw: Sequence[Any], files: bool = True) -> tuple[list[Step], list[Origin]]:
+    """The steps as given, each repeat written out ('3 x (a; b)' -> a, b, a, b, a, b), with
+    where each came from; a repeated step must end on a duration ('for 2 min', optionally
+    'or until ...': a bare until-condition would be met at once from the second repeat on)."""
+    steps: list[Step] = []
+    origins: list[Origin] = []
+    for i, value in enumerate(raw):
+        rep = _repeat_of(value, i)
+        if rep is None:
+            steps.append(parse_step(value, i, files))
+            origins.append(Origin(i))
+            continue
+        n, body = rep
+        inner = []
+        for k, b in enumerate(body):
+            if _repeat_of(b, i) is not None:
+                raise _Where(i, str(b), sub=k).error("", b, "a step (no repeat in a repeat)")
+            st = parse_step(b, i, files, sub=k)
+            if isinstance(st, (Hold, Bath)) and st.duration is None:
+                raise Origin(i, k, 1, n).where(st.text).error(
+                    "for", None, "a duration ('for 2 min', optionally 'or until 30 % "
+                                 "released') in a repeated step: a bare until-condition is "
+                                 "met at once from the second repeat on")
+            inner.append(st)
+        for r in range(n):
+            steps += inner
+            origins += [Origin(i, k, r + 1, n) for k in range(len(inner))]
+    return steps, origins
+
+
+def parse_step(value: Any, index: int = 0, files: bool = True,
+               sub: int | None = None) -> Step:
     """One step from its text, a structured dict or a step object; ``files`` allows
-    'Trace from <path>' to read a CSV file (Python and the CLI; HTTP sends the CSV text)."""
+    'Trace from <path>' to read a CSV file (Python and the CLI; HTTP sends the CSV text);
+    ``sub``: its place in the repeat of step ``index`` (errors name it)."""
     if isinstance(value, (Ramp, Hold, Bath, Trace)):
         return value
     if isinstance(value, dict):
-        return _from_dict(value, index)
+        return _from_dict(value, index, sub)
     if not isinstance(value, str):
-        raise ParameterError(f"protocol[{index}]", value, GRAMMAR)
+        raise ParameterError(f"protocol[{index}]" + ("" if sub is None else f".steps[{sub}]"),
+                             value, GRAMMAR)
     text = " ".join(value.split())
-    where = _Where(index, text)
+    where = _Where(index, text, sub=sub)
     for kind, pat in _PATTERNS:
         m = pat.match(text)
         if not m:
@@ -563,15 +673,16 @@ def parse_step(value: Any, index: int = 0, files: bool = True) -> Step:
         if kind == "ramp":
             rate, unit = where.rate(g["rate"])
             return Ramp(g["kind"].lower(), where.temperature(g["T"], "to"), rate, unit)
+        until = g.get("until") or g.get("until_only")
         if kind == "hold":
             return Hold(g["kind"].lower(), where.temperature(g["T"], "at"),
                         where.span(g["dur"], "for") if g.get("dur") else None,
-                        _until(g["until"], where) if g.get("until") else None)
+                        _until(until, where) if until else None)
         if kind == "bath":
             return Bath(where.temperature(g["T"], "at"),
                         where.span(g["tc"], "time_constant", *TIME_CONSTANT_RANGE_S),
                         where.span(g["dur"], "for") if g.get("dur") else None,
-                        _until(g["until"], where) if g.get("until") else None)
+                        _until(until, where) if until else None)
         path = g["path"].strip()
         if not files:
             raise where.error("trace", path[:MAX_QUANTITY_CHARS], PATHS_REFUSED)
@@ -584,17 +695,18 @@ def parse_step(value: Any, index: int = 0, files: bool = True) -> Step:
     raise where.error("", value, GRAMMAR)
 
 
-def _from_dict(d: dict[str, Any], index: int) -> Step:
+def _from_dict(d: dict[str, Any], index: int, sub: int | None = None) -> Step:
     kind = str(d.get("step", d.get("type", ""))).lower()
-    where = _Where(index, str(d))
+    where = _Where(index, str(d), sub=sub)
     allowed = {"heat": {"to", "rate"}, "cool": {"to", "rate"},
                "hold": {"at", "for", "until"}, "rest": {"at", "for", "until"},
                "bath": {"at", "time_constant", "for", "until"},
                "trace": {"name", "csv", "time", "temperature", "time_unit",
                          "temperature_unit"}}
     if kind not in allowed:
-        raise where.error("step", d.get("step"), "'heat', 'cool', 'hold', 'rest', 'bath' or "
-                                                 "'trace'")
+        raise where.error("step", d.get("step"), "'heat', 'cool', 'hold', 'rest', 'bath', "
+                                                 "'trace'" + (" or 'repeat'" if sub is None
+                                                              else " (no repeat in a repeat)"))
     extra = sorted(set(d) - allowed[kind] - {"step", "type"})
     if extra:
         raise where.error(extra[0], d[extra[0]], "one of " + ", ".join(sorted(allowed[kind])))
@@ -670,10 +782,17 @@ class Protocol:
             raise ParameterError("protocol", self.steps, "at least one step: " + GRAMMAR)
         if len(raw) > 1000:
             raise ParameterError("protocol", f"{len(raw)} steps", "1-1000 steps")
-        steps = tuple(parse_step(s, i, self.files) for i, s in enumerate(raw))
+        for i, value in enumerate(raw):  # non-strict JSON first, wherever it sits (a 422
+            if _non_finite(value):       # names the step that holds it)
+                raise ParameterError(f"protocol[{i}]", "NaN or Infinity", "finite numbers")
+        expanded, origins = expand_steps(raw, self.files)
+        if len(expanded) > 1000:
+            raise ParameterError("protocol", f"{len(expanded)} steps with the repeats written "
+                                 "out", "1-1000 steps")
+        steps = tuple(expanded)
         cur = t0
         for i, st in enumerate(steps):
-            where = _Where(i, st.text)
+            where = origins[i].where(st.text)
             if isinstance(st, Ramp):
                 if st.kind == "heat" and not st.to_k > cur:
                     raise where.error("to", st.to_k, f"above {cur:g} K (a heat goes up from "
@@ -780,22 +899,10 @@ class Protocol:
 
 
 def _check_physical(i: int, st: Step, tau_s: float | None, cur: float) -> None:
-    """A step's bounds on its physical values, once tau is known: a rate in K/tau within
-    RATE_RANGE_K_PER_MIN (and its ramp within the solver's longest step, TAU_MAX tau), a
-    duration in tau within DURATION_MAX_S (issue 40, R8)."""
+    """A step's duration given in tau, bounded by its physical value once tau is known
+    (within DURATION_MAX_S; issue 40, R8).  Rates and durations in tau are checked by the
+    solver's own rules where the request is built (the ramp's length in tau, its rate)."""
     where = _Where(i, st.text)
-    if isinstance(st, Ramp) and st.rate_unit == "K/tau":
-        r_tau = st.rate
-        if not (math.isfinite(r_tau) and r_tau > 0.0
-                and abs(st.to_k - cur) / r_tau <= TAU_MAX):
-            raise where.error("rate", st.text.rsplit(" at ", 1)[-1],
-                              f"a ramp of at most {TAU_MAX:g} tau (a faster rate)")
-        if tau_s is not None:
-            lo, hi = RATE_RANGE_K_PER_MIN
-            k_min = 60.0 * st.rate / tau_s
-            if not lo <= k_min <= hi:
-                raise where.error("rate", f"{st.rate:g} K/tau = {k_min:.3g} K/min (tau = "
-                                  f"{tau_s:.3g} s)", f"{lo:g}-{hi:g} K/min")
     spans = [("for", getattr(st, "duration", None)),
              ("time_constant", getattr(st, "time_constant", None))]
     for name, span in spans:

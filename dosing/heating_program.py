@@ -119,30 +119,90 @@ def program_spec(pieces: Sequence[Piece], mobility: str, reference: float) -> di
     steps: list[list[Any]] = []
     cur = pieces[0].t0 if pieces else reference
     for p in pieces:
-        if p.shape == "ramp":
-            if p.duration and p.t1 != p.t0:
-                steps.append(["ramp", p.t1, abs(p.t1 - p.t0) / p.duration])
-        elif p.shape == "hold":
-            if p.duration is None:
-                if p.t1 != cur:
-                    steps.append(["hold", p.t1, 1e-12])
-            elif p.duration > 0.0:
-                steps.append(["hold", p.t1, p.duration])
-        elif p.shape == "bath":
-            d = p.duration if p.duration is not None else OPEN_BATH_CONSTANTS * p.time_constant
-            if d > 0.0:
-                steps.append(["bath", p.t1, p.time_constant, d])
-        else:
-            steps.append(["trace", list(p.times), list(p.temps)])
-        if p.shape == "bath" and p.duration is not None:
-            cur = float(p.temperature(np.array([p.duration]))[0])
-        elif p.shape == "trace":
-            cur = p.temps[-1]
-        else:
-            cur = p.t1
+        rows, cur = _piece_rows(p, cur)
+        steps.extend(rows)
     if not steps:
         steps.append(["hold", cur, 1e-12])
     return {"steps": steps, "mobility": mobility, "reference": float(reference)}
+
+
+def _piece_rows(p: Piece, cur: float) -> tuple[list[list[Any]], float]:
+    """One piece's rows of :func:`program_spec` (none, or one) from temperature ``cur``, and
+    the temperature it ends at."""
+    rows: list[list[Any]] = []
+    if p.shape == "ramp":
+        if p.duration and p.t1 != p.t0:
+            rows.append(["ramp", p.t1, abs(p.t1 - p.t0) / p.duration])
+    elif p.shape == "hold":
+        if p.duration is None:
+            if p.t1 != cur:
+                rows.append(["hold", p.t1, 1e-12])
+        elif p.duration > 0.0:
+            rows.append(["hold", p.t1, p.duration])
+    elif p.shape == "bath":
+        d = p.duration if p.duration is not None else OPEN_BATH_CONSTANTS * p.time_constant
+        if d > 0.0:
+            rows.append(["bath", p.t1, p.time_constant, d])
+    else:
+        rows.append(["trace", list(p.times), list(p.temps)])
+    if p.shape == "bath" and p.duration is not None:
+        cur = float(p.temperature(np.array([p.duration]))[0])
+    elif p.shape == "trace":
+        cur = p.temps[-1]
+    else:
+        cur = p.t1
+    return rows, cur
+
+
+# the solver's field of a program step -> the grammar's name of it
+_GRAMMAR_FIELD = {"duration": "for", "rate": "rate", "target": "to", "temperature": "at",
+                  "time_constant": "time_constant", "times": "trace", "temperatures": "trace"}
+
+
+def check_program(protocol: Any, tau_s: float | None) -> None:
+    """What the grammar accepted, checked by the solver's own rules before anything runs:
+    each step of ``protocol`` (a ``dosing.heating.Protocol``) as the solver will get it in
+    tau (``tau_s``: tau in seconds, None for a protocol in tau alone), through
+    ``solver.heating``'s checks (durations, rates, time constants, traces: the ranges of
+    ``solver.limits``), and no step longer than PROGRAM_STEP_MAX tau.  A ParameterError
+    names the protocol's step and the grammar's field (``protocol[0].time_constant``)."""
+    from solver.limits import PROGRAM_STEP_MAX
+
+    try:
+        pieces = protocol.program(tau_s)
+    except ParameterError:
+        if tau_s is None:  # seconds without a bead size: refused where they are converted
+            return
+        raise
+    cur = pieces[0].t0 if pieces else protocol.t_start
+    for p in pieces:
+        text = protocol.steps[p.step].text
+        reason = f"in step {p.step}: {text!r}, as the solver runs it (in tau"
+        reason += "" if tau_s is None else f", tau = {tau_s:.4g} s"
+        d = p.duration
+        if p.shape == "ramp" and not (d is not None and d <= PROGRAM_STEP_MAX):
+            raise ParameterError(f"protocol[{p.step}].rate", text,
+                                 f"a rate that takes at most {PROGRAM_STEP_MAX:g} tau "
+                                 f"(from {p.t0:g} K to {p.t1:g} K: at least "
+                                 f"{abs(p.t1 - p.t0) / PROGRAM_STEP_MAX:.3g} K/tau)",
+                                 f"{reason}: {d!r} tau)")
+        rows, cur = _piece_rows(p, cur)
+        try:
+            solver_program({"steps": rows or [["hold", cur, 1e-12]], "mobility": "constant",
+                            "reference": cur})
+        except ParameterError as exc:
+            name = exc.field.split(".", 1)[1] if "." in exc.field else exc.field
+            base = name.split("[", 1)[0]
+            valid = exc.valid
+            if p.shape == "bath" and p.duration is None and base == "duration":
+                base = "time_constant"
+                valid = (f"0 < time_constant <= {PROGRAM_STEP_MAX / OPEN_BATH_CONSTANTS:g} tau "
+                         f"for a bath without 'for' or 'until' (it runs "
+                         f"{OPEN_BATH_CONSTANTS:g} time constants, at most "
+                         f"{PROGRAM_STEP_MAX:g} tau)")
+            field = _GRAMMAR_FIELD.get(base, base)
+            raise ParameterError(f"protocol[{p.step}].{field}", text, valid,
+                                 f"{reason}: {name} = {exc.value!r})") from None
 
 
 def solver_program(spec: dict[str, Any]) -> Any:

@@ -1,10 +1,20 @@
 """Computations on a pluggable ``concurrent.futures`` executor, deduplicated by key.
 
 Any executor works: the default is a process pool (spawned workers, so a threaded parent
-such as a web server forks nothing it should not; each worker ends itself when its parent
-is gone, and :meth:`JobRunner.shutdown` stops them); past one machine pass a Dask
-``Client(...).get_executor()``.  Submitting a key that is already pending or running
-returns the same future.
+such as a web server forks nothing it should not; each worker has a watchdog process that
+kills it once its parent is gone, even inside a compiled loop that holds the GIL, and
+:meth:`JobRunner.shutdown` stops them); past one machine pass a Dask
+``Client(...).get_executor()``.
+
+A job on a process pool runs through the worker's edge, :func:`run_in_worker`: an error
+comes back as an error (one that does not pickle as a :class:`WorkerError` with its type
+and message), never as a broken pool, and the worker marks which job it runs.  If the pool
+breaks anyway (a worker killed: by the OS, or by the runner's hard time limit on a job
+that overran its own budget) the runner replaces its own pool at once, fails the jobs that
+were running in the dead worker (not retried: a poll does not rebuild the same failure)
+and re-queues the others; :meth:`JobRunner.pool_status` says so (``/health``).
+
+Submitting a key that is already pending or running returns the same future.
 
 Admission is by group: a group (one validation: all its runs) is admitted whole or not at
 all, and at most ``max_pending`` unfinished groups are accepted; beyond that
@@ -18,15 +28,21 @@ renews the lease while it runs; every other process waits for the result to appe
 
 from __future__ import annotations
 
+import json
 import multiprocessing
 import multiprocessing.spawn as mp_spawn
 import os
+import pickle
+import shutil
+import signal
 import socket
+import tempfile
 import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import Executor, Future, ProcessPoolExecutor
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -64,6 +80,82 @@ class Leases(Protocol):
 
     def release(self, key: str, owner: str) -> None:
         """Drop our lease on ``key``."""
+
+
+class WorkerError(RuntimeError):
+    """An error raised in a pool worker that does not pickle: its type and message."""
+
+
+class WorkerDied(RuntimeError):
+    """A job whose pool worker died while it ran (killed by the OS, or by the runner's hard
+    time limit); the pool was replaced and the job is failed, not retried."""
+
+
+def portable_error(exc: BaseException) -> BaseException:
+    """``exc`` if it survives pickling (a process pool sends it back), else a
+    :class:`WorkerError` naming its type and message."""
+    try:
+        pickle.loads(pickle.dumps(exc))
+    except Exception:
+        return WorkerError(f"{type(exc).__name__}: {exc}")
+    return exc
+
+
+_RUN_DIR: str | None = None  # a pool worker's folder of job markers (pool_worker_start)
+
+
+def _marker(run_dir: str, pid: int) -> str:
+    return os.path.join(run_dir, f"{pid}.run")
+
+
+def run_in_worker(key: str, fn: Callable[..., Any], *args: Any) -> Any:
+    """The worker's edge: run ``fn(*args)`` (job ``key``) and send any error back as one
+    that pickles (:func:`portable_error`).  While it runs, a marker file in the pool's run
+    folder names the job, its process and its start, so the parent knows which job a dead
+    worker was running and how long a job has run."""
+    marker = None
+    if _RUN_DIR is not None:
+        marker = _marker(_RUN_DIR, os.getpid())
+        try:
+            with open(marker + ".tmp", "w") as fh:
+                json.dump({"key": key, "pid": os.getpid(), "started": time.time()}, fh)
+            os.replace(marker + ".tmp", marker)
+        except OSError:
+            marker = None
+    try:
+        return fn(*args)
+    except Exception as exc:
+        err = portable_error(exc)
+        if err is exc:
+            raise
+        raise err from None
+    finally:
+        if marker is not None:
+            try:
+                os.unlink(marker)
+            except OSError:
+                pass
+
+
+def running_jobs(run_dir: str | None) -> dict[str, dict[str, Any]]:
+    """The jobs a pool's workers are running: key -> {pid, started} (their markers)."""
+    out: dict[str, dict[str, Any]] = {}
+    if not run_dir:
+        return out
+    try:
+        names = os.listdir(run_dir)
+    except OSError:
+        return out
+    for name in names:
+        if not name.endswith(".run"):
+            continue
+        try:
+            with open(os.path.join(run_dir, name)) as fh:
+                d = json.load(fh)
+            out[str(d["key"])] = {"pid": int(d["pid"]), "started": float(d["started"])}
+        except (OSError, ValueError, KeyError, TypeError):
+            continue
+    return out
 
 
 def lease_owner() -> str:
@@ -124,10 +216,70 @@ class ScriptSafeProcessPool(ProcessPoolExecutor):
             return super().submit(fn, *args, **kwargs)
 
 
-def pool_worker_start(parent_pid: int, niceness: int = 0) -> None:
-    """A pool worker's initializer: end with ``parent_pid`` (:func:`exit_with_parent`) and
-    lower this process's priority by ``niceness`` (``os.nice``; 0 leaves it, and a
-    platform without ``os.nice`` runs at the parent's priority)."""
+def _parent_of(pid: int) -> int | None:
+    """The parent pid of process ``pid`` (Linux: /proc; else None)."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            stat = fh.read()
+    except OSError:
+        return None
+    try:
+        return int(stat[stat.rindex(b")") + 2:].split()[1])
+    except (ValueError, IndexError):
+        return None
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True
+
+
+def kill_with_parent(parent_pid: int, interval: float = 0.5) -> int | None:
+    """Fork a watchdog process that SIGKILLs this process once ``parent_pid`` is no longer
+    its parent (the parent died: this process was re-parented) and ends itself once this
+    process is gone; its pid (None where there is no fork).
+
+    A thread in this process (:func:`exit_with_parent`) cannot do it while a compiled loop
+    holds the GIL; a process of its own can.  It closes every inherited descriptor, so it
+    holds none of the pool's pipes, and makes only system calls."""
+    if not hasattr(os, "fork"):
+        return None
+    me = os.getpid()
+    pid = os.fork()
+    if pid:
+        return pid
+    try:  # the watchdog: only system calls from here on
+        os.closerange(3, 65536)
+        linux = os.path.exists(f"/proc/{me}/stat")
+        while True:
+            time.sleep(interval)
+            if os.getppid() != me:  # the worker is gone
+                os._exit(0)
+            gone = (_parent_of(me) != parent_pid) if linux else not _alive(parent_pid)
+            if gone:
+                try:
+                    os.kill(me, signal.SIGKILL)
+                finally:
+                    os._exit(0)
+    except BaseException:
+        os._exit(0)
+    return None  # not reached
+
+
+def pool_worker_start(parent_pid: int, niceness: int = 0, run_dir: str | None = None) -> None:
+    """A pool worker's initializer: end with ``parent_pid`` (a watchdog process,
+    :func:`kill_with_parent`, and :func:`exit_with_parent`), keep the markers of the jobs it
+    runs in ``run_dir`` (:func:`run_in_worker`) and lower this process's priority by
+    ``niceness`` (``os.nice``; 0 leaves it, and a platform without ``os.nice`` runs at the
+    parent's priority)."""
+    global _RUN_DIR
+    _RUN_DIR = run_dir
+    kill_with_parent(parent_pid)
     exit_with_parent(parent_pid)
     if niceness > 0 and hasattr(os, "nice"):
         try:
@@ -142,16 +294,22 @@ def default_executor(max_workers: int | None = None,
     the caller's script; each worker ends itself if this process dies and runs
     ``niceness`` below this process's priority (:func:`pool_worker_start`)."""
     n = max_workers or max(1, (os.cpu_count() or 2) // 2)
-    return ScriptSafeProcessPool(max_workers=n, mp_context=multiprocessing.get_context("spawn"),
+    run_dir = tempfile.mkdtemp(prefix="thermogel-pool-")
+    pool = ScriptSafeProcessPool(max_workers=n, mp_context=multiprocessing.get_context("spawn"),
                                  initializer=pool_worker_start,
-                                 initargs=(os.getpid(), int(niceness)))
+                                 initargs=(os.getpid(), int(niceness), run_dir))
+    pool.run_dir = run_dir  # type: ignore[attr-defined]
+    return pool
 
 
 def stop_executor(executor: Executor) -> None:
     """Cancel queued work and stop ``executor`` now: a process pool's workers are
     terminated and joined (work in flight is abandoned; its lease lapses)."""
     procs = list((getattr(executor, "_processes", None) or {}).values())  # gone after shutdown
-    executor.shutdown(wait=False, cancel_futures=True)
+    try:
+        executor.shutdown(wait=False, cancel_futures=True)
+    except Exception:  # a broken pool's internals may be gone already
+        pass
     for p in procs:
         if p.is_alive():
             p.terminate()
@@ -160,6 +318,9 @@ def stop_executor(executor: Executor) -> None:
         if p.is_alive():
             p.kill()
             p.join(timeout=5)
+    run_dir = getattr(executor, "run_dir", None)
+    if run_dir:
+        shutil.rmtree(run_dir, ignore_errors=True)
 
 
 def job_state(fut: Future) -> str:
@@ -190,6 +351,8 @@ class _Entry:
     inner: Future | None = None
     remote: bool = False  # another process holds the lease: we wait for its result
     held: bool = False  # we hold the lease
+    executor: Executor | None = None  # where it was submitted last
+    retries: int = 0  # times re-queued after a broken pool it was not running in
 
 
 class JobRunner:
@@ -197,7 +360,7 @@ class JobRunner:
 
     def __init__(self, executor: Executor | None = None, max_pending: int = 64,
                  leases: Leases | None = None, lease_seconds: float = DEFAULT_LEASE_SECONDS,
-                 what: str = "validations") -> None:
+                 what: str = "validations", hard_seconds: float | None = None) -> None:
         if max_pending < 1:
             raise ValueError("max_pending must be >= 1")
         if not lease_seconds > 0:
@@ -215,7 +378,19 @@ class JobRunner:
         self._heartbeat: threading.Thread | None = None
         self._waiting: list[_Entry] = []  # held elsewhere: polled by one waiter thread
         self._waiter: threading.Thread | None = None
-
+        # a job running longer than this in a process-pool worker is killed (its own budget
+        # failed to stop it); None: never
+        self.hard_seconds = hard_seconds
+        self._reaper: threading.Thread | None = None
+        self._killed: dict[str, str] = {}  # key -> why the runner killed its worker
+        self._suspects: dict[Executor, dict[str, dict[str, Any]]] = {}  # broken pool -> its jobs
+        self._restarts = 0
+        self._last_break: str | None = None
+        self._broken: str | None = None  # the pool is broken and not replaced: why
+        # called with (key, error) when a job's worker died while it ran (or was killed at
+        # the hard limit): the planner remembers it, so a poll after a restart does not run
+        # it into the same death (dosing.planner)
+        self.on_worker_died: Callable[[str, BaseException], None] | None = None
     @property
     def executor(self) -> Executor:
         """The executor (the default process pool is created on first use: background
@@ -349,14 +524,120 @@ class JobRunner:
             self._settle(entry.outer, error=RuntimeError("the job runner was shut down"))
 
     def _run(self, entry: _Entry) -> None:
-        try:
-            inner = self.executor.submit(entry.job.fn, *entry.job.args)
-        except Exception as exc:
-            self._release(entry)
-            self._settle(entry.outer, error=exc)
-            return
+        for attempt in range(2):
+            ex = self.executor
+            try:
+                if isinstance(ex, ThreadPoolExecutor):
+                    inner = ex.submit(entry.job.fn, *entry.job.args)
+                else:  # the worker's edge: errors come back, markers name the job
+                    inner = ex.submit(run_in_worker, entry.job.key, entry.job.fn,
+                                      *entry.job.args)
+                    self._ensure_reaper(ex)
+            except BrokenProcessPool as exc:
+                if attempt == 0 and self._replace(ex, str(exc)):
+                    continue
+                self._release(entry)
+                self._settle(entry.outer, error=exc)
+                return
+            except Exception as exc:
+                self._release(entry)
+                self._settle(entry.outer, error=exc)
+                return
+            break
+        entry.executor = ex
         entry.inner = inner
         inner.add_done_callback(lambda f: self._finish(f, entry))
+
+    # ------------------------------------------------------------------ a broken pool
+    def _replace(self, broken: Executor, why: str) -> bool:
+        """Note that ``broken`` broke (the jobs its workers were running are suspects) and,
+        if it is this runner's own pool, replace it; True once a working pool is in place."""
+        with self._lock:
+            first = broken not in self._suspects
+            if first:
+                run_dir = getattr(broken, "run_dir", None)
+                self._suspects[broken] = running_jobs(run_dir)
+                self._restarts += 1
+                self._last_break = f"{time.strftime('%H:%M:%S')}: {why}"
+            if self._executor is not broken:  # replaced already (or shut down)
+                return self._executor is not None or not self._owns
+            if not self._owns:
+                self._broken = why
+                return False
+            self._executor = None
+        stopper = threading.Thread(target=stop_executor, args=(broken,), daemon=True,
+                                   name="stop-broken-pool")
+        stopper.start()
+        self.executor  # noqa: B018 - the replacement (its workers start on demand)
+        return True
+
+    def _broken_pool(self, entry: _Entry, exc: BaseException) -> bool:
+        """A job's future failed with a broken pool: replace the pool, then fail the job if
+        it was running in the dead worker (or was re-queued twice), else queue it again.
+        True if it was queued again."""
+        broken = entry.executor
+        if broken is None or self._stop.is_set():
+            return False
+        replaced = self._replace(broken, str(exc))
+        with self._lock:
+            suspects = self._suspects.get(broken, {})
+            killed = self._killed.pop(entry.job.key, None)
+        was_running = entry.job.key in suspects
+        if replaced and not was_running and entry.retries < 2:
+            entry.retries += 1
+            self._run(entry)
+            return True
+        pid = suspects.get(entry.job.key, {}).get("pid")
+        why = killed or (f"its worker (pid {pid}) died while it ran" if was_running else
+                         "the process pool broke before it could run")
+        pool = "replaced" if replaced else "not replaced (a pool this runner was lent)"
+        err = WorkerDied(f"the job failed: {why}; the pool was {pool}, and this job is not "
+                         "run again unless asked again")
+        if (was_running or killed) and self.on_worker_died is not None:
+            try:
+                self.on_worker_died(entry.job.key, err)
+            except Exception:
+                pass
+        self._release(entry)
+        self._settle(entry.outer, error=err)
+        return True
+
+    def pool_status(self) -> dict[str, Any]:
+        """The pool's health: 'ok', or 'degraded' while a broken pool is not replaced;
+        how often it was replaced and the last break's cause."""
+        return {"status": "degraded" if self._broken else "ok",
+                "broken_because": self._broken, "restarts": self._restarts,
+                "last_break": self._last_break}
+
+    def _ensure_reaper(self, ex: Executor) -> None:
+        if self.hard_seconds is None or getattr(ex, "run_dir", None) is None:
+            return
+        with self._lock:
+            if self._reaper is None and not self._stop.is_set():
+                self._reaper = threading.Thread(target=self._reap, daemon=True,
+                                                name="hard-limit")
+                self._reaper.start()
+
+    def _reap(self) -> None:
+        """Kill a worker whose job has run past ``hard_seconds`` (the job's own budget did
+        not stop it): the pool breaks, is replaced, and that job is failed."""
+        while not self._stop.wait(1.0):
+            ex = self._executor
+            limit = self.hard_seconds
+            if ex is None or limit is None:
+                continue
+            now = time.time()
+            for key, run in running_jobs(getattr(ex, "run_dir", None)).items():
+                age = now - run["started"]
+                if age > limit:
+                    with self._lock:
+                        self._killed[key] = (f"killed after {age:.0f} s, past its hard "
+                                             f"limit of {limit:.0f} s (the run did not stop "
+                                             "at its own budget)")
+                    try:
+                        os.kill(run["pid"], signal.SIGKILL)
+                    except OSError:
+                        pass
 
     def _finish(self, inner: Future, entry: _Entry) -> None:
         if inner.cancelled():
@@ -364,6 +645,8 @@ class JobRunner:
             self._settle(entry.outer, error=RuntimeError("the job was cancelled"))
             return
         exc = inner.exception()
+        if isinstance(exc, BrokenProcessPool) and self._broken_pool(entry, exc):
+            return
         if exc is None and entry.job.on_done is not None:
             try:
                 entry.job.on_done(inner)

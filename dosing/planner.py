@@ -19,6 +19,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
+import sqlite3
 import threading
 import time
 from collections import OrderedDict
@@ -48,7 +49,15 @@ from .model_choice import (
 )
 from .request import DoseRequest, ScheduleRequest
 from .restart import Start, restartable, stopped_as_run
-from .scenario import Scenario, Solver, SolverSettings, Trajectory, run_scenario
+from .scenario import (
+    Scenario,
+    Solver,
+    SolverSettings,
+    Trajectory,
+    hard_limit,
+    run_budget,
+    run_scenario,
+)
 from .truth import delayed_settings, is_model_form_run, range_settings
 from .validation import error_estimate, failure, validation_report
 
@@ -66,6 +75,7 @@ MOVING_HORIZON = 0.1
 # a run that falls short is extended (x4) like every other
 MODEL_FORM_REACH = 4.0
 VERDICTS = 1024  # front-model verdicts remembered per planner (keyed by cache generation)
+RUN_FAILURE = "run-failure-"  # the id prefix of a run whose worker died (the cache's jobs)
 
 
 class UnknownValidationError(KeyError):
@@ -140,7 +150,9 @@ class Planner:
         self._solver = solver  # None: solver.full.simulate, imported when a run is queued
         self.cache = ValidationCache(cache_path)
         self.jobs = JobRunner(executor, max_pending, leases=self.cache,
-                              lease_seconds=lease_seconds)
+                              lease_seconds=lease_seconds,
+                              hard_seconds=hard_limit(run_budget()))
+        self.jobs.on_worker_died = self._remember_death
         self.horizon = float(horizon)
         self._row_digest: dict[str, str] = {}  # the cache row each _mem entry came from
         # runs held in memory: RUNS_MEMORY bytes at most (a run of a long trace program
@@ -260,6 +272,25 @@ class Planner:
         """Queue the full-solver run for ``sc`` (deduplicated by key); returns its future."""
         return self.jobs.submit_group(sc.key(), [self._job(sc, need_radius, need_time)])[0]
 
+    def run_here(self, sc: Scenario, need_radius: float | None = None,
+                 budget: float = 30.0) -> Trajectory:
+        """The trajectory for ``sc``, stored or run in this thread (not queued behind the
+        pool's validations) within ``budget`` seconds of wall time, and stored: for the
+        sub-second runs an answer's envelope needs (the delayed-law lattice)."""
+        traj = self.cached(sc, need_radius)
+        if traj is not None:
+            return traj
+        meta, blob = run_scenario(sc.to_dict(), self.horizon, need_radius, budget=budget,
+                                  solver=self.solver)
+        self.cache.put_if_longer(meta["key"], meta, blob)
+        traj = Trajectory.from_npz(blob, meta)
+        with self._mem_lock:
+            self._mem[sc.key()] = traj
+            self._mem.move_to_end(sc.key())
+            while len(self._mem) > 64:
+                self._row_digest.pop(self._mem.popitem(last=False)[0], None)
+        return traj
+
     def trajectory(self, sc: Scenario, need_radius: float | None = None,
                    need_time: float = 0.0) -> Trajectory:
         """The full-solver trajectory for ``sc`` covering the need (blocking, cached)."""
@@ -288,28 +319,44 @@ class Planner:
                 while len(self._mem) > 64:
                     self._mem.popitem(last=False)
         if states:
+            new = []
             with self._mem_lock:
                 for st in states:
                     if st.stopped:
                         continue
                     j = st.steps
                     key = _prefix(sc, j).key()
+                    if self._starts.get(key) != (sc, j):
+                        new.append((key, sc.to_dict(), j))
                     self._starts[key] = (sc, j)
                     self._starts.move_to_end(key)
                 while len(self._starts) > 4096:
                     self._starts.popitem(last=False)
+            try:  # kept in the cache too: a restarted planner starts from the same states
+                self.cache.put_starts(new)
+            except sqlite3.Error:
+                pass  # only where a run starts is lost (a full disk): it starts earlier
         return traj
 
     def _start(self, sc: Scenario) -> Start | None:
         """Where ``sc``'s protocol run starts: the state after its longest prefix that a
-        run this planner has seen kept, or a stored run of that prefix itself (the run
-        store keeps each run's states: another process's runs serve too); None: t = 0."""
+        run this planner, or one before it on this cache, has seen kept (the cache's
+        ``starts``: a job resumed after a restart starts where it would have), or a stored
+        run of that prefix itself (the run store keeps each run's states: another
+        process's runs serve too); None: t = 0."""
         if sc.protocol is None or len(sc.protocol) < 2:
             return None
         for j in range(len(sc.protocol) - 1, 0, -1):
             pre = _prefix(sc, j)
             with self._mem_lock:
                 hit = self._starts.get(pre.key())
+            if hit is None:
+                try:
+                    row = self.cache.get_start(pre.key())
+                except sqlite3.Error:
+                    row = None
+                if row is not None:
+                    hit = (Scenario.from_dict(row[0]), row[1])
             stored = self.cached(pre if hit is None else hit[0])
             start = None if stored is None else Start.of(stored, j if hit is None else hit[1])
             if start is not None:
@@ -485,17 +532,43 @@ class Planner:
         record = {"scenarios": [sc.to_dict() for sc in scs], "keys": keys,
                   "start_radius": req.start_radius, "target_radius": choice.radius,
                   "fraction": f, "front_time": choice.front_time}
-        self._advance(record, vid)  # admitted whole or not at all (QueueFullError)
+        self._advance(record, vid, retry=True)  # admitted whole or not (QueueFullError)
         if self.cache.get_validation(vid) is None:
             self.cache.put_validation(vid, record)
         return vid
 
-    def _advance(self, record: dict[str, Any], vid: str) -> tuple[list[Any], list[str]]:
+    def _remember_death(self, key: str, err: BaseException) -> None:
+        """A run whose pool worker died while it ran (killed by the OS, or at the hard
+        limit): kept in the cache, so that a poll (here or after a restart) reports it
+        failed instead of running it into the same death; asking again runs it."""
+        jid = RUN_FAILURE + key
+        self.cache.put_job(jid, "run-failure", {"key": key})
+        self.cache.finish_job(jid, "failed", error=str(err))
+
+    def _died(self, key: str, retry: bool) -> BaseException | None:
+        """The remembered death of run ``key`` (None: none; ``retry`` forgets it)."""
+        row = self.cache.get_job(RUN_FAILURE + key)
+        if row is None:
+            return None
+        if retry:
+            self.cache.forget_job(RUN_FAILURE + key)
+            return None
+        from .jobs import WorkerDied
+
+        return WorkerDied(row["error"] or "its pool worker died while it ran")
+
+    def _advance(self, record: dict[str, Any], vid: str,
+                 retry: bool = False) -> tuple[list[Any], list[str]]:
         """Per run: a covering trajectory, an exception, or None and its job state in the
-        second list (submitting what is neither cached nor queued, as one group ``vid``)."""
+        second list (submitting what is neither cached nor queued, as one group ``vid``;
+        a run whose worker died is not run again unless ``retry``: the request asked
+        again, not polled)."""
         need_r, need_t = record["target_radius"], record["front_time"] or 0.0
         scs = [Scenario.from_dict(scd) for scd in record["scenarios"]]
         trajs = [self.cached(sc, need_r, need_t) for sc in scs]
+        for i, sc in enumerate(scs):
+            if trajs[i] is None and self.jobs.state(sc.key()) is None:
+                trajs[i] = self._died(sc.key(), retry)
         todo = [sc for sc, traj in zip(scs, trajs, strict=True) if traj is None
                 and self.jobs.state(sc.key()) not in ("pending", "running", "failed")]
         if todo:  # never run, or short of the dose

@@ -58,6 +58,9 @@ class UntilResult:
     end: float
     start_seconds: float | None
     end_seconds: float | None
+    # 'until': its condition ended it; 'duration': a 'for D or until X' step whose D came
+    # first (the condition not met within it)
+    ended_by: str = "until"
 
 
 @dataclass
@@ -278,14 +281,23 @@ def resolve_untils(req: DoseRequest, get: Getter, mode: Mode = Mode()
         start = sum(p.duration for p in pieces[:-1])
         piece = pieces[-1]
         target = until_radius(req, piece.until, i)
-        got = _reach(req, get, pieces, target, start, f"protocol[{i}].until", False, mode)
+        bound = piece.duration  # 'for D or until X': whichever comes first
+        try:
+            got = _reach(req, get, pieces, target, start, f"protocol[{i}].until", False, mode)
+        except ParameterError:
+            if bound is None:
+                raise
+            got = (math.inf,)  # never met: the duration ends the step
         if isinstance(got, Pending):
             return got
         t_hit = max(got[0], start)  # met before the step: it ends at once
+        by = "until"
+        if bound is not None and t_hit - start > bound:
+            t_hit, by = start + bound, "duration"
         durations[i] = max(t_hit - start, 0.0)
         done.append(UntilResult(i, prot.steps[i].text, start, t_hit,
                                 None if tau_s is None else start * tau_s,
-                                None if tau_s is None else t_hit * tau_s))
+                                None if tau_s is None else t_hit * tau_s, by))
     return (prot.with_durations(durations) if durations else prot), done
 
 
@@ -391,6 +403,17 @@ def reduced_dose(req: DoseRequest, mode: Mode, choice: heating_reduced.Choice
                   f"{stated:.0%}: the reduced model's largest measured gap to the truth in "
                   "its region", None, scs[0].key(), program)
     return _answer(req, prot, untils, pieces, time, traj, out, tau_s)
+
+
+def lattice_scenario(req: DoseRequest, settings: Any, target: float) -> Scenario:
+    """The protocol's run under ``settings`` (the delayed-law lattice of an answer's
+    envelope): its until-steps ended where the reduced model ends them, its program
+    continuous in T(t) with the truth's mobility, stopping at ``target``."""
+    resolved = resolve_untils(req, reduced_getter(req))
+    assert not isinstance(resolved, Pending)
+    pieces = resolved[0].program(_tau_seconds(req))
+    return Scenario(req.gel, req.t_start, branch=req.branch, settings=settings,
+                    program=program_spec(pieces, Mode().mobility, req.t_end), stop=target)
 
 
 def _report(scs: list[Scenario], trajs: list[Any], a0: float, target: float) -> Any:

@@ -16,9 +16,11 @@ diffusivity in water at the release temperature (isothermal) or the protocol's h
 Residuals are absolute differences in released fraction, the noise estimated from them;
 D0 is fitted in log form (95% interval exp(q +- t sd)), as in ``solver.fit.result``.
 
-f2 (FDA, Guidance for Industry: Dissolution Testing of Immediate Release Solid Oral Dosage
-Forms, 1997; Moore & Flanner 1996): f2 = 50 log10(100 / sqrt(1 + mean((R_t - T_t)^2))) with
-R, T in percent released at the same times.
+The goodness of fit is the chi-square and the residuals.  Beside them the report states the
+similarity of the prediction and the data as two dissolution profiles: f1 and f2 (FDA,
+Guidance for Industry: Dissolution Testing of Immediate Release Solid Oral Dosage Forms,
+1997; Moore & Flanner 1996), f2 = 50 log10(100 / sqrt(1 + mean((R_t - T_t)^2))) with R, T in
+percent released at the same times, on the guidance's points (``dosing.analysis``).
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from solver.fit.result import covariance_from_jacobian, t_quantile
 from solver.gel import check_temperature
 from solver.solute.crank import crank_sphere
 
+from .analysis.similarity import fda_f2
 from .drug import DrugModel
 from .fit_csv import read_table
 from .gel_store import calibrated_constants
@@ -51,21 +54,39 @@ D_BOUNDS = (1e-12, 1e-3)  # cm^2/s: the fit's bounds on D0
 def f2(reference: Any, test: Any, *, fda_85_rule: bool = False) -> float:
     """The FDA similarity factor of two profiles in percent released at the same times.
 
-    ``fda_85_rule``: keep only the first point at which the reference exceeds 85% (the
-    guidance's "only one measurement after 85% dissolution"); t = 0 points are dropped."""
+    ``fda_85_rule``: the guidance's points (``dosing.analysis.similarity.points_used``: no
+    point after the first at which both products exceed 85 %); t = 0 points (both 0) are
+    dropped.  Two profiles with units and the full rules: ``dosing.analysis.similarity``."""
     r = np.asarray(reference, dtype=float)
     t = np.asarray(test, dtype=float)
     if r.shape != t.shape or r.ndim != 1 or r.size == 0:
         raise ParameterError("f2", f"{r.shape} and {t.shape}", "two profiles of equal length")
-    keep = ~((r == 0.0) & (t == 0.0))
     if fda_85_rule:
-        over = np.nonzero(r > 85.0)[0]
-        if over.size:
-            keep &= np.arange(r.size) <= over[0]
+        return fda_f2(r, t)
+    keep = ~((r == 0.0) & (t == 0.0))
     d = r[keep] - t[keep]
     if d.size == 0:
         raise ParameterError("f2", "no points", "at least one time with release > 0")
     return float(50.0 * math.log10(100.0 / math.sqrt(1.0 + float(np.mean(d * d)))))
+
+
+def similarity_of_fit(time_s: Any, measured: Any, predicted: Any) -> dict[str, Any]:
+    """f1/f2 of a prediction against a measured curve (fractions at the same times) under
+    the FDA rules (``dosing.analysis.similarity``): a similarity of two profiles, not a
+    goodness of fit (that is the fit's chi-square and residuals)."""
+    from .analysis.profiles import Profile
+    from .analysis.similarity import compare
+
+    ts = np.asarray(time_s, float)
+    meas = Profile(ts, 100.0 * np.asarray(measured, float)[:, None], "s", 1.0, "measured")
+    pred = Profile(ts, 100.0 * np.asarray(predicted, float)[:, None], "s", 1.0, "predicted")
+    c = compare(meas, pred, bootstrap=False, prediction=True)
+    return {"f2": c.f2, "f1": c.f1, "times_used_s": c.times_used, "points_used": c.points_used,
+            "conditions": c.conditions, "conditions_met": c.conditions_met,
+            "outcome": c.outcome, "f1_outcome": c.f1_outcome,
+            "meaning": "FDA similarity (1997 guidance rules) of the prediction and the measured "
+                       "profile as two dissolution profiles: not a goodness of fit (see "
+                       "chi2_reduced, rms_residual and residuals)"}
 
 
 RELEASE_UNITS = ("fraction", "percent", "ug")
@@ -120,7 +141,9 @@ def fit_release(time_s: Any, released: Any, gel: Any, t_start: float, t_end: flo
     """Fit D0 (cm^2/s) to a cumulative release curve, isothermal (``t_end`` None or
     ``t_start``) or under a heating ``protocol`` (step texts from ``t_start``; module doc);
     the report has ``parameters``/``intervals``/``stderr`` with ``drug_diffusivity_cm2_s``,
-    the effective D, ``f2`` of the fit against the data, the fitted curve and a 95% band.
+    the effective D, the fitted curve and a 95% band, the goodness of fit (``chi2_reduced``,
+    ``rms_residual``, ``residuals``) and, apart from it, ``similarity``: f1/f2 of the
+    prediction and the data under the FDA rules (``f2`` its value).
     ``settings``: the full solver's, under a protocol (default the truth's)."""
     t = np.asarray(time_s, dtype=float)
     y = np.asarray(released, dtype=float)
@@ -182,8 +205,11 @@ def fit_release(time_s: Any, released: Any, gel: Any, t_start: float, t_end: flo
     return {**rep, "effective_diffusivity_cm2_s": d0 * factor, "hindrance_factor": factor,
             "hindrance": hindrance, "swollen_radius_um": a0 * r_um, "porosity": phi0,
             "drug_diffusivity_temperature_K": t_ref, **extra,
-            "f2_meaning": "FDA similarity factor of the fitted prediction against the "
-                          "measured curve at the measured times (>= 50: similar)",
+            "f2_meaning": "FDA similarity factor (1997 guidance: zero excluded, one point "
+                          "after 85 % of both) of the fitted prediction and the measured "
+                          "curve as two dissolution profiles (50-100: similar); a similarity, "
+                          "not a goodness of fit: that is chi2_reduced, rms_residual and "
+                          "residuals",
             "confidence": 0.95, "not_pinned": not_pinned}
 
 
@@ -266,7 +292,9 @@ def _fit_log_d0(t: np.ndarray, y: np.ndarray, model_fn: Any, guess: float
                                                  math.exp(min(q + tq * sd, hi_q))]},
         "stderr": {"drug_diffusivity_cm2_s": d0 * sd},
         "interval_kind": "linearised (Jacobian of log D0, Student t)",
-        "f2": f2(100.0 * y, 100.0 * fitted),
+        "f2": fda_f2(100.0 * y, 100.0 * fitted, t),
+        "similarity": similarity_of_fit(t, y, fitted),
+        "residuals": (y - fitted).tolist(),
         "rms_residual": float(np.sqrt(np.mean((fitted - y) ** 2))),
         "chi2_reduced": chi2, "n_points": n, "success": bool(best.success),
         "fitted": fitted.tolist(), "time_s": t.tolist(), "released": y.tolist(),

@@ -169,6 +169,12 @@ def resolve_case(req: Case) -> tuple[Jump, float | None]:
     settings, ell_range = bead_settings(req.settings, req.constants, dry)
     object.__setattr__(req, "settings", settings)
     object.__setattr__(req, "interfacial_range", ell_range)
+    heating = getattr(req, "heating", None)
+    if heating is not None:  # what the grammar accepts, the solver must (issue 40, R1)
+        from .heating_program import check_program
+
+        check_program(heating, None if dry is None else
+                      timescale(dry, jump.t_end, req.constants).seconds)
     return jump, dry
 
 

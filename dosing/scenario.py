@@ -16,6 +16,7 @@ import functools
 import hashlib
 import json
 import math
+import os
 import time
 from array import array
 from collections.abc import Callable
@@ -25,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from solver.errors import ParameterError, SolverError, require_finite_positive
+from solver.errors import BudgetExceeded, ParameterError, SolverError, require_finite_positive
 from solver.full.result import FullResult
 from solver.gel import Gel, check_temperature
 from solver.json_safe import json_safe
@@ -219,6 +220,26 @@ Step = tuple[float, float]
 # encoder built once)
 _KEY_JSON = json.JSONEncoder(sort_keys=True, separators=(",", ":"))
 RUN_BUDGET_S = 600.0  # wall time of one validation run (the default ladder's largest: ~65 s)
+RUN_BUDGET_ENV = "THERMOGEL_RUN_SECONDS"  # the service's setting of that budget
+
+
+def run_budget(default: float = RUN_BUDGET_S) -> float:
+    """The wall seconds one full-solver run may take (all its calls of the solver):
+    $THERMOGEL_RUN_SECONDS when set to a number > 0, else ``default``.  Read where the run
+    starts (a pool worker inherits the service's environment)."""
+    raw = os.environ.get(RUN_BUDGET_ENV, "")
+    try:
+        x = float(raw) if raw.strip() else default
+    except ValueError:
+        return default
+    return x if math.isfinite(x) and x > 0.0 else default
+
+
+def hard_limit(budget: float) -> float:
+    """When a run that has not stopped at its ``budget`` is killed from outside (its
+    worker: ``dosing.jobs.JobRunner(hard_seconds=...)``): the budget, plus half of it or
+    at least a minute for the record to be written."""
+    return float(budget) + max(60.0, 0.5 * float(budget))
 
 
 @dataclass(frozen=True)
@@ -417,7 +438,7 @@ def plain(obj: Any) -> Any:
 
 
 def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: float | None = None,
-                 need_time: float = 0.0, max_horizon: float = 64.0, budget: float = RUN_BUDGET_S,
+                 need_time: float = 0.0, max_horizon: float = 64.0, budget: float | None = None,
                  solver: Solver | None = None, stop: bool = True,
                  start: Any = None) -> tuple[dict, bytes]:
     """Run the full solver for a scenario: plain data in, (metadata, npz blob) out.
@@ -426,8 +447,9 @@ def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: fl
     falls to ``need_radius`` and t reaches ``need_time``; with ``stop`` (default) the run
     ends where a(t) reaches ``need_radius`` (a terminal event: nothing past the dose is
     computed; a run that stopped before ``need_time`` is run again to it without the
-    event); each run gets ``budget`` seconds
-    of wall time, on ``solver`` (the planner's: a module-level function pickles by name).
+    event); all its runs together get ``budget`` seconds of wall time (default
+    :func:`run_budget`; past it a BudgetExceeded naming the settings), on ``solver`` (the
+    planner's: a module-level function pickles by name).
     A protocol starts from ``start`` (:class:`dosing.restart.Start`: a stored run's state
     after its first steps) when given.
     Top-level and free of shared state, so process pools and Dask workers can run it.
@@ -436,16 +458,30 @@ def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: fl
         from solver.full import simulate as solver
     sc = Scenario.from_dict(scenario)
     wall = time.perf_counter()
+    budget = run_budget() if budget is None else float(budget)
+
+    def left() -> float:  # what the next call may spend of the budget (the first: all)
+        if runs == 0:
+            return budget
+        spent = time.perf_counter() - wall
+        if spent >= budget:
+            raise BudgetExceeded(
+                f"the full-solver run ({sc.settings.grid} grid, N = {sc.settings.n}, "
+                f"interfacial length {sc.settings.interfacial_length:g}) used its "
+                f"{budget:.0f} s budget after {runs} solver calls",
+                {"wall_seconds": spent, "scenario": sc.key_dict()})
+        return budget - spent
+
     h = float(horizon)
     runs = 0
     end = (need_radius * (1.0 - STOP_MARGIN)
            if stop and sc.protocol is None and sc.program is None and need_radius is not None
            and sc.settings.integrator == "implicit" else None)  # events need the implicit one
     while True:
-        traj = _simulate(sc, max(h, need_time), budget, solver, end, start)
+        traj = _simulate(sc, max(h, need_time), left(), solver, end, start)
         runs += 1
         if end is not None and traj.status == "stopped" and traj.horizon < need_time:
-            traj = _simulate(sc, need_time, budget, solver)  # the truth's front-time need
+            traj = _simulate(sc, need_time, left(), solver)  # the truth's front-time need
             runs += 1
         if (sc.protocol is not None or sc.program is not None or need_radius is None
                 or traj.radius.min() <= need_radius):

@@ -17,7 +17,7 @@ A schedule needs of the planner only what :class:`SchedulePlanner` names, so
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from itertools import accumulate
 from typing import Any, Protocol
 
@@ -27,6 +27,7 @@ from solver.presenters import presenter
 from . import protocol
 from .answers import DoseAnswer, HoldRow
 from .heating_cycles import ProtocolHeatings
+from .question.events import schedule_events
 from .request import DoseRequest, ScheduleRequest
 from .scenario import Scenario, Step
 from .truth import truth_text
@@ -67,13 +68,16 @@ class ScheduleAnswer:
     method: str = "direct"
     t_start: float | None = None  # K: the rests' temperature
     t_end: float | None = None  # K: the actuation temperature
+    # the schedule as a lab runs it, one row per step (dosing.question.events)
+    events: list[dict[str, Any]] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""
         return asdict(self)
 
     def to_dataframe(self) -> Any:
-        """One row per dose (event): start, duration, temperature, dose, amount (pandas)."""
+        """The events, one row per step (heat, rest): start, duration, temperature, dose,
+        cumulative release, amount (pandas; ``dosing.question.events``)."""
         return presenter("schedule_frame")(self)
 
     def to_xarray(self, request: Any = None) -> Any:
@@ -187,7 +191,7 @@ def _answer(req: ScheduleRequest, model: str, hold: list[HoldRow],
         note = (f"Each heating follows the protocol ({'; '.join(req.heating.texts)}) from "
                 f"T_start = {req.t_start:g} K, then holds at its last temperature; times in "
                 f"tau at its hottest temperature {req.t_end:g} K. " + note)
-    return ScheduleAnswer(
+    ans = ScheduleAnswer(
         model=model, doses=list(req.doses), rests=list(req.rests), hold=hold,
         protocol_check=checked, corrected=corrected, start_radius=req.start_radius,
         stored_volume=sv, stored_volume_ul=None if dry is None else volume_to_ul(sv, dry),
@@ -197,3 +201,5 @@ def _answer(req: ScheduleRequest, model: str, hold: list[HoldRow],
                               settings=req.settings).key(), note=note,
         truth=truth_text(req), interfacial_length=s.interfacial_length,
         method=s.method if s.regularized else "paper", t_start=req.t_start, t_end=req.t_end)
+    ans.events = schedule_events(ans, req)
+    return ans

@@ -129,6 +129,9 @@ class SizeDistribution:
     weighting: str = "number"
     state: str = "dry"
     measure: str = "radius"
+    # what a table read from a file was read as (read_sizes_csv), and once resolved, what
+    # it was converted to: stated in describe(), not part of the spec's value
+    read: str | None = field(default=None, repr=False, compare=False)
     _table: tuple[np.ndarray, np.ndarray] | None = field(default=None, init=False,
                                                          repr=False, compare=False)
 
@@ -229,13 +232,28 @@ class SizeDistribution:
         sd = self.sd_um if self.sd_um is not None else self.cv * self.mean_um
         return _NormalLaw(self.mean_um * s, sd * s, self.weighting == "volume")
 
-    def resolve(self, start_radius: float) -> DrySizes:
-        """The number-weighted dry radii (um): swollen sizes over a0 (eq. EqlEqn)."""
+    def resolve(self, start_radius: float, t_start: float | None = None) -> DrySizes:
+        """The number-weighted dry radii (um): swollen sizes over a0 (eq. EqlEqn), the
+        swelling at ``t_start``; a table says what it read and what it became ('3 swollen
+        diameters (um) ... at 302 K, converted to dry radii 40-60 um')."""
         if not self.has_size:
             raise ParameterError(f"{F}.mean_um", None,
                                  "a size > 0 (um), or a bead size on the request")
         scale = 1.0 / start_radius if self.state == "swollen" else 1.0
-        return DrySizes(self, self._number_law(scale))
+        law = self._number_law(scale)
+        spec = self
+        if self.kind == "table":
+            r = law.r
+            at = (f" at {t_start:g} K (swollen {start_radius:.4g} x dry)"
+                  if self.state == "swollen" and t_start is not None else
+                  f" (swollen {start_radius:.4g} x dry)" if self.state == "swollen" else "")
+            done = ("" if self.state == "dry" and self.measure == "radius"
+                    else ", converted to dry radii")
+            read = (self.read or self.describe_plain()) + at
+            read += f"{done} {r.min():.4g}-{r.max():.4g} um" if done else \
+                f": dry radii {r.min():.4g}-{r.max():.4g} um"
+            spec = SizeDistribution(**{**self.to_dict(), "read": read})
+        return DrySizes(spec, law)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (the fields given)."""
@@ -255,10 +273,18 @@ class SizeDistribution:
                 raise ParameterError(f"{F}.{k}", d[k], f"one of {', '.join(sorted(names))}")
         return cls(**{k: v for k, v in d.items() if v is not None})
 
+    def describe_plain(self) -> str:
+        """A table's sizes in words ('3 dry radii (um)')."""
+        n = len(self.sizes_um or ())
+        return SizeHeader(self.state, self.measure, "um", "").describe(n)
+
     def describe(self) -> str:
-        """The distribution in words."""
+        """The distribution in words (a table read from a file: what it was read as)."""
         w, st = self.weighting, self.state
         m = "diameters" if self.measure == "diameter" else "radii"
+        if self.kind == "table" and self.read:
+            return (f"a measured table: {self.read}"
+                    + ("" if self.counts is None else ", with counts") + f" ({w}-weighted)")
         if self.kind == "table":
             n = len(self.sizes_um)
             return (f"a measured table of {n} {st} {m}"
@@ -524,27 +550,85 @@ class DrySizes:
 
 
 # ---------------------------------------------------------------------- a measured CSV
+# the words a size column's header may use (any order, any case, separated by spaces,
+# underscores or hyphens; the unit in brackets or as the last word)
+STATE_WORDS = {"dry": "dry", "swollen": "swollen", "wet": "swollen", "hydrated": "swollen"}
+MEASURE_WORDS = {"radius": "radius", "radii": "radius", "r": "radius",
+                 "diameter": "diameter", "diameters": "diameter", "diam": "diameter",
+                 "d": "diameter", "dia": "diameter"}
+UNIT_WORDS = ("um", "µm", "μm", "micron", "microns", "micrometre", "micrometer",
+              "micrometres", "micrometers", "nm", "mm", "cm", "m")
+IGNORED_WORDS = ("bead", "beads", "size", "sizes", "measured", "mean", "of", "the", "in",
+                 "at", "t_start", "tstart", "start")
+ACCEPTED = ("'dry' or 'swollen' (optional: default dry, or the request's), 'radius' or "
+            "'diameter' (also r, d, radii, diameters), and a length unit in brackets or as the "
+            "last word (um, nm, mm; default um): e.g. 'dry radius (um)', 'radius_um', "
+            "'swollen diameter (um)'")
+
+
+@dataclass(frozen=True)
+class SizeHeader:
+    """What a size column's header says: the state (None: not said), radius or diameter,
+    the unit, and the header itself."""
+
+    state: str | None
+    measure: str
+    unit: str
+    column: str
+
+    def describe(self, n: int) -> str:
+        """'3 swollen diameters (um)'."""
+        m = "diameters" if self.measure == "diameter" else "radii"
+        if n == 1:
+            m = self.measure
+        st = "" if self.state is None else f"{self.state} "
+        return f"{n} {st}{m} ({self.unit})"
+
+
+def read_header(name: str, field_name: str = f"{F}.sizes_um") -> SizeHeader:
+    """The state (dry | swollen), measure (radius | diameter) and unit a size column's
+    header names ('dry radius (um)', 'radius_um', 'swollen diameter (mm)', 'd_nm'); a header
+    that names no measure, or a word it does not know, is refused naming the column and
+    the words it accepts (:data:`ACCEPTED`)."""
+    low = name.strip().lower()
+    unit = None
+    m = re.search(r"[\(\[]\s*([^\)\]]+?)\s*[\)\]]", low)
+    if m:
+        unit = m.group(1).strip()
+        low = (low[:m.start()] + " " + low[m.end():]).strip()
+    words = [w for w in re.split(r"[\s_\-/.,:]+", low) if w]
+    if unit is None and len(words) > 1 and words[-1] in UNIT_WORDS:
+        unit = words.pop()
+    states = {STATE_WORDS[w] for w in words if w in STATE_WORDS}
+    measures = {MEASURE_WORDS[w] for w in words if w in MEASURE_WORDS}
+    unknown = [w for w in words if w not in STATE_WORDS and w not in MEASURE_WORDS
+               and w not in IGNORED_WORDS and w not in UNIT_WORDS]
+    if len(measures) != 1 or len(states) > 1 or unknown:
+        why = ("it names both radius and diameter" if len(measures) > 1
+               else "it names both dry and swollen" if len(states) > 1
+               else f"unknown word '{unknown[0]}'" if unknown
+               else "it names neither radius nor diameter")
+        raise ParameterError(f"{field_name} (column '{name.strip()}')", name.strip(),
+                             "a header naming " + ACCEPTED, why)
+    return SizeHeader(next(iter(states)) if states else None, measures.pop(), unit or "um",
+                      name.strip())
+
+
 def _header_unit(name: str) -> tuple[str, str]:
     """('radius' | 'diameter', unit) from a header such as 'diameter (um)' or 'radius_nm'."""
-    low = name.strip().lower()
-    measure = "diameter" if low.startswith(("d", "diam")) else "radius"
-    unit = "um"
-    m = re.search(r"[\(\[]\s*([^\)\]]+)\s*[\)\]]", low)
-    if m:
-        unit = m.group(1)
-    else:
-        m = re.search(r"_([a-zµμ]+)$", low)
-        if m and m.group(1) not in ("size",):
-            unit = m.group(1)
-    return measure, unit
+    h = read_header(name)
+    return h.measure, h.unit
 
 
 def read_sizes_csv(source: str, field_name: str = f"{F}.sizes_um",
                    **spec: Any) -> SizeDistribution:
-    """A table distribution from CSV text or a file path: a column of sizes (radii or
-    diameters: the header says which, e.g. ``diameter_um``, ``radius (nm)``; no header:
-    radii in um) and an optional second column of counts.  ``spec`` sets ``weighting``,
-    ``state`` (and ``measure`` for a headerless file)."""
+    """A table distribution from CSV text or a file path: a column of sizes, read as its
+    header says (:func:`read_header`: dry or swollen, radius or diameter, the unit; e.g.
+    ``dry radius (um)``, ``radius_um``, ``swollen diameter (mm)``; no header: radii in um,
+    dry unless ``state`` says) and an optional second column of counts.  ``spec`` sets
+    ``weighting`` and ``state`` (a header that names the other state is refused, naming
+    the column), and ``measure`` for a headerless file.  The distribution says what was
+    read (``describe()``: '3 swollen diameters (um) from the column ...')."""
     text = source
     if "\n" not in source:  # a path (CSV text has at least one line break)
         try:
@@ -555,17 +639,24 @@ def read_sizes_csv(source: str, field_name: str = f"{F}.sizes_um",
     rows = [r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r)]
     if not rows:
         raise ParameterError(field_name, source, "a CSV with at least one size")
-    measure, unit = spec.pop("measure", "radius"), "um"
+    given_state = spec.pop("state", None)
+    head = SizeHeader(None, spec.pop("measure", "radius"), "um", "")
     try:
         float(rows[0][0])
     except ValueError:
-        measure, unit = _header_unit(rows[0][0])
+        head = read_header(rows[0][0], field_name)
         rows = rows[1:]
+    if given_state is not None and head.state is not None and head.state != given_state:
+        raise ParameterError(f"{field_name} (column '{head.column}')", head.column,
+                             f"{given_state} sizes (the request's bead size is {given_state})"
+                             f", or a header without '{head.state}'",
+                             f"the column says {head.state}")
+    state = head.state or given_state or "dry"
     if len(rows) > MAX_ROWS:
         raise ParameterError(field_name, f"{len(rows)} rows", f"at most {MAX_ROWS} rows")
     if not rows:
         raise ParameterError(field_name, source, "a CSV with at least one size")
-    factor = micrometres(f"1 {unit}", f"{field_name} (the header's unit)")
+    factor = micrometres(f"1 {head.unit}", f"{field_name} (the header's unit)")
     sizes, counts = [], []
     for i, r in enumerate(rows):
         try:
@@ -578,8 +669,10 @@ def read_sizes_csv(source: str, field_name: str = f"{F}.sizes_um",
     if counts and len(counts) != len(sizes):
         raise ParameterError(f"{F}.counts", f"{len(counts)} of {len(sizes)} rows",
                              "a count on every row or on none")
+    read = SizeHeader(state, head.measure, head.unit, head.column).describe(len(sizes))
+    read += f" from the column '{head.column}'" if head.column else " (no header)"
     return SizeDistribution(kind="table", sizes_um=sizes, counts=counts or None,
-                            measure=measure, **spec)
+                            measure=head.measure, state=state, read=read, **spec)
 
 
 def request_sizes(req: Any) -> None:

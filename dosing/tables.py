@@ -12,7 +12,7 @@ import html
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from .export import EVENT_COLUMNS, PARAMETER_UNITS, header, schedule_events
+from .export import PARAMETER_UNITS, header
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -94,25 +94,34 @@ def answer_html(ans: DoseAnswer) -> str:
 
 # ---------------------------------------------------------------------------- schedules
 def schedule_frame(ans: ScheduleAnswer) -> pd.DataFrame:
-    """One row per dose (event): when its heating starts, how long, the temperature, the
-    dose and the fluid it releases (:data:`dosing.export.EVENT_COLUMNS`)."""
-    ev = schedule_events(ans)
-    units = {k: u for k, (u, _) in EVENT_COLUMNS.items()}
-    return _frame({k: v.tolist() for k, v in ev.items()}, units,
-                  {"model": ans.model, "truth": ans.truth, "note": ans.note})
+    """The schedule as a lab runs it: one row per step (heat, rest), the corrected times
+    when it was corrected, else the hold reading marked rough (:mod:`dosing.question.events`;
+    the per-dose table of every reading is ``to_xarray``)."""
+    from .question.events import events_frame
+
+    return events_frame(ans.events, {"model": ans.model, "truth": ans.truth,
+                                     "note": ans.note})
+
+
+_HTML_EVENTS = ("step", "kind", "start_s", "duration_s", "temperature_K", "dose_fraction",
+                "released_fraction", "amount_ul", "dose_error")
 
 
 def schedule_html(ans: ScheduleAnswer) -> str:
-    """The event table in HTML, with the truth below."""
-    ev = schedule_events(ans)
-    cols = ("dose", "seconds", "duration_seconds", "temperature", "dose_fraction",
-            "amount_ul", "error_estimate")
-    head = "".join(f"<th>{html.escape(header(c, EVENT_COLUMNS[c][0]))}</th>" for c in cols)
-    body = "".join("<tr>" + "".join(f"<td>{_fmt(ev[c][i].item())}</td>" for c in cols)
-                   + "</tr>" for i in range(len(ev["dose"])))
+    """The events in HTML (one row per step), with the reading and the truth below."""
+    from .question.events import EVENT_COLUMNS
+
+    ev = ans.events
+    cols = _HTML_EVENTS
+    head = "".join(f"<th>{html.escape(header(c, EVENT_COLUMNS[c][0] or None))}</th>"
+                   for c in cols)
+    body = "".join("<tr>" + "".join(f"<td>{_fmt(e.get(c))}</td>" for c in cols) + "</tr>"
+                   for e in ev)
+    reading = ev[0]["reading"] if ev else "hold"
+    rough = " (rough: the hold reading, not checked)" if ev and ev[0]["rough"] else ""
     return (f"<table><caption style='text-align:left'><b>thermogel schedule "
-            f"({html.escape(ans.model)})</b></caption><tr>{head}</tr>{body}"
-            f"<tr><td colspan='{len(cols)}' style='text-align:left;font-size:smaller'>"
+            f"({html.escape(ans.model)}), {reading} times{rough}</b></caption><tr>{head}</tr>"
+            f"{body}<tr><td colspan='{len(cols)}' style='text-align:left;font-size:smaller'>"
             f"truth: {html.escape(ans.truth)}</td></tr></table>")
 
 

@@ -1,4 +1,9 @@
-"""Errors raised by the solver layer: bad parameters name the field and its valid range."""
+"""Errors raised by the solver layer: bad parameters name the field and its valid range.
+
+Every one pickles (``__reduce__``: its constructor's arguments, the value and diagnostics
+made plain data when they are not), so an error raised in a process-pool worker comes back
+to the parent as itself instead of breaking the pool (issue 40, R1).
+"""
 
 from __future__ import annotations
 
@@ -12,10 +17,15 @@ class ParameterError(ValueError):
         self.field = field
         self.value = value
         self.valid = valid
+        self.reason = reason
         msg = f"{field}={value!r} is invalid: valid range is {valid}"
         if reason:
             msg += f" ({reason})"
         super().__init__(msg)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (_rebuild, (type(self), (self.field, _plain(self.value), self.valid, self.reason),
+                           _plain(self.__dict__)))
 
 
 class NotApplicableError(ValueError):
@@ -29,9 +39,37 @@ class SolverError(RuntimeError):
         self.diagnostics = dict(diagnostics or {})
         super().__init__(message)
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (_rebuild, (type(self), (str(self), _plain(self.diagnostics)),
+                           _plain(self.__dict__)))
+
 
 class BudgetExceeded(SolverError):
     """A run stopped by its wall-clock budget (``simulate(max_seconds=...)``)."""
+
+
+def _plain(value: Any) -> Any:
+    """``value`` if it pickles, else its repr, item by item in a dict or list (an error's
+    payload crosses processes)."""
+    import pickle
+
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return type(value)(_plain(v) for v in value) if type(value) in (list, tuple) \
+            else repr(value)
+    try:
+        pickle.dumps(value)
+    except Exception:
+        return repr(value)
+    return value
+
+
+def _rebuild(cls: type, args: tuple[Any, ...], state: dict[str, Any]) -> BaseException:
+    """An error unpickled: constructed from ``args``, then its attributes (plain) restored."""
+    exc = cls(*args)
+    exc.__dict__.update(state)
+    return exc
 
 
 def require_finite_positive(field: str, value: float) -> float:

@@ -34,14 +34,13 @@ from numba import njit
 
 from .errors import ParameterError
 from .gel import T_MAX, T_MIN, check_temperature
+from .limits import PROGRAM_RATE_MAX, PROGRAM_STEP_MAX, TRACE_ROWS_MAX, UNTIL_LIMIT
 
 MOBILITIES = ("constant", "kT", "water")
 Mobility = Literal["constant", "kT", "water"]
 MOBILITY_CODES = {name: k for k, name in enumerate(MOBILITIES)}
-DURATION_MAX = 1e6  # tau
-RATE_MAX = 1e12  # K per tau
-UNTIL_LIMIT = 1e4  # tau: the longest an until-step waits when no duration bounds it
-TRACE_ROWS_MAX = 100_000
+DURATION_MAX = PROGRAM_STEP_MAX  # tau (solver.limits)
+RATE_MAX = PROGRAM_RATE_MAX  # K per tau
 # a piece row: [t0, t1, kind, T0, p, q]; kind LINEAR: T = T0 + p (t - t0);
 # kind LAG: T = q + (T0 - q) exp(-(t - t0) / p)
 LINEAR, LAG = 0, 1

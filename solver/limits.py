@@ -30,6 +30,16 @@ TRUTH_DIRECT_ELL_RANGE = (2e-5, 0.02)
 LADDER_RUNGS = 3
 TRUTH_LADDER_START_RANGE = (TRUTH_LADDER_ELL_RANGE[0] * (1 << (LADDER_RUNGS - 1)), 0.01)
 
+# a temperature program's steps (solver.heating; simulate's protocol steps and horizon): the
+# longest step, bath time constant or trace (tau), the fastest ramp (K per tau), how long an
+# until-step waits when no duration bounds it (tau), the most rows of a trace.  The grammar
+# (dosing.heating) is checked against them in tau before anything runs
+# (dosing.heating_program.check_program)
+PROGRAM_STEP_MAX = 1e6
+PROGRAM_RATE_MAX = 1e12
+UNTIL_LIMIT = 1e4
+TRACE_ROWS_MAX = 100_000
+
 # a time at T_start before or between heatings (a schedule's rest, a drug's wait), tau; given
 # in seconds it is bounded after the conversion with the bead's tau (dosing.request.at_start)
 REST_RANGE = (0.0, 1e3)

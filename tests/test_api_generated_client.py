@@ -131,6 +131,20 @@ def test_a_generated_client_calls_every_route(tmp_path: Path) -> None:
                  {"time_s": [0, 50, 100, 200, 400, 800],
                   "radius": [115, 100, 90, 75, 62, 56], "gel": "ANB", "t_start": 302.0,
                   "t_end": 308.0, "dry_radius_um": 50.0, "model": "front"}))
+        emp = call("fit", "fit_empirical_route_v1_fit_empirical_post", want=(202,),
+                   body=models.EmpiricalFitRequest.from_dict(
+                       {"time": [5, 10, 20, 30, 60, 120, 240], "time_unit": "min",
+                        "released": [22, 33, 48, 58, 75, 90, 98], "released_unit": "percent",
+                        "models": ["weibull", "first_order"]}))  # issue 38
+        done = _wait(call, "fit_job_v1_fit_jobs_job_id_get", emp.parsed.id, "fit")
+        assert type(done.parsed).__name__ == "EmpiricalFitJobResponse", done.content[:300]
+        assert done.parsed.result.best in ("weibull", "first_order")
+        cmp = call("fit", "compare_route_v1_compare_post", body=models.CompareRequest.from_dict(
+            {"reference": {"time": [15, 30, 45, 60], "released": [35, 60, 79, 95],
+                           "released_unit": "percent"},
+             "test": {"time": [15, 30, 45, 60], "units": [[40, 67, 87, 98], [38, 65, 85, 97]],
+                      "released_unit": "percent"}}))
+        assert 50 < cmp.parsed.f2 < 100 and cmp.parsed.bootstrap is not None
         sweep = call("design_maps", "sweep_v1_sweep_post", want=(202,),
                      body=models.SweepRequest.from_dict(
                          {"t_start": 302.0, "t_ends": [308.0], "dry_radii_um": [50.0],
@@ -150,6 +164,16 @@ def test_a_generated_client_calls_every_route(tmp_path: Path) -> None:
         any_job = call("jobs", "job_route_v1_jobs_job_id_get", fit.parsed.id)
         assert type(any_job.parsed).__name__ == "FitJobResponse"
         call("jobs", "job_route_v1_jobs_job_id_get", "fit-nope", want=(404,))
+        dh = call("design", "design_heating_route_v1_design_heating_post", want=(202,),
+                  body=models.HeatingDesignRequest.from_dict(
+                      {"gel": "ANB", "t_start": 302.0, "fraction": 0.5, "at_seconds": 60.0,
+                       "dry_radius_um": 50.0, "full": False}))
+        done = _wait(call, "design_job_v1_design_jobs_job_id_get", dh.parsed.id, "design")
+        assert done.parsed.status == "done", done.content[:300]
+        call("design", "design_experiment_route_v1_design_experiment_post", want=(202,),
+             body=models.ExperimentDesignRequest.from_dict(
+                 {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "fraction": 0.8,
+                  "dry_radius_um": 50.0, "jumps": [308.0], "n_points": 6}))
         call("sensitivity", "post_sensitivity_v1_sensitivity_post",
              body=models.SensitivityRequest.from_dict(
                  {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.5,
@@ -175,4 +199,4 @@ def test_a_generated_client_calls_every_route(tmp_path: Path) -> None:
         with pkg.Client(base_url=url, raise_on_unexpected_status=True) as fresh:
             call("service", "health_health_get", client=fresh)  # the cap is per open one
     ops = sum(len(o) for o in create_app(warm=False).openapi()["paths"].values())
-    assert len(called) == ops == 19, sorted(called)
+    assert len(called) == ops == 24, sorted(called)

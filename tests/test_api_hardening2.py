@@ -44,6 +44,13 @@ POSTS: dict[str, tuple[dict[str, Any], list[Any]]] = {
                         ["body", "gel"]),
     "/v1/sensitivity": ({"gel": SURROGATE, "vary": [{"name": "dry_radius_um", "low": 20.0,
                                                      "high": 80.0}]}, ["body", "gel"]),
+    "/v1/fit/empirical": ({"csv": SURROGATE}, ["body", "csv"]),  # issue 38
+    "/v1/compare": ({"reference": {"csv": SURROGATE}, "test": {"csv": "t,r\n1,2\n"}},
+                    ["body", "reference", "csv"]),
+    "/v1/design/heating": ({"gel": SURROGATE, "t_start": 302.0, "at_seconds": 60.0,
+                            "fraction": 0.5, "dry_radius_um": 50.0}, ["body", "gel"]),
+    "/v1/design/experiment": ({"gel": SURROGATE, "t_start": 302.0, "t_end": 308.0,
+                               "fraction": 0.8, "dry_radius_um": 50.0}, ["body", "gel"]),
 }
 
 
@@ -410,7 +417,8 @@ async def test_a_finished_sweep_is_serialised_once(planner) -> None:
         assert any(fmt == "json" for _, fmt in rendered)
         key = next(k for k in rendered if k[1] == "json")
         rendered[key] = b'{"served": "from the rendered bytes"}'
-        assert (await raw.get(url)).json() == {"served": "from the rendered bytes"}
+        # the rendered bytes, stamped with the request and version (provenance, issue 37)
+        assert (await raw.get(url)).json()["served"] == "from the rendered bytes"
         csv = await raw.get(url, params={"format": "csv"})
         assert csv.headers["content-type"].startswith("text/csv")
         assert (await raw.get(url, params={"format": "csv"})).content == csv.content

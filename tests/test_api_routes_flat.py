@@ -37,7 +37,10 @@ def test_the_description_is_the_same_as_including_the_routers(
     try:
         assert json.dumps(flat.openapi()) == json.dumps(nested.openapi())  # order too
         own = [r for r in flat.router.routes if isinstance(r, APIRoute)]
-        assert len(own) == len(flat.router.routes) - 4  # all but /openapi.json and docs
+        other = {getattr(r, "path", None) for r in flat.router.routes
+                 if not isinstance(r, APIRoute)}
+        assert other <= {"/openapi.json", "/docs-assets", "/docs", "/redoc",
+                         "/docs/oauth2-redirect"}, other  # all but the spec and the manual
         assert len(own) > 20
     finally:
         p1.close()

@@ -31,8 +31,13 @@ def test_dose_json_front_model(capsys, tmp_path: Path) -> None:
 def test_dose_text_and_errors(capsys, tmp_path: Path) -> None:
     assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction",
                  "0.5", "--swollen-radius-um", "100", "--viscosity", "water",
-                 "--validation-method", "ladder", "--cache", str(tmp_path / "c.sqlite")]) == 0
+                 "--validation-method", "ladder", "--cache", str(tmp_path / "c.sqlite"),
+                 "--explain"]) == 0
     text = capsys.readouterr().out
+    lead = text.splitlines()[:3]  # issue 36: the envelope, the dominant part, how to pin it
+    assert lead[0].startswith("50% of the bead's fluid after ") and " s (point " in lead[0]
+    assert lead[1].startswith("dominant uncertainty: timescale x")
+    assert lead[2].startswith("to pin it: ") and "fit kinetics" in lead[2]
     assert "front-sharp model: heat for t =" in text and " s\n" in text and "tau =" in text
     assert "truth: the regularized model's sharp-interface limit" in text
     assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308",
@@ -120,10 +125,16 @@ def test_one_printer_for_fluid_and_drug_doses(capsys, tmp_path: Path) -> None:
     dose's printer: the same model line, the truth, then the drug's payload."""
     jump = ["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction", "0.5",
             "--dry-radius-um", "50", "--cache", str(tmp_path / "c.sqlite")]
+    def point(text: str) -> list[str]:  # the point answer, after the envelope's lead
+        lines = text.splitlines()
+        return lines[lines.index("the point answer:") + 1:]
+
     assert main(jump) == 0
-    fluid = capsys.readouterr().out.splitlines()
+    fluid = point(capsys.readouterr().out)
     assert main([*jump, "--drug-diffusivity-cm2-s", "0", "--load-ug", "2"]) == 0
-    drug = capsys.readouterr().out.splitlines()
+    out = capsys.readouterr().out
+    assert out.startswith("50% of the bead's drug after ")  # issue 36: the envelope first
+    drug = point(out)
     assert fluid[0].endswith("release 50.0% of the stored fluid (radius 2.292 -> 1.868 dry "
                              "radii)")
     assert drug[0] == "ANB 302 K -> 308 K: release 50.0% of the loaded drug = 1 ug"

@@ -257,3 +257,139 @@ def test_default_executor_does_not_rerun_an_unguarded_script(tmp_path: Path) -> 
     assert done.returncode == 0, done.stderr
     assert done.stdout.count("script body ran") == 1
     assert "result 3" in done.stdout
+
+
+# ----------------------------------------------------------------------------- issue 40, R1/R2
+
+def test_errors_from_a_pool_worker_come_back_and_the_pool_survives() -> None:
+    """A solver error (ParameterError: picklable now) and an error that does not pickle
+    (a WorkerError naming it) come back as errors; the pool is never broken by them."""
+    import pool_jobs
+
+    from dosing.jobs import WorkerError
+    from solver.errors import ParameterError
+
+    runner = JobRunner(max_pending=8)
+    try:
+        with pytest.raises(ParameterError) as err:
+            runner.submit("p", pool_jobs.bad_parameter).result(60)
+        assert err.value.field == "steps[0].duration" and err.value.value == 4e7
+        with pytest.raises(WorkerError, match="Unpicklable: 1/2"):
+            runner.submit("l", pool_jobs.bad_local).result(60)
+        assert runner.submit("ok", pool_jobs.slow, 5, 0.0).result(60) == 5
+        assert runner.pool_status()["restarts"] == 0
+    finally:
+        runner.shutdown(wait=False)
+
+
+def test_a_dead_worker_fails_its_job_only_and_the_pool_is_replaced() -> None:
+    """A worker killed while it runs a job: that job fails (WorkerDied, not retried), the
+    jobs queued behind it run on the replacement pool, /health's pool status counts it."""
+    import pool_jobs
+
+    from dosing.jobs import WorkerDied
+
+    runner = JobRunner(max_pending=8)
+    try:
+        dead = runner.submit("die", pool_jobs.die)
+        queued = [runner.submit(f"q{i}", pool_jobs.slow, i) for i in range(3)]
+        with pytest.raises(WorkerDied, match="died while it ran"):
+            dead.result(60)
+        assert [f.result(60) for f in queued] == [0, 1, 2]
+        status = runner.pool_status()
+        assert status["status"] == "ok" and status["restarts"] == 1
+        assert runner.state("die") == "failed"
+    finally:
+        runner.shutdown(wait=False)
+
+
+def test_a_job_past_its_hard_limit_is_killed_and_failed() -> None:
+    """A job that never returns (a loop that holds the worker) is killed at the runner's
+    hard limit; the job after it runs."""
+    import pool_jobs
+
+    from dosing.jobs import WorkerDied
+
+    runner = JobRunner(max_pending=8, hard_seconds=2.0)
+    try:
+        t0 = time.monotonic()
+        stuck = runner.submit("spin", pool_jobs.spin)
+        after = runner.submit("after", pool_jobs.slow, "after")
+        with pytest.raises(WorkerDied, match="hard limit of 2 s"):
+            stuck.result(60)
+        assert time.monotonic() - t0 < 30
+        assert after.result(60) == "after"
+    finally:
+        runner.shutdown(wait=False)
+
+
+def test_a_runs_budget_covers_all_its_solver_calls(monkeypatch: pytest.MonkeyPatch) -> None:
+    """run_scenario's budget (THERMOGEL_RUN_SECONDS when set) is for the whole run: a jump
+    extended x4 while its radius is short of the need stops at the budget with a
+    BudgetExceeded naming the settings, not after a budget per call."""
+    from dosing_fakes import FakeSolver
+
+    from dosing.scenario import (
+        RUN_BUDGET_S,
+        Scenario,
+        SolverSettings,
+        hard_limit,
+        run_budget,
+        run_scenario,
+    )
+    from solver.errors import BudgetExceeded
+    from solver.gel import preset
+
+    monkeypatch.delenv("THERMOGEL_RUN_SECONDS", raising=False)
+    assert run_budget() == RUN_BUDGET_S and hard_limit(RUN_BUDGET_S) == 900.0
+    for bad in ("", "x", "-1", "nan", "0"):
+        monkeypatch.setenv("THERMOGEL_RUN_SECONDS", bad)
+        assert run_budget() == RUN_BUDGET_S
+    monkeypatch.setenv("THERMOGEL_RUN_SECONDS", "0.5")
+    assert run_budget() == 0.5 and hard_limit(0.5) == 60.5
+
+    class Slow(FakeSolver):
+        def __call__(self, *args, **kw):
+            time.sleep(0.2)
+            return super().__call__(*args, **kw)
+
+    solver = Slow()
+    sc = Scenario(preset("ANB"), 300.0, 303.0, settings=SolverSettings(grid="lagrangian",
+                                                                       n=40))
+    t0 = time.monotonic()
+    with pytest.raises(BudgetExceeded, match=r"lagrangian grid, N = 40.*0 s budget") as err:
+        run_scenario(sc.to_dict(), horizon=0.01, need_radius=1.0001, solver=solver)
+    assert time.monotonic() - t0 < 2.0 and 2 <= len(solver.calls) <= 4
+    assert err.value.diagnostics["scenario"]["settings"]["n"] == 40
+
+
+@pytest.mark.slow
+def test_a_run_that_killed_its_worker_is_not_run_again_by_a_poll(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A validation whose runs kill their worker fails (WorkerDied); polled by a planner
+    started afresh on the same cache, it is failed at once, nothing run (the deaths are
+    kept in the cache); asked again (submitted), it runs again."""
+    import pool_jobs
+
+    from dosing import SolverSettings
+
+    calls = tmp_path / "calls"
+    monkeypatch.setenv("THERMOGEL_TEST_CALLS", str(calls))
+    req = DoseRequest("HHT", 304, 307.6, dose_fraction=0.5,
+                      settings=SolverSettings(n=50, interfacial_length=0.0))
+    with Planner(cache_path=tmp_path / "c.sqlite", solver=pool_jobs.dying_solver) as planner:
+        vid = planner.submit_validation(req)
+        st = planner.wait_validation(vid, 120.0)
+        assert st.status == "failed" and "died while it ran" in st.error, st.error
+        assert planner.jobs.pool_status()["restarts"] >= 1
+    ran = calls.read_text().count("\n")
+    assert ran == 2  # the truth and its check run, each killed its worker once
+    with Planner(cache_path=tmp_path / "c.sqlite", solver=pool_jobs.dying_solver) as planner:
+        st = planner.validation(vid)  # a poll after a restart
+        assert st.status == "failed" and "died while it ran" in st.error, st.error
+        time.sleep(1.0)
+        assert calls.read_text().count("\n") == ran  # nothing ran
+        assert planner.jobs.pool_status()["restarts"] == 0
+        assert planner.submit_validation(req) == vid  # asked again: run again
+        assert planner.wait_validation(vid, 120.0).status == "failed"
+        assert calls.read_text().count("\n") == 2 * ran

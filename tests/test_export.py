@@ -105,7 +105,7 @@ def test_run_round_trip(run: FullResult, tmp_path: Path) -> None:
     np.testing.assert_array_equal(ds["radius_um"].values, run.radius * 50.0)
     assert ds["seconds"].attrs["units"] == "s" and ds["radius_um"].attrs["units"] == "um"
     assert ds.attrs["truth"] == "the paper's model"
-    assert json.loads(ds.attrs["request"]) == {"why": "test"}
+    assert json.loads(ds.attrs["request"]) == {"why": "test", "units": {}}  # resolved: units
 
 
 def test_run_table_and_html(run: FullResult) -> None:
@@ -144,12 +144,18 @@ def test_schedule_round_trip_and_event_table(schedule, tmp_path: Path) -> None:
     assert set(ds["temperature"].values) == {308.0}
     assert json.loads(ds.attrs["request"])["doses"] == [0.3, 0.3, 0.2]
     assert ds.attrs["truth"] == ans.truth and ans.truth
+    # to_dataframe leads with the events: heat, rest, heat, rest, heat (the hold reading here:
+    # the check is off, so they are marked rough)
     df = ans.to_dataframe()
-    assert len(df) == 3
-    assert {"seconds [s]", "temperature [K]", "dose_fraction [1]", "amount_ul [uL]"} <= set(
-        df.columns)
+    assert list(df["kind"]) == ["heat", "rest", "heat", "rest", "heat"]
+    assert list(df.columns[:5]) == ["step [1]", "kind", "start_s [s]", "duration_s [s]",
+                                    "temperature_K [K]"]
+    assert {"dose_fraction [1]", "released_fraction [1]", "amount_ul [uL]"} <= set(df.columns)
+    np.testing.assert_allclose(df["duration_s [s]"].iloc[::2], np.array(dur) * tau, rtol=1e-12)
+    np.testing.assert_allclose(df["start_s [s]"].iloc[::2], np.array(starts) * tau, rtol=1e-12)
+    assert df["rough [1]"].all() and set(df["reading"]) == {"hold"}
     html = ans._repr_html_()
-    assert html.count("<tr>") == 1 + 3 + 1 and "truth" in html
+    assert html.count("<tr>") == 1 + 5 + 1 and "truth" in html and "rough" in html
 
 
 def test_sweep_round_trip(sweep, tmp_path: Path) -> None:

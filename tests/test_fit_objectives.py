@@ -111,6 +111,9 @@ def test_a_smooth_jump_gets_the_full_solvers_time_and_a_one_sided_flag(data, ort
     ((1.0, [0.9, 1.1]), (1.3, None), True),          # one-sided: outside
     ((1.0, [0.9, 1.1]), (1.05, None), False),        # one-sided: inside
     ((1.0, None), (1.3, None), None),                # no interval: not decided
+    # the review's real Hirotsu points (honest-answers.md sec. 4): a 3.0x gap is not
+    # made to agree by the temperature objective's useless interval
+    ((0.0249, [0.0203, 0.0306]), (0.0747, [0.0033, 1.70]), True),
 ])
 def test_disagreement_rule(a, b, flag) -> None:
     from dosing.fit import _disagreement
@@ -189,3 +192,15 @@ def test_http_swelling_fit_states_the_dose_under_both_objectives(data, tmp_path,
     dj = rep["dose_time_by_objective"]
     assert dj["orthogonal"]["time"] > 0 and "temperature" in dj and "disagree" in dj
     assert rep["objective"] == "orthogonal" and rep["not_pinned"]
+
+
+def test_a_disagreement_widens_a_saved_gels_interval() -> None:
+    """Issue 36: a gel saved from a fit whose objectives disagreed carries the spread."""
+    import math
+
+    from dosing.fit_uncertainty import objective_spread
+
+    rec = {"swelling": {"fit": {"dose_time_by_objective": {"disagree": True, "ratio": 1 / 3}}}}
+    assert objective_spread(rec) == pytest.approx(math.log(3.0))
+    rec["swelling"]["fit"]["dose_time_by_objective"]["disagree"] = False
+    assert objective_spread(rec) == 0.0 and objective_spread({}) == 0.0

@@ -43,10 +43,13 @@ def test_f2_follows_the_fda_definition() -> None:
     assert f2(r, r - 10.0) == pytest.approx(50 * math.log10(100 / math.sqrt(101)))
     assert f2(r, r - 10.0) == pytest.approx(49.89, abs=0.01)
     assert f2(r, [39.0, 64.0, 80.0, 89.0]) == pytest.approx(74.47, abs=0.01)
-    # only one point after 85% of the reference: 95% (after 88%) is dropped
+    # only one point after 85% of both products: 95/90 (after 88/86) is dropped; a point
+    # where only the reference is past 85% is kept (issue 38: the rule is of both)
     r2 = np.array([42.0, 67.0, 88.0, 95.0])
-    assert f2(r2, [39.0, 64.0, 84.0, 0.0], fda_85_rule=True) == pytest.approx(
-        50 * math.log10(100 / math.sqrt(1 + (9 + 9 + 16) / 3)))
+    assert f2(r2, [39.0, 64.0, 86.0, 90.0], fda_85_rule=True) == pytest.approx(
+        50 * math.log10(100 / math.sqrt(1 + (9 + 9 + 4) / 3)))
+    assert f2(r2, [39.0, 64.0, 84.0, 80.0], fda_85_rule=True) == pytest.approx(
+        50 * math.log10(100 / math.sqrt(1 + (9 + 9 + 16 + 225) / 4)))
     with pytest.raises(ParameterError):
         f2([1, 2], [1, 2, 3])
 

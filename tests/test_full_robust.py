@@ -109,3 +109,20 @@ def test_wall_clock_budget_stops_a_run_with_a_clear_error() -> None:
     assert np.all(np.isfinite(res.radius))
     with pytest.raises(ParameterError, match="max_seconds"):
         simulate("ANB", 302, 308, until=0.05, n=60, max_seconds=-1.0)
+
+
+def test_a_rejected_step_to_a_steps_end_is_retried_shorter_not_for_ever() -> None:
+    """Issue 40, R2: a protocol step of 1e-12 tau (an until-step's jump, 'Rest at 290 K
+    until radius 130 um') after a hold at 308 K: its one step is rejected, and the
+    controller's smaller step snapped back to the step's end (within 1e-12 of it), so the
+    compiled loop retried the same step for ever at 100 % CPU.  Now the smaller step is
+    taken as it is: the run crosses the jump and stops where the bead, swelling at 290 K,
+    reaches 2.6 dry radii."""
+    from solver.heating import Hold, Program
+
+    prog = Program((Hold(308.0, 0.0272), Hold(290.0, 1e-12)), "kT", 308.0)
+    res = simulate(ANB, 302.0, protocol=prog, stop=2.6, grid="moving", n=400,
+                   interfacial_length=8e-5, max_seconds=300)
+    assert res.diagnostics["status"] == "stopped"
+    assert res.terminal_time == pytest.approx(0.5459, rel=1e-3)
+    assert res.radius[-1] == pytest.approx(2.6, rel=1e-6)

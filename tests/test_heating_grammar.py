@@ -293,3 +293,30 @@ def test_bad_structured_trace():
     with pytest.raises(ParameterError) as e:
         parse_step({"step": "trace", "time": [0, math.nan], "temperature": [302, 303]})
     assert "line 2, column 1" in e.value.value
+
+
+@pytest.mark.parametrize("steps, field, valid_part", [
+    # issue 40, R1: the grammar took these, the solver refused them inside a pool worker
+    (["Bath at 308 K with a time constant of 1e6 tau"], "protocol[0].time_constant",
+     "time_constant <= 25000 tau for a bath without 'for' or 'until'"),
+    (["Heat to 308 K at 1e-320 K/tau"], "protocol[0].rate", "at most 1e+06 tau"),
+    (["Hold at 308 K for 2 min", "Cool to 302 K at 1e-9 K/tau"], "protocol[1].rate",
+     "at least 6e-06 K/tau"),
+    (["Hold at 308 K for 1e7 s"], "protocol[0].for", "0 < duration <= 1e+06 (tau)"),
+    (["Bath at 308 K with a time constant of 1e6 s for 1 min"], "protocol[0].time_constant",
+     "0 < time_constant <= 1e+06 (tau)"),
+])
+def test_what_the_grammar_accepts_the_solver_accepts(steps, field, valid_part):
+    """A request's protocol is checked in tau by the solver's own rules (solver.heating,
+    the ranges of solver.limits) before anything is queued: a 422 naming the step."""
+    from dosing.request import DoseRequest
+
+    with pytest.raises(ParameterError) as err:
+        DoseRequest(gel="ANB", t_start=302, dose_fraction=0.5, dry_radius_um=1,
+                    protocol=steps)
+    assert err.value.field == field, err.value
+    assert valid_part in err.value.valid, err.value
+    assert "as the solver runs it" in str(err.value)
+    ok = DoseRequest(gel="ANB", t_start=302, dose_fraction=0.5, dry_radius_um=1,
+                     protocol=["Heat to 308 K at 1e-5 K/tau", "Hold at 308 K for 1e6 tau"])
+    assert ok.heating is not None

@@ -20,6 +20,13 @@ def test_every_layer_uses_the_one_definition() -> None:
     assert scenario.ELL_RANGE == limits.TRUTH_LADDER_ELL_RANGE
     assert schemas.ELL_RANGE == limits.TRUTH_LADDER_START_RANGE
     assert scenario.LADDER_TOP == limits.TRUTH_LADDER_START_RANGE[1]
+    from dosing import heating as grammar
+    from solver import heating as program
+
+    assert program.DURATION_MAX == grammar.TAU_MAX == limits.PROGRAM_STEP_MAX
+    assert program.RATE_MAX == limits.PROGRAM_RATE_MAX
+    assert program.UNTIL_LIMIT == limits.UNTIL_LIMIT
+    assert program.TRACE_ROWS_MAX == limits.TRACE_ROWS_MAX
 
 
 def test_no_range_is_written_twice() -> None:

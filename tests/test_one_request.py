@@ -103,10 +103,14 @@ async def test_one_answer_whatever_the_way_in(name, fields, cli, body, planner, 
                                                   "dry_radius_um": fields["dry_radius_um"],
                                                   **body})
     assert r.status_code == 200, r.text
+    want = py.to_dict()
+    check_envelope(want)
     for d in (out, r.json()):
         assert d["cell"] == py.cell and d["question"] == "dose"
         assert d["time"] == pytest.approx(py.time, rel=1e-12)
         assert d["seconds"] == pytest.approx(py.seconds, rel=1e-12)
+        assert d["envelope_seconds"] == pytest.approx(want["envelope_seconds"], rel=1e-9)
+        assert d["dominant_uncertainty"]["name"] == want["dominant_uncertainty"]["name"]
         assert d["request"]["population"]["kind"] == fields.get("population", OneBead()).key
 
 
@@ -293,6 +297,29 @@ DRUG_CELLS = [
 ]
 
 
+def check_envelope(d: dict) -> None:
+    """Issue 36: an answer's envelope holds its point, is no narrower than its largest
+    counted part, and its parts are typed in one vocabulary."""
+    names = {"numerical", "reduction", "interfacial_length", "front_law", "timescale", "mesh",
+             "quadrature", "parameters"}
+    parts = d["envelope"]["parts"]
+    assert parts and set(parts) <= names and "front_law" in parts, parts
+    for name, part in parts.items():
+        assert part["low"] <= 1.0 <= part["high"] and part["how_to_pin"], name
+        def given(x: dict) -> dict:  # a typed schema fills its optional fields with null
+            return {k: v for k, v in x.items() if v is not None}
+
+        assert given(d["uncertainty"][name]) == given(part)
+    widest = max(p["factor"] for p in parts.values() if p["counted"])
+    env = d["envelope_seconds"] if d["envelope_seconds"] is not None else d["envelope_time"]
+    points = _headline(d) if d["envelope_seconds"] is None else (
+        d["actuation_seconds"] if d["question"] == "schedule" else [d["seconds"]])
+    for (lo, hi), x in zip(env if d["question"] == "schedule" else [env], points,
+                           strict=True):
+        assert lo <= x <= hi and hi / lo >= widest * (1 - 1e-9)
+    assert d["dominant_uncertainty"]["how_to_pin"]
+
+
 def _headline(d: dict) -> list[float]:
     return d["actuation_times"] if d["question"] == "schedule" else [d["time"]]
 
@@ -333,6 +360,8 @@ async def test_a_drug_cell_reads_the_same_whatever_the_way_in(
                     await asyncio.sleep(0.05)
                 assert v.status == "done", v.error
                 got = v.result
+    check_envelope(py)
     for d in (out, got):
         assert d["cell"] == py["cell"]
         assert _headline(d) == pytest.approx(_headline(py), rel=1e-9)
+        check_envelope(d)

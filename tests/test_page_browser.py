@@ -368,3 +368,138 @@ def test_batch_dose_and_schedules_in_headless_chromium(tmp_path: Path) -> None:
         assert "rough hold reading" in page.inner_text("#schedule-table")
         page.screenshot(path=str(_artifacts() / "page-batch-schedule.png"), full_page=True)
         assert errors == []
+
+
+SIZES_CSV = "radius (um)\n40\n50\n60\n"
+
+
+def _wait_schedule(page, url: str) -> dict:
+    """Wait for the page's schedule job to be shown corrected; its result (the JSON)."""
+    page.wait_for_selector("body[data-schedule=corrected], body[data-schedule=failed]",
+                           timeout=300_000)
+    assert page.get_attribute("body", "data-schedule") == "corrected", page.inner_text(
+        "#schedule-note")
+    return _job_result(url, page.get_attribute("body", "data-schedule-job"))
+
+
+def _events_shown(page, res: dict) -> None:
+    """The page's schedule is the answer's events: the headline, the answer panel and the
+    table's heat rows read the corrected durations, the plot its release."""
+    heats = [e["duration_s"] for e in res["events"] if e["kind"] == "heat"]
+    assert heats == res["actuation_seconds"]
+    assert _schedule_shown(page) == heats
+    assert json.loads(page.get_attribute("#answer-seconds", "data-value")) == heats
+    assert page.inner_text("#answer-heat-label") == "Heat for (corrected)"
+    rows = page.locator("#schedule-table tbody tr, #schedule-table tr.heat, "
+                        "#schedule-table tr.rest, #schedule-table tr.hold")
+    kinds = [page.locator("#schedule-table tr").nth(k).get_attribute("class")
+             for k in range(1, page.locator("#schedule-table tr").count())]
+    assert kinds == [e["kind"] for e in res["events"]], rows.count()
+    assert "shooting residual" in page.inner_text("#schedule-table")
+    assert page.get_attribute("#timeline-release", "data-reading") == "corrected"
+    assert "corrected" in page.inner_text("#schedule-caption")
+    # the steps as CSV, as the CLI's --out writes them: a header with units, a row per step
+    from urllib.parse import unquote
+
+    href = page.get_attribute("#schedule-download", "href")
+    lines = unquote(href.split(",", 1)[1]).strip().splitlines()
+    assert lines[0].startswith("step [1],kind,start_s [s],duration_s [s],temperature_K [K]")
+    assert [x.split(",")[1] for x in lines[1:]] == [e["kind"] for e in res["events"]]
+    assert [float(x.split(",")[3]) for x in lines[1:]] == [e["duration_s"]
+                                                           for e in res["events"]]
+
+
+@pytest.mark.slow  # a browser and a server whose full-solver runs are the fake's
+def test_lab_inputs_in_headless_chromium(tmp_path: Path) -> None:
+    """The page for lab users (issue 37): temperatures in degC and rests in minutes (the
+    server's one unit parser), a swollen bead size, drug inputs, a size table uploaded as
+    CSV for a batch's schedule; every schedule shown as its events (the corrected times in
+    the headline, the answer panel, the table and the plot)."""
+    with browser_page(tmp_path, _serve_fake) as (url, page, errors, sent):
+        page.select_option("#gel", "ANB")
+
+        # degC and minutes: the same request as the JSON route with those strings
+        _fill(page, t_start="29 degC", t_end="35 degC", doses="30, 30", rests="10 min",
+              dry_radius_um="50")
+        page.click("#plan")
+        res = _wait_schedule(page, url)
+        body = {"gel": "ANB", "t_start": "29 degC", "t_end": "35 degC", "dry_radius_um": 50.0,
+                "doses": [0.3, 0.3], "rests_seconds": ["10 min"]}
+        again = httpx.post(f"{url}/v1/schedule", json=body, timeout=60).json()
+        assert again["validation_id"] == page.get_attribute("body", "data-schedule-job")
+        assert res["request"]["t_start"] == pytest.approx(302.15)
+        _events_shown(page, res)
+        rest = [e for e in res["events"] if e["kind"] == "rest"]
+        assert rest[0]["duration_s"] == pytest.approx(600.0)
+        assert "600 s (10 min)" in page.inner_text("#schedule-table")
+        assert "308.15 K (35 °C)" in page.inner_text("#schedule-table")
+        page.wait_for_function("document.getElementById('phase-map').complete && "
+                               "document.getElementById('phase-map').naturalWidth > 0")
+        page.screenshot(path=str(_artifacts() / "page-lab-schedule.png"), full_page=True)
+
+        # rests in tau and in minutes mixed: refused in the page, no request
+        assert "not both" in refused_in_the_page(page, sent, "#plan", "data-state",
+                                                 rests="0.5, 10 min", doses="30, 30, 30")
+        # a temperature with a unit out of range: the server's message at the field
+        _fill(page, t_end="120 degC", doses="30", rests="")
+        page.click("#plan")
+        page.wait_for_selector("body[data-state=server-error]", timeout=60_000)
+        assert page.inner_text("#err-t_end").startswith("t_end")
+
+        # a swollen size: sent as swollen_radius_um, answered as the JSON route answers it
+        _fill(page, t_start="302", t_end="308", dry_radius_um="60")
+        page.select_option("#size_kind", "swollen")
+        page.click("#plan")
+        page.wait_for_selector("body[data-state=answered]", timeout=120_000)
+        want = httpx.post(f"{url}/v1/dose-time", json={
+            "gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.3,
+            "swollen_radius_um": 60.0}, timeout=60).json()
+        assert float(page.get_attribute("#answer-seconds", "data-value")) == want["seconds"]
+        assert want["bead_dry_radius_um"] < 60.0
+        page.select_option("#size_kind", "dry")
+
+        # drug inputs: D0, solute radius, mesh and load, sent as the drug
+        page.click("#drug-inputs summary")
+        _fill(page, dry_radius_um="50", drug_radius="2", drug_mesh="20", drug_load="2")
+        page.click("#plan")  # a drug dose job on the fake solver, then answered
+        page.wait_for_selector("body[data-state=answered]", timeout=120_000)
+        drug = {"solute_radius_nm": 2.0, "mesh_size_nm": 20.0, "load_ug": 2.0}
+        want = httpx.post(f"{url}/v1/dose-time", json={
+            "gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.3,
+            "dry_radius_um": 50.0, "drug": drug}, timeout=60).json()
+        assert want["drug"] is True
+        assert float(page.get_attribute("#answer-seconds", "data-value")) == want["seconds"]
+        assert "drug load" in page.inner_text("#answer-release")
+        # a bad drug field is named at its input
+        msg = refused_in_the_page(page, sent, "#plan", "data-state", drug_d0="-1")
+        assert msg.startswith("D0")
+        _fill(page, drug_d0="")
+        # a drug schedule: its events, doses of the load
+        _fill(page, doses="30, 30", rests="0.5")
+        page.click("#plan")
+        res = _wait_schedule(page, url)
+        assert res["drug"] is True
+        _events_shown(page, res)
+        assert "of the load" in page.inner_text("#schedule-table")
+        for name in ("drug_radius", "drug_mesh", "drug_load"):
+            _fill(page, **{name: ""})
+
+        # a size table uploaded as CSV: a batch, its schedule corrected as the batch's
+        table = tmp_path / "sizes.csv"
+        table.write_text(SIZES_CSV)
+        page.set_input_files("#size-file", str(table))
+        page.wait_for_selector("body[data-size-table=loaded]")
+        assert "3 sizes" in page.inner_text("#size-table-status")
+        page.click("#plan")
+        res = _wait_schedule(page, url)
+        assert res["batch"] is True
+        assert res["request"]["population"]["sizes"]["kind"] == "table"
+        _events_shown(page, res)
+        assert "The batch's schedule: heat for" in page.inner_text("#schedule-headline")
+        page.screenshot(path=str(_artifacts() / "page-lab-batch.png"), full_page=True)
+        bad = tmp_path / "bad.csv"
+        bad.write_text("radius (um)\n40\nfifty\n")
+        page.set_input_files("#size-file", str(bad))
+        page.wait_for_selector("body[data-size-table=invalid]")
+        assert "line 3" in page.inner_text("#err-size_table")
+        assert errors == []

@@ -119,6 +119,20 @@ def check(key: str, got: Any, want: Any, tolerance: dict[str, float] | None) -> 
     return None if ok else f"{key}: {float(got)!r} != {want!r} (tolerance {tol})"
 
 
+# Answers a later physics correction moved on purpose, with the issue that moved them and
+# their new values (every other output of the entry is still the table's)
+OGSTON = ("issue 36: Ogston's partition taken per pore volume (it counted the polymer's "
+          "excluded volume twice): this drug's partition rises, its 90 % dose comes earlier")
+CORRECTED: dict[str, tuple[str, dict[str, float]]] = {
+    "drug/one/jump/dose:ANB:302->308:f=0.9:dry=50:diffusivity_cm2_s=1e-08,hindrance=ogston,"
+    "solute_radius_nm=1.0,fiber_radius_nm=1.0": (OGSTON, {
+        "time": 1.6631825926470132, "seconds": 3666.7154468343597}),
+    "drug/one/jump/dose:HHT:304->308:f=0.9:dry=50:diffusivity_cm2_s=1e-08,hindrance=ogston,"
+    "solute_radius_nm=1.0,fiber_radius_nm=1.0": (OGSTON, {
+        "time": 1.6022017232609669, "seconds": 3532.2747085006704}),
+}
+
+
 def _params() -> list[Any]:
     return [pytest.param(e, id=e["id"],
                          marks=[pytest.mark.slow] if e["check"] == "full" else [])
@@ -130,9 +144,17 @@ def test_answer_reproduces_the_table(entry: dict[str, Any], tmp_path: Path) -> N
     recipe = entry["request"]
     answer = RECIPES[entry["kind"]](recipe["args"], str(tmp_path / "cache.sqlite"))
     tolerance = entry.get("tolerance", {}) if entry["check"] == "full" else {}
-    bad = [why for key, want in entry["outputs"].items()
+    outputs = {**entry["outputs"], **CORRECTED.get(entry["id"], ("", {}))[1]}
+    bad = [why for key, want in outputs.items()
            if (why := check(key, read(answer, key), want, tolerance.get(key))) is not None]
     assert not bad, bad
+
+
+def test_every_correction_names_a_moved_entry() -> None:
+    ids = {e["id"]: e for e in TABLE["entries"]}
+    for key, (why, new) in CORRECTED.items():
+        assert key in ids and why.startswith("issue ")
+        assert all(ids[key]["outputs"][k] != v for k, v in new.items())
 
 
 def test_the_table_covers_every_kind() -> None:

@@ -325,3 +325,25 @@ def test_a_stopped_read_off_is_the_run_of_its_heating(tmp_path) -> None:
         # arithmetic), inside these settings' numerical bound, the n vs n / 2 gap (2.9e-3)
         delivered, coarse = (h.delivered(r, [d])[0] for r in (again, half))
         assert abs(delivered - 0.2) <= 0.5 * abs(coarse - delivered)
+
+
+def test_a_restarted_planner_starts_where_the_first_would_have(tmp_path) -> None:
+    """Issue 40, R11: which stored run a protocol starts from was kept in the planner's
+    memory only, so a job resumed after a restart could start from another stored state
+    (the prefix's own run, or an earlier one) than the uninterrupted job did: equal to
+    round-off and the moving grid's mesh history (3e-7), which a schedule's shooting can
+    carry to ~5e-6.  The cache keeps it too: a planner started afresh starts from the same
+    run's state."""
+    other = (*PROTOCOL[:2], (0.03, 306.0))
+    with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1),
+                 solver=Counting()) as first:
+        run = Scenario(preset("ANB"), 302.0, protocol=PROTOCOL, settings=MOVING)
+        first.trajectory(run)
+        want = first._start(Scenario(preset("ANB"), 302.0, protocol=other, settings=MOVING))
+    assert want is not None and want.steps == 2 and want.record.meta["key"] == run.key()
+    with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1),
+                 solver=Counting()) as second:
+        got = second._start(Scenario(preset("ANB"), 302.0, protocol=other, settings=MOVING))
+    assert got is not None and got.steps == 2 and got.record.meta["key"] == run.key()
+    same = got.record.boundary_state(2), want.record.boundary_state(2)
+    assert same[0].phi.tobytes() == same[1].phi.tobytes() and same[0].t == same[1].t

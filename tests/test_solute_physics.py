@@ -21,10 +21,12 @@ def test_published_hindrance_laws() -> None:
         og = Hindrance("ogston", fiber=ratio)
         assert og.factor(1.0 - v) == pytest.approx(math.exp(-math.sqrt(v) * (1 + ratio)),
                                                    rel=1e-12)
-        # Ogston 1958 partition: K = exp(-v (1 + r_s/r_f)^2)
+        # Ogston 1958: exp(-v (1 + r_s/r_f)^2) of the total volume is open to the solute's
+        # centre, exp(-v) for a point; per pore volume (the kernels' c) the ratio of the two
         part = Hindrance("ogston", fiber=ratio, partition_law="ogston")
         assert part.steric_partition(1.0 - v) == pytest.approx(
-            math.exp(-v * (1 + ratio) ** 2), rel=1e-12)
+            math.exp(-v * (1 + ratio) ** 2) / math.exp(-v), rel=1e-12)
+    assert Hindrance("ogston", fiber=0.0, partition_law="ogston").steric_partition(0.7) == 1.0
     # Lustig & Peppas 1988 with the affine mesh xi = xi_dry v^(-1/3) (isotropic state)
     fv = Hindrance("free-volume", mesh=0.8, y=1.0)
     v = 0.3
@@ -134,7 +136,8 @@ def test_isothermal_partition_equals_ogstons_k() -> None:
                                 rtol=1e-6)
     a0 = float(res.radius[0])
     k = float(sol.partition_at(1.0 - 1.0 / a0**3))
-    assert k == pytest.approx(math.exp(-(1 / a0**3) * 9.0), rel=1e-12)
+    # per pore volume: exp(-v ((1 + 2)^2 - 1)), v = 1 / a0^3 (Ogston's K over exp(-v))
+    assert k == pytest.approx(math.exp(-(1 / a0**3) * 8.0), rel=1e-12)
     ratio = (rel.in_gel_fraction[-1] / (a0**3 - 1.0)) / (rel.released_fraction[-1] / 40.0)
     assert ratio == pytest.approx(k, rel=1e-6)
     assert rel.start_partition == pytest.approx(k, rel=1e-12)
@@ -168,7 +171,7 @@ def test_loading_concentration_uses_the_partition_at_the_start_state() -> None:
                      loading_concentration_ug_per_ul=1.0)
     assert drug.partition_law_used() == "ogston"
     a0, stored = 2.0, 10.0
-    want = 2.0 * math.exp(-(1.0 / a0**3) * (1.0 + 2.0) ** 2) * 1.0 * stored
+    want = 2.0 * math.exp(-(1.0 / a0**3) * ((1.0 + 2.0) ** 2 - 1.0)) * 1.0 * stored  # per pore
     assert drug.load(stored, a0, PhysicalConstants()) == pytest.approx(want, rel=1e-12)
     assert drug.load(stored) == pytest.approx(2.0 * stored)  # no start state: K0 only
     sol = drug.solute(a0, 308.0, PhysicalConstants(), None)

@@ -82,7 +82,14 @@ def test_lazy_package_names_resolve() -> None:
 def test_a_front_cli_dose_loads_no_kernel(tmp_path) -> None:
     """A front-model ``thermogel dose`` calls the scalar kernels' Python bodies
     (``solver.jit.Kernel``) and Brent's root from ``solver.roots``: it imports neither numba,
-    scipy.optimize nor the drug's solute model."""
+    scipy.optimize nor the drug's solute model, once its jump's delayed-law lattice (the
+    envelope's front-law part, issue 36: one sub-second run per jump, any size, any dose up
+    to the one it ran to) is stored."""
+    from api.cli import main
+
+    first = ["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction", "0.9",
+             "--dry-radius-um", "20", "--json", "--cache", str(tmp_path / "c.sqlite")]
+    assert main(first) == 0  # stores the lattice run (this process loads the kernels)
     code = ("import contextlib, os\n"
             f"os.environ['THERMOGEL_CACHE'] = {str(tmp_path / 'c.sqlite')!r}\n"
             "import api.cli\n"

@@ -27,6 +27,12 @@ _WHERE: dict[str, str] = {
     "DrugModel": "dosing.drug", "DrugDoseRequest": "dosing.drug_dose",
     "plan_drug_dose": "dosing.drug_dose", "DrugScheduleRequest": "dosing.drug_schedule",
     "plan_drug_schedule": "dosing.drug_schedule",
+    # release data as a lab analyses it (docs/release_analysis.md)
+    "read_profile": "dosing.analysis", "fit_empirical": "dosing.analysis",
+    "compare_profiles": "dosing.analysis",
+    # design: the heating that meets a target, the experiment that pins the model
+    "HeatingTarget": "dosing.design", "design_heating": "dosing.design",
+    "ExperimentAsk": "dosing.design", "design_experiment": "dosing.design",
     # units at the edges
     "to_unit": "dosing.quantity", "kelvin": "dosing.quantity", "seconds": "dosing.quantity",
     "micrometres": "dosing.quantity",

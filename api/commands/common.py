@@ -57,8 +57,21 @@ def add_at_start_options(p: argparse.ArgumentParser, name: str, what: str,
                    help="the same in seconds (needs a bead size)")
 
 
+_REQUEST: list[dict[str, Any] | None] = [None]  # the command line being answered
+
+
+def set_request(request: dict[str, Any] | None) -> None:
+    """The resolved request (``outfile.request_of(args)``) every JSON answer carries."""
+    _REQUEST[0] = request
+
+
 def print_json(obj: Any) -> None:
-    """Print one strict JSON object on stdout."""
+    """Print one strict JSON object on stdout, with ``request`` (the command's options as
+    resolved, with units) and ``version`` (dosing.provenance)."""
+    if isinstance(obj, dict):
+        from dosing.provenance import stamp
+
+        obj = stamp(dict(obj), _REQUEST[0])
     json.dump(json_safe(obj), sys.stdout, indent=None)
     sys.stdout.write("\n")
 

@@ -121,11 +121,35 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with --validate: draw the validation (dose time against ell with "
                         "its bounds, the model-form bound and the answer) to this file "
                         "(needs matplotlib)")
+    add_explain_option(p)
     add_format_option(p)
     add_batch_options(p)
     add_drug_options(p)
     add_wait_options(p)
     p.set_defaults(func=run)
+
+
+def add_explain_option(p: argparse.ArgumentParser) -> None:
+    """--explain: the parts, the model and the runs behind the three lines."""
+    p.add_argument("--explain", action="store_true",
+                   help="after the answer, its envelope and how to pin it: every "
+                        "uncertainty part, the model, the truth and the runs")
+
+
+def print_lead(result: Any, what: str, explain: bool) -> None:
+    """The three lines every text answer leads with (the answer with its envelope, the
+    dominant part, how to pin it); with ``explain`` every part in words after them."""
+    env = getattr(result, "envelope", None)
+    if env is None:
+        return
+    for line in env.lines(what):
+        print(line)
+    if explain:
+        print("uncertainty parts (the envelope is the point times their factors):")
+        for part in env.parts:
+            tag = "" if part.counted else " (listed, not in the envelope)"
+            print(wrap(f"  {part.name} x{part.factor:.3g}{tag}: {part.text}"))
+    print("the point answer:")
 
 
 def add_protocol_option(p: argparse.ArgumentParser, what: str) -> None:
@@ -171,8 +195,9 @@ def batch_distribution(args: argparse.Namespace) -> Any:
     state = "swollen" if args.swollen_radius_um is not None else "dry"
     if args.sizes is not None:
         try:
+            # the column's header says dry or swollen; --swollen-radius-um says swollen
             return read_sizes_csv(args.sizes, "--sizes", weighting=args.size_weighting,
-                                  state=state)
+                                  state="swollen" if state == "swollen" else None)
         except ParameterError as exc:
             if exc.field.startswith("--sizes"):
                 raise
@@ -277,6 +302,8 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print_json(result.to_dict())
         return 0
+    what = f"{_dose_words(request)} after"  # the lead: '80% of the bead's fluid after ...'
+    print_lead(result, what, args.explain)
     if result.batch is not None:  # the batch's own time first: the answer asked for
         print(result.headline)
     if result.answer is None:  # a drug batch: its answer is the batch's
@@ -284,6 +311,14 @@ def run(args: argparse.Namespace) -> int:
         return 0
     print_dose(request.planned, result.answer, result.batch)
     return 0
+
+
+def _dose_words(request: Any) -> str:
+    """'80 % of the fluid' / 'the dose' for the lead line."""
+    q, p = request.question, request.payload
+    who = f" of {'the batch' if request.population.key == 'batch' else 'the bead'}'s {p.key}"
+    return (f"{q.fraction:.0%}{who}" if getattr(q, "fraction", None) is not None
+            else "the dose")
 
 
 def protocol_steps(args: argparse.Namespace) -> list[str] | None:

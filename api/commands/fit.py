@@ -1,4 +1,5 @@
-"""``thermogel fit``: fit a gel to measured swelling (eq. EqlEqn) or shrinking data.
+"""``thermogel fit``: fit a gel to measured swelling (eq. EqlEqn) or shrinking data; the
+empirical release models to a release profile (``fit empirical``, api/commands/empirical.py).
 
     thermogel fit swelling curve.csv [--json] [--plot fit.png] [--save NAME]
     thermogel fit kinetics shrink.csv --gel NAME --t-start 302 --t-end 308 --dry-radius-um 50
@@ -95,9 +96,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="full solver's interfacial length (default: the bead's own, "
                         "xi_dry / a_d, as in `thermogel dose`)")
     k.add_argument("--size-rel-sigma", type=float, default=0.01, help="relative size noise")
-    k.add_argument("--compare-laws", action="store_true",
+    k.add_argument("--compare-laws", action=argparse.BooleanOptionalAction, default=True,
                    help="also fit under both front laws (Maxwell: front-sharp; delayed: the "
-                        "ell = 0 lattice, one full-solver run) and compare them by AIC")
+                        "ell = 0 lattice, one full-solver run, about a second) and compare "
+                        "them by AIC (default on; --no-compare-laws skips it)")
     k.add_argument("--cache", default=None, help="validation cache file for full-solver runs")
     _common(k)
     k.set_defaults(func=run_kinetics)
@@ -130,6 +132,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--plot", default=None, metavar="PNG",
                    help="draw data, fit and its 95%% band (matplotlib)")
     r.set_defaults(func=run_release)
+    from .empirical import add_empirical
+
+    add_empirical(fs)
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -254,7 +259,7 @@ def _jump(text: str | None) -> tuple[float, float] | None:
 
 def _print_notes(res: Any, report: dict[str, Any]) -> None:
     """The fit's warnings on stdout; where it was saved and plotted on stderr."""
-    for w in res.warnings:
+    for w in report.get("warnings", res.warnings):
         print(f"  warning: {w}")
     for key in ("saved", "plots"):
         if key in report:
@@ -264,7 +269,7 @@ def _print_notes(res: Any, report: dict[str, Any]) -> None:
 def run_kinetics(args: argparse.Namespace) -> int:
     """Fit, print, plot, save."""
     from dosing import PhysicalConstants, Planner, SolverSettings
-    from dosing.fit import data_dict, fit_shrinking, read_kinetics_csv
+    from dosing.fit import data_dict, kinetics_report, read_kinetics_csv
     from dosing.gel_store import GelStore, check_name, lookup
 
     if args.save:
@@ -280,27 +285,15 @@ def run_kinetics(args: argparse.Namespace) -> int:
 
     planner = Planner(cache_path=args.cache, executor=ThreadPoolExecutor(1))
     try:
-        res = fit_shrinking(data, gel, args.t_start, args.t_end, branch=args.branch,
-                            dry_radius_um=args.dry_radius_um,
-                            swollen_radius_um=args.swollen_radius_um, constants=constants,
-                            fit_beta=args.fit_beta, beta=args.beta, model=args.model,
-                            settings=settings, size_rel_sigma=args.size_rel_sigma,
-                            planner=planner)
-        laws = None
-        if args.compare_laws:
-            from dosing.fit import fit_front_laws
-
-            laws = fit_front_laws(data, gel, args.t_start, args.t_end, branch=args.branch,
-                                  dry_radius_um=args.dry_radius_um, planner=planner,
-                                  size_rel_sigma=args.size_rel_sigma)
-            for v in laws["laws"].values():
-                v.pop("report")
+        res, report = kinetics_report(
+            data, gel, args.t_start, args.t_end, compare_laws=args.compare_laws,
+            branch=args.branch, dry_radius_um=args.dry_radius_um,
+            swollen_radius_um=args.swollen_radius_um, constants=constants,
+            fit_beta=args.fit_beta, beta=args.beta, model=args.model, settings=settings,
+            size_rel_sigma=args.size_rel_sigma, planner=planner)
     finally:
         planner.close()
         planner.jobs.executor.shutdown(wait=True)
-    report = res.to_dict()
-    if laws is not None:
-        report["front_laws"] = laws
     report["read"] = read
     dd = data_dict(data)
     if args.out:
@@ -338,10 +331,11 @@ def run_kinetics(args: argparse.Namespace) -> int:
         print(f"  D      {res.extra['diffusivity_cm2_s']:12.6g} cm^2/s at "
               f"{res.extra['diffusivity_t_k']:g} K  95% "
               f"{_interval(res.extra['diffusivity_interval_cm2_s'])} (what the curve pins)")
-    if laws is not None:
-        for law, v in laws["laws"].items():
-            print(f"  law {law:8s} tau {v['tau_s']:.5g} s  AIC {v['aic']:.4g}")
-        print(f"  {laws['note']}")
+    laws = report.get("front_laws") or {}
+    for law, v in (laws.get("laws") or {}).items():
+        print(f"  law {law:8s} tau {v['tau_s']:.5g} s  AIC {v['aic']:.4g}")
+    if laws.get("note") or laws.get("error"):
+        print(f"  {laws.get('note') or 'front laws not compared: ' + laws['error']}")
     if "k0_m2" in res.extra:
         print(f"  k0     {res.extra['k0_m2']:12.6g} m^2  95% "
               f"{_interval(res.extra['k0_interval_m2'])}")
@@ -374,8 +368,10 @@ def run_release(args: argparse.Namespace) -> int:
           f"{_interval(rep['intervals']['drug_diffusivity_cm2_s'])}; effective "
           f"{rep['effective_diffusivity_cm2_s']:.4g} cm^2/s (hindrance {rep['hindrance']}, "
           f"factor {rep['hindrance_factor']:.3g})")
-    print(f"  f2 of the fit against the data {rep['f2']:.1f} (>= 50: similar); rms "
-          f"{rep['rms_residual']:.3g} of the load")
+    print(f"  goodness of fit: rms residual {rep['rms_residual']:.3g} of the load, chi2/dof "
+          f"{rep['chi2_reduced']:.3g}")
+    print(f"  similarity of prediction and data (FDA rules, not a goodness of fit): "
+          f"{rep['similarity']['outcome']}")
     for w in rep["warnings"] + [f"not pinned: {x}" for x in rep["not_pinned"]]:
         print(f"  {w}")
     return 0
@@ -396,7 +392,7 @@ def _plot_release(rep: dict[str, Any], path: str) -> str:
     ax.set_xlabel("time (s)")
     ax.set_ylabel("released fraction")
     ax.set_title(f"D0 = {rep['parameters']['drug_diffusivity_cm2_s']:.3g} cm^2/s, "
-                 f"f2 = {rep['f2']:.1f}", fontsize=9)
+                 f"similarity f2 = {rep['f2']:.1f}", fontsize=9)
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)

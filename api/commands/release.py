@@ -48,6 +48,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="draw cumulative release and concentration profiles (matplotlib)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--profiles", action="store_true", help="with --json: include the profiles")
+    p.add_argument("--compare", default=None, metavar="MEASURED.csv",
+                   help="state f1/f2 (FDA rules; a bootstrap over replicate units) between the "
+                        "prediction and this measured profile (needs --dry-radius-um), beside "
+                        "the residuals and chi-square (dosing.analysis)")
+    p.add_argument("--measured-loaded-ug", type=float, default=None,
+                   help="the load, when the measured profile is given as a mass")
     p.set_defaults(func=run)
 
 
@@ -63,6 +69,14 @@ def run(args: argparse.Namespace) -> int:
 
     if args.protocol is None and (args.t_end is None or args.until is None):
         raise ParameterError("t_end/until", None, "both --t-end and --until, or --protocol")
+    measured = None
+    if args.compare is not None:
+        from dosing.analysis import read_profile
+
+        if args.dry_radius_um is None:
+            raise ParameterError("dry_radius_um", None, "a dry radius in um with --compare "
+                                 "(the prediction in seconds)")
+        measured = read_profile(args.compare, args.measured_loaded_ug)
     gel = gel_from_args(args)
     constants = PhysicalConstants(args.viscosity, args.polymer_volume_m3, args.k0_m2,
                                   **({} if args.mesh_length_nm is None
@@ -86,7 +100,8 @@ def run(args: argparse.Namespace) -> int:
     tau = timescale(args.dry_radius_um, t_ref, constants) if args.dry_radius_um else None
     d_gel = constants.diffusivity(t_ref) * 1e4
     d_eff = rel.effective_diffusivity * d_gel
-    saved = save(args.out, rel.save, lambda: _dataset(rel, args, tau)) if args.out else None
+    saved = (save(args.out, rel.save, lambda: _dataset(rel, args, tau, settings))
+             if args.out else None)
     if args.plot:
         from api.plots.release import draw_release
 
@@ -107,8 +122,20 @@ def run(args: argparse.Namespace) -> int:
            "solute_seconds": rel.diagnostics.get("wall_time")}
     if args.release_volume_ul is not None:
         out["medium_concentration_ug_per_ul"] = _medium(rel, drug, args, a0)
+    from dosing.drug import sieved_out
+
+    warning = sieved_out(solute, a0, float(rel.released_fraction[-1]),
+                         float(np.max(rel.expelled_fraction)))
+    out["warnings"] = [warning] if warning else []
     if saved is not None:
         out["file"] = str(saved)
+        out["files"] = [str(f) for f in saved.files]
+        out["file_notes"] = saved.notes
+    if measured is not None:
+        from dosing.analysis.similarity import measured_against_predicted
+
+        out["compare"] = measured_against_predicted(measured, out["seconds"],
+                                                    rel.released_fraction)
     if args.json:
         if args.profiles:
             out.update(profile_t=rel.profile_t, profiles=rel.profiles,
@@ -119,13 +146,31 @@ def run(args: argparse.Namespace) -> int:
     print(f"{gel.name} from {args.t_start:g} K: drug D0 = {out['drug_diffusivity_cm2_s']:.3g} "
           f"cm^2/s, hindered to {d_eff:.3g} cm^2/s at the start (gel's D = {d_gel:.3g})"
           f"{secs}; mass balance {rel.mass_balance_error:.1e}")
+    for w in out["warnings"]:
+        print(f"  WARNING: {w}")
     print("       t   released  squeezed  expelled fluid")
     for k in np.unique(np.linspace(0, rel.t.size - 1, 11).astype(int)):
         print(f"  {rel.t[k]:8.4f}  {rel.released_fraction[k]:8.4f}  "
               f"{rel.squeezed_fraction[k]:8.4f}  {rel.expelled_fraction[k]:8.4f}")
     if saved is not None:
-        print(f"wrote {saved}")
+        print("\n".join(saved.report()))
+    if measured is not None:
+        _print_compare(out["compare"], measured.label)
     return 0
+
+
+def _print_compare(c: dict, label: str) -> None:
+    """Measured against predicted: residuals, chi-square, the FDA similarity."""
+    s = c["similarity"]
+    chi = (f", chi2 {c['chi2']:.4g} on {c['chi2_dof']} points (SEM of the units)"
+           if "chi2" in c else "")
+    print(f"measured ({label}) against predicted: rms residual "
+          f"{c['rms_residual_percent']:.3g} % of the load{chi}")
+    print(f"  {s['notes'][0]}")
+    print(f"  {s['f1_outcome']}")
+    print(f"  {s['outcome']}")
+    if s["bootstrap"]:
+        print(f"  {s['bootstrap']['outcome']}")
 
 
 def _medium(rel: object, drug: object, args: argparse.Namespace, a0: float) -> list | None:
@@ -143,11 +188,14 @@ def _medium(rel: object, drug: object, args: argparse.Namespace, a0: float) -> l
     return (rel.released_fraction * load / (args.release_volume_ul + grown)).tolist()  # type: ignore[attr-defined]
 
 
-def _dataset(rel: object, args: argparse.Namespace, tau: object) -> object:
-    """The release run as an xarray Dataset with units and provenance."""
+def _dataset(rel: object, args: argparse.Namespace, tau: object, settings: object) -> object:
+    """The release run as an xarray Dataset with units and provenance (the run's own grid,
+    cells and interfacial length: the resolved settings, whatever the options left unset)."""
     from dosing.export import release_dataset
 
+    ell = settings.interfacial_length  # type: ignore[attr-defined]
     return release_dataset(
         rel, args.dry_radius_um, tau and tau.seconds, request_of(args),  # type: ignore[arg-type,attr-defined]
-        f"full solver (Lagrangian grid, N = {args.n}) with the drug carried by the pore "
-        f"fluid; interfacial length {args.interfacial_length:g}")
+        f"full solver ({settings.grid} grid, N = {settings.n}) with the drug carried by the "  # type: ignore[attr-defined]
+        "pore fluid; " + (f"interfacial length {ell:g}" if ell
+                          else "the paper's model (no interfacial energy)"))

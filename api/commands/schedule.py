@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import Any
 
 from solver.errors import ParameterError
@@ -19,11 +20,13 @@ from .common import (
 from .dose import (
     _planner,
     add_batch_options,
+    add_explain_option,
     add_planning_options,
     add_protocol_option,
     add_wait_options,
     close_planner,
     planning_values,
+    print_lead,
     protocol_steps,
     request_from_args,
 )
@@ -51,11 +54,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="skip the corrected (shooting) schedule")
     p.add_argument("--tolerance", type=float, default=0.01,
                    help="relative tolerance of each dose in the corrected schedule (0.01)")
+    p.add_argument("--out", default=None, metavar="FILE.csv|.nc",
+                   help="write the schedule's events (one row per step: heat, rest; the "
+                        "corrected times when corrected) as tidy CSV or netCDF, with units "
+                        "and provenance")
     p.add_argument("--plot", default=None, metavar="PNG",
                    help="with a drug: cumulative drug through the corrected protocol")
     add_drug_options(p)
     add_wait_options(p)
     add_batch_options(p)
+    add_explain_option(p)
     p.set_defaults(func=run)
 
 
@@ -88,6 +96,8 @@ def run(args: argparse.Namespace) -> int:
     if drug is None and args.plot:
         raise ParameterError("plot", args.plot, "used with a drug option (e.g. "
                              "--drug-diffusivity-cm2-s)")
+    if args.out is not None and Path(args.out).suffix not in (".csv", ".nc"):
+        raise ParameterError("--out", args.out, "a file ending in .csv or .nc")
     request = request_from_args(args, Schedule(
         doses=args.doses, doses_ug=args.doses_ug, rests=args.rests,
         rests_seconds=args.rests_seconds, check_protocol=not args.no_check,
@@ -100,10 +110,16 @@ def run(args: argparse.Namespace) -> int:
     finally:
         close_planner(planner)
     req, ans = request.planned, result.answer
+    if args.out is not None:
+        wrote = write_events(result, args)
+        if not args.json:
+            print(f"wrote {wrote}")
     if args.json:
         print_json(result.to_dict())
         return 0
+    print_lead(result, f"heat for ({result.reading} times)", args.explain)
     print(result.headline)
+    print_events(result.events)
     if hasattr(ans, "nodes"):  # a batch's schedule: its nodes and quadrature
         print_batch_schedule(req, ans)
         return 0
@@ -131,6 +147,36 @@ def run(args: argparse.Namespace) -> int:
         print_uncertainty(ans.uncertainty, "the simulated schedule")
     print(wrap(ans.note))
     return 0
+
+
+def print_events(events: list[dict[str, Any]]) -> None:
+    """The events a controller or a lab notebook takes: one line per step."""
+    if not events:
+        return
+    rough = " (ROUGH: the hold reading, not checked on the full solver)" if events[0]["rough"] \
+        else ""
+    print(f"events ({events[0]['reading']} times){rough}:")
+    for e in events:
+        start = "-" if e["start_s"] is None else f"{e['start_s']:.4g} s"
+        dur = (f"{e['duration_tau']:.4g} tau" if e["duration_s"] is None
+               else f"{e['duration_s']:.4g} s")
+        dose = "-" if e["dose_fraction"] is None else f"{e['dose_fraction']:.4g}"
+        print(f"  {e['step']:>2} {e['kind']:<4} at {start:>11} for {dur:>11} "
+              f"at {e['temperature_K']:.5g} K  delivers {dose:>8}  released "
+              f"{e['released_fraction']:.4g}" + (f"  [{e['program']}]" if e["program"] else ""))
+
+
+def write_events(result: Any, args: argparse.Namespace) -> Path:
+    """The answer's events (dosing.question.events) to ``args.out`` (.csv or .nc)."""
+    from dosing import export
+    from dosing.question.events import events_dataset
+
+    from .outfile import request_of
+
+    attrs = export.provenance("schedule events", request_of(args), result.truth,
+                              model=result.model, reading=result.reading,
+                              headline=result.headline, note=result.note)
+    return export.save(events_dataset(result.events, attrs), args.out)
 
 
 def _plot(planner: Any, req: Any, ans: Any, path: str) -> None:

@@ -98,6 +98,20 @@ def connection_limits(args: argparse.Namespace) -> limits.ConnectionLimits:
     return limits.ConnectionLimits(**{k: v for k, v in given.items() if v is not None})
 
 
+def log_config(level: str = "info") -> dict:
+    """uvicorn's logging configuration with the service's own loggers (``thermogel.*``:
+    the warm-up's progress) written as uvicorn writes its own ("INFO:     ..."), at the
+    level of ``--log-level``."""
+    import copy
+
+    from uvicorn.config import LOGGING_CONFIG
+
+    config = copy.deepcopy(LOGGING_CONFIG)
+    config["loggers"]["thermogel"] = {"handlers": ["default"], "propagate": False,
+                                      "level": "DEBUG" if level == "trace" else level.upper()}
+    return config
+
+
 def warm_only() -> int:
     """Warm every kernel (a throw-away planner on a temporary cache for the front-model
     dose), then print the report."""
@@ -131,8 +145,9 @@ def run(args: argparse.Namespace) -> int:
     if args.warmup_only:
         return warm_only()
     from api.auth import is_loopback
+    from dosing.settings import settings
 
-    if not is_loopback(args.host) and not (args.token or os.environ.get("THERMOGEL_API_TOKEN")):
+    if not is_loopback(args.host) and not (args.token or settings().api_token):
         raise ParameterError("--token", None, "a token (--token or $THERMOGEL_API_TOKEN)",
                              f"--host {args.host} is reachable beyond this machine, so the "
                              "service needs a token: clients then send 'Authorization: "
@@ -156,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
 
     uvicorn.run("api.http:app_from_env", factory=True, host=args.host, port=args.port,
                 workers=args.workers, log_level=args.log_level, timeout_graceful_shutdown=10,
+                log_config=log_config(args.log_level),
                 timeout_keep_alive=args.timeout_keep_alive,
                 h11_max_incomplete_event_size=H11_MAX_HEADER_BYTES,
                 **uvicorn_options(connection_limits(args)))

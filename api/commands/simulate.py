@@ -169,6 +169,8 @@ def run(args: argparse.Namespace) -> int:
         out = res.to_json_dict(profiles=args.profiles)
         if saved is not None:
             out["file"] = str(saved)
+            out["files"] = [str(f) for f in saved.files]
+            out["file_notes"] = saved.notes
         print_json(out)
         return 0
     d = res.diagnostics
@@ -188,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
         jp = "-" if np.isnan(res.jump[k]) else f"{res.jump[k]:.3f}"
         print(f"  {res.t[k]:9.5f}  {res.radius[k]:8.5f}  {fr:>8}  {jp:>6}")
     if saved is not None:
-        print(f"wrote {saved}")
+        print("\n".join(saved.report()))
     return 0
 
 

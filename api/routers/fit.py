@@ -15,7 +15,13 @@ from fastapi import APIRouter
 from fastapi.responses import JSONResponse
 
 from dosing import PhysicalConstants, SolverSettings, UnknownValidationError
-from dosing.fit import data_dict, fit_shrinking, fit_swelling, kinetics_data, swelling_data
+from dosing.fit import (
+    data_dict,
+    fit_swelling,
+    kinetics_data,
+    kinetics_report,
+    swelling_data,
+)
 from dosing.gel_store import GelStore, check_name
 from solver.errors import ParameterError
 from solver.fit import fit_gel
@@ -24,6 +30,7 @@ from solver.json_safe import json_safe
 from solver.limits import DRY_RADIUS_UM_RANGE, SIZE_UM_RANGE
 
 from .. import stored_jobs
+from ..analysis_schemas import EmpiricalFitJobResponse
 from ..deps import StateDep
 from ..fit_schemas import (
     FitJobResponse,
@@ -38,7 +45,8 @@ from ..service import to_gel
 from .compute import compute
 
 router = APIRouter(tags=["fit"], route_class=SafeRoute)
-KINDS = {"swelling": "fit-swelling", "kinetics": "fit-kinetics", "release": "fit-release"}
+KINDS = {"swelling": "fit-swelling", "kinetics": "fit-kinetics", "release": "fit-release",
+         "empirical": "fit-empirical"}  # empirical: api/routers/analysis.py
 
 
 def _swelling_data(body: SwellingFitRequest) -> Any:
@@ -75,15 +83,14 @@ def _kinetics(planner: Any, body: KineticsFitRequest) -> dict[str, Any]:
     data = kinetics_data(body.time_s, body.size, body.size_kind, body.weight)
     settings = SolverSettings() if body.interfacial_length is None else SolverSettings(
         interfacial_length=body.interfacial_length)
-    res = fit_shrinking(data, to_gel(body.gel), body.t_start, body.t_end, branch=body.branch,
-                        dry_radius_um=body.dry_radius_um,
-                        swollen_radius_um=body.swollen_radius_um,
-                        constants=PhysicalConstants(body.viscosity_pa_s,
-                                                    body.polymer_volume_m3),
-                        fit_beta=body.fit_beta, beta=body.beta, model=body.model,
-                        settings=settings, size_rel_sigma=body.size_rel_sigma,
-                        planner=planner)
-    report = json_safe(res.to_dict())
+    _, report = kinetics_report(
+        data, to_gel(body.gel), body.t_start, body.t_end, compare_laws=body.compare_laws,
+        branch=body.branch, dry_radius_um=body.dry_radius_um,
+        swollen_radius_um=body.swollen_radius_um,
+        constants=PhysicalConstants(body.viscosity_pa_s, body.polymer_volume_m3),
+        fit_beta=body.fit_beta, beta=body.beta, model=body.model, settings=settings,
+        size_rel_sigma=body.size_rel_sigma, planner=planner)
+    report = json_safe(report)
     if body.save:
         store = GelStore()
         g = Gel.from_dict({**report["gel"], "name": body.save})
@@ -223,7 +230,8 @@ def _status(state: Any, job_id: str) -> dict[str, Any]:
     return {**out, "kind": kind, "status_url": f"/v1/fit/jobs/{job_id}"}
 
 
-@router.get("/v1/fit/jobs/{job_id}", response_model=ReleaseFitJobResponse | FitJobResponse,
+@router.get("/v1/fit/jobs/{job_id}",
+            response_model=ReleaseFitJobResponse | EmpiricalFitJobResponse | FitJobResponse,
             responses={404: {"description": "no such fit job"}})
 async def fit_job(job_id: str, state: StateDep) -> Any:
     """A fit job's state, with the report when done or the error when failed (kept in the

@@ -16,20 +16,24 @@ from fastapi.responses import Response
 from dosing import UnknownValidationError
 
 from .. import schemas as s
+from ..analysis_schemas import EmpiricalFitJobResponse
 from ..deps import PlannerDep, StateDep
+from ..design_schemas import DesignJobResponse
 from ..errors import job_kind
 from ..fit_schemas import FitJobResponse, ReleaseFitJobResponse
 from ..job_schemas import ValidationJob
 from ..safe_route import SafeRoute
 from ..service import validation
 from .compute import compute
+from .design import status as design_status
 from .fit import _status as fit_status
 from .sweep import SweepStatus, render
 
 router = APIRouter(tags=["jobs"], route_class=SafeRoute)
 
 
-JobResponse = ValidationJob | ReleaseFitJobResponse | FitJobResponse | SweepStatus
+JobResponse = (ValidationJob | ReleaseFitJobResponse | EmpiricalFitJobResponse | FitJobResponse
+               | SweepStatus | DesignJobResponse)
 
 
 @router.get("/v1/jobs/{job_id}", response_model=JobResponse,
@@ -49,6 +53,8 @@ async def job_route(job_id: str, request: Request, state: StateDep,
             return Response(body, media_type=media)
         if kind == "fit":
             return await compute(fit_status, state, job_id)
+        if kind == "design":
+            return await compute(design_status, state, job_id)
         return await compute(validation, state, job_id)
     except UnknownValidationError:
         raise UnknownValidationError(job_id, "job_id") from None

@@ -6,7 +6,10 @@
 const $ = (id) => document.getElementById(id);
 const SVGNS = "http://www.w3.org/2000/svg";
 const FIELDS = ["t_start", "t_end", "dry_radius_um", "doses", "rests", "interfacial_length",
-  "size_cv"];
+  "size_cv", "drug_d0", "drug_radius", "drug_mesh", "drug_load"];
+// the drug inputs: page id -> the HTTP drug field (DrugIn), its unit
+const DRUG_FIELDS = { drug_d0: ["diffusivity_cm2_s", "cm²/s"], drug_radius: ["solute_radius_nm", "nm"],
+  drug_mesh: ["mesh_size_nm", "nm"], drug_load: ["load_ug", "µg"] };
 const LABELS = { t_start: "T_start", t_end: "T_end", dry_radius_um: "dry radius",
   doses: "dose", rests: "rest", interfacial_length: "interfacial length",
   sweep_t_end: "T_end", sweep_radius: "dry radius", sweep_doses: "dose" };
@@ -17,6 +20,9 @@ const SAVED_KEY = "thermogel.gels";
 for (const p of GEL_PARAMS) LABELS[`gel_${p}`] = p === "omega" ? "Omega" : p.toUpperCase();
 LABELS.gel_name = "gel name";
 LABELS.size_cv = "size CV";
+Object.assign(LABELS, { drug_d0: "D0", drug_radius: "solute radius", drug_mesh: "mesh size",
+  drug_load: "load", size_table: "size table" });
+let sizeTable = null; // an uploaded size table: {name, sizes_um, counts}
 let presets = {}; // preset name -> its parameters (from /v1/gels)
 let fittedGels = {}; // stored fitted gel name -> its parameters (from /v1/gels, on the server)
 let bounds = {};
@@ -76,6 +82,39 @@ function checkValue(name, text, b, scale = 1, unit = "") {
   return { value: x };
 }
 
+function hasUnit(text) {
+  // a value written with a unit ("29 degC", "10 min", "0.1 mm"): the server's one unit
+  // parser (dosing.quantity, the HTTP models) converts and checks it
+  const t = String(text).trim();
+  return t !== "" && !isFinite(Number(t)) && /[a-zA-Zµμ°℃]/.test(t);
+}
+
+function checkQuantity(name, text, b, unit) {
+  // a plain number checked against the bounds here; a value with a unit sent as written
+  if (hasUnit(text)) return { value: String(text).trim() };
+  return checkValue(name, text, b, 1, unit);
+}
+
+function checkRests(text, b) {
+  // rests in units of tau (plain numbers, or '0.5 tau'), or times with a unit ('10 min',
+  // '600 s': sent as rests_seconds, converted by the server); not both in one list
+  const parts = String(text).split(/[,;]+/).map((p) => p.trim()).filter((p) => p !== "");
+  const tau = [], secs = [];
+  for (const p of parts) {
+    const m = /^(.*?)\s*(tau|τ)$/i.exec(p);
+    if (m || !hasUnit(p)) {
+      const r = checkValue("rests", m ? m[1] : p, b, 1, "τ");
+      if (r.error) return r;
+      tau.push(r.value);
+    } else secs.push(p);
+  }
+  if (tau.length && secs.length)
+    return { error: "rest: give every rest in units of tau, or every one with a time unit (10 min), not both" };
+  if (b.maxItems !== undefined && parts.length > b.maxItems)
+    return { error: `rest: at most ${b.maxItems} values` };
+  return { value: secs.length ? { rests_seconds: secs } : { rests: tau }, count: parts.length };
+}
+
 function checkList(name, text, b, scale, unit) {
   const parts = String(text).split(/[,;\s]+/).filter((p) => p !== "");
   const out = [];
@@ -105,6 +144,7 @@ function clearErrors() {
     $(`err-${f}`).textContent = "";
     $(f).classList.remove("invalid");
   }
+  $("err-size_table").textContent = "";
   $("form-error").textContent = "";
 }
 
@@ -123,7 +163,14 @@ function fieldOf(loc) {
   const parts = (loc || []).filter((p) => !["body", "query", "custom", "preset"].includes(p));
   const name = parts.length ? String(parts[0]) : "";
   if (name === "dose_fraction" || name === "doses") return { input: "doses", name: parts.join(".") };
-  if (name === "rests") return { input: "rests", name: parts.join(".") };
+  if (name === "rests" || name === "rests_seconds") return { input: "rests", name: parts.join(".") };
+  if (name === "swollen_radius_um") return { input: "dry_radius_um", name: parts.join(".") };
+  if (name === "size_distribution") return { input: $("size-clear").hidden ? "size_cv" : "size_table", name: parts.join(".") };
+  if (name === "drug") {
+    const page = Object.keys(DRUG_FIELDS).find((k) => DRUG_FIELDS[k][0] === String(parts[1]));
+    if (page) $("drug-inputs").open = true;
+    return { input: page || null, name: parts.join(".") };
+  }
   if (name === "gel" && GEL_PARAMS.includes(String(parts[1]))) {
     $("custom-gel").open = true;
     return { input: `gel_${parts[1]}`, name: parts.join(".") };
@@ -301,7 +348,7 @@ function scheduleTable(rows, reading) {
   const lead = reading === "corrected" ? "heat for (corrected)" :
     reading === "hold" ? "heat for (rough hold reading)" : "heat for";
   const holdCol = reading === "corrected" && rows.some((r) => r.hold_time !== undefined);
-  const errHead = reading === "corrected" ? "dose error" : "error";
+  const errHead = reading === "corrected" ? "shooting residual" : "error estimate (the single dose's)";
   const head = `<tr><th>dose</th><th>cumulative</th><th>${lead}</th><th>${errHead}</th>` +
     `${holdCol ? "<th>rough hold reading</th>" : ""}</tr>`;
   const body = rows.map((r) => `<tr><td>${pct(r.dose_fraction)}</td><td>${pct(r.cumulative_fraction)}</td>` +
@@ -345,43 +392,122 @@ function readForm() {
   const out = { gel: gelSpec() };
   let ok = true;
   const take = (name, r) => { if (r.error) { showError(name, r.error); ok = false; } else out[name] = r.value; };
-  take("t_start", checkValue("t_start", $("t_start").value, b.t_start, 1, "K"));
-  take("t_end", checkValue("t_end", $("t_end").value, b.t_end, 1, "K"));
+  // temperatures in K, or with a unit ("29 degC"): the server converts them
+  take("t_start", checkQuantity("t_start", $("t_start").value, b.t_start, "K"));
+  take("t_end", checkQuantity("t_end", $("t_end").value, b.t_end, "K"));
+  out.size_kind = $("size_kind").value;  // 'dry' or 'swollen' (at T_start)
+  const rb = out.size_kind === "swollen" ? b.swollen_radius_um : b.dry_radius_um;
   if ($("dry_radius_um").value.trim() !== "")
-    take("dry_radius_um", checkValue("dry_radius_um", $("dry_radius_um").value, b.dry_radius_um, 1, "µm"));
-  if ($("size_cv").value.trim() !== "") {  // a batch: a lognormal whose mean is the dry radius
+    take("dry_radius_um", checkQuantity("dry_radius_um", $("dry_radius_um").value, rb, "µm"));
+  if (sizeTable) {  // a batch: the uploaded table of sizes
+    out.size_table = sizeTable;
+  } else if ($("size_cv").value.trim() !== "") {  // a batch: a lognormal whose mean is the radius
     take("size_cv", checkValue("size_cv", $("size_cv").value, b.size_cv));
     if (out.dry_radius_um === undefined && $("dry_radius_um").value.trim() === "") {
-      showError("size_cv", "size CV: give the dry radius too (the batch's number-weighted mean)");
+      showError("size_cv", "size CV: give the radius too (the batch's number-weighted mean)");
       ok = false;
     }
   }
+  const drug = {};
+  for (const [id, [field, unit]] of Object.entries(DRUG_FIELDS)) {
+    if ($(id).value.trim() === "") continue;
+    const r = checkQuantity(id, $(id).value, b.drug[field] || {}, unit);
+    if (r.error) { showError(id, r.error); ok = false; } else drug[field] = r.value;
+  }
+  if (Object.keys(drug).length) out.drug = drug;
   if ($("interfacial_length").value.trim() !== "")  // empty: the bead's own (xi_dry / a_d)
     take("interfacial_length", checkValue("interfacial_length", $("interfacial_length").value, b.interfacial_length));
   const doses = checkList("doses", $("doses").value, { ...b.dose_fraction, maxItems: b.doses.maxItems }, 100, "%");
   if (!doses.error && doses.value.length === 0) doses.error = "dose: give one dose, or several separated by commas";
   take("doses", doses);
-  const rests = checkList("rests", $("rests").value, b.rests, 1, "τ");
-  take("rests", rests);
-  if (ok && out.rests.length && out.rests.length !== out.doses.length - 1) {
+  const rests = checkRests($("rests").value, b.rests);
+  out.rests = [];
+  if (rests.error) { showError("rests", rests.error); ok = false; } else Object.assign(out, rests.value);
+  const nRests = rests.count || 0;
+  if (ok && nRests && nRests !== out.doses.length - 1) {
     showError("rests", `rest: give ${out.doses.length - 1} rests (one between consecutive doses), or none`);
     ok = false;
   }
   if (ok && out.doses.reduce((a, x) => a + x, 0) > 1) {
-    showError("doses", "dose: the doses add up to more than 100 % of the stored fluid");
+    showError("doses", `dose: the doses add up to more than 100 % of the ${out.drug ? "load" : "stored fluid"}`);
     ok = false;
   }
   out.validate = $("validate").checked;
   return ok ? out : null;
 }
 
+function sizeBody(f, body) {
+  // the bead size as the HTTP API takes it: dry_radius_um or swollen_radius_um, and a
+  // batch's size_distribution (a lognormal by CV, or the uploaded table) in the same state
+  if (f.dry_radius_um !== undefined) body[f.size_kind === "swollen" ? "swollen_radius_um" : "dry_radius_um"] = f.dry_radius_um;
+  if (f.size_table) {
+    body.size_distribution = { kind: "table", sizes_um: f.size_table.sizes_um,
+      state: f.size_kind, measure: $("size_measure").value };
+    if (f.size_table.counts) body.size_distribution.counts = f.size_table.counts;
+  } else if (f.size_cv !== undefined) {
+    body.size_distribution = { kind: "lognormal", cv: f.size_cv };
+    if (f.size_kind === "swollen") body.size_distribution.state = "swollen";
+  }
+  return body;
+}
+
 function doseBody(f, fraction, validate) {
   const body = { gel: f.gel, t_start: f.t_start, t_end: f.t_end, dose_fraction: fraction,
     interfacial_length: f.interfacial_length };
-  if (f.dry_radius_um !== undefined) body.dry_radius_um = f.dry_radius_um;
-  if (f.size_cv !== undefined) body.size_distribution = { kind: "lognormal", cv: f.size_cv };
+  sizeBody(f, body);
+  if (f.drug) body.drug = f.drug;
   if (validate) body.validate = true;
   return body;
+}
+
+function parseSizeTable(text, name) {
+  // a CSV of sizes (um), one per row, optionally a second column of counts; a header may
+  // name the measure ('diameter') and the state ('swollen'); '#' lines are comments
+  const rows = text.split(/\r?\n/).map((l, i) => [i + 1, l.trim()]).filter(([, l]) => l !== "" && !l.startsWith("#"));
+  if (!rows.length) return { error: `size table ${name}: no rows` };
+  const cells = (l) => l.split(/[,;\t]/).map((c) => c.trim());
+  let header = null;
+  if (!isFinite(Number(cells(rows[0][1])[0]))) header = rows.shift()[1].toLowerCase();
+  const sizes = [], counts = [];
+  for (const [line, l] of rows) {
+    const c = cells(l);
+    const x = Number(c[0]);
+    if (c[0] === "" || !isFinite(x) || x <= 0) return { error: `size table ${name}, line ${line}: '${c[0]}' is not a size > 0 (um)` };
+    sizes.push(x);
+    if (c.length > 1 && c[1] !== "") {
+      const n = Number(c[1]);
+      if (!isFinite(n) || n < 0) return { error: `size table ${name}, line ${line}: '${c[1]}' is not a count >= 0` };
+      counts.push(n);
+    }
+  }
+  if (counts.length && counts.length !== sizes.length) return { error: `size table ${name}: give a count on every row, or on none` };
+  return { value: { name, sizes_um: sizes, counts: counts.length ? counts : null,
+    measure: header && /diam/.test(header) ? "diameter" : header && /radi/.test(header) ? "radius" : null,
+    state: header && /swollen|swell/.test(header) ? "swollen" : header && /dry/.test(header) ? "dry" : null } };
+}
+
+async function uploadSizes(ev) {
+  const file = ev.target.files && ev.target.files[0];
+  if (!file) return;
+  $("err-size_table").textContent = "";
+  const r = parseSizeTable(await file.text(), file.name);
+  ev.target.value = "";
+  if (r.error) { $("err-size_table").textContent = r.error; document.body.dataset.sizeTable = "invalid"; return; }
+  sizeTable = r.value;
+  if (r.value.measure) $("size_measure").value = r.value.measure;
+  if (r.value.state) $("size_kind").value = r.value.state;
+  $("size-table-status").textContent = `${file.name}: ${r.value.sizes_um.length} sizes` +
+    (r.value.counts ? " with counts" : "") + " (the batch; the size CV is not used)";
+  $("size-clear").hidden = false;
+  document.body.dataset.sizeTable = "loaded";
+}
+
+function clearSizes() {
+  sizeTable = null;
+  $("size-table-status").textContent = "";
+  $("err-size_table").textContent = "";
+  $("size-clear").hidden = true;
+  delete document.body.dataset.sizeTable;
 }
 
 function showBatch(bt) {
@@ -429,9 +555,9 @@ function showAnswer(a, total) {
     `${total > 1 ? `; all ${total} doses` : ""})`;
   t.dataset.value = String(a.time);
   showReference(ref);
-  $("answer-model").textContent = `${a.model} (${a.behaviour})`;
+  $("answer-model").textContent = a.behaviour ? `${a.model} (${a.behaviour})` : a.model;
   $("answer-error").textContent = `± ${pct(a.error_estimate)}` + (ref ? " (the mean bead's)" : "");
-  $("answer-release").textContent = `${pct(a.dose_fraction)} of the stored fluid` +
+  $("answer-release").textContent = `${pct(a.dose_fraction)} of the ${a.drug ? "drug load" : "stored fluid"}` +
     (a.expelled_volume_ul !== null && a.expelled_volume_ul !== undefined ?
       `: ${fmt(a.expelled_volume_ul)} µL of ${fmt(a.stored_volume_ul)} µL; radius ${fmt(a.start_radius)} → ${fmt(a.final_radius)} dry radii (${fmt(a.final_radius_um)} µm)` :
       `; radius ${fmt(a.start_radius)} → ${fmt(a.final_radius)} dry radii`) +
@@ -479,7 +605,8 @@ function poll(vid, onDone) {
 
 function resetSchedule() {
   for (const id of ["schedule-headline", "schedule-status", "schedule-note", "schedule-table"]) $(id).textContent = "";
-  $("schedule-caption").textContent = "Schedule: temperature protocol and cumulative release";
+  $("schedule-caption").textContent = "Schedule: the heat/rest steps and cumulative release";
+  $("answer-heat-label").textContent = "Heat for";
   delete $("schedule-headline").dataset.value;
   delete $("schedule-headline").dataset.reading;
   for (const k of ["schedule", "scheduleJob", "scheduleBatch"]) delete document.body.dataset[k];
@@ -493,36 +620,164 @@ function batchWords(s) {
     `${fmt(s.reference_dry_radius_um)} µm dry (τ = ${fmt(s.timescale_seconds)} s)`;
 }
 
+function kelvinText(k) {
+  return `${fmt(k, 5)} K (${fmt(k - 273.15, 4)} °C)`;
+}
+
+function spanText(e) {
+  // a step's duration: seconds (and minutes past two), or tau without a bead size
+  if (e.duration_s === null || e.duration_s === undefined) return `${fmt(e.duration_tau)} τ`;
+  return e.duration_s >= 120 ? `${fmt(e.duration_s)} s (${fmt(e.duration_s / 60)} min)` : `${fmt(e.duration_s)} s`;
+}
+
+function eventsTable(s) {
+  // the schedule's events (one row per step: heat, rest, a drug's wait), the corrected
+  // times when corrected; every column named for what it is
+  const ev = s.events || [];
+  const reading = ev.length ? ev[0].reading : s.reading;
+  const rough = ev.length && ev[0].rough;
+  const of = s.drug ? "of the load" : "of the stored fluid";
+  const resHead = reading === "corrected" ? "shooting residual (delivered / asked − 1)" :
+    reading === "checked" ? "full-solver error (delivered / asked − 1)" : null;
+  const hold = s.hold || [];
+  const holdCol = reading === "corrected" && hold.length > 0;
+  const head = `<tr><th>#</th><th>step</th><th>start</th><th>duration</th><th>set temperature</th>` +
+    `<th>delivers (${of})</th><th>released so far</th><th>dose asked</th>` +
+    `${resHead ? `<th>${resHead}</th>` : ""}${holdCol ? "<th>rough hold reading</th>" : ""}</tr>`;
+  const body = ev.map((e) => {
+    const heat = e.kind === "heat";
+    const h = heat ? hold[e.heating - 1] : null;
+    const start = e.start_s === null || e.start_s === undefined ? `${fmt(e.start_tau)} τ` : `${fmt(e.start_s)} s`;
+    const what = heat ? (e.program ? `heat: ${esc(e.program)}` : "heat") :
+      e.kind === "rest" ? "rest" : "hold (wait at T_start)";
+    return `<tr class="${e.kind}"><td>${e.step}</td><td class="kind">${what}</td><td>${start}</td>` +
+      `<td class="${heat ? "heat-for" : "rest-for"}" data-value="${e.duration_s ?? ""}">${spanText(e)}</td>` +
+      `<td>${kelvinText(e.temperature_K)}</td><td>${pct(e.dose_fraction)}</td><td>${pct(e.released_fraction)}</td>` +
+      `<td>${heat ? pct(e.target_fraction) : "–"}</td>` +
+      `${resHead ? `<td class="residual">${heat && e.dose_error !== null ? `${e.dose_error >= 0 ? "+" : ""}${pct(e.dose_error)}` : "–"}</td>` : ""}` +
+      `${holdCol ? `<td class="hold-reading">${h ? heatFor(h.actuation_seconds, h.actuation_time) : "–"}</td>` : ""}</tr>`;
+  }).join("");
+  const cap = rough ? "The hold reading (rough: one continuous heating, not checked on the full solver)" :
+    reading === "corrected" ? "The corrected schedule: each step as a bath controller or a lab notebook takes it" :
+      "The hold times as the full solver runs them (not corrected)";
+  const csv = `data:text/csv;charset=utf-8,${encodeURIComponent(eventsCsv(ev))}`;
+  $("schedule-table").innerHTML = `<table><caption>${cap}</caption>${head}${body}</table>` +
+    `<p class="hint"><a id="schedule-download" href="${csv}" download="schedule-events.csv">` +
+    "The steps as CSV</a> (one row per step, units in the headers)</p>";
+  $("schedule-table").dataset.reading = reading || "";
+}
+
+// the events' columns as the CSV export names them (dosing.question.events.EVENT_COLUMNS)
+const EVENT_UNITS = [["step", "1"], ["kind", ""], ["start_s", "s"], ["duration_s", "s"],
+  ["temperature_K", "K"], ["dose_fraction", "1"], ["released_fraction", "1"], ["amount_ul", "uL"],
+  ["amount_ug", "ug"], ["target_fraction", "1"], ["dose_error", "1"], ["uptake_fraction", "1"],
+  ["heating", "1"], ["start_tau", "1"], ["duration_tau", "1"], ["program", ""], ["reading", ""],
+  ["rough", "1"]];
+
+function eventsCsv(ev) {
+  // the events as tidy CSV ('name [unit]' headers), for a bath controller or a notebook
+  const cell = (v) => {
+    if (v === null || v === undefined) return "";
+    if (typeof v === "boolean") return v ? "1" : "0";
+    const t = String(v);
+    return /[",\n]/.test(t) ? `"${t.replace(/"/g, '""')}"` : t;
+  };
+  const head = EVENT_UNITS.map(([n, u]) => (u ? `${n} [${u}]` : n)).join(",");
+  return [head, ...ev.map((e) => EVENT_UNITS.map(([n]) => cell(e[n])).join(","))].join("\n") + "\n";
+}
+
+function drawEvents(s, ctx) {
+  // the events on one clock: the set temperature (a protocol heating drawn as a ramp from
+  // T_start to its end's set point) and the cumulative release, linear within each step
+  const ev = s.events || [];
+  const svg = $("timeline-plot");
+  clear(svg);
+  if (!ev.length) return;
+  const secs = ev.every((e) => e.start_s !== null && e.start_s !== undefined);
+  const t0 = (e) => (secs ? e.start_s : e.start_tau);
+  const dt = (e) => (secs ? e.duration_s : e.duration_tau);
+  const tStart = ctx.tStart;
+  const clockT = [0], temp = [tStart], relT = [0], rel = [0];
+  let prev = 0;
+  for (const e of ev) {
+    const a = t0(e), b = a + dt(e);
+    clockT.push(a); temp.push(e.program ? tStart : e.temperature_K);
+    clockT.push(b); temp.push(e.temperature_K);
+    clockT.push(b); temp.push(tStart);
+    relT.push(a); rel.push(100 * prev);
+    relT.push(b); rel.push(100 * e.released_fraction);
+    prev = e.released_fraction;
+  }
+  const last = ev[ev.length - 1];
+  const end = (t0(last) + dt(last)) * 1.03 || 1;
+  clockT.push(end); temp.push(tStart);
+  relT.push(end); rel.push(100 * prev);
+  const temps = ev.map((e) => e.temperature_K).concat([tStart]);
+  const xl = [0, end];
+  const top = panel(svg, { x: 55, y: 10, w: 445, h: 80 }, xl, [Math.min(...temps) - 1, Math.max(...temps) + 1], null, "T (K)");
+  polyline(svg, top, clockT, temp, { stroke: "#b3261e", id: "timeline-temperature" });
+  const ymax = Math.max(100, 100 * Math.max(...ev.map((e) => e.released_fraction)));
+  const bot = panel(svg, { x: 55, y: 115, w: 445, h: 140 }, xl, [0, ymax],
+    secs ? "clock time (s)" : "clock time (units of τ)", "released (%)");
+  polyline(svg, bot, relT, rel, { stroke: "#1f6fb2", id: "timeline-release", "data-reading": ev[0].reading });
+  for (const e of ev.filter((x) => x.kind === "heat")) {
+    el("text", { x: bot.sx(t0(e) + dt(e)) - 2, y: bot.sy(100 * e.released_fraction) - 5, "text-anchor": "end",
+      class: "release-mark" }, svg, `${fmt(100 * e.released_fraction, 3)}%`);
+  }
+  if (ev[0].rough) el("text", { x: 62, y: 128 }, svg, "rough: the hold reading (one continuous heating)");
+}
+
+function scheduleAnswerPending(a) {
+  // a schedule queued: the answer panel says its one continuous heating is a rough reading
+  $("answer-heat-label").textContent = "All doses in one heating (rough)";
+  $("answer-headline").textContent = "A schedule: the corrected heat/rest times follow (the time below is one continuous heating, the rough hold reading).";
+}
+
+function scheduleAnswer(s) {
+  // the answer panel leads with the schedule's heatings (the corrected ones when corrected)
+  const ev = s.events || [];
+  const heats = ev.filter((e) => e.kind === "heat");
+  if (!heats.length) return;
+  $("answer-heat-label").textContent = `Heat for (${ev[0].rough ? "rough hold reading" : ev[0].reading})`;
+  const secs = $("answer-seconds");
+  secs.textContent = heats.map((e) => (e.duration_s === null || e.duration_s === undefined ?
+    `${fmt(e.duration_tau)} τ` : `${fmt(e.duration_s)} s`)).join(", ");
+  secs.dataset.value = JSON.stringify(heats.map((e) => e.duration_s ?? e.duration_tau));
+  const rests = ev.filter((e) => e.kind === "rest");
+  $("answer-time").textContent = rests.length ? `with rests of ${rests.map(spanText).join(", ")} at ${kelvinText(ev.find((e) => e.kind === "rest").temperature_K)}` : "";
+  $("answer-headline").textContent = s.headline || "";
+}
+
 function showSchedule(s, ctx) {
-  // a schedule answer (200, or a schedule job's result): the headline and the table lead
-  // with its headline times, the corrected ones when it was corrected (``reading``)
-  const rows = scheduleRows(s);
+  // a schedule answer (200, or a schedule job's result): its events lead the headline, the
+  // table and the plot (the corrected schedule when it was corrected: ``reading``)
+  const ev = s.events || [];
+  const heats = ev.filter((e) => e.kind === "heat");
   const corrected = s.reading === "corrected";
   const batch = s.batch === true;
-  const secs = s.actuation_seconds;
-  const times = secs ? secs.map((x) => `${fmt(x)} s`) : s.actuation_times.map((x) => `${fmt(x)} τ`);
+  const secs = heats.every((e) => e.duration_s !== null && e.duration_s !== undefined);
+  const times = heats.map((e) => (secs ? `${fmt(e.duration_s)} s` : `${fmt(e.duration_tau)} τ`));
   const h = $("schedule-headline");
   const who = batch ? "The batch's schedule: heat" : "Heat";
-  const how = corrected ? "corrected by the full solver" : "the rough hold reading: one continuous heating";
+  const how = corrected ? "corrected by the full solver" : ev.length && ev[0].rough ?
+    "the rough hold reading: one continuous heating" : "the hold times as the full solver runs them";
   h.innerHTML = `${who} for <b id="schedule-seconds">${times.join(", ")}</b> (${how})` +
     (batch ? `<br><span class="secondary" id="schedule-batch">${batchWords(s)}</span>` : "") +
     (s.headline ? `<br><span class="secondary">${esc(s.headline)}</span>` : "");
   h.dataset.reading = s.reading;
-  h.dataset.value = JSON.stringify(secs || s.actuation_times);
+  h.dataset.value = JSON.stringify(heats.map((e) => (secs ? e.duration_s : e.duration_tau)));
   $("schedule-caption").textContent = corrected ?
-    "Schedule: the corrected heat/rest protocol and cumulative release" :
-    "Schedule: temperature protocol and cumulative release (rough hold reading)";
-  scheduleTable(rows, s.reading);
-  const tau = s.timescale_seconds || ctx.tau;
-  drawTimeline(rows, s.rests && s.rests.length ? s.rests : ctx.rests, ctx.tStart, ctx.tEnd, tau,
-    corrected || batch ? null : ctx.curve,
-    corrected ? "release drawn linearly within each corrected heating" : undefined);
+    "Schedule: the corrected heat/rest steps and cumulative release" :
+    `Schedule: the heat/rest steps and cumulative release (${ev.length && ev[0].rough ? "rough hold reading" : "not corrected"})`;
+  eventsTable(s);
+  drawEvents(s, ctx);
+  scheduleAnswer(s);
   const c = s.corrected;
   $("schedule-note").textContent = corrected ?
     (batch ? `Corrected by the full solver, every size its own run: the batch's summed release meets each ` +
       `dose within ${pct(c.max_relative_error)} (quadrature over ${s.quadrature.nodes} sizes).` :
       `Corrected by the full solver: each heating meets its dose within ${pct(c.max_relative_error)} ` +
-      "in the real heat/rest protocol.") +
+      "in the real heat/rest protocol (the shooting residual column).") +
       " The rough hold reading (one continuous heating) is beside it." :
     "Hold reading only (rough: one continuous heating; the protocol was not corrected).";
   $("schedule-status").textContent = "";
@@ -580,10 +835,6 @@ async function run(f) {
   const total = f.doses.reduce((a, x) => a + x, 0);
   const token = ++scheduleToken;  // an earlier schedule job's poll stops showing
   resetSchedule();
-  const phase = $("phase-map");
-  phase.hidden = false;
-  const gq = typeof f.gel === "string" ? { base: f.gel } : f.gel;
-  phase.src = `/v1/phase-map.svg?${new URLSearchParams({ ...gq, t_start: f.t_start, t_end: f.t_end })}`;
   const [dose, curveRes] = await Promise.all([
     api("POST", "/v1/dose-time", doseBody(f, total, f.validate)),
     api("POST", "/v1/front-curve", { gel: f.gel, t_start: f.t_start, t_end: f.t_end,
@@ -599,11 +850,19 @@ async function run(f) {
     return;
   }
   const a = dose.data;
+  // temperatures written with a unit ("29 degC") come back in K in the answer's request
+  const req = a.request || {};
+  if (typeof req.t_start === "number") f.t_start = req.t_start;
+  if (req.heating && typeof req.heating.t_end === "number") f.t_end = req.heating.t_end;
+  const phase = $("phase-map");
+  phase.hidden = false;
+  const gq = typeof f.gel === "string" ? { base: f.gel } : f.gel;
+  phase.src = `/v1/phase-map.svg?${new URLSearchParams({ ...gq, t_start: f.t_start, t_end: f.t_end })}`;
   showAnswer(a, f.doses.length);
   const ref = a.reference_bead || null;  // a batch: a is the batch's own time, ref its mean bead's
   const tau = a.timescale_seconds;
   const ctx = { tau, rests: f.rests.length ? f.rests : [], tStart: f.t_start, tEnd: f.t_end, curve,
-    batch: f.size_cv !== undefined };
+    batch: f.size_cv !== undefined || f.size_table !== undefined, drug: f.drug !== undefined };
   let rows = null;
   let answered = null;  // a schedule answered at once (200)
   let job = null;       // a schedule job (202): every batch's, and the correction by default
@@ -612,6 +871,7 @@ async function run(f) {
     const body = { ...doseBody(f, undefined, false), doses: f.doses };
     delete body.dose_fraction;
     if (f.rests.length) body.rests = f.rests;
+    if (f.rests_seconds) body.rests_seconds = f.rests_seconds;
     const sch = await api("POST", "/v1/schedule", body);
     if (sch.status >= 400) { showServerError(sch); document.body.dataset.state = "server-error"; return; }
     if (sch.status === 200) {
@@ -625,10 +885,12 @@ async function run(f) {
       document.body.dataset.schedule = "queued";
       document.body.dataset.scheduleJob = job;
       document.body.dataset.scheduleBatch = String(ctx.batch);
+      const which = f.size_table ? `size table ${f.size_table.name}` : `size CV ${fmt(f.size_cv, 3)}`;
       $("schedule-headline").textContent = ctx.batch ?
-        `The batch's schedule (size CV ${fmt(f.size_cv, 3)}) is queued: every size of the batch ` +
+        `The batch's schedule (${which}) is queued: every size of the batch ` +
         "runs on the full solver; its corrected times follow." :
         "Queued: the full solver checks and corrects the real heat/rest protocol; the corrected times follow.";
+      scheduleAnswerPending(a);
       $("schedule-status").textContent = `queued (job ${job})`;
       $("schedule-note").textContent = rows ?
         "Below, the hold reading (rough: one continuous heating) until the job corrects it." : "";
@@ -823,6 +1085,8 @@ async function init() {
     dry_radius_um: boundOf(dose.dry_radius_um), dose_fraction: boundOf(dose.dose_fraction),
     interfacial_length: boundOf(dose.interfacial_length), doses: boundOf(sched.doses),
     size_cv: boundOf(sc.SizeDistributionIn ? sc.SizeDistributionIn.properties.cv : { minimum: 0, maximum: 2 }),
+    swollen_radius_um: boundOf(dose.swollen_radius_um),
+    drug: Object.fromEntries(Object.entries(sc.DrugIn.properties).map(([k, v]) => [k, boundOf(v)])),
     rests: boundOf(numberSchema(sched.rests).items || {}) };
   const sw = sc.SweepRequest.properties;
   const items = (p) => ({ ...boundOf(p.items), maxItems: p.maxItems });
@@ -850,6 +1114,8 @@ async function init() {
   $("save-gel").addEventListener("click", saveGel);
   $("delete-gel").addEventListener("click", deleteGel);
   $("plan-form").addEventListener("submit", plan);
+  $("size-file").addEventListener("change", uploadSizes);
+  $("size-clear").addEventListener("click", clearSizes);
   $("sweep-form").addEventListener("submit", sweep);
   for (const name of [...FIELDS, ...SWEEP_FIELDS, ...GEL_FIELDS]) {
     $(name).addEventListener("input", () => { $(`err-${name}`).textContent = ""; $(name).classList.remove("invalid"); });
@@ -998,7 +1264,7 @@ async function planProtocol() {
   $("protocol-error").textContent = "";
   for (const e of document.querySelectorAll(".step-err")) e.textContent = "";
   const f = { gel: gelSpec() };
-  const t0 = checkValue("t_start", $("t_start").value, bounds.t_start, 1, "K");
+  const t0 = checkQuantity("t_start", $("t_start").value, bounds.t_start, "K");
   const doses = checkList("doses", $("doses").value, { ...bounds.dose_fraction, maxItems: 1000 }, 100, "%");
   if (t0.error) { showError("t_start", t0.error); document.body.dataset.protocol = "invalid"; return; }
   if (doses.error || !doses.value.length) {
@@ -1011,7 +1277,10 @@ async function planProtocol() {
     return;
   }
   const body = { gel: f.gel, t_start: t0.value, dose_fraction: doses.value[0], protocol: steps };
-  if ($("dry_radius_um").value.trim() !== "") body.dry_radius_um = Number($("dry_radius_um").value);
+  if ($("dry_radius_um").value.trim() !== "") {
+    const r = $("dry_radius_um").value.trim();
+    body[$("size_kind").value === "swollen" ? "swollen_radius_um" : "dry_radius_um"] = hasUnit(r) ? r : Number(r);
+  }
   if ($("interfacial_length").value.trim() !== "") body.interfacial_length = Number($("interfacial_length").value);
   document.body.dataset.protocol = "busy";
   $("plan-protocol").disabled = true;

@@ -29,14 +29,22 @@ def answer(planner: Any, request: Request) -> Result | Pending | None:
     the planner; or None when the request needs a blocking job (:func:`run`)."""
     out = request.cell.now(planner, request)
     if out is not None and not isinstance(out, Pending):
-        out.request, out.tags = request.to_dict(), {**out.tags, **request.payload.tags}
+        _finish(planner, request, out)
     return out
+
+
+def _finish(planner: Any, request: Request, out: Result, blocking: bool = False) -> None:
+    """The answer's echo of its request, its payload's tags and its envelope."""
+    from .envelope import envelope
+
+    out.request, out.tags = request.to_dict(), {**out.tags, **request.payload.tags}
+    out.envelope = envelope(planner, request, out, blocking)
 
 
 def run(planner: Any, request: Request) -> Result:
     """The answer, blocking (full-solver runs on the planner, cached)."""
     out = request.cell.run(planner, request)
-    out.request, out.tags = request.to_dict(), {**out.tags, **request.payload.tags}
+    _finish(planner, request, out, blocking=True)
     return out
 
 

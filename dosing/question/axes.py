@@ -34,10 +34,17 @@ class Fluid:
 
     key: ClassVar[str] = "fluid"
     tags: ClassVar[dict[str, Any]] = {}  # what its answers add to their JSON
+    # its dimensionless answer is free of tau (the seconds scale with it: eq. timescale)
+    tau_free: ClassVar[bool] = True
 
     def fields(self) -> dict[str, Any]:
         """Nothing to add: the fluid is the bead's own."""
         return {}
+
+    @staticmethod
+    def mesh_variants(planned: Any) -> list[tuple[str, Any]]:
+        """No sieving: no mesh part."""
+        return []
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
@@ -59,10 +66,29 @@ class Drug:
 
     key: ClassVar[str] = "drug"
     tags: ClassVar[dict[str, Any]] = {"drug": True}  # its answers say so (api DrugOut)
+    tau_free: ClassVar[bool] = False  # D0 / D_gel moves with the constants
 
     def fields(self) -> dict[str, Any]:
         """The drug request's fields (the medium is the population's to use)."""
         return {"drug": self.model, "wait": self.wait, "wait_seconds": self.wait_seconds}
+
+    def mesh_variants(self, planned: Any) -> list[tuple[str, Any]]:
+        """The payloads of the mesh part (issue 36): a sieved drug at xi_dry / 2 and 2 xi_dry
+        (its own mesh_size_nm, so the bead's mechanics and their runs stay) and with the
+        other stretch bound (J^(1/3) vs the smallest principal stretch); none when nothing
+        sieves it (no solute radius, no hindrance)."""
+        from dataclasses import replace
+
+        drug = planned.drug
+        if drug.hindrance == "none" or drug.solute_radius() is None:
+            return []
+        xi = drug.dry_mesh_nm(planned.start_radius, planned.constants)
+        swollen = xi * planned.start_radius
+        other = "volume" if drug.mesh_stretch == "smallest" else "smallest"
+        return [(f"xi_dry {f * xi:.3g} nm", replace(self, model=replace(
+                    drug, mesh_size_nm=f * swollen))) for f in (0.5, 2.0)] + [
+                (f"mesh stretch '{other}'", replace(self, model=replace(
+                    drug, mesh_stretch=other)))]
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
@@ -113,10 +139,19 @@ class Jump:
     t_end: Any
 
     key: ClassVar[str] = "jump"
+    tau_free: ClassVar[bool] = True
 
     def fields(self) -> dict[str, Any]:
         """The request's T_end."""
         return {"t_end": self.t_end}
+
+    @staticmethod
+    def lattice(planned: Any, settings: Any, target: float) -> Any:
+        """The jump's run under ``settings`` (the envelope's delayed-law lattice)."""
+        from ..scenario import Scenario
+
+        return Scenario(planned.gel, planned.t_start, planned.t_end, branch=planned.branch,
+                        settings=settings)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
@@ -132,10 +167,18 @@ class Heating:
     steps: Any
 
     key: ClassVar[str] = "protocol"
+    tau_free: ClassVar[bool] = False  # its rates and times are in seconds: tau moves them
 
     def fields(self) -> dict[str, Any]:
         """The request's protocol (its hottest temperature is T_end)."""
         return {"t_end": None, "protocol": self.steps}
+
+    @staticmethod
+    def lattice(planned: Any, settings: Any, target: float) -> Any:
+        """The protocol's run under ``settings`` (the envelope's delayed-law lattice)."""
+        from ..protocol_dose import lattice_scenario
+
+        return lattice_scenario(planned, settings, target)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""

@@ -28,6 +28,7 @@ class DoseResult:
     validation_id: str | None = None
     request: dict[str, Any] | None = None
     tags: dict[str, Any] = field(default_factory=dict)  # the payload's flags ({"drug": True})
+    envelope: Any = None  # dosing.question.envelope.Envelope: what cannot be ruled out
 
     @property
     def time(self) -> float:
@@ -75,6 +76,7 @@ class DoseResult:
             d["validation_id"] = self.validation_id
         if self.request is not None:
             d["request"] = self.request
+        _envelope_fields(d, self.envelope, single=True)
         return d
 
 
@@ -89,6 +91,7 @@ class ScheduleResult:
     answer: Any
     request: dict[str, Any] | None = None
     tags: dict[str, Any] = field(default_factory=dict)
+    envelope: Any = None  # dosing.question.envelope.Envelope: what cannot be ruled out
 
     @property
     def reading(self) -> str:
@@ -142,4 +145,22 @@ class ScheduleResult:
                  actuation_seconds=self.actuation_seconds, headline=self.headline)
         if self.request is not None:
             d["request"] = self.request
+        _envelope_fields(d, self.envelope, single=False)
         return d
+
+
+def _envelope_fields(d: dict[str, Any], env: Any, single: bool) -> None:
+    """The envelope's JSON beside the point: ``envelope_seconds`` (one [lo, hi] for a dose,
+    one per heating for a schedule), ``envelope_time``, ``dominant_uncertainty``, the
+    ``envelope`` section, and ``uncertainty`` as the typed parts by name (the truth's
+    three parts of a validated answer kept beside them)."""
+    if env is None:
+        return
+    e = env.to_dict()
+    secs, times = e["seconds"], e["time"]
+    d["envelope_seconds"] = (secs[0] if single else secs) if secs is not None else None
+    d["envelope_time"] = times[0] if single else times
+    d["dominant_uncertainty"] = e["dominant"]
+    d["envelope"] = e
+    old = d.get("uncertainty")
+    d["uncertainty"] = {**(old if isinstance(old, dict) else {}), **e["parts"]}

@@ -7,8 +7,11 @@ Three stages, each the leading order in 1/Omega of the paper's model (sec. Front
    on, the shrunken one past the fold) as a linear poro-elastic sphere: the volume V = a^3
    obeys dV/dt = -m(T) (V - V_eq(T)) / tau_lag, tau_lag = a^2 / (15 D), D = k(phi)
    d^2W/dlambda_n^2 / lambda (the diffusivity of eq. PDE_Dimless linearised about the
-   uniform state; 15 = 1 / sum_n 6/(n pi)^4, the exact mean lag of the diffusive sphere's
-   modes, Tanaka & Fillmore 1979).
+   uniform state; 15 = 1 / sum_n 6/(n pi)^4, the mean lag of Crank's diffusive sphere with
+   a fixed surface value, Tanaka & Fillmore 1979).  A one-mode closure, not exact: this
+   model's edge follows a (eq. Boundary_Dimless), so its modes depend on G / (K + 4G/3)
+   (Li & Tanaka 1990); the closure's error is largest for small doses, whose time is mostly
+   this stage (10 % doses 10-63 % late, docs/heating.md), which lie outside the region.
 2. Nucleation.  When the uniform state (T(t), a(t)) enters the coexistence region
    (eq. Coexistence at the isotropic stretch; T_n(lambda), tabulated) a front forms at the
    edge: the core keeps phi_- = 1 - a_n^-3, the current uniform porosity.

@@ -25,7 +25,7 @@ from .evolve import _clenshaw as _clenshaw_kernel
 osmotic_dp = _osmotic_dp.compiled
 _clenshaw = _clenshaw_kernel.compiled
 
-LAG_MODES = 15.0  # 1 / sum_n 6 / (n pi)^4: the mean lag of a diffusive sphere's volume
+LAG_MODES = 15.0  # 1 / sum_n 6 / (n pi)^4: a one-mode closure of the sphere's volume lag
 CENTRE = 1e-12  # R_f^3 at which the core is gone
 MAX_STEPS = 200_000
 

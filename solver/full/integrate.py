@@ -85,9 +85,11 @@ class Segment:
 @dataclass
 class Watch:
     """What the drivers call besides the outputs and ``progress``: ``check(t)`` wherever
-    the compiled stepping loop returns anyway (outputs, mesh checks, record flushes: at
-    least every 4096 steps), so a wall-clock budget raises there without stopping the
-    integration anywhere it would not stop (``progress``'s ticks do stop it); and
+    the compiled stepping loop returns (outputs, mesh checks, record flushes: at least
+    every 4096 accepted steps; and a pause after every rosenbrock.PAUSE_ATTEMPTS step
+    attempts, accepted or rejected, after which the loop goes on as if it had not
+    returned), so a wall-clock budget raises there without stopping the integration
+    anywhere it would not stop (``progress``'s ticks do stop it); and
     ``boundary(seg, y)`` with the state at the end of every segment the run completes."""
 
     check: Callable[[float], None] | None = None
@@ -357,11 +359,14 @@ def run_implicit(ws: Workspace, y: np.ndarray, segments: Iterable[Segment],
                 # thin cells' nodes between steps (docs/moving_mesh.md sec. 8)
                 if land and k_out < out_times.size and out_times[k_out] > tt[0]:
                     t_land = min(t_land, float(out_times[k_out]))
-            status = ros.rodas_run(ws.grid, state, t_stop, t_land, budget, seg.par, seg.heat,
-                                   ws.geo, ws.band, ws.buf, method, control)
-            _flush(stats, rec, counters)
-            if watch.check is not None:
-                watch.check(float(tt[0]))
+            while True:  # a pause changes no step: the call goes on where it returned
+                status = ros.rodas_run(ws.grid, state, t_stop, t_land, budget, seg.par,
+                                       seg.heat, ws.geo, ws.band, ws.buf, method, control)
+                _flush(stats, rec, counters)
+                if watch.check is not None:
+                    watch.check(float(tt[0]))
+                if status != ros.RUN_PAUSED:
+                    break
             check = status == ros.RUN_BUDGET and budget < max_steps
             if check:
                 status = ros.RUN_REACHED

@@ -242,7 +242,13 @@ C_RHS, C_JAC, C_STEPS, C_REJECTED, C_MERGES = 0, 1, 2, 3, 4
 # run status
 RUN_REACHED, RUN_RECORD_FULL, RUN_BUDGET, RUN_UNDERFLOW, RUN_BAD_STATE = 0, 1, 2, 3, 4
 RUN_EVENT = 5
-CTRL_SIZE = 8  # [h, last h, last error, Jacobian valid, stop target, dir, step target, dir]
+# PAUSE_ATTEMPTS step attempts (accepted or rejected) in one call: back to the driver, which
+# checks its wall-clock budget and calls again with the same state (all of the loop's
+# state is in ``state`` and ``control``: the steps are those of one uninterrupted call)
+RUN_PAUSED = 6
+PAUSE_ATTEMPTS = 4096
+# [h, last h, last error, Jacobian valid, stop target, dir, step target, dir, no snap]
+CTRL_SIZE = 9
 
 
 @njit(cache=True)
@@ -272,7 +278,15 @@ def rodas_run(grid, state, t_stop, t_seg, budget, par, heat, geo, band, buf, met
     (empty: constant ``par``).  An accepted step is linearized at once (f and J at the new
     state; an unphysical new state rejects it).  control.rec = (4, capacity) record of
     (t, a, da/dt, edge-cell porosity) per accepted step, its count in counters[5].
-    Returns a RUN_* status.
+    Returns a RUN_* status; RUN_PAUSED after PAUSE_ATTEMPTS attempts (call again: the
+    steps are those of one call).
+
+    A step that would end within 1e-12 of t_seg is stretched to end there ("snapped").  If
+    such a step is rejected and the controller's smaller step would be snapped again, the
+    retry would be the very same step, rejected for ever (issue 40, R2: a protocol step of
+    1e-12 tau after a temperature jump spun at 100 % CPU).  Then, until the next accepted
+    step (ctrl[8] = 1), steps are not snapped: the smaller step is taken as it is.  No run
+    that ever finished took that branch, so this changes no step of any of them.
     """
     y, f, yold, fold, tt = state.y, state.f, state.yold, state.fold, state.tt
     lower, upper = band.lower, band.upper
@@ -286,11 +300,15 @@ def rodas_run(grid, state, t_stop, t_seg, budget, par, heat, geo, band, buf, met
     ia = radius_index(grid, n)
     floor = underflow(grid)
     expo = tableau[1]
+    attempts = 0
     while tt[0] < t_stop:
         if counters[C_STEPS] >= max_steps:
             return RUN_BUDGET
         if counters[5] >= rec.shape[1]:
             return RUN_RECORD_FULL
+        if attempts >= PAUSE_ATTEMPTS:
+            return RUN_PAUSED
+        attempts += 1
         t = tt[0]
         if ctrl[3] == 0.0:
             calls = linearize(grid, y, f, par_at(par, heat, t), geo, work, lower, upper,
@@ -303,7 +321,8 @@ def rodas_run(grid, state, t_stop, t_seg, budget, par, heat, geo, band, buf, met
             ctrl[3] = 1.0
         h = ctrl[0]
         last = False
-        if t + h >= t_seg - 1e-12 * max(1.0, abs(t_seg)):
+        if t + h >= t_seg - 1e-12 * max(1.0, abs(t_seg)) and not (
+                ctrl[8] != 0.0 and h < t_seg - t):
             h = t_seg - t
             last = True
         if h < floor * max(1.0, abs(t)):
@@ -330,7 +349,10 @@ def rodas_run(grid, state, t_stop, t_seg, budget, par, heat, geo, band, buf, met
                 ctrl[0] = 0.25 * h
             else:
                 ctrl[0] = h * max(FAC_MIN, min(1.0, SAFETY * err**-expo))
+            if last and t + ctrl[0] >= t_seg - 1e-12 * max(1.0, abs(t_seg)):
+                ctrl[8] = 1.0  # the retry would be this step again: do not snap it
             continue
+        ctrl[8] = 0.0
         quot = max(1.0 / FAC_MAX, min(1.0 / FAC_MIN, max(err, 1e-12) ** expo / SAFETY))
         if ctrl[1] > 0.0:
             gus = (ctrl[1] / h) * (max(err, 1e-12) ** 2 / ctrl[2]) ** expo / SAFETY

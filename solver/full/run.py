@@ -18,7 +18,7 @@ import numpy as np
 from ..equilibrium import equilibrium
 from ..errors import BudgetExceeded, ParameterError, SolverError
 from ..gel import Gel, check_temperature, preset
-from ..heating import UNTIL_LIMIT, Program, Radius, Released
+from ..heating import DURATION_MAX, UNTIL_LIMIT, Program, Radius, Released
 from . import front as fronts
 from . import moving
 from .grids import GRIDS, GridSpec, grid_spec
@@ -67,8 +67,9 @@ def _protocol(t_end: float | None, until: float | None,
             duration = float(duration)
         except (TypeError, ValueError):
             raise ParameterError(f"protocol[{k}]", item, "a (duration, temperature) pair") from None
-        if not (math.isfinite(duration) and 0.0 < duration <= 1e6):
-            raise ParameterError(f"protocol[{k}].duration", duration, "0 < duration <= 1e6")
+        if not (math.isfinite(duration) and 0.0 < duration <= DURATION_MAX):
+            raise ParameterError(f"protocol[{k}].duration", duration,
+                                 f"0 < duration <= {DURATION_MAX:g}")
         steps.append((duration, check_temperature(temperature, f"protocol[{k}].temperature")))
     return steps
 
@@ -370,8 +371,9 @@ def simulate(gel: Gel | str, t_start: float, t_end: float | None = None, *,
                 total = float(until)
             except (TypeError, ValueError):
                 total = math.nan
-            if not (math.isfinite(total) and 0.0 < total <= 1e6):
-                raise ParameterError("until", until, "a horizon 0 < until <= 1e6 (tau)")
+            if not (math.isfinite(total) and 0.0 < total <= DURATION_MAX):
+                raise ParameterError("until", until,
+                                     f"a horizon 0 < until <= {DURATION_MAX:g} (tau)")
         else:
             total = full + (HOLD_AFTER if stop is not None else 0.0)
         if total <= 0.0:

@@ -114,13 +114,20 @@ def sieving_factor(lam, mesh):
 
 @njit(cache=True)
 def partition_factor(phi, code, fiber):
-    """The steric partition K_s(phi) (``code`` 0: 1; 1: Ogston 1958)."""
+    """The steric partition K_s(phi) of the pore fluid (``code`` 0: 1; 1: Ogston 1958).
+
+    Ogston's exp(-v (1 + r_s/r_f)^2) is the fraction of the *total* volume open to the
+    solute's centre (exp(-v) for a point solute, the random-fibre model's void fraction);
+    the kernels hold the solute in the pore fluid (phi c), so the partition per pore volume
+    is that over exp(-v): exp(-v ((1 + r_s/r_f)^2 - 1)), 1 for a point solute (issue 36:
+    taken per total volume it counted the polymer's excluded volume twice, x0.49 in a
+    collapsed ANB shell)."""
     if code == 0:
         return 1.0
     v = 1.0 - phi
     if v <= 0.0:
         return 1.0
-    return np.exp(-v * (1.0 + fiber) ** 2)
+    return np.exp(-v * fiber * (2.0 + fiber))
 
 
 @njit(cache=True)

@@ -1,0 +1,167 @@
+"""Issue 36: every answer leads with the envelope the user cannot rule out.
+
+The acceptance figures (../shared/design/honest-answers.md, sec. 1 and 5): ANB 302 -> 308 K,
+80 %, 50 um dry, uncalibrated: the envelope covers 1.8-240 s and stays within 0.3-1,500 s,
+the timescale dominates and the front law's ratio (the delayed lattice over this Maxwell
+answer) is 1.40-1.54 (the review's lattice at N = 400 against the Maxwell truth: 1.47;
+here N = 200, whose N-spread is 0.05 %, against the front model, 2-3 % from the truth);
+at 5 K/min the envelope covers 54-295 s; HHT 304 -> 308 K at 5 K/min, 80 %: the ratio is
+2.3-2.75 (the review: 2.51).
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from dosing import Planner
+from dosing.question import Batch, Dose, Heating, Jump, Request, Schedule, plan
+from dosing.question.envelope import Envelope, Part, StoredOnly, _NeedsRuns, symmetric
+
+RAMP = ["Heat to {t} K at 5 K/min"]
+
+
+@pytest.fixture(scope="module")
+def planner(tmp_path_factory):
+    from concurrent.futures import ThreadPoolExecutor
+
+    p = Planner(cache_path=str(tmp_path_factory.mktemp("env") / "c.sqlite"),
+                executor=ThreadPoolExecutor(1))
+    yield p
+    p.close()
+
+
+def _parts(d: dict) -> dict:
+    return d["envelope"]["parts"]
+
+
+def test_the_jump_answer_leads_with_its_envelope(planner) -> None:
+    d = plan(Request("ANB", 302, Jump(308), Dose(0.8), dry_radius_um=50), planner).to_dict()
+    lo, hi = d["envelope_seconds"]
+    assert lo <= 1.8 and hi >= 240 and lo >= 0.3 and hi <= 1500, (lo, hi)
+    assert d["dominant_uncertainty"]["name"] == "timescale"
+    assert "fit kinetics" in d["dominant_uncertainty"]["how_to_pin"]
+    assert 1.40 <= d["uncertainty"]["front_law"]["ratio"] <= 1.54
+    assert _parts(d)["timescale"]["factor"] == pytest.approx(100, rel=1e-9)
+    assert d["seconds"] == pytest.approx(167.9, abs=0.1)  # the point stays
+
+
+def test_a_ramp_reruns_the_timescale_and_runs_the_front_law(planner) -> None:
+    d = plan(Request("ANB", 302, Heating([RAMP[0].format(t=308)]), Dose(0.8),
+                     dry_radius_um=50), planner).to_dict()
+    lo, hi = d["envelope_seconds"]
+    assert lo <= 54 and hi >= 295, (lo, hi)
+    ts = _parts(d)["timescale"]
+    assert ts["rerun"] is True  # a ramp is not a rescale
+    assert 1.25 <= d["uncertainty"]["front_law"]["ratio"] <= 1.45  # the review: 1.35
+
+
+def test_hht_under_a_ramp_has_the_wide_front_law(planner) -> None:
+    d = plan(Request("HHT", 304, Heating([RAMP[0].format(t=308)]), Dose(0.8),
+                     dry_radius_um=50), planner).to_dict()
+    assert 2.3 <= d["uncertainty"]["front_law"]["ratio"] <= 2.75
+
+
+def test_a_batch_and_a_schedule_carry_an_envelope(planner) -> None:
+    b = plan(Request("ANB", 302, Jump(308), Dose(0.8), population=Batch({"cv": 0.2}),
+                     dry_radius_um=50), planner).to_dict()
+    lo, hi = b["envelope_seconds"]
+    assert lo < b["seconds"] < hi and "quadrature" in _parts(b)
+    s = plan(Request("ANB", 302, Jump(308), Schedule([0.3, 0.3], rests=[0.5]),
+                     dry_radius_um=50), planner).to_dict()
+    assert len(s["envelope_seconds"]) == 2
+    for (lo, hi), x in zip(s["envelope_seconds"], s["actuation_seconds"], strict=True):
+        assert lo < x < hi
+
+
+def test_without_a_size_the_envelope_is_in_tau(planner) -> None:
+    d = plan(Request("ANB", 302, Jump(308), Dose(0.8)), planner).to_dict()
+    assert d["envelope_seconds"] is None and "timescale" not in _parts(d)
+    lo, hi = d["envelope_time"]
+    assert lo < d["time"] < hi
+    assert d["dominant_uncertainty"]["name"] == "front_law"
+
+
+def test_the_envelope_is_the_product_of_its_counted_parts() -> None:
+    parts = (symmetric("reduction", 0.03, "r"), Part("timescale", 0.01, 1.0, "t"),
+             Part("front_law", 1.0, 1.5, "f"), Part("mesh", 1.0, 1.0, "m", counted=False,
+                                                    measured=False))
+    env = Envelope((0.1,), (100.0,), parts)
+    assert env.seconds_range() == [[pytest.approx(0.97), pytest.approx(154.5)]]
+    assert env.time_range() == [[pytest.approx(0.097), pytest.approx(0.1545)]]
+    assert env.dominant.name == "timescale"
+    lines = env.lines("80% after")
+    assert lines[0] == "80% after 0.97-150 s (point 100.0 s)"
+    assert lines[1].startswith("dominant uncertainty: timescale x100, then front law x1.5")
+    assert not math.isclose(env.high, 1.0)
+
+
+def test_an_envelope_rerun_queues_nothing(planner) -> None:
+    """A candidate that needs new full-solver runs is rescaled: the pool is not loaded."""
+    with pytest.raises(_NeedsRuns):
+        StoredOnly(planner).submit(None)
+    with pytest.raises(_NeedsRuns):
+        StoredOnly(planner).jobs.submit_group("k", [])
+
+
+@pytest.mark.slow
+def test_a_calibrated_gels_envelope_contains_the_truth(tmp_path, capsys, monkeypatch) -> None:
+    """Issue 36: a shrinking curve made with the Maxwell truth (the regularized model on the
+    moving grid at the bead's own ell) at tau = 300 s, 0.5 % size noise, fitted with
+    `thermogel fit kinetics ... --save NAME` (both laws compared by default): `dose --gel
+    NAME` gives an envelope that contains the truth and is at most 2x wide."""
+    import json
+
+    import numpy as np
+
+    from api.cli import main
+    from dosing.scenario import Scenario, SolverSettings
+    from dosing.units import radius_after_dose
+    from solver.gel import ANB
+
+    monkeypatch.setenv("THERMOGEL_GELS", str(tmp_path / "gels"))
+    cache = str(tmp_path / "c.sqlite")
+    tau, dry = 300.0, 50.0
+    truth = SolverSettings(grid="moving", n=200, interfacial_length=8e-5, rtol=1e-5)
+    from solver.equilibrium import equilibrium
+
+    a80 = radius_after_dose(equilibrium(ANB, 302.0).stretch, 0.8)
+    with Planner(cache_path=cache) as p:
+        traj = p.trajectory(Scenario(ANB, 302.0, 308.0, settings=truth), need_radius=1.2,
+                            need_time=0.3)
+    t80 = traj.time_to_radius(a80)
+    td = np.linspace(0.0, 0.3, 40)
+    size = 2 * dry * np.interp(td, traj.step_t, traj.step_radius)
+    size *= 1 + 0.005 * np.random.default_rng(3).standard_normal(td.size)
+    csv = tmp_path / "curve.csv"
+    csv.write_text("time_s,diameter_um\n" + "\n".join(
+        f"{t * tau:.6g},{y:.6g}" for t, y in zip(td, size, strict=True)))
+    assert main(["fit", "kinetics", str(csv), "--gel", "ANB", "--t-start", "302",
+                 "--t-end", "308", "--dry-radius-um", str(dry), "--size-rel-sigma", "0.005",
+                 "--save", "cal", "--cache", cache, "--json"]) == 0
+    fit = json.loads(capsys.readouterr().out)
+    assert fit["front_laws"]["preferred"] == "maxwell"
+    assert main(["dose", "--gel", "cal", "--t-start", "302", "--t-end", "308", "--fraction",
+                 "0.8", "--dry-radius-um", str(dry), "--cache", cache, "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    lo, hi = d["envelope_seconds"]
+    assert lo <= t80 * tau <= hi and hi / lo <= 2.0, (lo, t80 * tau, hi)
+    assert d["uncertainty"]["timescale"]["calibrated"] is True
+
+
+@pytest.mark.slow
+def test_a_sieved_drug_carries_its_mesh_part(planner) -> None:
+    """Issue 36: a 1.5 nm solute's dose (carried by the fluid, D0 = 0): the sieving rerun
+    over xi_dry 2-8 nm and both stretch bounds moves it by more than the numerical part;
+    the envelope counts it (2 nm: the dose is never reached, said in words)."""
+    from dosing.question import Drug
+
+    d = plan(Request("ANB", 302, Jump(308), Dose(0.5), dry_radius_um=50,
+                     payload=Drug({"diffusivity_cm2_s": 0.0, "solute_radius_nm": 1.5})),
+             planner).to_dict()
+    mesh = _parts(d)["mesh"]
+    assert mesh["counted"] and mesh["factor"] > 2.0, mesh["text"]
+    assert "xi_dry" in mesh["text"] and "stretch" in mesh["text"]
+    lo, hi = d["envelope_seconds"]
+    assert lo < d["seconds"] * mesh["low"] * 1.0001
