@@ -860,7 +860,6 @@ class Protocol:
         out, cur = [], self.t_start
         for i, st in enumerate(self.steps):
             end = _end_temperature(st, cur)
-            _check_physical(i, st, tau_s, cur)
             if isinstance(st, Ramp):
                 out.append(Piece("ramp", cur, st.to_k, abs(st.to_k - cur) / st.rate_tau(tau_s),
                                  step=i))
@@ -898,19 +897,23 @@ class Protocol:
         return out
 
 
-def _check_physical(i: int, st: Step, tau_s: float | None, cur: float) -> None:
-    """A step's duration given in tau, bounded by its physical value once tau is known
-    (within DURATION_MAX_S; issue 40, R8).  Rates and durations in tau are checked by the
-    solver's own rules where the request is built (the ramp's length in tau, its rate)."""
-    where = _Where(i, st.text)
-    spans = [("for", getattr(st, "duration", None)),
-             ("time_constant", getattr(st, "time_constant", None))]
-    for name, span in spans:
-        if isinstance(span, Span) and span.unit == "tau" and tau_s is not None:
-            secs = span.value * tau_s
-            if not 0.0 < secs <= DURATION_MAX_S:
-                raise where.error(name, f"{span.value:g} tau = {secs:.3g} s (tau = "
-                                  f"{tau_s:.3g} s)", f"0 s < {name} <= {DURATION_MAX_S:g} s")
+def check_physical(protocol: Protocol, tau_s: float | None) -> None:
+    """Each step's duration given in tau, bounded by its physical value once tau is known
+    (within DURATION_MAX_S, as one given in seconds; issue 40, R8), after the solver's own
+    rules (``dosing.heating_program.check_program``, which calls this last)."""
+    if tau_s is None:
+        return
+    for i, st in enumerate(protocol.steps):
+        where = _Where(i, st.text)
+        for name in ("duration", "time_constant"):
+            span = getattr(st, name, None)
+            field = "for" if name == "duration" else name
+            if isinstance(span, Span) and span.unit == "tau":
+                secs = span.value * tau_s
+                if not 0.0 < secs <= DURATION_MAX_S:
+                    raise where.error(field, f"{span.value:g} tau = {secs:.3g} s (tau = "
+                                      f"{tau_s:.3g} s)",
+                                      f"0 s < {field} <= {DURATION_MAX_S:g} s")
 
 
 def _end_temperature(st: Step, cur: float) -> float:
