@@ -9,8 +9,10 @@ non-finite number cannot turn a 422 into a 500.
 
 from __future__ import annotations
 
+import logging
 import math
 import re
+import sqlite3
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -145,13 +147,69 @@ def rule_for(exc: Exception) -> Rule | None:
     return None
 
 
-def error_response(exc: Exception) -> JSONResponse:
-    """The answer to a table exception."""
+def error_response(exc: Exception, model: Any = None, body: Any = None) -> JSONResponse:
+    """The answer to a table exception (``model``: the route's body model, whose fields a
+    ``loc`` under 'body' must name: :func:`known_loc`; ``body``: the request's JSON, where
+    a derived value's field must be given, not null or absent)."""
     rule = rule_for(exc)
     assert rule is not None, type(exc)
+    loc = rule.loc(exc)
+    if model is not None and loc[:1] == ["body"]:
+        loc = known_loc(loc, model)
+    if (isinstance(body, dict) and len(loc) > 1 and loc[0] == "body"
+            and body.get(loc[1]) is None and getattr(exc, "value", None) is not None):
+        loc = ["body"]  # a value the planner derived (a batch's mean) for a field not given
     detail: Any = (rule.msg(exc) if rule.plain else
-                   [_item(rule.loc(exc), rule.msg(exc), rule.kind, **rule.extra(exc))])
+                   [_item(loc, rule.msg(exc), rule.kind, **rule.extra(exc))])
     return JSONResponse({"detail": detail}, status_code=rule.status, headers=rule.headers(exc))
+
+
+def _fields(model: Any) -> dict[str, Any]:
+    """A pydantic model's fields by name and by alias."""
+    fields = getattr(model, "model_fields", None) or {}
+    out = dict(fields)
+    out.update({f.alias: f for f in fields.values() if getattr(f, "alias", None)})
+    return out
+
+
+def _model_in(annotation: Any) -> Any:
+    """The pydantic model inside an annotation (``X | None``, ``list[X]``), or None."""
+    if isinstance(annotation, type) and hasattr(annotation, "model_fields"):
+        return annotation
+    for arg in getattr(annotation, "__args__", ()) or ():
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def known_loc(loc: list[str | int], model: Any) -> list[str | int]:
+    """``loc`` cut at its first part the request's model does not have: an error found deep
+    in the planner (a solver's 'targets', a derived 'data') points at the body, or at the
+    deepest field the request has, never at a field it lacks (issue 40, R10)."""
+    out: list[str | int] = [loc[0]]
+    current = model
+    for part in loc[1:]:
+        if isinstance(part, int):  # an index into a list field: kept
+            out.append(part)
+            continue
+        fields = _fields(current) if current is not None else {}
+        if part not in fields:
+            if current is None and len(out) > 1:  # a free-form value (a protocol step)
+                out.append(part)
+                continue
+            break
+        out.append(part)
+        current = _model_in(fields[part].annotation)
+    return out
+
+
+def _route_model(request: Request) -> Any:
+    route = request.scope.get("route")
+    body = getattr(route, "body_field", None)
+    info = getattr(body, "field_info", None)
+    return _model_in(getattr(body, "type_", None) or getattr(body, "annotation", None)
+                     or getattr(info, "annotation", None))
 
 
 async def _table_handler(request: Request, exc: Exception) -> JSONResponse:
@@ -159,7 +217,20 @@ async def _table_handler(request: Request, exc: Exception) -> JSONResponse:
         state = getattr(request.app.state, "service", None)
         if state is not None and hasattr(state, "record_fault"):
             state.record_fault(exc.reason)
-    return error_response(exc)
+    return error_response(exc, _route_model(request), _json_body(request))
+
+
+def _json_body(request: Request) -> Any:
+    """The request's JSON body as the route read it (kept on the request), or None."""
+    raw = getattr(request, "_body", None)
+    if not raw or len(raw) > (4 << 20):
+        return None
+    try:
+        import json
+
+        return json.loads(raw)
+    except ValueError:
+        return None
 
 
 async def _validation_handler(_: Request, exc: Exception) -> JSONResponse:
@@ -179,3 +250,37 @@ def install(app: FastAPI) -> None:
     for cls in ERRORS:
         app.add_exception_handler(cls, _table_handler)
     app.add_exception_handler(RequestValidationError, _validation_handler)
+
+
+class FaultWatch(logging.Handler):
+    """A log handler on the 'thermogel' loggers: a cache failure logged anywhere in the
+    process (a job thread, a validation, the health probe; a request's is recorded by
+    :func:`_table_handler`) makes /health 'degraded' (issue 40, R10: it said 'ok' on a
+    cache the log already called malformed)."""
+
+    WORDS = ("malformed", "disk is full", "disk i/o error", "not a database")
+
+    def __init__(self, record_fault: Callable[[str], None]) -> None:
+        super().__init__(logging.WARNING)
+        self.record_fault = record_fault
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            exc = record.exc_info[1] if record.exc_info else None
+            text = str(exc) if isinstance(exc, sqlite3.Error) else None
+            if text is None:
+                msg = record.getMessage().lower()
+                if any(w in msg for w in self.WORDS):
+                    text = record.getMessage()
+            if text:
+                self.record_fault(text[:300])
+        except Exception:  # a log handler never raises
+            pass
+
+
+def watch_faults(state: Any) -> Callable[[], None]:
+    """Install a :class:`FaultWatch` for ``state`` (its ``record_fault``); the remover."""
+    handler = FaultWatch(state.record_fault)
+    logger = logging.getLogger("thermogel")
+    logger.addHandler(handler)
+    return lambda: logger.removeHandler(handler)

@@ -19,12 +19,11 @@ from typing import Any
 from fastapi import APIRouter, FastAPI
 from fastapi.concurrency import run_in_threadpool
 from fastapi.routing import APIRoute
-from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from dosing.jobs import exit_with_parent
 
 from . import docs_pages, errors, guard, openapi_spec
-from .auth import TokenAuth
+from .auth import HostCheck, TokenAuth
 from .routers import (
     analysis,
     design,
@@ -59,7 +58,9 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
     stopped.  ``warm``: warm every numba kernel first.  ``max_body_bytes``: larger request
     bodies are refused with 413 before they are read.  ``api_token``: every route but
     /health needs ``Authorization: Bearer <token>`` (:mod:`api.auth`).  ``allowed_hosts``:
-    Host headers accepted (Starlette's TrustedHostMiddleware; default any).
+    Host headers accepted (:class:`api.auth.HostCheck`: a name with any port, or
+    ``name:port``; default any; ``thermogel serve`` on loopback defaults to
+    ``api.auth.LOOPBACK_HOSTS``).
     """
     options: dict[str, Any] = {"cache_path": cache_path}
     if executor is not None:
@@ -72,11 +73,13 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
 
     @asynccontextmanager
     async def lifespan(_: FastAPI):
+        unwatch = errors.watch_faults(state)  # /health degraded on a logged cache failure
         await run_in_threadpool(state.start, warm)
         try:
             yield
         finally:
             await run_in_threadpool(state.stop)
+            unwatch()
 
     app = guard.GuardedFastAPI(
         title="thermogel planner", version=package_version(), lifespan=lifespan,
@@ -92,7 +95,7 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
     if api_token:
         app.add_middleware(TokenAuth, token=api_token)
     if allowed_hosts:
-        app.add_middleware(TrustedHostMiddleware, allowed_hosts=allowed_hosts)
+        app.add_middleware(HostCheck, allowed=allowed_hosts)
     for router in (service.router, physics.router, dosing.router, validations.router,
                    fit.router, sweep.router, page.router, sensitivity_routes.router,
                    design.router, jobs.router, analysis.router):

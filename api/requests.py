@@ -4,6 +4,7 @@ axis here, once, so that the service's adapter only plans the request it is give
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from dosing.question import Batch, Dose, Drug, Fluid, Heating, Jump, OneBead, Request, Schedule
@@ -24,16 +25,38 @@ def to_gel(spec: str | s.GelParameters) -> Gel:
                                        exclude_none=True))
 
 
+def http_protocol(t_start: float, steps: Any) -> Any:
+    """The one parser of a protocol sent over HTTP (every route): steps as text or data, a
+    measured trace as CSV text or lists; a step naming a file ('Trace from <path>') is a
+    422 naming it (``protocol[i].trace``): no route opens a path a request names."""
+    from dosing.heating import Protocol
+
+    for i, step in enumerate(steps if isinstance(steps, list) else []):
+        for key, value in (step.items() if isinstance(step, dict) else ()):
+            if _non_finite(value):  # JSON's NaN / Infinity in a structured step
+                raise ParameterError(f"protocol[{i}]", f"{str(key)[:40]}: {value!r:.40}",
+                                     "finite numbers")
+    return Protocol(t_start, steps, files=False)
+
+
+def _non_finite(value: Any) -> bool:
+    if isinstance(value, float):
+        return not math.isfinite(value)
+    if isinstance(value, (list, tuple)):
+        return any(isinstance(x, float) and not math.isfinite(x) for x in value)
+    if isinstance(value, dict):
+        return any(_non_finite(x) for x in value.values())
+    return False
+
+
 def _heating(body: Any) -> Jump | Heating:
     """A jump to t_end, or the protocol (no file paths over HTTP)."""
     if getattr(body, "protocol", None) is None:
         return Jump(body.t_end)
-    from dosing.heating import Protocol
-
     if body.t_end is not None:
         raise ParameterError("t_end", body.t_end, "absent when a protocol is given (the "
                              "protocol's steps set the heating)")
-    return Heating(Protocol(body.t_start, body.protocol, files=False))
+    return Heating(http_protocol(body.t_start, body.protocol))
 
 
 def _payload(body: Any) -> Fluid | Drug:

@@ -32,6 +32,7 @@ from dosing.units import REFERENCE_TEMPERATURE_K
 from solver.limits import (
     BEAD_COUNT_RANGE,
     DRUG_STEP_MAX,
+    DRY_RADIUS_UM_RANGE,
     MEDIUM_VOLUME_ML_RANGE,
     REST_RANGE,
     T_MAX,
@@ -56,7 +57,7 @@ Branch = Literal["swollen", "shrunken"]
 
 
 
-MIN_RADIUS_UM = 1.0e-3  # 1 nm: a subnormal radius would make tau 0 (issue 22)
+MIN_RADIUS_UM = DRY_RADIUS_UM_RANGE[0]  # 1 nm: a subnormal radius made tau 0 (issue 22)
 
 def interfacial_length_field() -> Any:
     """The validation truth's interfacial length: None (the bead's own), 0 (the paper's
@@ -89,6 +90,26 @@ def check_interfacial_length(value: float | None, info: ValidationInfo) -> float
                          f"model) or {lo}-{hi} dry radii"
                          + (" (the ladder goes down to ell / 4)" if ladder else ""))
     return value
+
+
+def _has_non_finite(value: Any) -> bool:
+    if isinstance(value, float):
+        return not math.isfinite(value)
+    if isinstance(value, (list, tuple)):
+        return any(_has_non_finite(x) for x in value)
+    if isinstance(value, dict):
+        return any(_has_non_finite(x) for x in value.values())
+    return False
+
+
+def check_finite_steps(steps: list[Any] | None) -> list[Any] | None:
+    """A protocol's structured steps hold finite numbers only (JSON's NaN and Infinity are
+    refused here, with the body's other errors: the steps' own parser names the rest)."""
+    for i, step in enumerate(steps or []):
+        if _has_non_finite(step):
+            raise ValueError(f"protocol step {i} holds a number that is not finite (NaN or "
+                             "Infinity)")
+    return steps
 
 
 def temperature_field(what: str, example: float) -> Any:
@@ -563,6 +584,7 @@ class DoseTimeRequest(RequestModel):
                       "dry_radius_um": 50.0}]})
 
     _ell = field_validator("interfacial_length")(check_interfacial_length)
+    _steps = field_validator("protocol")(check_finite_steps)
 
     @model_validator(mode="after")
     def _heating(self) -> DoseTimeRequest:
@@ -871,6 +893,7 @@ class ScheduleRequest(RequestModel):
                           "dry_radius_um is the batch's number-weighted mean")
 
     _ell = field_validator("interfacial_length")(check_interfacial_length)
+    _steps = field_validator("protocol")(check_finite_steps)
 
     model_config = ConfigDict(extra="forbid", json_schema_extra={"examples": [
         {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dry_radius_um": 50.0,

@@ -13,6 +13,7 @@ their one thread and queue), else on the service's job threads.
 from __future__ import annotations
 
 import hashlib
+import logging
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -20,6 +21,8 @@ from typing import Any
 from pydantic import BaseModel
 
 from dosing import QueueFullError, UnknownValidationError
+
+log = logging.getLogger("thermogel.service")
 
 
 @dataclass(frozen=True)
@@ -64,10 +67,39 @@ def _run(state: Any, jid: str, kind: JobKind, stored: dict[str, Any]) -> dict[st
     try:
         result = kind.run(state.planner, kind.request.model_validate(stored))
     except Exception as exc:
-        cache.finish_job(jid, "failed", error=f"{type(exc).__name__}: {exc}")
+        import sqlite3
+
+        if isinstance(exc, sqlite3.Error) and hasattr(state, "record_fault"):
+            state.record_fault(str(exc))  # /health: degraded
+        cache.finish_job(jid, "failed", error=plain_error(exc))
         raise
     cache.finish_job(jid, "done", result=result)
     return result
+
+
+def plain_error(exc: Exception) -> str:
+    """Why a job failed, in plain words for its poll: the field and its valid range for an
+    input error, the solver's reason for a numerical failure; never a Python exception's
+    class name (the traceback goes to the log)."""
+    from solver.errors import NotApplicableError, ParameterError, SolverError
+
+    if isinstance(exc, ParameterError):
+        return f"the input {exc.field} is not usable: {exc}"
+    if isinstance(exc, NotApplicableError):
+        return f"the model does not apply: {exc}"
+    if isinstance(exc, SolverError):
+        return f"the solver could not answer: {exc}"
+    if isinstance(exc, QueueFullError):
+        return str(exc)
+    import sqlite3
+
+    if isinstance(exc, sqlite3.Error) or type(exc).__name__ == "CacheFault":
+        return f"the validation cache failed: {str(exc)[:300]}"
+    log.error("job failed", exc_info=exc)
+    text = str(exc).strip()
+    if isinstance(exc, (ValueError, ArithmeticError)) and text:
+        return f"the computation failed on these data: {text[:300]}"
+    return "the job failed on an internal error (logged); please report it"
 
 
 def _start(state: Any, jid: str, kind: JobKind, stored: dict[str, Any]) -> None:

@@ -19,7 +19,6 @@ radius; times are in its tau.
 from __future__ import annotations
 
 import math
-from collections import OrderedDict
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -28,6 +27,7 @@ from scipy.optimize import brentq
 
 from solver.errors import NotApplicableError, ParameterError
 
+from .lru import ByteLRU
 from .model_choice import MODEL_NAMES, front_run, model_answer
 from .request import DoseRequest
 from .scenario import SolverSettings
@@ -50,7 +50,7 @@ def exact_release_fraction(fr: Any, s: Any) -> np.ndarray:
 
 
 TABLE_POINTS = 8001  # F(s) tabulated at this many front positions: |error| < 1e-7
-_TABLES: OrderedDict[int, tuple[Any, np.ndarray, np.ndarray]] = OrderedDict()
+_TABLES: ByteLRU = ByteLRU(32e6, max_items=16)  # bytes: a table and its trajectory
 
 
 def _table(fr: Any) -> tuple[np.ndarray, np.ndarray]:

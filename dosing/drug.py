@@ -49,6 +49,7 @@ from solver.solute import Hindrance, ReleaseResult, Solute, crank_sphere
 from solver.solute.result import RELEASE_ARRAYS
 
 from .cache import ValidationCache
+from .lru import ByteLRU
 from .scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
 from .units import (
     BOLTZMANN,
@@ -565,7 +566,7 @@ class DrugRuns:
     def __init__(self, planner: Any) -> None:
         self.planner = planner
         self.cache = DrugCache(planner.cache.path)
-        self._mem: OrderedDict[str, ReleaseResult] = OrderedDict()
+        self._mem: ByteLRU = ByteLRU(MECHANICS_MEMORY, max_items=32)  # bytes, not entries
         self._lock = threading.Lock()
         # key -> (case, protocol, mechanics, the run's solute as a dict)
         self._mech: OrderedDict[str, tuple[tuple, tuple[Step, ...], Any, dict[str, Any]]] = \

@@ -20,7 +20,6 @@ from __future__ import annotations
 import json
 import threading
 import time
-from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any
 
@@ -32,6 +31,7 @@ from solver.errors import ParameterError
 from .drug import DrugModel, drug_settings
 from .heating import Protocol
 from .heating_program import program_spec, solver_program
+from .lru import ByteLRU
 from .request import bead_settings
 from .scenario import SolverSettings, run_budget
 from .units import PhysicalConstants, timescale
@@ -39,6 +39,7 @@ from .units import PhysicalConstants, timescale
 SAMPLES = 600  # mechanics outputs over the horizon (the solute's steps adapt within them)
 HORIZON_MARGIN = 1.02  # the run goes this far past the last measured time
 MEMO_SIZE = 8
+MEMO_BYTES = 128e6  # mechanics (with profiles) kept, bytes
 
 
 @dataclass(frozen=True)
@@ -55,7 +56,7 @@ class ReleaseMechanics:
     protocol: tuple[str, ...]
 
 
-_MEMO: OrderedDict[str, ReleaseMechanics] = OrderedDict()
+_MEMO: ByteLRU = ByteLRU(MEMO_BYTES, max_items=MEMO_SIZE)  # bytes, not only entries
 _LOCK = threading.Lock()
 
 

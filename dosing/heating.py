@@ -399,6 +399,8 @@ def _unit_of(header: str) -> str | None:
 
 
 def _temperature_unit(unit: str | None, field: str) -> str:
+    if unit is not None and not isinstance(unit, str):
+        raise ParameterError(field, unit, "K or degC (a string)")
     u = (unit or "K").strip().lower().replace("deg c", "degc")
     if u in ("k", "kelvin"):
         return "K"
@@ -408,6 +410,8 @@ def _temperature_unit(unit: str | None, field: str) -> str:
 
 
 def _time_scale(unit: str | None, field: str) -> float:
+    if unit is not None and not isinstance(unit, str):
+        raise ParameterError(field, unit, "s, min or h (a string)")
     u = (unit or "s").strip().lower()
     if u not in _TIME_UNITS:
         raise ParameterError(field, unit, "s, min or h")
@@ -423,7 +427,15 @@ def trace_from_csv(text: str, time_unit: str | None = None,
     and the column: time not increasing, a value that is not a finite number, a temperature
     outside 273.15-373.15 K, more than 100,000 rows, fewer than 2."""
     where = _Where(index, f"Trace from {name}")
-    rows = list(csv.reader(io.StringIO(text)))
+    if not isinstance(text, str):
+        raise where.error("trace", type(text).__name__, "CSV text")
+    # any line ending (CR alone too); a field over csv's limit is refused, not a crash
+    text = text.replace("\r\n", "\n").replace("\r", "\n")
+    try:
+        rows = list(csv.reader(io.StringIO(text)))
+    except csv.Error as exc:
+        raise where.error("trace", f"CSV text ({exc})", "CSV text with a time and a "
+                          "temperature column, a number in each cell") from None
     rows = [(k + 1, r) for k, r in enumerate(rows) if r and any(c.strip() for c in r)
             and not r[0].lstrip().startswith("#")]
     if not rows:
@@ -447,22 +459,24 @@ def trace_from_csv(text: str, time_unit: str | None = None,
     except ParameterError as exc:
         raise where.error(exc.field, exc.value, exc.valid) from None
     offset = kelvin_offset(kunit)
-    times = np.empty(len(rows))
-    temps = np.empty(len(rows))
-    for j, (line, r) in enumerate(rows):
-        if len(r) < 2:
-            raise where.error("trace", f"line {line}", "two columns: time, temperature")
-        for col, (cell, out) in enumerate(((r[0], times), (r[1], temps))):
-            try:
-                x = float(cell)
-            except ValueError:
-                x = math.nan
-            if not math.isfinite(x):
-                raise where.error("trace", f"line {line}, column {col + 1} "
-                                  f"({'time' if col == 0 else 'temperature'}): {cell!r}",
-                                  "a finite number")
-            out[j] = x
-    return _trace_checked(times * scale, temps + offset, name, where,
+    short = next((line for line, r in rows if len(r) < 2), None)
+    if short is not None:
+        raise where.error("trace", f"line {short}", "two columns: time, temperature")
+    cols = []
+    for col in (0, 1):  # whole columns at once (100,000 rows in milliseconds)
+        cells = [r[col] for _, r in rows]
+        try:
+            cols.append(np.array(cells, dtype=float))
+        except ValueError:
+            for (line, _), cell in zip(rows, cells, strict=True):
+                try:
+                    float(cell)
+                except ValueError:
+                    raise where.error("trace", f"line {line}, column {col + 1} "
+                                      f"({'time' if col == 0 else 'temperature'}): "
+                                      f"{cell[:40]!r}", "a finite number") from None
+            raise
+    return _trace_checked(cols[0] * scale, cols[1] + offset, name, where,
                           [line for line, _ in rows], kunit)
 
 
@@ -472,7 +486,11 @@ def _trace_checked(times: np.ndarray, temps: np.ndarray, name: str, where: _Wher
         raise where.error("trace", f"{times.size} rows", f"2-{TRACE_MAX_ROWS} rows")
     lines = list(lines) if lines is not None else [k + 1 for k in range(times.size)]
     lo, hi = TRACE_TEMPERATURE_RANGE
-    for j in range(times.size):
+    with np.errstate(invalid="ignore"):  # the first bad row, in the order rows are read
+        bad = (~np.isfinite(times) | ~np.isfinite(temps) | (temps < lo) | (temps > hi)
+               | np.concatenate([[False], ~(np.diff(times) > 0.0)]))
+    first = np.flatnonzero(bad)
+    for j in first[:1].tolist():
         for col, x in ((1, times[j]), (2, temps[j])):
             if not math.isfinite(x):
                 raise where.error("trace", f"line {lines[j]}, column {col} "
@@ -491,7 +509,7 @@ def _trace_checked(times: np.ndarray, temps: np.ndarray, name: str, where: _Wher
 
 
 def _trace_step(d: dict[str, Any], where: _Where) -> Trace:
-    name = str(d.get("name") or "trace")
+    name = str(d.get("name") or "trace")[:MAX_QUANTITY_CHARS]
     if "csv" in d:
         try:
             return trace_from_csv(str(d["csv"]), d.get("time_unit"), d.get("temperature_unit"),
@@ -536,6 +554,11 @@ GRAMMAR = ("'Heat to 308 K at 5 K/min', 'Cool to 302 K at 2 K/min', 'Hold at 308
            "30 s', 'Trace from run.csv', '3 x (Heat to 308 K at 5 K/min; Hold at 308 K for "
            "2 min; Cool to 302 K at 5 K/min)', or a structured step {'step': 'heat'|'cool'|"
            "'hold'|'rest'|'bath'|'trace'|'repeat', ...}")
+
+
+PATHS_REFUSED = ("the trace as data: {'step': 'trace', 'csv': '<CSV text>'} or 'time' and "
+                 "'temperature' lists; file paths are refused here (the service never reads "
+                 "a file a request names)")
 
 
 @dataclass(frozen=True)
@@ -662,8 +685,7 @@ def parse_step(value: Any, index: int = 0, files: bool = True,
                         _until(until, where) if until else None)
         path = g["path"].strip()
         if not files:
-            raise where.error("trace", path, "a structured trace step {'step': 'trace', "
-                                             "'csv': '<text>'} (no file paths here)")
+            raise where.error("trace", path[:MAX_QUANTITY_CHARS], PATHS_REFUSED)
         try:
             with open(path, encoding="utf-8") as fh:
                 body = fh.read()
@@ -873,6 +895,25 @@ class Protocol:
         if hot_since is not None:
             out.append((hot_since, None))
         return out
+
+
+def check_physical(protocol: Protocol, tau_s: float | None) -> None:
+    """Each step's duration given in tau, bounded by its physical value once tau is known
+    (within DURATION_MAX_S, as one given in seconds; issue 40, R8), after the solver's own
+    rules (``dosing.heating_program.check_program``, which calls this last)."""
+    if tau_s is None:
+        return
+    for i, st in enumerate(protocol.steps):
+        where = _Where(i, st.text)
+        for name in ("duration", "time_constant"):
+            span = getattr(st, name, None)
+            field = "for" if name == "duration" else name
+            if isinstance(span, Span) and span.unit == "tau":
+                secs = span.value * tau_s
+                if not 0.0 < secs <= DURATION_MAX_S:
+                    raise where.error(field, f"{span.value:g} tau = {secs:.3g} s (tau = "
+                                      f"{tau_s:.3g} s)",
+                                      f"0 s < {field} <= {DURATION_MAX_S:g} s")
 
 
 def _end_temperature(st: Step, cur: float) -> float:

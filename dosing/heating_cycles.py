@@ -132,5 +132,7 @@ class ProtocolHeatings(protocol.FluidHeatings):
 
     def rows(self, sc: Scenario) -> list[list[Any]]:  # type: ignore[override]
         """The run's steps as plain rows: the program's, or the staircase's."""
-        return [list(row) for row in (sc.program["steps"] if sc.program is not None
-                                      else sc.protocol)]
+        from .scenario import plain
+
+        return [plain(list(row)) for row in (sc.program["steps"] if sc.program is not None
+                                             else sc.protocol)]

@@ -203,6 +203,9 @@ def check_program(protocol: Any, tau_s: float | None) -> None:
             field = _GRAMMAR_FIELD.get(base, base)
             raise ParameterError(f"protocol[{p.step}].{field}", text, valid,
                                  f"{reason}: {name} = {exc.value!r})") from None
+    from .heating import check_physical
+
+    check_physical(protocol, tau_s)  # durations in tau, by their seconds (issue 40, R8)
 
 
 def solver_program(spec: dict[str, Any]) -> Any:

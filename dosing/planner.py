@@ -41,6 +41,7 @@ from .answers import (
 )
 from .cache import ValidationCache
 from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner
+from .lru import ByteLRU
 from .model_choice import (
     build_answer,
     front_time,
@@ -127,6 +128,9 @@ def request_scenarios(req: DoseRequest | ScheduleRequest) -> tuple[Scenario, ...
                                 req.interfacial_range)
 
 
+RUNS_MEMORY = 64e6  # bytes of runs a planner keeps in memory (dosing.lru.ByteLRU)
+
+
 class Planner:
     """Plans doses and schedules; keeps full-solver validations in a persistent cache.
 
@@ -150,8 +154,11 @@ class Planner:
                               hard_seconds=hard_limit(run_budget()))
         self.jobs.on_worker_died = self._remember_death
         self.horizon = float(horizon)
-        self._mem: OrderedDict[str, Trajectory] = OrderedDict()
         self._row_digest: dict[str, str] = {}  # the cache row each _mem entry came from
+        # runs held in memory: RUNS_MEMORY bytes at most (a run of a long trace program
+        # weighs hundreds of ordinary ones), and at most 64 of them
+        self._mem: ByteLRU = ByteLRU(RUNS_MEMORY, max_items=64,
+                                     on_evict=lambda key: self._row_digest.pop(key, None))
         self._mem_lock = threading.Lock()
         # protocol prefixes with a stored state at their end: prefix key -> (the stored
         # run's scenario, steps) (module ``restart``; kept for this planner's life)
@@ -256,7 +263,7 @@ class Planner:
         if start is not None:
             self.restarts += 1
         return Job(sc.key(), functools.partial(run_scenario, solver=self.solver, start=start),
-                   (sc.to_dict(), max(horizon, first), need_radius, need_time),
+                   (sc.to_dict(compact=True), max(horizon, first), need_radius, need_time),
                    on_done=self._store,
                    fetch=functools.partial(self._fetch, sc, need_radius, need_time))
 

@@ -105,10 +105,11 @@ def to_unit(value: Any, kind: str, field: str) -> float:
     unit = UNITS[kind]
     q = parse(value, field)
     if _is_quantity(q):
-        ureg = registry()
-        if q.dimensionless and not ureg.Quantity(1, unit).dimensionless:
-            # a bare number in a string ("308") is in the documented unit
-            out = float(q.to("dimensionless").magnitude)
+        if not dict(q.unit_items()):  # a bare number ("308") is in the documented unit
+            out = float(q.magnitude)
+        elif q.dimensionless:  # "500 percent", "10 radian": a unit, of no dimension
+            raise ParameterError(field, str(value), f"a quantity of dimension {unit} (got "
+                                 f"'{q.units}', which has none)")
         else:
             try:
                 out = float(q.to(unit).magnitude)

@@ -268,6 +268,10 @@ def _fit_log_d0(t: np.ndarray, y: np.ndarray, model_fn: Any, guess: float
     q = float(best.x[0])
     sd = math.sqrt(max(cov[0, 0], 0.0))
     tq = t_quantile(n - 1)
+    lo_q, hi_q = (math.log(b) for b in D_BOUNDS)
+    unpinned = not (math.isfinite(sd) and tq * sd <= hi_q - lo_q)
+    if unpinned:  # a flat misfit: the interval is D0's whole range (no exp overflow)
+        sd = (hi_q - lo_q) / tq
     d0 = math.exp(q)
     fitted = model_fn(d0, t)
     tt = np.linspace(0.0, float(t.max()), 200)
@@ -276,13 +280,16 @@ def _fit_log_d0(t: np.ndarray, y: np.ndarray, model_fn: Any, guess: float
         warns.append(f"the fit did not converge ({best.message})")
     if y.max() < 0.3:
         warns.append("less than 30% released: D0 rests on the early t^1/2 part only")
+    if unpinned:
+        warns.append(f"the interval spans D0's whole range {D_BOUNDS}: the data do not pin "
+                     "it")
     if min(abs(q - math.log(b)) for b in D_BOUNDS) < 1e-6:
         warns.append(f"D0 at its bound {D_BOUNDS}: the curve does not pin it")
     return {
         "names": ["drug_diffusivity_cm2_s"],
         "parameters": {"drug_diffusivity_cm2_s": d0},
-        "intervals": {"drug_diffusivity_cm2_s": [math.exp(q - tq * sd),
-                                                 math.exp(q + tq * sd)]},
+        "intervals": {"drug_diffusivity_cm2_s": [math.exp(max(q - tq * sd, lo_q)),
+                                                 math.exp(min(q + tq * sd, hi_q))]},
         "stderr": {"drug_diffusivity_cm2_s": d0 * sd},
         "interval_kind": "linearised (Jacobian of log D0, Student t)",
         "f2": fda_f2(100.0 * y, 100.0 * fitted, t),
@@ -292,6 +299,6 @@ def _fit_log_d0(t: np.ndarray, y: np.ndarray, model_fn: Any, guess: float
         "chi2_reduced": chi2, "n_points": n, "success": bool(best.success),
         "fitted": fitted.tolist(), "time_s": t.tolist(), "released": y.tolist(),
         "band": {"time_s": tt.tolist(), "released": model_fn(d0, tt).tolist(),
-                 "lower": model_fn(math.exp(q - tq * sd), tt).tolist(),
-                 "upper": model_fn(math.exp(q + tq * sd), tt).tolist()},
+                 "lower": model_fn(math.exp(max(q - tq * sd, lo_q)), tt).tolist(),
+                 "upper": model_fn(math.exp(min(q + tq * sd, hi_q)), tt).tolist()},
         "warnings": warns}

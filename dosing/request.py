@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 from solver.equilibrium import equilibrium, nearest_stable
 from solver.errors import ParameterError, require_finite_positive
 from solver.gel import Gel, Permeability, check_temperature
-from solver.limits import REST_RANGE
+from solver.limits import DRY_RADIUS_UM_RANGE, REST_RANGE
 
 from .gel_store import calibrated_constants, lookup
 from .scenario import DIRECT_ELL_RANGE, TRUTH, SolverSettings
@@ -132,10 +132,16 @@ def resolve_dry_radius(dry_radius_um: float | None, swollen_radius_um: float | N
     if dry_radius_um is not None and swollen_radius_um is not None:
         raise ParameterError("swollen_radius_um", swollen_radius_um,
                              "None when dry_radius_um is given (give one bead size)")
-    if dry_radius_um is not None:
-        return require_finite_positive("dry_radius_um", dry_radius_um)
+    if dry_radius_um is not None:  # bounded where a user gives it (HTTP, CLI; a batch's
+        return require_finite_positive("dry_radius_um", dry_radius_um)  # nodes: beyond)
     if swollen_radius_um is not None:
-        return require_finite_positive("swollen_radius_um", swollen_radius_um) / start_radius
+        lo, hi = DRY_RADIUS_UM_RANGE  # after the conversion: a subnormal tau otherwise
+        dry = require_finite_positive("swollen_radius_um", swollen_radius_um) / start_radius
+        if not lo <= dry <= hi:
+            raise ParameterError("swollen_radius_um", swollen_radius_um,
+                                 f"a swollen size whose dry radius (/ a0 = {start_radius:.4g}) "
+                                 f"is {lo:g}-{hi:g} um")
+        return dry
     return None
 
 

@@ -18,6 +18,7 @@ import json
 import math
 import os
 import time
+from array import array
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
@@ -275,7 +276,7 @@ class Scenario:
         if self.program is not None:
             if self.t_end is not None or self.protocol is not None:
                 raise ParameterError("program", "with t_end/protocol", "one of them")
-            object.__setattr__(self, "program", json.loads(json.dumps(self.program)))
+            object.__setattr__(self, "program", _interned(self.program))
             return
         if (self.t_end is None) == (self.protocol is None):
             raise ParameterError("protocol", self.protocol, "exactly one of t_end or protocol")
@@ -292,7 +293,7 @@ class Scenario:
     def key_dict(self) -> dict[str, Any]:
         """Everything that defines the dimensionless answer (JSON-ready, canonical)."""
         what: dict[str, Any] = ({"t_end": self.t_end} if self.t_end is not None
-                                else {"program": self.program, "stop": self.stop}
+                                else {"program": plain(self.program), "stop": self.stop}
                                 if self.program is not None
                                 else {"protocol": [list(s) for s in self.protocol]})
         if self.stop_expelled is not None:
@@ -311,13 +312,15 @@ class Scenario:
         text = _KEY_JSON.encode(self.key_dict())
         return hashlib.sha256(text.encode()).hexdigest()[:32]
 
-    def to_dict(self) -> dict[str, Any]:
-        """Plain data for a worker process (and for humans)."""
+    def to_dict(self, compact: bool = False) -> dict[str, Any]:
+        """Plain data for a worker process (and for humans); ``compact``: a program's long
+        columns stay ``array('d')`` (a queued run's arguments; they pickle)."""
         return {"gel": self.gel.to_dict(), "t_start": self.t_start, "t_end": self.t_end,
                 "protocol": None if self.protocol is None else [list(s) for s in self.protocol],
                 "branch": self.branch, "settings": self.settings.to_dict(),
-                **({} if self.program is None else {"program": self.program,
-                                                    "stop": self.stop}),
+                **({} if self.program is None else {
+                    "program": self.program if compact else plain(self.program),
+                    "stop": self.stop}),
                 **({} if self.stop_expelled is None
                    else {"stop_expelled": self.stop_expelled})}
 
@@ -380,6 +383,58 @@ def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver,
         raise SolverError("the full solver returned no finite a(t)", {"scenario": sc.key_dict()})
     rec.diagnostics = {**json_safe(res.diagnostics, max_array=64), "spinodal": bool(res.spinodal)}
     return rec
+
+
+def _interned(program: Any) -> Any:
+    """A program as plain JSON data, one shared copy per program (issue 40, R7): a
+    request's runs (the truth, its check, the ell range, ...) are scenarios of one program,
+    and a 100,000-row trace's copy weighs megabytes.  Programs are read, never mutated."""
+    from .lru import ByteLRU
+
+    global _PROGRAMS
+    if _PROGRAMS is None:
+        _PROGRAMS = ByteLRU(64e6)  # canonical programs by their JSON's digest
+    text = json.dumps(program, default=_listed)
+    digest = hashlib.sha256(text.encode()).hexdigest()
+    hit = _PROGRAMS.get(digest)
+    if hit is None:
+        hit = _compact(json.loads(text))
+        _PROGRAMS[digest] = hit
+    return hit
+
+
+_PROGRAMS: Any = None
+COMPACT_FROM = 256  # a list of this many floats is held as array('d'): 8 bytes a number
+
+
+def _listed(obj: Any) -> Any:
+    """json's ``default``: a compact column as the list it stands for."""
+    if isinstance(obj, array):
+        return obj.tolist()
+    raise TypeError(f"{type(obj).__name__} is not JSON data")
+
+
+def _compact(obj: Any) -> Any:
+    """Long lists of floats as ``array('d')`` (a 100,000-row trace: 0.8 MB a column, not
+    3.2 MB); :func:`plain` gives back the same lists (the same JSON, the same key)."""
+    if isinstance(obj, list):
+        if len(obj) >= COMPACT_FROM and all(type(x) is float for x in obj):
+            return array("d", obj)
+        return [_compact(x) for x in obj]
+    if isinstance(obj, dict):
+        return {k: _compact(v) for k, v in obj.items()}
+    return obj
+
+
+def plain(obj: Any) -> Any:
+    """A program (or any JSON data) with its compact columns as plain lists."""
+    if isinstance(obj, array):
+        return obj.tolist()
+    if isinstance(obj, (list, tuple)):
+        return [plain(x) for x in obj]
+    if isinstance(obj, dict):
+        return {k: plain(v) for k, v in obj.items()}
+    return obj
 
 
 def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: float | None = None,

@@ -29,6 +29,7 @@ import numpy as np
 
 from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.gel import Gel
+from solver.limits import DRY_RADIUS_UM_RANGE, T_MAX, T_MIN
 
 from .request import DoseRequest, resolve_gel
 from .units import PhysicalConstants, timescale
@@ -40,6 +41,16 @@ NAMES = REQUEST_FIELDS + CONSTANT_FIELDS + GEL_FIELDS
 UNITS = {"dry_radius_um": "um", "t_start": "K", "t_end": "K", "dose_fraction": "1",
          "viscosity_pa_s": "Pa s", "polymer_volume_m3": "m^3", "permeability_m2": "m^2",
          "omega": "1", "a0": "1", "b0": "1/K", "a1": "1", "b1": "1/K"}
+# each input's physical range (its unit's), the bounds a request's own fields have: a
+# range beyond them is refused before sampling (issue 40, R6; gel parameters: finite, sane)
+RANGES: dict[str, tuple[float, float]] = {
+    "dry_radius_um": DRY_RADIUS_UM_RANGE, "t_start": (T_MIN, T_MAX), "t_end": (T_MIN, T_MAX),
+    "dose_fraction": (0.0, 1.0), "viscosity_pa_s": (0.0, 10.0),
+    "polymer_volume_m3": (0.0, 1e-20), "permeability_m2": (0.0, 1e-10),
+    "omega": (0.0, 1e6), "a0": (-1e3, 1e3), "b0": (-1e3, 1e3), "a1": (-1e3, 1e3),
+    "b1": (-1e3, 1e3)}
+OPEN_BELOW = {"dose_fraction", "viscosity_pa_s", "polymer_volume_m3", "permeability_m2",
+              "omega"}  # a bound the input may not reach (0 < x)
 METHODS = ("sobol", "morris")
 MAX_EVALUATIONS = 200_000  # model evaluations of one analysis
 CONFIDENCE = 0.95
@@ -65,6 +76,13 @@ class Vary:
         if self.log and lo <= 0.0:
             raise ParameterError(f"vary.{self.name}", [self.low, self.high],
                                  "positive bounds for a log-uniform input")
+        a, b = RANGES[self.name]
+        low_ok = lo > a if self.name in OPEN_BELOW else lo >= a
+        if not (low_ok and hi <= b and (self.name != "dose_fraction" or hi < b)):
+            op = "<" if self.name in OPEN_BELOW else "<="
+            top = "<" if self.name == "dose_fraction" else "<="
+            raise ParameterError(f"vary.{self.name}", [self.low, self.high],
+                                 f"{a:g} {op} low < high {top} {b:g} {UNITS[self.name]}")
         object.__setattr__(self, "low", lo)
         object.__setattr__(self, "high", hi)
 
@@ -76,10 +94,10 @@ class Vary:
             parts = rng.split(":")
             if len(parts) not in (2, 3) or (len(parts) == 3 and parts[2] not in ("log", "lin")):
                 raise ValueError
-            return cls(name.strip(), float(parts[0]), float(parts[1]),
-                       len(parts) == 3 and parts[2] == "log")
+            lo, hi = float(parts[0]), float(parts[1])
         except ValueError:
             raise ParameterError("vary", text, "NAME=LO:HI or NAME=LO:HI:log") from None
+        return cls(name.strip(), lo, hi, len(parts) == 3 and parts[2] == "log")
 
     def bounds(self) -> list[float]:
         """The sampling bounds (log10 of the bounds for a log-uniform input)."""
@@ -200,7 +218,8 @@ class DoseTimeModel:
             values = dict(zip(self.names, map(float, row), strict=True))
             try:
                 out[i] = self.one(values)
-            except (ParameterError, NotApplicableError, SolverError, ValueError) as exc:
+            except (ParameterError, NotApplicableError, SolverError, ValueError,
+                    ArithmeticError) as exc:
                 out[i] = math.nan
                 if len(self.failures) < 5:
                     self.failures.append((values, str(exc)))
@@ -214,8 +233,12 @@ def _base(gel: Gel | str | dict[str, Any], t_start: Any, t_end: Any, dose_fracti
 
     c = (constants if isinstance(constants, PhysicalConstants)
          else PhysicalConstants.from_dict(constants))
+    radius = micrometres(dry_radius_um, "dry_radius_um")
+    lo, hi = RANGES["dry_radius_um"]
+    if not lo <= radius <= hi:  # after the unit's conversion
+        raise ParameterError("dry_radius_um", dry_radius_um, f"{lo:g}-{hi:g} um")
     base = Base(resolve_gel(gel), kelvin(t_start, "t_start"), kelvin(t_end, "t_end"),
-                float(dose_fraction), micrometres(dry_radius_um, "dry_radius_um"), c, branch)
+                float(dose_fraction), radius, c, branch)
     # the base request itself must be answerable by the front model
     DoseTimeModel(base, []).one({})
     return base

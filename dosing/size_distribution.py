@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from solver.errors import ParameterError
+from solver.limits import DRY_RADIUS_UM_RANGE, SIZE_UM_RANGE
 
 from .quantity import micrometres
 
@@ -49,8 +50,10 @@ F = "size_distribution"
 
 def _pos(name: str, value: Any) -> float:
     x = micrometres(value, f"{F}.{name}")
-    if not x > 0.0:
-        raise ParameterError(f"{F}.{name}", value, "a finite size > 0 (um, or with a unit)")
+    lo, hi = SIZE_UM_RANGE
+    if not lo <= x <= hi:  # after the unit's conversion
+        raise ParameterError(f"{F}.{name}", value, f"a size {lo:g}-{hi:g} um (or with a "
+                             "unit)")
     return x
 
 
@@ -83,10 +86,11 @@ def _table(sizes: Any, counts: Any) -> tuple[np.ndarray, np.ndarray]:
         r = np.asarray(sizes, dtype=float)
     except (TypeError, ValueError):
         r = np.array([_pos(f"sizes_um[{i}]", s) for i, s in enumerate(sizes)])
-    bad = np.flatnonzero(~(np.isfinite(r) & (r > 0.0)))
+    lo, hi = SIZE_UM_RANGE
+    bad = np.flatnonzero(~(np.isfinite(r) & (r >= lo) & (r <= hi)))
     if bad.size:
         i = int(bad[0])
-        raise ParameterError(f"{F}.sizes_um[{i}]", sizes[i], "a finite size > 0 (um)")
+        raise ParameterError(f"{F}.sizes_um[{i}]", sizes[i], f"a size {lo:g}-{hi:g} um")
     if counts is None:
         return r, np.ones_like(r)
     if isinstance(counts, (str, bytes)) or not hasattr(counts, "__len__") or len(counts) != n:
@@ -696,6 +700,12 @@ def request_sizes(req: Any) -> None:
         d = d.with_mean(micrometres(size, own))
     else:
         mean = d.number_mean_um()
+        lo, hi = DRY_RADIUS_UM_RANGE if d.state == "dry" else SIZE_UM_RANGE
+        if not (math.isfinite(mean) and lo <= mean <= hi):  # the reference bead's size
+            where = next((f"{F}.{n}" for n in ("mean_um", "median_um", "sizes_um")
+                          if getattr(d, n) is not None), F)
+            raise ParameterError(where, f"a number-weighted mean of {mean:.4g} um",
+                                 f"a {d.state} mean size {lo:g}-{hi:g} um")
         if size is None:
             object.__setattr__(req, own, mean)
         elif not math.isclose(micrometres(size, own), mean, rel_tol=1e-9):

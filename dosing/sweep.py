@@ -220,8 +220,11 @@ def answer_point(point: dict[str, Any]) -> dict[str, Any]:
         tau = timescale(req.bead_dry_radius_um, req.t_end, req.constants).seconds
         row.update(status="needs-full", model="full", message=str(exc), timescale_seconds=tau)
         return row
-    except (SolverError, ArithmeticError, ValueError) as exc:
-        row.update(status="error", message=f"{type(exc).__name__}: {exc}")
+    except SolverError as exc:
+        row.update(status="error", message=f"the front model could not answer: {exc}")
+        return row
+    except (ArithmeticError, ValueError) as exc:
+        row.update(status="error", message=f"the computation failed at this point: {exc}")
         return row
     row.update(status="answered", model=ans.model, time=ans.time, seconds=ans.seconds,
                timescale_seconds=ans.timescale_seconds, final_radius_um=ans.final_radius_um,
@@ -323,8 +326,8 @@ def _chunk_failed(chunk: list[dict[str, Any]], exc: BaseException) -> list[dict[
     rows = []
     for p in chunk:
         row = _row(p)
-        row.update(status="error", message=f"the executor failed on this chunk "
-                                           f"({type(exc).__name__}: {exc})")
+        why = str(exc) or "no reason given"
+        row.update(status="error", message=f"the executor failed on this chunk ({why})")
         rows.append(row)
     return rows
 

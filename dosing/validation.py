@@ -83,7 +83,7 @@ def _run_entry(sc: Scenario, traj: Trajectory | BaseException | None, start_radi
         try:
             entry["time"] = traj.time_to_radius(radius)
         except ValueError as exc:  # a run that never reaches the radius: its error, not ours
-            entry["error"] = f"ValueError: {exc}"
+            entry["error"] = f"the run does not reach the dose's radius: {exc}"
             return entry
         entry["nucleation_time"] = None if level is None else traj.nucleation_time(level)
         entry["wall_seconds"] = traj.meta.get("wall_seconds")
@@ -95,8 +95,22 @@ def _run_entry(sc: Scenario, traj: Trajectory | BaseException | None, start_radi
             got = expelled_volume(start_radius, traj.radius_at(t_front))
             entry["front_volume_error"] = (got - target) / target
     else:
-        entry["error"] = f"{type(traj).__name__}: {traj}"
+        entry["error"] = run_failure(traj)
     return entry
+
+
+def run_failure(exc: BaseException | None) -> str:
+    """Why a run failed, in plain words (never a Python exception's class name)."""
+    from solver.errors import ParameterError, SolverError
+
+    text = str(exc or "").strip()
+    if isinstance(exc, SolverError):
+        return f"the solver could not finish this run: {text}"
+    if isinstance(exc, ParameterError):
+        return f"the run's input {exc.field} is not usable: {text}"
+    if exc is None:
+        return "the run has no result"
+    return f"the run failed: {text or 'its worker ended without a reason'}"
 
 
 def validation_report(scs: list[Scenario], trajs: list[Any], start_radius: float,

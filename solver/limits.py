@@ -50,3 +50,9 @@ DRUG_STEP_MAX = 32.0
 # a drug batch's shared release medium (mL) and its number of beads (dosing.batch_drug)
 MEDIUM_VOLUME_ML_RANGE = (1e-6, 1e4)
 BEAD_COUNT_RANGE = (1.0, 1e15)
+
+# bead sizes, um: a dry radius (and every size a batch resolves to, after unit conversion);
+# 1 nm below (a subnormal radius made tau 0, issue 22), 10 cm above
+DRY_RADIUS_UM_RANGE = (1.0e-3, 1.0e5)
+# a swollen size (or a diameter) may be larger than the dry radius it stands for
+SIZE_UM_RANGE = (DRY_RADIUS_UM_RANGE[0], 1.0e6)

@@ -96,9 +96,16 @@ def test_bad_inputs_name_their_field() -> None:
     with pytest.raises(ParameterError) as e:
         Vary("permeability_m2", -1.0, 1.0, log=True)
     assert e.value.field == "vary.permeability_m2"
-    with pytest.raises(ParameterError) as e:  # doses above the stored fluid
+    with pytest.raises(ParameterError) as e:  # beyond a fraction's range: refused at once
         sensitivity("ANB", 302.0, 308.0, 0.8, ["dose_fraction=0.5:1.5"], samples=8)
+    assert e.value.field == "vary.dose_fraction" and "< 1" in e.value.valid
+    with pytest.raises(ParameterError) as e:  # doses above what the gel can expel
+        sensitivity("ANB", 302.0, 308.0, 0.8, ["dose_fraction=0.97:0.99"], samples=8)
     assert e.value.field == "vary" and "samples failed" in str(e.value)
+    for bad in ("dry_radius_um=1e-300:1e300:log", "t_end=0:1e308", "omega=-1e308:1e308"):
+        with pytest.raises(ParameterError) as e:  # unbounded ranges (issue 40, R6)
+            sensitivity("ANB", 302.0, 308.0, 0.8, [bad], samples=8)
+        assert e.value.field == f"vary.{bad.split('=')[0]}", bad
     with pytest.raises(ParameterError) as e:
         sensitivity("ANB", 302.0, 308.0, 0.8, ["t_end=308:309"], samples=512,
                     max_trajectories=100)

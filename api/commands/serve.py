@@ -39,8 +39,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="require 'Authorization: Bearer TOKEN' on every route but /health "
                         "(default $THERMOGEL_API_TOKEN; required when --host is not loopback)")
     p.add_argument("--allowed-hosts", default=None, metavar="H1,H2",
-                   help="Host headers to accept, comma-separated (default any; "
-                        "$THERMOGEL_ALLOWED_HOSTS)")
+                   help="Host headers to accept, comma-separated, each a name (any port) "
+                        "or name:port, '*.domain' or '*' (default on loopback: localhost, "
+                        "127.0.0.1, [::1] with any port, against DNS rebinding; beyond "
+                        "loopback any; $THERMOGEL_ALLOWED_HOSTS)")
     p.add_argument("--timeout-keep-alive", type=float, default=5.0,
                    help="close a keep-alive connection idle this long, s (default 5)")
     p.add_argument("--limit-concurrency", type=int, default=None,
@@ -75,8 +77,15 @@ def configure_env(args: argparse.Namespace) -> None:
         os.environ["THERMOGEL_LEASE_SECONDS"] = str(args.lease_seconds)
     if args.token:
         os.environ["THERMOGEL_API_TOKEN"] = args.token
+    from api.auth import LOOPBACK_HOSTS, is_loopback
+
     if args.allowed_hosts:
         os.environ["THERMOGEL_ALLOWED_HOSTS"] = args.allowed_hosts
+    elif is_loopback(args.host) and not os.environ.get("THERMOGEL_ALLOWED_HOSTS"):
+        # DNS rebinding: a page elsewhere may resolve its own name to 127.0.0.1
+        os.environ["THERMOGEL_ALLOWED_HOSTS"] = ",".join(
+            dict.fromkeys((*LOOPBACK_HOSTS, args.host if ":" not in args.host
+                           else f"[{args.host}]")))
     if args.workers > 1:  # its worker processes end themselves if this one is killed
         os.environ["THERMOGEL_SUPERVISOR_PID"] = str(os.getpid())
     os.environ["THERMOGEL_WARMUP"] = "0" if args.no_warmup else "1"

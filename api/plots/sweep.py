@@ -9,6 +9,8 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
+MAX_PANELS = 8  # dose columns drawn (each ~0.3 s of matplotlib): a figure in seconds
+
 
 def _grids(table: dict[str, Any], gel_index: int) -> tuple[np.ndarray, ...]:
     """(seconds, validated error, prior error) arrays of shape (doses, radii, t_ends) for
@@ -64,14 +66,22 @@ def _edges(values: list[float], log: bool) -> np.ndarray:
     return np.exp(e) if log else e
 
 
+def panel_doses(n: int, most: int = MAX_PANELS) -> list[int]:
+    """The dose columns drawn: all of them up to ``most``, else ``most`` evenly spaced ones
+    (the first and the last among them), so a figure takes seconds whatever the grid."""
+    if n <= most:
+        return list(range(n))
+    return sorted({int(round(k)) for k in np.linspace(0, n - 1, most)})
+
+
 def draw_sweep(table: dict[str, Any], out: str | Path | BinaryIO, gel_index: int = 0,
                fmt: str = "svg") -> str | Path | BinaryIO:
     """Draw ``table`` (``SweepResult.to_dict()``) for one gel to ``out`` (PNG, PDF or SVG):
     top row the actuation time (s, or tau without bead sizes) with iso-time contours,
     bottom row the validated relative error of the front model where a validation is done
-    (log colour); the front model's prior, one number per dose, is written on the panel
-    and labelled as a prior, not painted as if it were measured.  A file object gets
-    ``fmt``."""
+    (log colour); at most ``MAX_PANELS`` doses, evenly spaced, are drawn; the front model's
+    prior, one number per dose, is written on the panel and labelled as a prior, not painted
+    as if it were measured.  A file object gets ``fmt``."""
     from matplotlib.colors import LogNorm
 
     from .style import pyplot
@@ -79,7 +89,9 @@ def draw_sweep(table: dict[str, Any], out: str | Path | BinaryIO, gel_index: int
     plt = pyplot()
     g = table["grid"]
     secs, err, prior = _grids(table, gel_index)
-    doses = g["doses"]
+    picks = panel_doses(len(g["doses"]))
+    secs, err, prior = secs[picks], err[picks], prior[picks]
+    doses = [g["doses"][k] for k in picks]
     x = _edges(g["t_ends"], log=False)
     y = _edges(g["dry_radii_um"], log=True)
     n = len(doses)
@@ -119,9 +131,12 @@ def draw_sweep(table: dict[str, Any], out: str | Path | BinaryIO, gel_index: int
         if mesh is not None and norm is not None:
             fig.colorbar(mesh, ax=axes[r, :].tolist(), label=label, shrink=0.9)
     gel = g["gels"][gel_index].get("name", "custom")
+    shown = ("" if len(picks) == len(g["doses"]) else
+             f"\n{len(picks)} of {len(g['doses'])} doses drawn (evenly spaced; the table has "
+             "them all)")
     fig.suptitle(f"{gel}, T_start = {g['t_start']:g} K: front-model design map with iso-time "
                  "contours (grey: no answer)" + ("" if validated else "\nno point validated "
-                 "yet: the error shown is the front model's prior"), fontsize=10)
+                 "yet: the error shown is the front model's prior") + shown, fontsize=10)
     if isinstance(out, (str, Path)):
         from .style import save
 

@@ -27,6 +27,7 @@ from solver.errors import ParameterError
 from solver.fit import fit_gel
 from solver.gel import Gel
 from solver.json_safe import json_safe
+from solver.limits import DRY_RADIUS_UM_RANGE, SIZE_UM_RANGE
 
 from .. import stored_jobs
 from ..analysis_schemas import EmpiricalFitJobResponse
@@ -38,6 +39,7 @@ from ..fit_schemas import (
     ReleaseFitRequest,
     SwellingFitRequest,
 )
+from ..requests import http_protocol
 from ..safe_route import SafeRoute
 from ..service import to_gel
 from .compute import compute
@@ -119,9 +121,10 @@ def _release(_: Any, body: ReleaseFitRequest) -> dict[str, Any]:
     from dosing.release_fit import fit_release
 
     t, y = _release_data(body)
+    prot = None if body.protocol is None else http_protocol(body.t_start, body.protocol)
     return json_safe(fit_release(
         t, y, to_gel(body.gel), body.t_start, body.t_end, body.dry_radius_um,
-        protocol=body.protocol, hindrance=body.hindrance, mesh_size_nm=body.mesh_size_nm,
+        protocol=prot, hindrance=body.hindrance, mesh_size_nm=body.mesh_size_nm,
         fiber_radius_nm=body.fiber_radius_nm, settings=_release_settings(body)))
 
 
@@ -131,8 +134,34 @@ stored_jobs.register(stored_jobs.JobKind(KINDS["kinetics"], KineticsFitRequest, 
 
 
 def _check(body: SwellingFitRequest | KineticsFitRequest | ReleaseFitRequest) -> None:
-    """What can be refused before the job: the name, the data, the gel (422 naming it)."""
+    """What can be refused before the job (422 naming the field, never a failed job): the
+    name, the data (enough points for the parameters fitted), the gel, the bead size."""
+    first = "temperature_K" if isinstance(body, SwellingFitRequest) else "time_s"
+    try:
+        _check_body(body)
+    except ParameterError as exc:
+        if exc.field != "data":
+            raise
+        raise ParameterError(first, exc.value, exc.valid) from None
+
+
+def _enough(body: KineticsFitRequest | ReleaseFitRequest, least: int) -> None:
+    n = len(body.time_s)
+    if n < least:
+        raise ParameterError("time_s", f"{n} points", f"at least {least} points (more than "
+                             "the parameters fitted)")
+
+
+def _bead(name: str, value: float | None) -> None:
+    lo, hi = DRY_RADIUS_UM_RANGE if name == "dry_radius_um" else SIZE_UM_RANGE
+    if value is not None and not lo <= value <= hi:
+        raise ParameterError(name, value, f"{lo:g}-{hi:g} um")
+
+
+def _check_body(body: SwellingFitRequest | KineticsFitRequest | ReleaseFitRequest) -> None:
     if isinstance(body, ReleaseFitRequest):
+        _enough(body, 3)
+        _bead("dry_radius_um", body.dry_radius_um)
         _release_data(body)
         _release_settings(body)
         to_gel(body.gel)
@@ -141,7 +170,7 @@ def _check(body: SwellingFitRequest | KineticsFitRequest | ReleaseFitRequest) ->
 
             if body.t_end is not None:
                 raise ParameterError("t_end", body.t_end, "null when a protocol is given")
-            parse_protocol(body.t_start, body.protocol)
+            parse_protocol(body.t_start, http_protocol(body.t_start, body.protocol))
         elif body.t_end is not None and body.t_end != body.t_start:
             raise ParameterError("t_end", body.t_end, f"equal to t_start = {body.t_start:g} "
                                  "K (isothermal), or give a protocol")
@@ -151,6 +180,9 @@ def _check(body: SwellingFitRequest | KineticsFitRequest | ReleaseFitRequest) ->
     if isinstance(body, SwellingFitRequest):
         _swelling_data(body)
     else:
+        _enough(body, 3 if body.fit_beta else 2)
+        _bead("dry_radius_um", body.dry_radius_um)
+        _bead("swollen_radius_um", body.swollen_radius_um)
         kinetics_data(body.time_s, body.size, body.size_kind, body.weight)
         to_gel(body.gel)
 

@@ -27,7 +27,7 @@ from ..service import validation
 from .compute import compute
 from .design import status as design_status
 from .fit import _status as fit_status
-from .sweep import SweepStatus, _render
+from .sweep import SweepStatus, render
 
 router = APIRouter(tags=["jobs"], route_class=SafeRoute)
 
@@ -49,7 +49,7 @@ async def job_route(job_id: str, request: Request, state: StateDep,
     kind = job_kind(job_id)
     try:
         if kind == "sweep":  # the rendered bytes (a big table is not parsed again here)
-            body, media = await compute(_render, request, job_id, "json")
+            body, media = await render(request, job_id, "json")
             return Response(body, media_type=media)
         if kind == "fit":
             return await compute(fit_status, state, job_id)

@@ -37,7 +37,7 @@ from ..schemas import (
     temperature_field,
 )
 from ..service import to_gel
-from .compute import compute
+from .compute import RENDER, compute
 
 router = APIRouter(route_class=SafeRoute)
 STATIC = files("api") / "static"
@@ -157,5 +157,5 @@ def phase_map_svg(query_json: str) -> bytes:
 async def phase_map(query: Annotated[PhaseMapQuery, Query()]) -> Response:
     """The gel's phase map (paper fig. 3) with the jump T_start -> T_end drawn on it."""
 
-    svg = await compute(phase_map_svg, query.model_dump_json())
+    svg = await RENDER.run(phase_map_svg, query.model_dump_json())
     return Response(svg, media_type="image/svg+xml")

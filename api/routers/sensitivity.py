@@ -1,5 +1,6 @@
 """``POST /v1/sensitivity``: Sobol or Morris indices of the dose time, answered at once
-(front model; the request's size is bounded so it takes seconds at most)."""
+(front model; the request's size is bounded so it takes seconds at most), on the analysis
+executor (:data:`api.routers.compute.ANALYSIS`), not the compute threads."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from dosing.units import PhysicalConstants
 from ..safe_route import SafeRoute
 from ..sensitivity_schemas import MAX_TRAJECTORIES, SensitivityRequest, SensitivityResponse
 from ..service import to_gel
-from .compute import compute
+from .compute import ANALYSIS
 
 router = APIRouter(tags=["sensitivity"], route_class=SafeRoute)
 
@@ -32,5 +33,6 @@ def run_sensitivity(body: SensitivityRequest) -> dict[str, Any]:
 
 @router.post("/v1/sensitivity", response_model=SensitivityResponse)
 async def post_sensitivity(body: SensitivityRequest) -> dict[str, Any]:
-    """Global sensitivity of the dose time in seconds (SALib on the front model)."""
-    return await compute(run_sensitivity, body)
+    """Global sensitivity of the dose time in seconds (SALib on the front model), on an
+    executor of its own (never the threads front doses use; a few queued, then 429)."""
+    return await ANALYSIS.run(run_sensitivity, body)

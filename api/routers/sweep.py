@@ -9,14 +9,13 @@ thread, ``SWEEP_QUEUE`` queued before 429) and spreads its chunks over the plann
 executor, so a planner on a Dask cluster sweeps on the cluster.  Validations the request
 selects are the planner's own (poll /v1/validations/{id}); each poll of the sweep fills
 those done, and the table is stored again once they all are.  Only rendered bodies of
-final tables are kept in memory (the last ``SWEEPS_KEPT``).
+final tables are kept in memory (the last ``SWEEPS_KEPT``, ``RENDERED_BYTES`` at most).
 """
 
 from __future__ import annotations
 
 import json
 import threading
-from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
 from typing import Annotated, Any, Literal
 
@@ -25,6 +24,7 @@ from fastapi.responses import JSONResponse, Response
 from pydantic import BaseModel, ConfigDict, Field, create_model, field_validator, model_validator
 
 from dosing import JobRunner, SolverSettings, UnknownValidationError
+from dosing.lru import ByteLRU
 from dosing.sweep import COLUMNS, SweepGrid, SweepResult, fill_validations, run_sweep
 from solver.errors import ParameterError
 from solver.json_safe import json_safe
@@ -43,7 +43,7 @@ from ..schemas import (
     temperature_field,
 )
 from ..service import to_gel
-from .compute import compute
+from .compute import RENDER, compute
 
 router = APIRouter(tags=["design maps"], route_class=SafeRoute)
 
@@ -51,6 +51,7 @@ MAX_SERVICE_POINTS = 20_000  # points in one sweep request (the CLI takes up to 
 SWEEP_QUEUE = 4  # sweeps queued or running before 429
 SWEEP_PREFIX = "sweep-"
 SWEEPS_KEPT = 8  # final sweep tables kept rendered in memory (20,000 rows: tens of MB)
+RENDERED_BYTES = 64e6  # ... and their bodies' bytes at most
 Temperature = Annotated[float, Field(ge=T_MIN, le=T_MAX)]
 Radius = Annotated[float, Field(ge=1.0e-3, le=1.0e5)]
 Fraction = Annotated[float, Field(gt=0.0, le=1.0)]
@@ -159,7 +160,8 @@ class _Sweeps:
         self.runner = JobRunner(ThreadPoolExecutor(1, thread_name_prefix="sweep"),
                                 max_pending=SWEEP_QUEUE, what="sweeps")
         self.progress: dict[str, list[int]] = {}
-        self.rendered: OrderedDict[tuple[str, str], bytes] = OrderedDict()  # JSON, CSV, SVG
+        # JSON, CSV, SVG bodies: RENDERED_BYTES at most (dosing.lru: bytes, not entries)
+        self.rendered: ByteLRU = ByteLRU(RENDERED_BYTES, sizeof=len)
         self.lock = threading.Lock()
 
     def keep(self, key: tuple[str, str], body: bytes) -> None:
@@ -293,7 +295,7 @@ async def sweep_status(
     ``/v1/sweeps/{id}/table.csv``).  Serialised off the event loop; a final table (every
     validation settled) is serialised once.  (``?format=csv``, undocumented, is the CSV
     route's older spelling.)"""
-    body, media = await compute(_render, request, sweep_id, format)
+    body, media = await render(request, sweep_id, format)
     return Response(body, media_type=media)
 
 
@@ -304,13 +306,22 @@ async def sweep_status(
     409: {"model": ErrorResponse, "description": "not done yet (poll the sweep)"}})
 async def sweep_csv(sweep_id: str, request: Request) -> Response:
     """The finished sweep's table as CSV, one row per point (a 409 while it runs)."""
-    body, media = await compute(_render, request, sweep_id, "csv")
+    body, media = await render(request, sweep_id, "csv")
     if media != _MEDIA["csv"]:
         state = json.loads(body).get("status")
         return JSONResponse({"detail": [{"loc": ["path", "sweep_id"], "type": "not_done",
                                          "msg": f"sweep {sweep_id} is {state}: poll "
                                                 f"/v1/sweeps/{sweep_id}"}]}, status_code=409)
     return Response(body, media_type=media)
+
+
+async def render(request: Request, sweep_id: str, fmt: str) -> tuple[bytes, str]:
+    """A sweep poll's answer as bytes: a final table's from memory at once, else rendered
+    on the render executor (a 20,000-row table is not serialised on the compute threads)."""
+    hit = _sweeps(request).cached((sweep_id, fmt))
+    if hit is not None:
+        return hit, _MEDIA[fmt]
+    return await RENDER.run(_render, request, sweep_id, fmt)
 
 
 def _render(request: Request, sweep_id: str, fmt: str) -> tuple[bytes, str]:
@@ -345,8 +356,12 @@ async def sweep_plot(
         gel: Annotated[int, Query(ge=0, description="which gel of the grid")] = 0,
 ) -> Response:
     """Heat maps of the finished sweep: actuation time and its error over T_end x radius
-    (drawn once per final table and gel, off the event loop)."""
-    return await compute(_plot, request, sweep_id, gel)
+    (drawn once per final table and gel, on the render executor: at most 8 doses drawn, so
+    seconds; kept)."""
+    hit = _sweeps(request).cached((sweep_id, f"svg{gel}"))
+    if hit is not None:
+        return Response(hit, media_type=_MEDIA["svg"])
+    return await RENDER.run(_plot, request, sweep_id, gel)
 
 
 def _plot(request: Request, sweep_id: str, gel: int) -> Response:
