@@ -24,6 +24,7 @@ from dosing.jobs import exit_with_parent
 
 from . import docs_pages, errors, guard, openapi_spec
 from .auth import HostCheck, TokenAuth
+from .memory import ReleaseAfterLarge
 from .routers import (
     analysis,
     design,
@@ -96,6 +97,7 @@ def create_app(planner: Any = None, *, cache_path: str | None = None, warm: bool
         app.add_middleware(TokenAuth, token=api_token)
     if allowed_hosts:
         app.add_middleware(HostCheck, allowed=allowed_hosts)
+    app.add_middleware(ReleaseAfterLarge)  # a large body's memory back to the system (R7)
     for router in (service.router, physics.router, dosing.router, validations.router,
                    fit.router, sweep.router, page.router, sensitivity_routes.router,
                    design.router, jobs.router, analysis.router):

@@ -276,20 +276,19 @@ class Planner:
                  budget: float = 30.0) -> Trajectory:
         """The trajectory for ``sc``, stored or run in this thread (not queued behind the
         pool's validations) within ``budget`` seconds of wall time, and stored: for the
-        sub-second runs an answer's envelope needs (the delayed-law lattice)."""
-        traj = self.cached(sc, need_radius)
-        if traj is not None:
+        sub-second runs an answer's envelope needs (the delayed-law lattice).  Not kept in
+        this planner's memory (its caller keeps the number it needs)."""
+        with self._mem_lock:
+            traj = self._mem.get(sc.key())
+        if traj is not None and _covers(traj, sc, need_radius, 0.0):
             return traj
+        raw = self._fetch(sc, need_radius, 0.0)
+        if raw is not None:
+            return Trajectory.from_npz(raw[1], raw[0])
         meta, blob = run_scenario(sc.to_dict(), self.horizon, need_radius, budget=budget,
                                   solver=self.solver)
         self.cache.put_if_longer(meta["key"], meta, blob)
-        traj = Trajectory.from_npz(blob, meta)
-        with self._mem_lock:
-            self._mem[sc.key()] = traj
-            self._mem.move_to_end(sc.key())
-            while len(self._mem) > 64:
-                self._row_digest.pop(self._mem.popitem(last=False)[0], None)
-        return traj
+        return Trajectory.from_npz(blob, meta)
 
     def trajectory(self, sc: Scenario, need_radius: float | None = None,
                    need_time: float = 0.0) -> Trajectory:

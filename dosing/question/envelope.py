@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -342,8 +344,7 @@ def front_law_part(planner: Any, request: Any, result: Any) -> Part:
         target, point = _front_target(result, ans, planned)
         settings = delayed_settings(_truth())[0]
         sc = request.heating.lattice(planned, settings, target)
-        traj = planner.run_here(sc, need_radius=target, budget=LATTICE_BUDGET_S)
-        t_d = float(traj.time_to_radius(target))
+        t_d = lattice_time(planner, sc, target)
     except (ParameterError, NotApplicableError, SolverError, ValueError, AssertionError,
             AttributeError, TypeError) as exc:
         lo, hi = FRONT_LAW_PRIOR
@@ -372,6 +373,27 @@ def front_law_part(planner: Any, request: Any, result: Any) -> Part:
         "Which law "
         "holds is for experiment to decide (docs/interfacial.md sec. 10)"),
         details={"ratio": ratio, "delayed_time": t_d, "maxwell_time": point})
+
+
+_LATTICE_TIMES: OrderedDict[tuple[str, str, float], float] = OrderedDict()
+_LATTICE_LOCK = threading.Lock()
+
+
+def lattice_time(planner: Any, sc: Any, target: float) -> float:
+    """The lattice run's time to ``target`` (run once and stored: ``Planner.run_here``);
+    the number kept per process, not the run (a trace's program can be large)."""
+    key = (str(getattr(planner.cache, "path", "")), sc.key(), float(target))
+    with _LATTICE_LOCK:
+        if key in _LATTICE_TIMES:
+            _LATTICE_TIMES.move_to_end(key)
+            return _LATTICE_TIMES[key]
+    t = float(planner.run_here(sc, need_radius=target,
+                               budget=LATTICE_BUDGET_S).time_to_radius(target))
+    with _LATTICE_LOCK:
+        _LATTICE_TIMES[key] = t
+        while len(_LATTICE_TIMES) > 4096:
+            _LATTICE_TIMES.popitem(last=False)
+    return t
 
 
 def calibration_ratio(planned: Any) -> float | None:
