@@ -46,7 +46,7 @@ from .fit_csv import read_table
 from .gel_store import calibrated_constants
 from .request import resolve_gel
 from .scenario import SolverSettings
-from .units import PhysicalConstants
+from .units import REFERENCE_TEMPERATURE_K, PhysicalConstants, water_viscosity
 
 D_BOUNDS = (1e-12, 1e-3)  # cm^2/s: the fit's bounds on D0
 
@@ -204,13 +204,30 @@ def fit_release(time_s: Any, released: Any, gel: Any, t_start: float, t_end: flo
                           "under the protocol")
     return {**rep, "effective_diffusivity_cm2_s": d0 * factor, "hindrance_factor": factor,
             "hindrance": hindrance, "swollen_radius_um": a0 * r_um, "porosity": phi0,
-            "drug_diffusivity_temperature_K": t_ref, **extra,
+            "drug_diffusivity_temperature_K": t_ref, **at_reference(rep, t_ref), **extra,
             "f2_meaning": "FDA similarity factor (1997 guidance: zero excluded, one point "
                           "after 85 % of both) of the fitted prediction and the measured "
                           "curve as two dissolution profiles (50-100: similar); a similarity, "
                           "not a goodness of fit: that is chi2_reduced, rms_residual and "
                           "residuals",
             "confidence": 0.95, "not_pinned": not_pinned}
+
+
+def at_reference(rep: dict[str, Any], t_fit: float) -> dict[str, Any]:
+    """The fitted D0 carried from the fit's temperature to the 25 degC at which an input
+    D0 is read (``DrugModel.reference_temperature_k``): Stokes-Einstein, D ~ T / eta(T)
+    with water's eta (issue 36: the two stood side by side at different temperatures)."""
+    t0 = REFERENCE_TEMPERATURE_K
+    f = (t0 / t_fit) * water_viscosity(t_fit) / water_viscosity(t0)
+    d0 = rep["parameters"]["drug_diffusivity_cm2_s"]
+    iv = (rep.get("intervals") or {}).get("drug_diffusivity_cm2_s")
+    return {"drug_diffusivity_reference_K": t0,
+            "drug_diffusivity_at_reference_cm2_s": d0 * f,
+            "drug_diffusivity_at_reference_interval_cm2_s":
+                None if iv is None else [iv[0] * f, iv[1] * f],
+            "drug_diffusivity_note": (
+                f"D0 fitted at {t_fit:g} K (the release temperature); at {t0:g} K, where an "
+                f"input D0 is read, it is {d0 * f:.3g} cm^2/s (Stokes-Einstein, x{f:.3g})")}
 
 
 def _factor(drug: DrugModel, d0: float, a0: float, t_ref: float,

@@ -91,6 +91,13 @@ def test_crank_curve_is_fitted_back_within_3_percent() -> None:
     assert lo < D0 < hi
     assert rep["f2"] > 80.0  # the fit against its own noisy data
     assert rep["hindrance_factor"] == 1.0
+    # issue 36: D0 stated at its temperature and at the 25 degC an input D0 is read at
+    from dosing.units import water_viscosity
+
+    assert rep["drug_diffusivity_temperature_K"] == T
+    f = (298.15 / T) * water_viscosity(T) / water_viscosity(298.15)
+    assert rep["drug_diffusivity_at_reference_cm2_s"] == pytest.approx(d * f, rel=1e-12)
+    assert f < 1.0 and "298.15 K" in rep["drug_diffusivity_note"]
 
 
 def test_coverage_over_50_seeds() -> None:
