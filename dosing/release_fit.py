@@ -46,7 +46,7 @@ from .fit_csv import read_table
 from .gel_store import calibrated_constants
 from .request import resolve_gel
 from .scenario import SolverSettings
-from .units import REFERENCE_TEMPERATURE_K, PhysicalConstants, water_viscosity
+from .units import REFERENCE_TEMPERATURE_K, PhysicalConstants
 
 D_BOUNDS = (1e-12, 1e-3)  # cm^2/s: the fit's bounds on D0
 
@@ -218,7 +218,8 @@ def at_reference(rep: dict[str, Any], t_fit: float) -> dict[str, Any]:
     D0 is read (``DrugModel.reference_temperature_k``): Stokes-Einstein, D ~ T / eta(T)
     with water's eta (issue 36: the two stood side by side at different temperatures)."""
     t0 = REFERENCE_TEMPERATURE_K
-    f = (t0 / t_fit) * water_viscosity(t_fit) / water_viscosity(t0)
+    # the drug's own carrier of D0 between temperatures (DrugModel.d0_cm2_s), per unit D0
+    f = DrugModel(diffusivity_cm2_s=1e-6, reference_temperature_k=t_fit).d0_cm2_s(t0) / 1e-6
     d0 = rep["parameters"]["drug_diffusivity_cm2_s"]
     iv = (rep.get("intervals") or {}).get("drug_diffusivity_cm2_s")
     return {"drug_diffusivity_reference_K": t0,

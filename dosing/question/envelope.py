@@ -25,6 +25,7 @@ can hold).  The parts:
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import threading
 from collections import OrderedDict
@@ -319,6 +320,27 @@ def _rerun_ratio(planner: Any, request: Any, result: Any, constants: Any, t_end:
     when the rerun is not available now."""
     if math.isclose(d_cm2_s, constants.diffusivity(t_end) * 1e4, rel_tol=1e-9):
         return 1.0
+    # memo: the same request and candidate under an unchanged run store give the same ratio
+    try:
+        key = (str(planner.cache.path), planner.cache.generation(),
+               json.dumps(request.to_dict(), sort_keys=True, default=str), d_cm2_s)
+    except (AttributeError, TypeError):
+        key = None
+    with _LATTICE_LOCK:
+        if key is not None and key in _RERUNS:
+            return _RERUNS[key]
+    got = _rerun(planner, request, constants, t_end, d_cm2_s, secs)
+    if key is not None:
+        with _LATTICE_LOCK:
+            _RERUNS[key] = got
+            while len(_RERUNS) > 4096:
+                _RERUNS.popitem(last=False)
+    return got
+
+
+def _rerun(planner: Any, request: Any, constants: Any, t_end: float, d_cm2_s: float,
+           secs: tuple[float, ...]) -> float | None:
+    """:func:`_rerun_ratio` without the memo."""
     alt = dataclasses.replace(constants, diffusivity_m2_s=d_cm2_s * 1e-4,
                               diffusivity_t_k=t_end,
                               diffusivity_source=f"the envelope's candidate {d_cm2_s:.3g}")
@@ -376,6 +398,7 @@ def front_law_part(planner: Any, request: Any, result: Any) -> Part:
 
 
 _LATTICE_TIMES: OrderedDict[tuple[str, str, float], float] = OrderedDict()
+_RERUNS: OrderedDict[tuple[Any, ...], float | None] = OrderedDict()
 _LATTICE_LOCK = threading.Lock()
 
 
