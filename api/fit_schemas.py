@@ -126,7 +126,9 @@ class KineticsFitRequest(_In):
     viscosity_pa_s: Annotated[float, Field(gt=0.0, le=10.0)] | Literal["water"] = Field(
         1.0e-3, description="fluid viscosity in Pa s, 0 < eta <= 10, or 'water' (water at "
                             "T_end), for k0")
-    polymer_volume_m3: float = Field(3.0e-25, gt=0, description="Omega_p in m^3, for k0")
+    polymer_volume_m3: float | None = Field(
+        None, gt=0, le=1.0e-20, description="Omega_p in m^3, for k0 (default Omega Omega_f, "
+                                            "consistent with the gel's Omega)")
     model: Literal["auto", "front", "front-sharp", "full"] = Field(
         "auto", description="model of the curve: the front models (milliseconds), the full "
         "solver (one run per beta), or auto (the planner's choice)")

@@ -334,7 +334,13 @@ class ClassifyResponse(_Out):
 
 class ConstantsIn(RequestModel):
     """Constants of the timescale tau = eta Omega_p R^2 / (k0 k_B T_end) (eq. timescale, R the
-    dry radius); unset fields keep the paper's values."""
+    dry radius); unset fields keep the defaults (Omega_p consistent with the gel's Omega), or
+    the paper's with ``paper``."""
+
+    paper: bool = Field(
+        False, description="start from the paper's constants (eta 1e-3 Pa s, Omega_p 3e-25 "
+                           "m^3, k0 8e-20 m^2) instead of the default Omega_p = Omega Omega_f; "
+                           "the fields given still override them")
 
     viscosity_pa_s: float | Literal["water"] | None = Field(
         None, examples=[0.001, "water"],
@@ -343,7 +349,8 @@ class ConstantsIn(RequestModel):
     polymer_volume_m3: float | None = Field(
         None, gt=0.0, le=1.0e-20, examples=[3.0e-25],
         description="polymer molecular volume Omega_p in m^3, 0 < Omega_p <= 1e-20 "
-                    "(default 3e-25 m^3)")
+                    "(default Omega Omega_f, consistent with the gel's Omega: 3e-27 m^3 for "
+                    "ANB; the paper's 3e-25 m^3)")
     permeability_m2: float | None = Field(
         None, gt=0.0, le=1.0e-10, examples=[8.0e-20],
         description="permeability scale k0 in m^2, 0 < k0 <= 1e-10 (default 8e-20 m^2; the "

@@ -39,8 +39,10 @@ class SensitivityRequest(RequestModel):
                                   description="base eta, Pa s")
     permeability_m2: float = Field(_BASE.permeability_m2, gt=0.0, le=1e-10,
                                    description="base k0, m^2")
-    polymer_volume_m3: float = Field(_BASE.polymer_volume_m3, gt=0.0, le=1e-20,
-                                     description="base Omega_p, m^3")
+    polymer_volume_m3: float | None = Field(
+        _BASE.polymer_volume_m3, gt=0.0, le=1e-20,
+        description="base Omega_p, m^3 (default Omega Omega_f: consistent with the gel's Omega, "
+                    "so it follows a varied omega)")
     vary: list[VaryIn] = Field(min_length=1, max_length=12, description="the varied inputs")
     method: Literal["sobol", "morris"] = Field("sobol", description="Sobol or Morris")
     samples: int = Field(512, ge=4, le=4096, description="Sobol base samples N, or Morris "

@@ -65,7 +65,7 @@ def equilibrium(seeds: int) -> None:
 
 def kinetics(full: bool) -> None:
     dry = 50.0
-    tau = timescale(dry, 308.0).seconds
+    tau = timescale(dry, 308.0, omega=ANB.omega).seconds  # the fit's default constants
     st = SolverSettings(interfacial_length=0.0025, method="ladder")
     with tempfile.TemporaryDirectory() as tmp:
         planner = Planner(cache_path=os.path.join(tmp, "c.sqlite"),

@@ -47,7 +47,7 @@ def _gel(name: str) -> Gel:
 def run(args: argparse.Namespace) -> None:
     gel = _gel(args.gel)
     t0, t1 = STARTS.get(gel.name, 302.0), 308.0
-    tau = timescale(args.dry_radius_um, t1).seconds
+    tau = timescale(args.dry_radius_um, t1, PhysicalConstants.paper()).seconds  # the table's
     ell = PhysicalConstants().interfacial_lengths(args.dry_radius_um)[0]
     a0 = equilibrium(gel, t0, "swollen").stretch
     targets = [float(Released(f).radius(a0)) for f in args.fractions]

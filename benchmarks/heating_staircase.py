@@ -17,7 +17,7 @@ import time
 
 from dosing.heating import Protocol
 from dosing.heating_program import staircase
-from dosing.units import radius_after_dose, timescale
+from dosing.units import PhysicalConstants, radius_after_dose, timescale
 from solver.full import simulate
 from solver.gel import preset
 
@@ -30,7 +30,7 @@ def main() -> None:
     ap.add_argument("--fractions", type=float, nargs="+", default=[0.3, 0.8])
     args = ap.parse_args()
     gel, dry = preset("ANB"), 50.0
-    tau = timescale(dry, 308.0).seconds
+    tau = timescale(dry, 308.0, PhysicalConstants.paper()).seconds  # the recorded table's
     opts = dict(grid="moving", n=400, rtol=1e-5, interfacial_length=4e-3 / dry)
     jump = simulate(gel, 302.0, protocol=[(0.5, 308.0)], **opts)
     a0 = float(jump.radius[0])

@@ -379,7 +379,7 @@ def fit_shrinking(data: KineticsData, gel: Gel | str | dict[str, Any], t_start: 
                       "tau_s": res.parameters["tau"], "tau_interval_s": res.intervals["tau"],
                       "dry_radius_um": dry})
     if dry is not None:
-        c = constants or PhysicalConstants()
+        c = (constants or PhysicalConstants()).for_gel(g.omega)
         res.extra.update(diffusivity_report(res.parameters["tau"], res.intervals["tau"], dry,
                                             jump.t_end))
         res.extra["k0_m2"] = k0_from_tau(res.parameters["tau"], dry, jump.t_end, c)

@@ -157,7 +157,7 @@ def fit_release(time_s: Any, released: Any, gel: Any, t_start: float, t_end: flo
                              "release)", "a release under heating is fitted with a protocol "
                              "('Heat to 308 K at 5 K/min'; an instant jump: 'Bath at 308 K')")
     r_um = require_finite_positive("dry_radius_um", dry_radius_um)
-    c = calibrated_constants(g, constants or PhysicalConstants())
+    c = calibrated_constants(g, constants or PhysicalConstants()).for_gel(g.omega)
     n = t.size
     if n < 3:
         raise ParameterError("data", f"{n} points", "at least 3 points")

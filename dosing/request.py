@@ -157,7 +157,8 @@ def resolve_case(req: Case) -> tuple[Jump, float | None]:
             object.__setattr__(req, f.name, from_edge(f.name, getattr(req, f.name)))
     gel = resolve_gel(req.gel)
     object.__setattr__(req, "gel", gel)
-    object.__setattr__(req, "constants", calibrated_constants(gel, _constants(req.constants)))
+    object.__setattr__(req, "constants", calibrated_constants(
+        gel, _constants(req.constants)).for_gel(gel.omega))  # Omega_p = Omega Omega_f default
     object.__setattr__(req, "settings", _settings(req.settings))
     jump = resolve_jump(gel, req.t_start, req.t_end, req.branch)
     object.__setattr__(req, "jump", jump)

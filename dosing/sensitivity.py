@@ -210,7 +210,7 @@ class DoseTimeModel:
         t_end = values.get("t_end", b.t_end)
         t = self._time(gel, t_start, t_end, values.get("dose_fraction", b.dose_fraction))
         return t * timescale(values.get("dry_radius_um", b.dry_radius_um), t_end,
-                             constants).seconds
+                             constants, omega=gel.omega).seconds
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         out = np.empty(x.shape[0])

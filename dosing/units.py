@@ -4,14 +4,17 @@ The solver is dimensionless (lengths by the dry radius R, time by tau).  Here
 tau = eta Omega_p R^2 / (k0 k_B T_end) (eq. timescale).  The paper's constants
 (eta = 1e-3 Pa s, Omega_p = 3e-25 m^3, k0 = 8e-20 m^2: printed "m^3", a slip, see
 ../shared/DESIGN.md) give an effective diffusivity D = k0 k_B T / (eta Omega_p) of about
-1e-8 cm^2/s, not the 3e-7 cm^2/s the text calls similar, so every constant is settable.
+1e-8 cm^2/s, not the 3e-7 cm^2/s the text calls similar, and contradict the gel's own
+Omega = Omega_p / Omega_f of eq. EqlEqn (3e-25 / 3e-29 = 1e4, against ANB's 100).  The
+default is therefore consistent with the gel: Omega_p = Omega Omega_f with water's molecular
+volume (D ~ 1.1e-6 cm^2/s for ANB at 308 K, within 4x of Tanaka & Fillmore's gel);
+``PhysicalConstants.paper()`` gives the paper's, and every constant is settable.
 """
 
 from __future__ import annotations
 
-import functools
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 from solver.errors import ParameterError, require_finite_positive
@@ -21,6 +24,11 @@ BOLTZMANN = 1.380649e-23  # J/K (exact, SI 2019)
 UM3_PER_UL = 1.0e9  # 1 uL = 1 mm^3 = 1e9 um^3
 WATER = "water"
 REFERENCE_TEMPERATURE_K = 298.15  # 25 degC: where a drug's D0 is given unless stated
+WATER_MOLECULAR_VOLUME_M3 = 3.0e-29  # Omega_f: 18 cm^3/mol / N_A = 2.99e-29 m^3
+# the paper's constants (after eq. timescale; k0 printed "m^3", a slip)
+PAPER_VISCOSITY_PA_S = 1.0e-3
+PAPER_POLYMER_VOLUME_M3 = 3.0e-25
+PAPER_PERMEABILITY_M2 = 8.0e-20
 
 # Vogel equation for liquid water, mu = A 10^(B / (T - C)); within 2.5 % over 0-370 C.
 _VOGEL_A, _VOGEL_B, _VOGEL_C = 2.414e-5, 247.8, 140.0
@@ -36,6 +44,11 @@ def water_viscosity(temperature: float) -> float:
 class PhysicalConstants:
     """Constants of eq. timescale.  ``viscosity_pa_s="water"`` uses water at T_end.
 
+    ``polymer_volume_m3`` (Omega_p) defaults to None: the value consistent with the gel's own
+    Omega of eq. EqlEqn, Omega_p = Omega Omega_f with water's molecular volume, resolved
+    against the gel by :meth:`for_gel` (every request's case does so).
+    :meth:`paper` gives the paper's constants (Omega_p = 3e-25 m^3, 1e4 Omega_f).
+
     ``mesh_length_nm`` is the gel's dry mesh (interfacial) length xi_dry, which sets the
     bead's interfacial length ell = xi_dry / a_d of the truth (docs/interfacial.md, sec. 1:
     a swollen PNIPAM mesh of ~10 nm at a swelling stretch ~2.3 is ~4 nm in the dry frame);
@@ -45,7 +58,8 @@ class PhysicalConstants:
     """
 
     viscosity_pa_s: float | str = 1.0e-3
-    polymer_volume_m3: float = 3.0e-25
+    # None: consistent with the gel, Omega_p = Omega Omega_f (resolved by ``for_gel``)
+    polymer_volume_m3: float | None = None
     permeability_m2: float = 8.0e-20
     mesh_length_nm: float = 4.0
     mesh_length_range_nm: tuple[float, float] | None = None  # default (xi / 2, 2 xi)
@@ -63,7 +77,10 @@ class PhysicalConstants:
         else:
             object.__setattr__(self, "viscosity_pa_s",
                                require_finite_positive("constants.viscosity_pa_s", v))
-        for name in ("polymer_volume_m3", "permeability_m2", "mesh_length_nm"):
+        names = ("permeability_m2", "mesh_length_nm")
+        if self.polymer_volume_m3 is not None:
+            names = ("polymer_volume_m3", *names)
+        for name in names:
             object.__setattr__(self, name,
                                require_finite_positive(f"constants.{name}", getattr(self, name)))
         if self.mesh_length_range_nm is None:
@@ -86,6 +103,46 @@ class PhysicalConstants:
                 "constants.diffusivity_m2_s", self.diffusivity_m2_s))
             object.__setattr__(self, "diffusivity_t_k", check_temperature(
                 self.diffusivity_t_k, "constants.diffusivity_t_k"))
+
+    @classmethod
+    def paper(cls, **changes: Any) -> PhysicalConstants:
+        """The paper's constants (after eq. timescale): eta = 1e-3 Pa s, Omega_p = 3e-25 m^3,
+        k0 = 8e-20 m^2 (printed "m^3", ../shared/DESIGN.md); D ~ 1.1e-8 cm^2/s at 308 K."""
+        return cls(**{"viscosity_pa_s": PAPER_VISCOSITY_PA_S,
+                      "polymer_volume_m3": PAPER_POLYMER_VOLUME_M3,
+                      "permeability_m2": PAPER_PERMEABILITY_M2, **changes})
+
+    def for_gel(self, omega: float) -> PhysicalConstants:
+        """These constants with Omega_p resolved against a gel of ``omega``: the given value,
+        else Omega Omega_f (water's molecular volume), consistent with eq. EqlEqn."""
+        if self.polymer_volume_m3 is not None:
+            return self
+        omega = require_finite_positive("omega", omega)
+        return replace(self, polymer_volume_m3=omega * WATER_MOLECULAR_VOLUME_M3)
+
+    @property
+    def resolved(self) -> bool:
+        """True once Omega_p has a value (given, the paper's, or resolved by :meth:`for_gel`)."""
+        return self.polymer_volume_m3 is not None
+
+    def source(self, omega: float | None = None) -> str:
+        """Which constants these are, in words (the timescale part's ``source``)."""
+        if self.calibrated:
+            return self.diffusivity_source or "kinetics fit"
+        paper = self.paper(mesh_length_nm=self.mesh_length_nm,
+                           mesh_length_range_nm=self.mesh_length_range_nm)
+        if self == paper:
+            return ("the paper's constants (eta = 1e-3 Pa s, Omega_p = 3e-25 m^3, "
+                    "k0 = 8e-20 m^2)")
+        if (omega is not None and self.polymer_volume_m3 is not None
+                and math.isclose(self.polymer_volume_m3, omega * WATER_MOLECULAR_VOLUME_M3,
+                                 rel_tol=1e-12)
+                and self.viscosity_pa_s == PAPER_VISCOSITY_PA_S
+                and self.permeability_m2 == PAPER_PERMEABILITY_M2):
+            return (f"default constants consistent with the gel: Omega_p = Omega Omega_f = "
+                    f"{self.polymer_volume_m3:.3g} m^3 (the gel's Omega {omega:.4g}, water's "
+                    "Omega_f 3.0e-29 m^3), eta = 1e-3 Pa s, k0 = 8e-20 m^2 (Bertrand et al.)")
+        return "constants given"
 
     @property
     def calibrated(self) -> bool:
@@ -115,6 +172,11 @@ class PhysicalConstants:
             t_ref = float(self.diffusivity_t_k)
             return (self.diffusivity_m2_s * (t_end / t_ref)
                     * self.viscosity(t_ref) / self.viscosity(t_end))
+        if self.polymer_volume_m3 is None:
+            raise ParameterError("constants.polymer_volume_m3", None,
+                                 "a value in m^3, or the constants resolved against the gel "
+                                 "first (PhysicalConstants.for_gel(gel.omega): Omega_p = "
+                                 "Omega Omega_f), or PhysicalConstants.paper()")
         return (self.permeability_m2 * BOLTZMANN * t_end
                 / (self.viscosity(t_end) * self.polymer_volume_m3))
 
@@ -126,8 +188,12 @@ class PhysicalConstants:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any] | None) -> PhysicalConstants:
-        """Inverse of :meth:`to_dict` (None gives the defaults)."""
+        """Inverse of :meth:`to_dict` (None gives the defaults; ``"paper": true`` starts from
+        the paper's constants, the other fields given overriding them)."""
         d = dict(data or {})
+        if d.pop("paper", False):
+            return cls.paper(**{k: v for k, v in cls.from_dict(d).to_dict().items()
+                                if k in d})
         if d.get("mesh_length_range_nm") is not None:
             d["mesh_length_range_nm"] = tuple(d["mesh_length_range_nm"])
         return cls(**d)
@@ -170,9 +236,15 @@ SYMBOLIC_FORMULA = ("tau = eta Omega_p R^2 / (k0 k_B T_end) (eq. timescale; R = 
 
 
 def timescale(dry_radius_um: float, t_end: float,
-              constants: PhysicalConstants | None = None) -> Timescale:
-    """tau = eta Omega_p R^2 / (k0 k_B T_end) for a dry radius in micrometres (eq. timescale)."""
+              constants: PhysicalConstants | None = None,
+              omega: float | None = None) -> Timescale:
+    """tau = eta Omega_p R^2 / (k0 k_B T_end) for a dry radius in micrometres (eq. timescale).
+
+    Default constants need the gel's ``omega`` (Omega_p = Omega Omega_f) unless resolved.
+    """
     c = constants or PhysicalConstants()
+    if omega is not None:
+        c = c.for_gel(omega)
     r_um = require_finite_positive("dry_radius_um", dry_radius_um)
     t1 = check_temperature(t_end, "t_end")
     d = c.diffusivity(t1)
@@ -214,16 +286,10 @@ def ul_to_volume(volume_ul: float, dry_radius_um: float) -> float:
 
 
 # ---------------------------------------------------------------- the constants' range
-WATER_MOLECULAR_VOLUME_M3 = 3.0e-29  # Omega_f: 18 cm^3/mol / N_A = 2.99e-29 m^3
 TANAKA_FILLMORE_D_CM2_S = 3.0e-7  # the gel diffusivity the paper quotes (Tanaka 1979)
 HOW_TO_PIN = ("pin it by a kinetics fit to a measured shrinking curve: thermogel fit kinetics "
               "FILE.csv --gel G --t-start T0 --t-end T1 --dry-radius-um R --save NAME, then "
               "--gel NAME (docs/fitting.md)")
-
-
-@functools.cache
-def _defaults() -> PhysicalConstants:
-    return PhysicalConstants()
 
 
 def timescale_uncertainty(omega: float, t_end: float, constants: PhysicalConstants,
@@ -233,32 +299,37 @@ def timescale_uncertainty(omega: float, t_end: float, constants: PhysicalConstan
     """How far the seconds can be trusted: the effective diffusivity over the constants' range.
 
     eq. timescale needs k0 / Omega_p, which nothing in a swelling curve fixes.  Uncalibrated,
-    D is taken at three defensible values: the constants used (the paper's, D ~ 1e-8 cm^2/s
-    at 308 K), Omega_p = Omega Omega_f consistent with the gel's own Omega of eq. EqlEqn
-    (water's Omega_f = 3.0e-29 m^3: D larger by 3e-25 / (Omega Omega_f), 100x for ANB,
-    14x for HHT) and the 3e-7 cm^2/s the paper quotes from Tanaka & Fillmore; the seconds'
-    range is tau over them.  Calibrated (a kinetics fit), the range is the fit's interval.
+    D is taken at three defensible values: the constants used (by default Omega_p = Omega
+    Omega_f, consistent with the gel's own Omega of eq. EqlEqn: D ~ 1.1e-6 cm^2/s for ANB at
+    308 K), the paper's (Omega_p = 3e-25 m^3: D smaller by 3e-25 / (Omega Omega_f), 100x for
+    ANB, 14x for HHT) and the 3e-7 cm^2/s the paper quotes from Tanaka & Fillmore; the
+    seconds' range is tau over them.  Calibrated (a kinetics fit), the range is the fit's
+    interval.
     """
-    d_used = constants.diffusivity(t_end) * 1e4  # cm^2/s
-    if constants.calibrated:
+    c = constants.for_gel(omega)
+    d_used = c.diffusivity(t_end) * 1e4  # cm^2/s
+    if c.calibrated:
         lo, hi = calibrated_interval or (d_used, d_used)
         out: dict[str, Any] = {
-            "calibrated": True, "source": constants.diffusivity_source or "kinetics fit",
+            "calibrated": True, "source": c.source(omega),
             "diffusivity_cm2_s": d_used, "diffusivity_range_cm2_s": [lo, hi],
             "factor": hi / lo,
             "note": "tau from the effective diffusivity a kinetics fit measured (eq. "
                     "timescale: the fit pins D = k0 k_B T / (eta Omega_p), not k0 alone); the "
                     "range is its 95% interval"}
     else:
-        d_consistent = d_used * constants.polymer_volume_m3 / (omega * WATER_MOLECULAR_VOLUME_M3)
+        omega_p = omega * WATER_MOLECULAR_VOLUME_M3
+        d_consistent = d_used * float(c.polymer_volume_m3) / omega_p
+        d_paper = d_used * float(c.polymer_volume_m3) / PAPER_POLYMER_VOLUME_M3
         ds = {"constants used": d_used,
-              f"Omega_p = Omega Omega_f = {omega * WATER_MOLECULAR_VOLUME_M3:.3g} m^3 "
-              f"(the gel's Omega {omega:.4g})": d_consistent,
+              f"Omega_p = Omega Omega_f = {omega_p:.3g} m^3 (the gel's Omega {omega:.4g})":
+                  d_consistent,
+              "the paper's Omega_p = 3e-25 m^3": d_paper,
               "Tanaka & Fillmore's measured gel diffusivity": TANAKA_FILLMORE_D_CM2_S}
+        ds = {k: v for i, (k, v) in enumerate(ds.items())
+              if i == 0 or not math.isclose(v, d_used, rel_tol=1e-9)}
         lo, hi = min(ds.values()), max(ds.values())
-        out = {"calibrated": False, "source": "default constants (the paper's: eta = 1e-3 Pa s, "
-               "Omega_p = 3e-25 m^3, k0 = 8e-20 m^2)" if constants == _defaults()
-               else "constants given", "diffusivity_cm2_s": d_used,
+        out = {"calibrated": False, "source": c.source(omega), "diffusivity_cm2_s": d_used,
                "diffusivity_range_cm2_s": [lo, hi], "candidates_cm2_s": ds,
                "factor": hi / lo,
                "note": f"UNCALIBRATED: the seconds are uncertain by a factor {hi / lo:.3g} "

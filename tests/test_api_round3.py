@@ -282,7 +282,7 @@ async def test_a_cr_only_trace_is_read(raw) -> None:
     ("Heat to 308 K at 1e-300 K/tau", "rate"),
     ("Heat to 308 K at 1e300 K/tau", "rate"),
     ("Heat to 308 K at 1e-9 K/tau", "rate"),
-    ("Hold at 308 K for 1e5 tau", "for"),
+    ("Hold at 308 K for 1e6 tau", "for"),  # 2.2e7 s at tau = 22 s (50 um ANB)
 ])
 async def test_bounds_hold_after_unit_conversion(raw, step, field) -> None:
     """R8: a dimensionless unit inside a step ('500 percent', '10 radian') is refused, and a

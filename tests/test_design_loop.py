@@ -38,7 +38,7 @@ def measured(planner, gel: str, t_start: float, t_end: float, dry_um: float,
     this bead: moving grid, its own ell), at the true tau (SPEED x faster than the planner's
     constants), with relative Gaussian noise."""
     req = Request(gel, t_start, Jump(t_end), Dose(0.5), dry_radius_um=dry_um)
-    tau = timescale(dry_um, t_end).seconds / SPEED
+    tau = timescale(dry_um, t_end, req.planned.constants).seconds / SPEED
     sc = Scenario(req.planned.gel, t_start, t_end, branch=req.planned.branch,
                   settings=req.planned.settings)
     traj = planner.trajectory(sc, need_time=float(times_s.max()) / tau * 1.01)
@@ -83,7 +83,7 @@ def test_the_recommended_experiment_pins_the_envelope(planner, tmp_path, monkeyp
     # the truth: the full solver's validated time at the true tau
     val = plan(Request("ANB", 302.0, Jump(308.0), Dose(0.8), dry_radius_um=50.0,
                        validate=True), planner)
-    c = PhysicalConstants()
+    c = PhysicalConstants().for_gel(100.0)  # ANB's Omega: the default Omega_p
     tau_true = (50e-6) ** 2 / (SPEED * c.diffusivity(308.0))
     truth = val.answer.validation.time * tau_true
     width, predicted = hi / lo, out["envelope_after_factor"]

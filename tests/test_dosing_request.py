@@ -92,5 +92,5 @@ def test_schedule_validation() -> None:
 
 
 def test_schedule_rests_in_seconds_use_tau() -> None:
-    s = ScheduleRequest(**JUMP, doses=[0.3, 0.3], rests_seconds=[2205.0], dry_radius_um=50.0)
-    assert s.rests[0] == pytest.approx(1.0, rel=1e-3)  # tau = 2205 s for 50 um at 308 K
+    s = ScheduleRequest(**JUMP, doses=[0.3, 0.3], rests_seconds=[22.05], dry_radius_um=50.0)
+    assert s.rests[0] == pytest.approx(1.0, rel=1e-3)  # tau = 22.05 s for 50 um ANB at 308 K

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from api.cli import main
-from dosing import DoseRequest, PhysicalConstants, SolverSettings
+from dosing import DoseRequest, SolverSettings
 from dosing.drug import DrugModel, DrugRuns, DrugScenario, drug_settings
 from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
 from dosing.drug_schedule import DrugScheduleRequest, plan_drug_schedule
@@ -60,7 +60,7 @@ def test_protein_dose_leaks_while_it_waits_as_crank_says(planner) -> None:
     assert ans.peclet is not None and ans.peclet > 0.0 and "D0 = 0" in ans.split
     assert "xi_dry = 4 nm" in ans.mesh and "none" in ans.permeability_law
     assert ans.drug_diffusivity_cm2_s == pytest.approx(drug.d0_cm2_s(308.0), rel=1e-12)
-    d_gel = PhysicalConstants().diffusivity(308.0) * 1e4  # the gel's R^2 / tau in cm^2/s
+    d_gel = req.constants.diffusivity(308.0) * 1e4  # the gel's R^2 / tau in cm^2/s
     assert ans.effective_diffusivity_cm2_s == pytest.approx(d_eff * d_gel, rel=1e-12)
     released = ans.leaked_before_heating + 0.2
     grown_ul = ans.fluid_fraction * (req.start_radius**3 - 1) * 4 * math.pi / 3 * 50**3 / 1e9

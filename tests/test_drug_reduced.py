@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from dosing import PhysicalConstants
 from dosing.drug import DrugModel
 from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
 from dosing.drug_reduced import MEASURED, STATED_LIMIT, stated_error
@@ -116,7 +117,9 @@ def test_bad_grid_is_refused():
 def _req(**drug):
     kw = {"dose_fraction": drug.pop("dose_fraction", 0.5),
           "dry_radius_um": drug.pop("dry_radius_um", 50.0), "wait": drug.pop("wait", None),
-          "settings": drug.pop("settings", None)}
+          "settings": drug.pop("settings", None),
+          # the table's D0 / D_gel rows were picked as D0 in cm^2/s at the paper's D_gel
+          "constants": drug.pop("constants", PhysicalConstants.paper())}
     return DrugDoseRequest("ANB", 302.0, 308.0, DrugModel(**drug), **kw)
 
 

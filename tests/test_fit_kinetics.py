@@ -15,7 +15,7 @@ from solver.errors import ParameterError
 from solver.gel import ANB
 
 DRY_UM = 50.0
-TAU = timescale(DRY_UM, 308.0).seconds  # the paper's constants: about 2200 s
+TAU = timescale(DRY_UM, 308.0, omega=ANB.omega).seconds  # default constants: about 22 s
 
 
 def _curve(radius_of_t, noise: float = 0.01, seed: int = 0, t_max: float = 0.3, n: int = 40):

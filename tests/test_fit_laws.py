@@ -14,7 +14,7 @@ from dosing.units import timescale
 from solver.gel import ANB
 
 DRY_UM = 50.0
-TAU = timescale(DRY_UM, 308.0).seconds
+TAU = timescale(DRY_UM, 308.0, omega=ANB.omega).seconds  # default constants
 
 
 @pytest.fixture(scope="module")

@@ -137,6 +137,7 @@ def test_cli_fit_release(tmp_path, capsys) -> None:
 
 RAMP = "Heat to 308 K at 5 K/min"
 COARSE = SolverSettings(grid="moving", n=100, rtol=1e-4)  # ~2 s of mechanics (truth: ~1 min)
+DEFAULTS = PhysicalConstants().for_gel(ANB.omega)  # the fit's own constants for ANB
 D0_RAMP = 3.0e-8  # cm^2/s: its half-release time (~150 s) is of the ramp's 96 s
 
 
@@ -146,10 +147,10 @@ def ramp_curve(seed: int = 0, noise: float = 0.01) -> tuple[np.ndarray, np.ndarr
     at COARSE settings), 1% noise."""
     t = np.linspace(10.0, 600.0, 25)
     prot = fp.parse_protocol(T, RAMP)
-    mech = fp.protocol_mechanics(ANB, prot, DRY_UM, float(t.max()), PhysicalConstants(),
+    mech = fp.protocol_mechanics(ANB, prot, DRY_UM, float(t.max()), DEFAULTS,
                                  COARSE)
     clean = fp.released_under(mech, DrugModel(hindrance="none"), D0_RAMP,
-                              PhysicalConstants(), DRY_UM, t)
+                              DEFAULTS, DRY_UM, t)
     return t, clean + noise * np.random.default_rng(seed).standard_normal(t.size)
 
 

@@ -13,9 +13,10 @@ from api.http import create_app
 from dosing import DoseRequest, PhysicalConstants, plan_dose
 from dosing.fit import front_radius_model
 from dosing.units import timescale, timescale_uncertainty
+from solver.gel import HHT
 
 DRY_UM = 40.0
-SLOWER = 2.3  # the "measured" bead is 2.3x slower than the paper's constants say
+SLOWER = 2.3  # the "measured" bead is 2.3x slower than the default constants say
 
 
 @pytest.fixture
@@ -38,7 +39,7 @@ def _kinetics_csv(path, tau_s: float):
 @pytest.fixture
 def calibrated(env, capsys):
     """`fit kinetics --save mygel` on a bead SLOWER times slower than the default tau."""
-    tau_true = SLOWER * timescale(DRY_UM, 310.0).seconds
+    tau_true = SLOWER * timescale(DRY_UM, 310.0, omega=HHT.omega).seconds
     csv = _kinetics_csv(env / "k.csv", tau_true)
     assert main(["fit", "kinetics", str(csv), "--gel", "HHT", "--t-start", "300",
                  "--t-end", "310", "--dry-radius-um", str(DRY_UM), "--json",
@@ -96,18 +97,24 @@ def test_a_calibrated_gel_at_another_temperature_follows_k_B_T_over_eta() -> Non
 
 
 def test_uncalibrated_answers_state_the_constants_range(capsys) -> None:
-    """ANB (Omega = 100): the paper's Omega_p = 3e-25 m^3 against Omega Omega_f = 3e-27 m^3
-    is a factor 100 in tau; HHT (Omega = 720) 13.9x, widened to 26x by Tanaka's D."""
+    """ANB (Omega = 100): the default Omega_p = Omega Omega_f = 3e-27 m^3 against the paper's
+    3e-25 m^3 is a factor 100 in tau, the default at its fast end; HHT (Omega = 720) 13.9x,
+    widened to 26x by Tanaka's D."""
     ans = plan_dose(DoseRequest("ANB", 302.0, 308.0, dose_fraction=0.8, dry_radius_um=50.0))
     tu = ans.timescale_uncertainty
     assert tu["calibrated"] is False and "UNCALIBRATED" in tu["note"]
     assert tu["factor"] == pytest.approx(100.0, rel=1e-6)
-    assert tu["seconds_range"][1] == pytest.approx(ans.seconds)
+    assert tu["seconds_range"][0] == pytest.approx(ans.seconds)
+    assert tu["source"].startswith("default constants consistent with the gel")
     assert "fit kinetics" in tu["how_to_pin"]
     hht = timescale_uncertainty(720.0, 308.0, PhysicalConstants())
-    d = PhysicalConstants().diffusivity(308.0) * 1e4
-    assert hht["factor"] == pytest.approx(3e-7 / d, rel=1e-6)
+    d_paper = PhysicalConstants.paper().diffusivity(308.0) * 1e4
+    assert hht["diffusivity_cm2_s"] == pytest.approx(d_paper * 3e-25 / (720 * 3e-29))
+    assert hht["factor"] == pytest.approx(3e-7 / d_paper, rel=1e-6)
     assert 10 < hht["factor"] < 100  # one to two orders of magnitude
+    paper = timescale_uncertainty(720.0, 308.0, PhysicalConstants.paper())
+    assert paper["source"].startswith("the paper's constants")
+    assert paper["factor"] == pytest.approx(hht["factor"], rel=1e-9)  # the same three readings
     assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308",
                  "--fraction", "0.8", "--dry-radius-um", "50"]) == 0
     assert "UNCALIBRATED seconds" in capsys.readouterr().out
@@ -154,7 +161,7 @@ def test_joint_interval_of_a_gel_fitted_to_swelling_and_kinetics(env, capsys) ->
         f"{t:.4f},{y:.5f}\n" for t, y in zip(d.temperature, d.size, strict=True)))
     assert main(["fit", "swelling", str(sw), "--save", "both", "--json"]) == 0
     capsys.readouterr()
-    csv = _kinetics_csv(env / "k.csv", SLOWER * timescale(DRY_UM, 310.0).seconds)
+    csv = _kinetics_csv(env / "k.csv", SLOWER * timescale(DRY_UM, 310.0, omega=HHT.omega).seconds)
     assert main(["fit", "kinetics", str(csv), "--gel", "both", "--t-start", "300", "--t-end",
                  "310", "--dry-radius-um", str(DRY_UM), "--save", "both", "--json"]) == 0
     capsys.readouterr()

@@ -37,7 +37,7 @@ def _swelling_csv(path, seed: int = 3):
 
 def _kinetics_csv(path):
     curve = front_radius_model(HHT, 300.0, 310.0, "swollen")(None)
-    tau = timescale(40.0, 310.0).seconds
+    tau = timescale(40.0, 310.0, omega=HHT.omega).seconds
     td = np.linspace(0.0, 0.02, 30)
     y = 40.0 * curve(td) * (1 + 0.01 * np.random.default_rng(0).standard_normal(td.size))
     path.write_text("time_s,radius\n" + "".join(

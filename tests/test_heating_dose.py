@@ -18,11 +18,12 @@ from dosing_fakes import FakeSolver
 from dosing import DoseRequest, Planner
 from dosing.answers import Answered, Pending
 from dosing.heating import Protocol
-from dosing.units import radius_after_dose, timescale
+from dosing.units import PhysicalConstants, radius_after_dose, timescale
 from solver.errors import ParameterError
 
-BEAD = {"gel": "ANB", "t_start": 302.0, "dry_radius_um": 50.0}
-TAU = timescale(50.0, 308.0).seconds  # the reference: tau at the hottest temperature
+PAPER = PhysicalConstants.paper()  # its heatings are written for tau = 2205 s (50 um, 308 K)
+BEAD = {"gel": "ANB", "t_start": 302.0, "dry_radius_um": 50.0, "constants": PAPER}
+TAU = timescale(50.0, 308.0, PAPER).seconds  # the reference: tau at the hottest temperature
 
 
 @pytest.fixture
@@ -230,7 +231,7 @@ def test_cli_protocol_dose_json_equals_python(cli_on_fake, capsys, tmp_path, fak
     from api.cli import main
 
     argv = ["dose", "--t-start", "302", "--protocol", "Heat to 308 K at 5 K/min",
-            "--fraction", "0.8", "--dry-radius-um", "50", "--json",
+            "--fraction", "0.8", "--dry-radius-um", "50", "--paper-constants", "--json",
             "--cache", str(tmp_path / "cli.sqlite")]
     assert main(argv) == 0
     out = json.loads(capsys.readouterr().out)
@@ -269,7 +270,7 @@ def test_cli_trace_file_in_degc(cli_on_fake, capsys, tmp_path):
     f = tmp_path / "bath.csv"
     f.write_text("time (s),T (degC)\n0,28.85\n36,31.85\n72,34.85\n")
     assert main(["dose", "--t-start", "302", "--protocol", f"Trace from {f}", "--fraction",
-                 "0.3", "--dry-radius-um", "50", "--json", "--cache",
+                 "0.3", "--dry-radius-um", "50", "--paper-constants", "--json", "--cache",
                  str(tmp_path / "c.sqlite")]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["protocol_steps"][0]["step"] == "trace" and out["seconds"] > 72.0
@@ -290,6 +291,7 @@ async def test_http_protocol_202_then_answer(tmp_path, fake):
     from api.http import create_app
 
     body = {"gel": "ANB", "t_start": 302.0, "dose_fraction": 0.8, "dry_radius_um": 50.0,
+            "constants": {"paper": True},
             "protocol": ["Heat to 308 K at 5 K/min"]}
     with fake_planner(tmp_path / "c.sqlite", fake) as planner:
         async with asgi(create_app(planner=planner, warm=False)) as (_, raw):
@@ -326,6 +328,7 @@ async def test_http_protocol_in_the_reduced_region_answers_at_once(tmp_path):
     from api.http import create_app
 
     body = {"gel": "ANB", "t_start": 302.0, "dose_fraction": 0.8, "dry_radius_um": 50.0,
+            "constants": {"paper": True},
             "protocol": ["Heat to 308 K at 5 K/min"]}
     with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1)) as p:
         async with asgi(create_app(planner=p, warm=False)) as (_, raw):
@@ -353,6 +356,7 @@ async def test_http_protocol_errors_422(tmp_path, fake, change, where):
     from api.http import create_app
 
     body = {"gel": "ANB", "t_start": 302.0, "dose_fraction": 0.8, "dry_radius_um": 50.0,
+            "constants": {"paper": True},
             "protocol": ["Heat to 308 K at 5 K/min"], **change}
     with fake_planner(tmp_path / "c.sqlite", fake) as planner:
         async with asgi(create_app(planner=planner, warm=False)) as (_, raw):

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dosing.units import timescale
+from dosing.units import PhysicalConstants, timescale
 from solver.equilibrium import equilibrium
 from solver.full import simulate
 from solver.full.integrate import Workspace
@@ -56,7 +56,7 @@ def test_fast_ramp_gives_the_step_answer() -> None:
     takes 1.6e-5 tau.  The dose times (30 % and 80 %) lie between the step's and the step's
     plus the ramp's length (the bead cannot shrink faster than under the jump, nor lag it
     by more than the ramp), with the integrators' tolerance."""
-    tau = timescale(50.0, 308.0).seconds
+    tau = timescale(50.0, 308.0, PhysicalConstants.paper()).seconds
     rate = 1e4 / 60.0 * tau
     duration = 6.0 / rate
     assert duration == pytest.approx(1.63e-5, rel=0.01)
@@ -76,7 +76,8 @@ def test_fast_ramp_gives_the_step_answer() -> None:
 def _lag(dry_radius_um: float, per_min: float) -> np.ndarray:
     """Relative deviation of the radius from the equilibrium stretch at the current
     temperature along an ANB ramp 296 -> 300 K (single phase: the smooth regime)."""
-    rate = per_min / 60.0 * timescale(dry_radius_um, 308.0).seconds  # K per tau
+    tau = timescale(dry_radius_um, 308.0, PhysicalConstants.paper()).seconds
+    rate = per_min / 60.0 * tau  # K per tau
     prog = Program((Ramp(300.0, rate),))
     res = simulate("ANB", 296.0, protocol=prog, saveat=np.linspace(0.0, 4.0 / rate, 21),
                    grid="lagrangian", n=40, rtol=1e-8, atol=1e-11)

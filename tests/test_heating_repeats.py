@@ -9,6 +9,7 @@ import pytest
 from api_support import asgi
 
 from api.http import create_app
+from dosing import PhysicalConstants
 from dosing.heating import Hold, Protocol, Until, parse_step
 from dosing.question import Dose, Heating, Request, plan
 from solver.errors import ParameterError
@@ -83,7 +84,8 @@ def test_for_or_until_parses_both_ends() -> None:
 
 def _dose(planner, first: str):
     req = Request("ANB", 302.0, Heating([first, "Rest at 302 K for 5 s", "Hold at 308 K"]),
-                  Dose(0.5), dry_radius_um=2.0)
+                  Dose(0.5), dry_radius_um=2.0,
+                  constants=PhysicalConstants.paper())  # tau 3.5 s: the steps are seconds
     return plan(req, planner=planner).to_dict()
 
 

@@ -9,6 +9,11 @@ Front-model and reduced-model entries ("exact") reproduce to rel 1e-9 (abs 1e-12
 zeros), strings equal; the validated entries ("full", slow) reproduce the full solver's
 outputs named in their ``tolerance`` within it (the truth's numerical part).  An output's
 key is its attribute path on the answer (``batch.time``, ``hold[1].end``).
+
+The table was made with the paper's timescale constants, the default until issue 36 made
+Omega_p = Omega Omega_f the default: every recipe runs with ``PhysicalConstants.paper()``
+(tau moves a ramp's rate in K/tau and a drug's D0 / D_gel, so the default would not be the
+table's dimensionless problem).
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ import pytest
 import dosing
 from dosing import DoseRequest, Planner, ScheduleRequest, plan_dose, plan_schedule
 from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
+from dosing.units import PhysicalConstants
 
 TABLE = json.loads((Path(__file__).parent / "data" / "regression_70c49c7.json").read_text())
 REL, ABS = TABLE["tolerance"]["exact"]["rel"], TABLE["tolerance"]["exact"]["abs"]
@@ -142,7 +148,9 @@ def _params() -> list[Any]:
 @pytest.mark.parametrize("entry", _params())
 def test_answer_reproduces_the_table(entry: dict[str, Any], tmp_path: Path) -> None:
     recipe = entry["request"]
-    answer = RECIPES[entry["kind"]](recipe["args"], str(tmp_path / "cache.sqlite"))
+    args = {**recipe["args"], "constants": PhysicalConstants.from_dict(
+        {**(recipe["args"].get("constants") or {}), "paper": True})}
+    answer = RECIPES[entry["kind"]](args, str(tmp_path / "cache.sqlite"))
     tolerance = entry.get("tolerance", {}) if entry["check"] == "full" else {}
     outputs = {**entry["outputs"], **CORRECTED.get(entry["id"], ("", {}))[1]}
     bad = [why for key, want in outputs.items()

@@ -15,6 +15,7 @@ from api_support import asgi
 
 from api.cli import main
 from api.http import create_app
+from dosing import PhysicalConstants
 from dosing.question import Batch, Drug, Fluid, Heating, Jump, OneBead, Request, Schedule, plan
 from dosing.question.cells import CELLS
 from dosing.question.events import EVENT_COLUMNS, schedule_events
@@ -230,7 +231,8 @@ def test_a_repeated_protocol_heating_is_written_out_in_its_events(fake_planner) 
     words, its set temperature the one at its end."""
     req = Request(**FAKE_CASE, heating=Heating(["2 x (Hold at 308 K for 0.1 s; Rest at 302 K "
                                                 "for 0.2 s)", "Hold at 308 K"]),
-                  question=Schedule([0.3, 0.3], rests=[0.5]))
+                  question=Schedule([0.3, 0.3], rests=[0.5]),
+                  constants=PhysicalConstants.paper())  # tau 3.5 s: the steps are seconds
     res = plan(req, planner=fake_planner)
     ev = _check_events(res, ("fluid", "one", "repeat"))
     for e in (x for x in ev if x["kind"] == "heat"):

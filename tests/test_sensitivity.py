@@ -69,7 +69,7 @@ def test_sobol_matches_the_analytic_indices_within_their_intervals(seed: int) ->
 
 def test_the_model_is_the_planners_front_answer() -> None:
     c = PhysicalConstants()
-    base = Base(ANB, 302.0, 308.0, 0.8, 50.0, c)
+    base = Base(ANB, 302.0, 308.0, 0.8, 50.0, c)  # Omega_p follows a varied omega
     model = DoseTimeModel(base, ["dry_radius_um", "dose_fraction", "t_end", "omega"])
     x = np.array([[20.0, 0.5, 308.0, 100.0], [70.0, 0.3, 309.0, 100.0],
                   [35.0, 0.7, 308.0, 110.0], [35.0, 0.6, 308.0, 110.0]])

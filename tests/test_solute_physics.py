@@ -91,7 +91,7 @@ def test_no_diffusion_drug_is_all_squeezed() -> None:
 
 
 def _anb_50um(drug: DrugModel, protocol: list) -> tuple:
-    c = PhysicalConstants()
+    c = PhysicalConstants.paper()  # D0 / D_gel at the paper's tau, as these runs were set
     res0, _ = simulate_release("ANB", 302, Solute(), t_end=302, until=0.01, samples=10)
     a0 = float(res0.radius[0])
     sol = drug.solute(a0, 308.0, c, 50.0)
@@ -174,5 +174,5 @@ def test_loading_concentration_uses_the_partition_at_the_start_state() -> None:
     want = 2.0 * math.exp(-(1.0 / a0**3) * ((1.0 + 2.0) ** 2 - 1.0)) * 1.0 * stored  # per pore
     assert drug.load(stored, a0, PhysicalConstants()) == pytest.approx(want, rel=1e-12)
     assert drug.load(stored) == pytest.approx(2.0 * stored)  # no start state: K0 only
-    sol = drug.solute(a0, 308.0, PhysicalConstants(), None)
+    sol = drug.solute(a0, 308.0, PhysicalConstants.paper(), None)
     assert sol.partition_at(1.0 - 1.0 / a0**3) * stored == pytest.approx(want, rel=1e-12)

@@ -155,7 +155,7 @@ def test_every_float_cli_option_named_by_its_unit_takes_units() -> None:
 def test_sweep_axes_and_viscosity_take_units() -> None:
     """The CLI's sweep axes and --viscosity read quantities too; a wrong kind names the
     option."""
-    from api.commands.dose import _viscosity
+    from api.commands.constants_options import viscosity as _viscosity
     from api.commands.sweep import parse_axis
     from solver.errors import ParameterError
 

@@ -20,17 +20,9 @@ from .common import (
     print_uncertainty,
     wrap,
 )
+from .constants_options import add_constants_options, constants_from_args, constants_values
 from .drug_options import add_drug_options, drug_from_args
 from .outfile import add_format_option, figure_path
-
-
-def _viscosity(text: str) -> float | str:
-    """'water', a number in Pa s, or a quantity ('1 mPa s')."""
-    if text.strip().lower() == "water":
-        return text
-    from dosing.quantity import to_unit
-
-    return to_unit(text, "viscosity", "--viscosity")
 
 
 def add_planning_options(p: argparse.ArgumentParser) -> None:
@@ -44,17 +36,7 @@ def add_planning_options(p: argparse.ArgumentParser) -> None:
     size.add_argument("--dry-radius-um", type=float, default=None, help="dry bead radius in um")
     size.add_argument("--swollen-radius-um", type=float, default=None,
                       help="bead radius in um, swollen at T_start")
-    c = p.add_argument_group("timescale constants (eq. timescale)")
-    c.add_argument("--viscosity", type=_viscosity, default=1.0e-3,
-                   help="fluid viscosity in Pa s, or 'water' for water at T_end (default 1e-3)")
-    c.add_argument("--polymer-volume-m3", type=float, default=3.0e-25,
-                   help="Omega_p, volume of a polymer unit in m^3 (default 3e-25)")
-    c.add_argument("--k0-m2", type=float, default=8.0e-20,
-                   help="permeability scale k0 in m^2 (default 8e-20)")
-    c.add_argument("--mesh-length-nm", type=float, default=4.0, metavar="XI",
-                   help="the gel's dry mesh (interfacial) length xi_dry in nm: the truth's "
-                        "ell = xi_dry / a_d, its range xi/2-2xi (default 4, "
-                        "docs/interfacial.md sec. 1)")
+    add_constants_options(p.add_argument_group("timescale constants (eq. timescale)"))
     s = p.add_argument_group("full solver (validation truth)")
     s.add_argument("--validation-method", choices=list(METHODS), default="direct",
                    help="'direct' (default): the regularized model at ell itself on the "
@@ -80,23 +62,19 @@ def planning_values(args: argparse.Namespace) -> dict[str, Any]:
     return {"gel": gel_bounds(args), "t_start": args.t_start, "t_end": args.t_end,
             "branch": args.branch, "dry_radius_um": args.dry_radius_um,
             "swollen_radius_um": args.swollen_radius_um,
-            "constants": {"viscosity_pa_s": args.viscosity,
-                          "polymer_volume_m3": args.polymer_volume_m3,
-                          "permeability_m2": args.k0_m2,
-                          "mesh_length_nm": args.mesh_length_nm}}
+            "constants": constants_values(args)}
     # --interfacial-length is left to SolverSettings: with --n (which HTTP does not offer)
     # its valid range moves with the grid
 
 
 def planning_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     """Request keyword arguments shared by ``dose`` and ``schedule``."""
-    from dosing import PhysicalConstants, SolverSettings
+    from dosing import SolverSettings
 
     return {"gel": gel_from_args(args), "t_start": args.t_start, "t_end": args.t_end,
             "branch": args.branch, "dry_radius_um": args.dry_radius_um,
             "swollen_radius_um": args.swollen_radius_um,
-            "constants": PhysicalConstants(args.viscosity, args.polymer_volume_m3, args.k0_m2,
-                                           mesh_length_nm=args.mesh_length_nm),
+            "constants": constants_from_args(args),
             "settings": SolverSettings(grid=args.grid, n=args.n,
                                        interfacial_length=args.interfacial_length,
                                        method=args.validation_method)}

@@ -16,6 +16,7 @@ from typing import Any
 from solver.errors import ParameterError
 
 from .common import print_json
+from .constants_options import add_constants_options, constants_from_args
 from .outfile import add_format_option, figure_path, request_of
 
 
@@ -25,10 +26,6 @@ def _fix(text: str) -> tuple[str, float]:
         return k.strip(), float(v)
     except ValueError:
         raise argparse.ArgumentTypeError("expected NAME=VALUE, e.g. omega=100") from None
-
-
-def _viscosity(text: str) -> float | str:
-    return text if text.strip().lower() == "water" else float(text)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -82,10 +79,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                       help="dry bead radius in um (for k0)")
     size.add_argument("--swollen-radius-um", type=float, default=None,
                       help="bead radius in um at T_start (for k0)")
-    k.add_argument("--viscosity", type=_viscosity, default=1.0e-3,
-                   help="fluid viscosity in Pa s or 'water' (default 1e-3)")
-    k.add_argument("--polymer-volume-m3", type=float, default=3.0e-25,
-                   help="Omega_p in m^3 (default 3e-25)")
+    add_constants_options(k, mesh=False, k0=False)
     k.add_argument("--model", choices=["auto", "front", "front-sharp", "full"], default="auto",
                    help="model of the curve (default auto: the front model where it applies)")
     k.add_argument("--fit-beta", action="store_true",
@@ -268,7 +262,7 @@ def _print_notes(res: Any, report: dict[str, Any]) -> None:
 
 def run_kinetics(args: argparse.Namespace) -> int:
     """Fit, print, plot, save."""
-    from dosing import PhysicalConstants, Planner, SolverSettings
+    from dosing import Planner, SolverSettings
     from dosing.fit import data_dict, kinetics_report, read_kinetics_csv
     from dosing.gel_store import GelStore, check_name, lookup
 
@@ -280,7 +274,7 @@ def run_kinetics(args: argparse.Namespace) -> int:
     gel = lookup(args.gel, store)
     settings = SolverSettings() if args.interfacial_length is None else SolverSettings(
         interfacial_length=args.interfacial_length)
-    constants = PhysicalConstants(args.viscosity, args.polymer_volume_m3)
+    constants = constants_from_args(args).for_gel(gel.omega)
     from concurrent.futures import ThreadPoolExecutor
 
     planner = Planner(cache_path=args.cache, executor=ThreadPoolExecutor(1))

@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
 
         dry = micrometres(args.dry_radius_um, "dry_radius_um")
         t_end = max(T for _, T in res.diagnostics["protocol"])
-        tau = timescale(dry, t_end).seconds
+        tau = timescale(dry, t_end, omega=float(res.diagnostics["gel"]["omega"])).seconds
     for path in draw_run(res, args.out, args.format, dry, tau):
         print(f"wrote {path}")
     return 0

@@ -10,7 +10,7 @@ import numpy as np
 from solver.errors import ParameterError
 
 from .common import add_gel_options, gel_from_args, print_json
-from .dose import _viscosity
+from .constants_options import add_constants_options, constants_from_args
 from .drug_options import add_drug_options, drug_from_args
 from .outfile import OUT_HELP, request_of, save
 from .simulate import add_protocol_options, protocol_pairs
@@ -24,11 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_protocol_options(p, "start (loading) temperature, K")
     p.add_argument("--dry-radius-um", type=float, default=None,
                    help="dry bead radius in um (for seconds and a release volume)")
-    c = p.add_argument_group("timescale constants (eq. timescale; tau at the hottest step)")
-    c.add_argument("--viscosity", type=_viscosity, default=1.0e-3,
-                   help="fluid viscosity in Pa s, or 'water' (default 1e-3)")
-    c.add_argument("--polymer-volume-m3", type=float, default=3.0e-25, help="Omega_p in m^3")
-    c.add_argument("--k0-m2", type=float, default=8.0e-20, help="k0 in m^2")
+    add_constants_options(p.add_argument_group(
+        "timescale constants (eq. timescale; tau at the hottest step)"))
     add_drug_options(p, required=True)
     p.add_argument("--n", type=int, default=None,
                    help="cells (default: the planner's truth, 400 on the moving grid)")
@@ -36,8 +33,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="interfacial length ell in dry radii (default: the planner's truth, "
                         "the bead's own xi_dry / a_d with --dry-radius-um, else 1e-4 for "
                         "the sharp limit; 0: the paper's model on the Lagrangian grid)")
-    p.add_argument("--mesh-length-nm", type=float, default=None, metavar="XI",
-                   help="the gel's dry mesh length xi_dry in nm (default 4)")
     p.add_argument("--rtol", type=float, default=None,
                    help="mechanics tolerance (default: the truth's, 1e-5)")
     p.add_argument("--samples", type=int, default=2000,
@@ -62,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     from dosing.drug import drug_settings
     from dosing.request import bead_settings
     from dosing.scenario import SolverSettings
-    from dosing.units import PhysicalConstants, timescale
+    from dosing.units import timescale
     from solver.equilibrium import equilibrium
     from solver.gel import check_temperature
     from solver.solute import simulate_release
@@ -78,9 +73,7 @@ def run(args: argparse.Namespace) -> int:
                                  "(the prediction in seconds)")
         measured = read_profile(args.compare, args.measured_loaded_ug)
     gel = gel_from_args(args)
-    constants = PhysicalConstants(args.viscosity, args.polymer_volume_m3, args.k0_m2,
-                                  **({} if args.mesh_length_nm is None
-                                     else {"mesh_length_nm": args.mesh_length_nm}))
+    constants = constants_from_args(args).for_gel(gel.omega)
     protocol = protocol_pairs(args, args.dry_radius_um, constants)
     temps = [T for _, T in protocol] if protocol else [args.t_end]
     t_ref = check_temperature(max(temps), "t_end")
