@@ -41,6 +41,7 @@ from .heating_truth import (
     STARTS,
     T_END,
     gel_named,
+    given,
     heatings,
     per_tau,
     program_for,
@@ -50,13 +51,14 @@ from .heating_truth import truth as truth_run
 
 
 def rows(gel_name: str, constants: str = "consistent", rates: tuple[float, ...] = RATES,
-         baths: tuple[float, ...] = BATHS
+         baths: tuple[float, ...] = BATHS, dimensionless: bool = False
          ) -> list[tuple[str, list[float], list[float], float, float, float]]:
     """(heating, truth seconds, model errors, model ms, K per tau or tau, truth CPU s) for
-    every heating of one gel."""
+    every heating of one gel (``dimensionless``: rates in K per tau, baths in tau)."""
     gel = gel_named(gel_name)
     t0 = STARTS[gel_name]
     tau = tau_for(gel_name, constants)
+    rates, baths = given(rates, baths, tau, dimensionless)
     a0 = equilibrium(gel, t0, "swollen").stretch
     targets = tuple(float(Released(f).radius(a0)) for f in FRACTIONS)
     out = []
@@ -96,22 +98,32 @@ def unit(label: str) -> str:
 SIZE_HEATINGS = (("jump", 0.0), ("ramp", 5.0), ("ramp", 20.0), ("bath", 10.0), ("bath", 30.0))
 
 
-def sizes(dries: list[float], gels: list[str], constants: str = "consistent") -> None:
-    """The model's error at other bead sizes (markdown: heating, then each dose)."""
-    print(f"\n| bead | gel | heating | {' | '.join(f'{f:.0%}' for f in FRACTIONS)} |")
-    print("|---" * (len(FRACTIONS) + 3) + "|")
+def sizes(dries: list[float], gels: list[str], constants: str = "consistent",
+          rates: tuple[float, ...] | None = None, baths: tuple[float, ...] | None = None,
+          dimensionless: bool = False) -> None:
+    """The model's error at other bead sizes (markdown: heating, then each dose): the
+    SIZE_HEATINGS, or the jump and the ``rates`` and ``baths`` given (K/min and s; K per
+    tau and tau if ``dimensionless``)."""
+    print(f"\n| bead | gel | heating | per tau | {' | '.join(f'{f:.0%}' for f in FRACTIONS)} |")
+    print("|---" * (len(FRACTIONS) + 4) + "|")
     for dry in dries:
         for g in gels:
             tau = tau_for(g, constants, dry)
+            heats = list(SIZE_HEATINGS)
+            if rates is not None or baths is not None:
+                r, b = given(rates or (), baths or (), tau, dimensionless)
+                heats = [("jump", 0.0)] + [("ramp", x) for x in r] + [("bath", x) for x in b]
             gel = gel_named(g)
             a0 = equilibrium(gel, STARTS[g], "swollen").stretch
             tg = tuple(float(Released(f).radius(a0)) for f in FRACTIONS)
-            for kind, v in SIZE_HEATINGS:
+            for kind, v in heats:
                 tr = truth_run(g, kind, v, dry_um=dry, constants=constants)
                 res = slow_front_trajectory(gel, STARTS[g], program_for(kind, v, tau),
                                             targets=tg)
-                label = {"jump": "jump", "ramp": f"ramp {v:g} K/min",
-                         "bath": f"bath {v:g} s"}[kind]
+                label = {"jump": "jump", "ramp": f"ramp {v:.3g} K/min",
+                         "bath": f"bath {v:.3g} s"}[kind]
+                label += " | " + ("" if kind == "jump" else
+                                  f"{per_tau(kind, v, tau):.3g} {unit(kind)}")
                 cells = [f"{t * tau:.1f} s, {pct(crossing(res, a) / t - 1.0)}"
                          for a, t in zip(tg, tr["times"], strict=True)]
                 print(f"| {dry:g} um | {g} | {label} | " + " | ".join(cells) + " |")
@@ -130,7 +142,7 @@ def in_region(kind: str, fraction: float, value: float = 0.0) -> bool:
 
 
 def summary(gels: list[str], constants: str = "consistent", rates: tuple[float, ...] = RATES,
-            baths: tuple[float, ...] = BATHS) -> None:
+            baths: tuple[float, ...] = BATHS, dimensionless: bool = False) -> None:
     """The largest |error| per heating and dose (markdown), in brackets outside the
     region.  One tau for all gels (the paper's constants): one row per heating, the
     largest over the gels.  Otherwise one row per gel and heating, ordered by the heating
@@ -138,9 +150,9 @@ def summary(gels: list[str], constants: str = "consistent", rates: tuple[float, 
     is a different K per tau for each gel."""
     from dosing.heating_reduced import STATED_ERROR
 
-    per = {g: rows(g, constants, rates, baths) for g in gels}
+    per = {g: rows(g, constants, rates, baths, dimensionless) for g in gels}
     worst_in = 0.0
-    if len({tau_for(g, constants) for g in gels}) == 1:
+    if len({tau_for(g, constants) for g in gels}) == 1 and not dimensionless:
         print(f"\n| heating | {' | '.join(f'{f:.0%}' for f in FRACTIONS)} |")
         print("|---" * (len(FRACTIONS) + 1) + "|")
         first = per[gels[0]]
@@ -183,16 +195,22 @@ def main() -> None:
     p.add_argument("--summary", action="store_true")
     p.add_argument("--sizes", type=float, nargs="*", default=None)
     p.add_argument("--constants", choices=CONSTANTS, default="consistent")
-    p.add_argument("--rates", type=float, nargs="*", default=list(RATES), help="K/min")
-    p.add_argument("--baths", type=float, nargs="*", default=list(BATHS), help="s")
+    p.add_argument("--rates", type=float, nargs="*", default=None,
+                   help="ramps, K/min (K per tau with --per-tau)")
+    p.add_argument("--baths", type=float, nargs="*", default=None,
+                   help="baths' time constants, s (tau with --per-tau)")
+    p.add_argument("--per-tau", action="store_true",
+                   help="--rates in K per tau and --baths in tau (the same for every gel)")
     args = p.parse_args()
-    rates, baths = tuple(args.rates), tuple(args.baths)
     if args.sizes:
         sizes(args.sizes, args.gel if args.gel != ["ANB", "HHT", "custom"] else ["ANB", "HHT"],
-              args.constants)
+              args.constants, None if args.rates is None else tuple(args.rates),
+              None if args.baths is None else tuple(args.baths), args.per_tau)
         return
+    rates = RATES if args.rates is None else tuple(args.rates)
+    baths = BATHS if args.baths is None else tuple(args.baths)
     if args.summary:
-        summary(args.gel, args.constants, rates, baths)
+        summary(args.gel, args.constants, rates, baths, args.per_tau)
         return
     for g in args.gel:
         tau = tau_for(g, args.constants)
@@ -202,7 +220,8 @@ def main() -> None:
             print("\n| heating | per tau | " + " | ".join(f"{f:.0%}" for f in FRACTIONS)
                   + " | ms |")
             print("|---" * (len(FRACTIONS) + 3) + "|")
-        for label, secs, errs, ms, value, _ in rows(g, args.constants, rates, baths):
+        for label, secs, errs, ms, value, _ in rows(g, args.constants, rates, baths,
+                                                    args.per_tau):
             cells = [f"{s:.1f} s, {pct(e)}" for s, e in zip(secs, errs, strict=True)]
             per = "" if label == "jump" else f"{value:.3g} {unit(label)}"
             if args.markdown:

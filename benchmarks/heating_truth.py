@@ -78,6 +78,15 @@ def heatings(tau: float, rates: tuple[float, ...] = RATES,
     return out
 
 
+def given(rates: tuple[float, ...], baths: tuple[float, ...], tau: float,
+          dimensionless: bool) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Rates in K/min and baths in s; ``dimensionless``: the inputs are K per tau and tau
+    (``--per-tau``, the same solver heating for every gel), turned into K/min and s."""
+    if not dimensionless:
+        return tuple(rates), tuple(baths)
+    return tuple(r * 60.0 / tau for r in rates), tuple(b * tau for b in baths)
+
+
 def per_tau(kind: str, value: float, tau: float) -> float:
     """The heating in the solver's units: a ramp in K per tau, a bath's time constant in
     tau (the jump 0)."""
@@ -144,13 +153,18 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--gel", nargs="+", default=["ANB", "HHT", "custom"])
     p.add_argument("--constants", choices=CONSTANTS, default="consistent")
-    p.add_argument("--rates", type=float, nargs="*", default=list(RATES), help="K/min")
-    p.add_argument("--baths", type=float, nargs="*", default=list(BATHS), help="s")
+    p.add_argument("--rates", type=float, nargs="*", default=list(RATES),
+                   help="ramps, K/min (K per tau with --per-tau)")
+    p.add_argument("--baths", type=float, nargs="*", default=list(BATHS),
+                   help="baths' time constants, s (tau with --per-tau)")
+    p.add_argument("--per-tau", action="store_true",
+                   help="--rates in K per tau and --baths in tau (the same for every gel)")
     p.add_argument("--no-jump", action="store_true")
     args = p.parse_args()
     for g in args.gel:
         tau = tau_for(g, args.constants)
-        for label, kind, value in heatings(tau, tuple(args.rates), tuple(args.baths)):
+        for label, kind, value in heatings(tau, *given(args.rates, args.baths, tau,
+                                                       args.per_tau)):
             if args.no_jump and kind == "jump":
                 continue
             r = truth(g, kind, value, constants=args.constants)
