@@ -73,8 +73,8 @@ def heatings(tau: float, rates: tuple[float, ...] = RATES,
              baths: tuple[float, ...] = BATHS) -> list[tuple[str, str, float]]:
     """(label, kind, value): the jump, ramps in K/min and baths in s."""
     out = [("jump", "jump", 0.0)]
-    out += [(f"ramp {r:g} K/min", "ramp", r) for r in rates]
-    out += [(f"bath {b:g} s", "bath", b) for b in baths]
+    out += [(f"ramp {r:.4g} K/min", "ramp", r) for r in rates]
+    out += [(f"bath {b:.4g} s", "bath", b) for b in baths]
     return out
 
 
