@@ -176,6 +176,26 @@ def test_holds_after_the_heating_stay_in_the_region():
     assert choose(req, req.heating.program(2204.6), False).reduced
 
 
+def test_the_region_edges_in_k_per_tau_and_tau():
+    """The region measured at both timescales (benchmarks/heating_reduced.py, paper and
+    gel-consistent constants): ramps from 10 K per tau (ANB's 30 % dose 4.9 % early at 9,
+    8.1 % at 7.35), baths up to 0.17 tau (HHT's 90 % dose 4.6 %; 5.1 % at 0.19)."""
+    from dosing.heating_reduced import BATH_MAX, RAMP_MIN, choose
+
+    assert RAMP_MIN == 10.0 and BATH_MAX == 0.17
+    for protocol, fraction, inside in (
+            (["Heat to 308 K at 10.5 K/tau"], 0.3, True),
+            (["Heat to 308 K at 9 K/tau"], 0.8, False),
+            (["Bath at 308 K with a time constant of 0.165 tau"], 0.9, True),
+            (["Bath at 308 K with a time constant of 0.19 tau"], 0.5, False)):
+        req = DoseRequest(**BEAD, protocol=protocol, dose_fraction=fraction)
+        choice = choose(req, req.heating.program(2204.6), False)
+        assert choice.reduced is inside, (protocol, choice.why)
+        if not inside:  # the bead's own K/min or seconds beside the tau units
+            unit = "K/min for this bead" if "Heat" in protocol[0] else "s for this bead"
+            assert unit in choice.why, choice.why
+
+
 def test_beads_under_50_um_and_no_bead_size_go_to_the_full_solver():
     from dosing.heating_reduced import choose
 
