@@ -6,7 +6,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from api.schemas import GelSpec, RequestModel
+from api.schemas import ConstantsIn, GelSpec, RequestModel
 from solver.limits import T_MAX, T_MIN
 
 Temperature = Annotated[float, Field(ge=T_MIN, le=T_MAX)]
@@ -30,6 +30,8 @@ class HeatingDesignRequest(RequestModel):
     concentration_ug_per_ul: float | None = Field(None, gt=0, description="the drug's "
                                                   "concentration in the fluid, ug/uL")
     dry_radius_um: float = Field(gt=0, le=1e5, description="dry bead radius, um")
+    constants: ConstantsIn | None = Field(None, description="timescale constants (default: "
+                                          "Omega_p = Omega Omega_f; paper: the paper's)")
     size_cv: float | None = Field(None, gt=0, le=1.0, description="a batch: lognormal CV")
     mode: Literal["jump", "ramp", "bath"] = Field("jump", description="what is found: the "
                                                   "jump temperature, a ramp's rate or a "
@@ -60,6 +62,8 @@ class ExperimentDesignRequest(RequestModel):
     t_end: Temperature = Field(description="the answer's jump temperature, K")
     fraction: float = Field(gt=0, lt=1, description="the answer's dose")
     dry_radius_um: float = Field(gt=0, le=1e5, description="the answer's dry bead radius, um")
+    constants: ConstantsIn | None = Field(None, description="timescale constants (default: "
+                                          "Omega_p = Omega Omega_f; paper: the paper's)")
     size_noise: float = Field(0.01, ge=1e-5, le=0.3, description="relative radius noise")
     max_duration_s: float = Field(3600.0, ge=1.0, le=1e6, description="longest measurement")
     n_points: int = Field(20, ge=4, le=200, description="radii measured")

@@ -15,9 +15,11 @@ affine in the local (smallest principal) stretch; ``mesh_size_nm`` (the swollen 
 T_start, xi_dry = mesh_size_nm / a0) overrides it for the drug alone, and the answer says
 so.  The retained solute's osmotic pressure is neglected: Staverman-van 't Hoff,
 Pi = sigma c R T with sigma = 1 - W <= 1, over the stress scale k_B T / Omega_p is at most
-c N_A Omega_p (the default Omega_p = 3e-25 m^3: 1.8e-4 per uM), times the enrichment of a
+c N_A Omega_p (the default Omega_p = Omega Omega_f, 3e-27 m^3 for ANB: 1.8e-6 per uM;
+the paper's 3e-25 m^3: 1.8e-4 per uM), times the enrichment of a
 retaining shell (at most the fluid's volume ratio a0^3 / a^3 ~ 10): below 2 % of the stress
-scale for retained loads under ~10 uM (0.7 mg/mL of a 66 kDa protein); small drugs pass the
+scale for retained loads under ~10 uM with the paper's Omega_p (0.7 mg/mL of a 66 kDa
+protein; ~1 mM with the default); small drugs pass the
 mesh (sigma ~ 0) and exert none.  Above that the answer overstates the collapse.
 A drug run is the full solver (Lagrangian grid, outputs at every protocol boundary
 and densely between them) followed by the solute on its cells; runs are cached per

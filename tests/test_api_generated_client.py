@@ -166,7 +166,7 @@ def test_a_generated_client_calls_every_route(tmp_path: Path) -> None:
         call("jobs", "job_route_v1_jobs_job_id_get", "fit-nope", want=(404,))
         dh = call("design", "design_heating_route_v1_design_heating_post", want=(202,),
                   body=models.HeatingDesignRequest.from_dict(
-                      {"gel": "ANB", "t_start": 302.0, "fraction": 0.5, "at_seconds": 60.0,
+                      {"gel": "ANB", "t_start": 302.0, "fraction": 0.5, "at_seconds": 0.5,
                        "dry_radius_um": 50.0, "full": False}))
         done = _wait(call, "design_job_v1_design_jobs_job_id_get", dh.parsed.id, "design")
         assert done.parsed.status == "done", done.content[:300]

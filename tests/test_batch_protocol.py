@@ -8,24 +8,26 @@ import json
 import pytest
 
 from api.cli import main
-from dosing import DoseRequest, heating_reduced
+from dosing import DoseRequest, PhysicalConstants, heating_reduced
 from dosing.batch_protocol import BatchCurves, batch_protocol_answer
 from dosing.protocol_dose import Mode, reduced_dose
 from solver.errors import ParameterError
 
 RAMP = ["Heat to 308 K at 5 K/min"]
 MEAN_UM = 120.0  # a CV 0.2 batch's beads (above 0.1 % of its fluid) all in the region
+PAPER = PhysicalConstants.paper()  # the region at 5 K/min needs tau = 2205 s (50 um)
 
 
 def batch(cv: float, fraction: float = 0.5, **kw):
     req = DoseRequest("ANB", 302.0, protocol=RAMP, dose_fraction=fraction,
-                      dry_radius_um=MEAN_UM, size_distribution={"cv": cv}, **kw)
+                      dry_radius_um=MEAN_UM, size_distribution={"cv": cv}, constants=PAPER,
+                      **kw)
     return req, batch_protocol_answer(req)
 
 
 def single(fraction: float = 0.5):
     req = DoseRequest("ANB", 302.0, protocol=RAMP, dose_fraction=fraction,
-                      dry_radius_um=MEAN_UM)
+                      dry_radius_um=MEAN_UM, constants=PAPER)
     return reduced_dose(req, Mode(True, "kT"), heating_reduced.Choice(True, "test"))
 
 
@@ -64,7 +66,7 @@ def test_the_quadrature_converges() -> None:
 
 def test_outside_the_region_the_batch_is_refused_naming_the_field() -> None:
     req = DoseRequest("ANB", 302.0, protocol=RAMP, dose_fraction=0.5, dry_radius_um=50.0,
-                      size_distribution={"cv": 0.2})
+                      size_distribution={"cv": 0.2}, constants=PAPER)
     with pytest.raises(ParameterError) as exc:
         batch_protocol_answer(req)
     assert exc.value.field == "size_distribution" and "um bead is not" in str(exc.value)
@@ -72,7 +74,7 @@ def test_outside_the_region_the_batch_is_refused_naming_the_field() -> None:
 
 def test_cli_batch_under_a_protocol(capsys) -> None:
     argv = ["dose", "--t-start", "302", "--protocol", RAMP[0], "--fraction", "0.5",
-            "--dry-radius-um", str(MEAN_UM), "--size-cv", "0.2", "--json"]
+            "--dry-radius-um", str(MEAN_UM), "--size-cv", "0.2", "--paper-constants", "--json"]
     assert main(argv) == 0
     got = json.loads(capsys.readouterr().out)
     _, b = batch(0.2)
@@ -93,7 +95,8 @@ async def test_http_batch_under_a_protocol(planner) -> None:
     from api.http import create_app
 
     body = {"gel": "ANB", "t_start": 302.0, "protocol": RAMP, "dose_fraction": 0.5,
-            "dry_radius_um": MEAN_UM, "size_distribution": {"cv": 0.1}}
+            "dry_radius_um": MEAN_UM, "size_distribution": {"cv": 0.1},
+            "constants": {"paper": True}}
     async with asgi(create_app(planner=planner, warm=False)) as (_, raw):
         r = await raw.post("/v1/dose-time", json=body)
     assert r.status_code == 200, r.text

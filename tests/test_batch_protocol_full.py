@@ -15,7 +15,7 @@ from dosing_fakes import FakeSolver
 
 import dosing
 from api.cli import main
-from dosing import DoseRequest, Planner
+from dosing import DoseRequest, PhysicalConstants, Planner
 from dosing.batch_protocol import (
     BatchCurves,
     FullNodeCurve,
@@ -28,7 +28,9 @@ from dosing.protocol_dose import mode_for
 from dosing.question import Batch, Dose, Heating, Request, plan
 
 RAMP = ["Heat to 308 K at 5 K/min"]
-CASE = {"gel": "ANB", "t_start": 302.0, "protocol": RAMP, "dose_fraction": 0.8}
+# the paper's constants (tau = 2205 s at 50 um): a batch split across the region's edge
+CASE = {"gel": "ANB", "t_start": 302.0, "protocol": RAMP, "dose_fraction": 0.8,
+        "constants": PhysicalConstants.paper()}
 OUT_UM = 50.0  # a CV 0.2 batch's beads under 50 um are outside the region (their own ell)
 
 
@@ -101,7 +103,7 @@ def test_cli_batch_outside_the_region_runs_the_full_solver(monkeypatch, capsys,
     monkeypatch.setattr(dosing, "_one_shot", lambda path, ex, **kw: real(path, ex, solver=fake,
                                                                           **kw))
     assert main(["dose", "--t-start", "302", "--protocol", RAMP[0], "--fraction", "0.8",
-                 "--dry-radius-um", str(OUT_UM), "--size-cv", "0.2", "--json",
+                 "--dry-radius-um", str(OUT_UM), "--size-cv", "0.2", "--paper-constants", "--json",
                  "--cache", str(tmp_path / "c.sqlite")]) == 0
     got = json.loads(capsys.readouterr().out)
     assert got["model"] == "front-slow-sharp+full" and fake.calls
@@ -119,7 +121,8 @@ async def test_http_batch_outside_the_region_is_a_job(planner) -> None:
 
     from api.http import create_app
 
-    body = {**CASE, "dry_radius_um": OUT_UM, "size_distribution": {"cv": 0.2}}
+    body = {**CASE, "constants": {"paper": True}, "dry_radius_um": OUT_UM,
+            "size_distribution": {"cv": 0.2}}
     async with asgi(create_app(planner=planner, warm=False)) as (_, raw):
         r = await raw.post("/v1/dose-time", json=body)
         assert r.status_code == 202, r.text
@@ -133,7 +136,7 @@ async def test_http_batch_outside_the_region_is_a_job(planner) -> None:
         assert job["status"] == "done", job
         again = await raw.post("/v1/dose-time", json=body)  # now from the cache
     py = plan(Request("ANB", 302.0, Heating(RAMP), Dose(0.8), population=Batch({"cv": 0.2}),
-                      dry_radius_um=OUT_UM), planner=planner)
+                      dry_radius_um=OUT_UM, constants=CASE["constants"]), planner=planner)
     assert job["result"]["seconds"] == py.seconds == py.batch.seconds
     assert job["result"]["model"] == py.model == "front-slow-sharp+full"
     assert again.status_code == 200, again.text

@@ -144,7 +144,7 @@ async def test_design_jobs_over_http(tmp_path, monkeypatch) -> None:
     monkeypatch.setenv("THERMOGEL_GELS", str(tmp_path / "gels"))
     cache = str(tmp_path / "v.sqlite")
     body = {"gel": "ANB", "t_start": 302.0, "fraction": 0.5, "at_seconds": 60.0,
-            "dry_radius_um": 50.0, "full": False}
+            "dry_radius_um": 50.0, "full": False, "constants": {"paper": True}}
     app = create_app(warm=False, cache_path=cache)
     async with app.router.lifespan_context(app):
         transport = httpx.ASGITransport(app=app)

@@ -12,7 +12,7 @@ from api_support import asgi
 
 from api.cli import main
 from api.http import create_app
-from dosing import DoseRequest, SolverSettings
+from dosing import DoseRequest, PhysicalConstants, SolverSettings
 from dosing import protocol_dose as pd
 from dosing.drug import DrugModel, drug_settings, simulate_protocol
 from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
@@ -23,7 +23,9 @@ from solver.solute import release
 # (checked at 50), rtol 1e-5: a protocol's mechanics in about a second
 SETTINGS = SolverSettings(grid="moving", n=100, interfacial_length=0.01)
 SMALL = DrugModel(diffusivity_cm2_s=1e-6, load_ug=1.0)  # r_s = 2.45 nm in a 4 nm dry mesh
-BEAD = {"gel": "ANB", "t_start": 302.0, "dry_radius_um": 50.0, "settings": SETTINGS}
+# the paper's constants: its ramps and bounds were set for tau = 2205 s (50 um ANB)
+BEAD = {"gel": "ANB", "t_start": 302.0, "dry_radius_um": 50.0, "settings": SETTINGS,
+        "constants": PhysicalConstants.paper()}
 RAMP = ["Heat to 308 K at 5 K/min"]
 
 

@@ -64,7 +64,7 @@ def test_a_time_at_start_has_one_rule() -> None:
     assert (rest["items"]["minimum"], rest["items"]["maximum"]) == limits.REST_RANGE
     wait = schemas.DrugIn.model_json_schema()["properties"]["wait"]["anyOf"][0]
     assert (wait["minimum"], wait["maximum"]) == (limits.REST_RANGE[0], limits.DRUG_STEP_MAX)
-    c = PhysicalConstants()
+    c = PhysicalConstants.paper()  # tau = 2205 s for 50 um at 308 K
     top = limits.REST_RANGE[1]
     assert at_start("rests", [0.0, top], None, None, 308.0, c) == (0.0, top)
     with pytest.raises(ParameterError, match="0-1000 tau") as err:

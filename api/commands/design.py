@@ -14,6 +14,7 @@ import argparse
 from typing import Any
 
 from .common import print_json
+from .constants_options import add_constants_options, constants_values
 
 
 def _seconds(field: str):
@@ -61,6 +62,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "'2 min'; a number is seconds)")
     h.add_argument("--dry-radius-um", type=float, required=True,
                    help="dry bead radius, um (a batch's reference size)")
+    add_constants_options(h.add_argument_group("timescale constants (eq. timescale)"))
     h.add_argument("--size-cv", type=float, default=None,
                    help="a batch: lognormal sizes of this CV around --dry-radius-um")
     mode = h.add_mutually_exclusive_group()
@@ -96,6 +98,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--fraction", type=float, required=True,
                    help="the answer's dose (fraction of the stored fluid)")
     e.add_argument("--dry-radius-um", type=float, required=True, help="the answer's bead, um")
+    add_constants_options(e.add_argument_group("timescale constants (eq. timescale)"))
     e.add_argument("--size-noise", type=float, default=0.01,
                    help="relative noise of one measured radius (default 0.01)")
     e.add_argument("--max-duration", type=_seconds("max_duration"), default=3600.0,
@@ -152,7 +155,7 @@ def heating_target(args: argparse.Namespace) -> Any:
                          dry_radius_um=args.dry_radius_um, size_cv=args.size_cv, mode=mode,
                          t_end=args.t_end, time_constant_s=args.time_constant_s,
                          bounds=rng, validate=args.validate, confidence=args.confidence,
-                         full=not args.no_full)
+                         full=not args.no_full, constants=constants_values(args) or None)
 
 
 def run_heating(args: argparse.Namespace) -> int:
@@ -182,7 +185,7 @@ def experiment_ask(args: argparse.Namespace) -> Any:
                          max_duration_s=args.max_duration, n_points=args.n_points,
                          min_interval_s=args.min_interval, sizes_um=args.sizes_um,
                          jumps=args.jumps, criterion=args.criterion,
-                         simulate=args.simulate)
+                         simulate=args.simulate, constants=constants_values(args) or None)
 
 
 def run_experiment(args: argparse.Namespace) -> int:

@@ -25,6 +25,10 @@ router = APIRouter(tags=["design"], route_class=SafeRoute)
 KINDS = {"heating": "design-heating", "experiment": "design-experiment"}
 
 
+def _constants(body: Any) -> dict[str, Any] | None:
+    return None if body is None else body.model_dump(exclude_none=True)
+
+
 def heating_target(body: HeatingDesignRequest) -> Any:
     """The request as a ``dosing.design.HeatingTarget`` (a ParameterError names the field)."""
     from dosing.design import HeatingTarget
@@ -37,7 +41,7 @@ def heating_target(body: HeatingDesignRequest) -> Any:
                          time_constant_s=body.time_constant_s,
                          bounds=None if body.bounds is None else tuple(body.bounds),
                          validate=body.validate_full, confidence=body.confidence,
-                         full=body.full)
+                         full=body.full, constants=_constants(body.constants))
 
 
 def experiment_ask(body: ExperimentDesignRequest) -> Any:
@@ -50,7 +54,8 @@ def experiment_ask(body: ExperimentDesignRequest) -> Any:
                          min_interval_s=body.min_interval_s,
                          sizes_um=None if body.sizes_um is None else tuple(body.sizes_um),
                          jumps=None if body.jumps is None else tuple(body.jumps),
-                         criterion=body.criterion, simulate=body.simulate)
+                         criterion=body.criterion, simulate=body.simulate,
+                         constants=_constants(body.constants))
 
 
 def _heating(planner: Any, body: HeatingDesignRequest) -> dict[str, Any]:

@@ -74,9 +74,12 @@ class Drug:
 
     def mesh_variants(self, planned: Any) -> list[tuple[str, Any]]:
         """The payloads of the mesh part (issue 36): a sieved drug at xi_dry / 2 and 2 xi_dry
-        (its own mesh_size_nm, so the bead's mechanics and their runs stay) and with the
-        other stretch bound (J^(1/3) vs the smallest principal stretch); none when nothing
-        sieves it (no solute radius, no hindrance)."""
+        (its own mesh_size_nm, so the bead's mechanics and their runs stay), with the
+        other stretch bound (J^(1/3) vs the smallest principal stretch) and, with a fibre
+        radius, in the other microstructure: the default mixes pore transmission with
+        free-volume diffusion and a constant partition, the fibre matrix takes Ogston's
+        diffusion and partition (docs/drug.md: the combination is stated as a bound); none
+        when nothing sieves it (no solute radius, no hindrance)."""
         from dataclasses import replace
 
         drug = planned.drug
@@ -85,10 +88,20 @@ class Drug:
         xi = drug.dry_mesh_nm(planned.start_radius, planned.constants)
         swollen = xi * planned.start_radius
         other = "volume" if drug.mesh_stretch == "smallest" else "smallest"
-        return [(f"xi_dry {f * xi:.3g} nm", replace(self, model=replace(
-                    drug, mesh_size_nm=f * swollen))) for f in (0.5, 2.0)] + [
-                (f"mesh stretch '{other}'", replace(self, model=replace(
-                    drug, mesh_stretch=other)))]
+        out = [(f"xi_dry {f * xi:.3g} nm", replace(self, model=replace(
+                   drug, mesh_size_nm=f * swollen))) for f in (0.5, 2.0)] + [
+               (f"mesh stretch '{other}'", replace(self, model=replace(
+                   drug, mesh_stretch=other)))]
+        if drug.fiber_radius_nm is not None:
+            fibre = drug.hindrance == "ogston" and drug.partition_law_used() == "ogston"
+            out.append(("pore microstructure (free-volume diffusion, constant partition)",
+                        replace(self, model=replace(drug, hindrance="free-volume",
+                                                    partition_law="constant")))
+                       if fibre else
+                       ("fibre-matrix microstructure (Ogston's diffusion and partition)",
+                        replace(self, model=replace(drug, hindrance="ogston",
+                                                    partition_law="ogston"))))
+        return out
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
