@@ -27,7 +27,7 @@ def test_the_design_page_runs_both_jobs(tmp_path: Path, monkeypatch) -> None:
             page.wait_for_function(
                 "document.querySelector('#heating-out').textContent.includes('envelope')",
                 timeout=120_000)
-            assert "Hold at 307.36" in page.inner_text("#heating-out")
+            assert "Hold at 307.7" in page.inner_text("#heating-out")  # 50 % at 0.5 s (tau 22 s)
             page.fill("#experiment [name=max_duration_s]", "1200")
             page.click("#run-experiment")
             page.wait_for_function(

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from api.cli import main
-from dosing import DoseRequest, SolverSettings
+from dosing import DoseRequest, PhysicalConstants, SolverSettings
 from dosing.drug import DrugModel, DrugRuns, DrugScenario, drug_settings
 from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
 from dosing.drug_schedule import DrugScheduleRequest, plan_drug_schedule
@@ -19,6 +19,7 @@ from solver.solute import crank_sphere_finite
 # ell = 0.01 (N = 400 Lagrangian cells): the coarsest ladder rung of the benchmarks; drug
 # runs at the planner's default ell = 0.005 (N = 800) behave alike, twice as slowly
 SETTINGS = SolverSettings(interfacial_length=0.01)
+PAPER = PhysicalConstants.paper()  # these drugs' D0 / D_gel were set at the paper's tau
 BALANCE = 1e-10
 # a protein-like drug: D0 = 1e-7 cm^2/s in water at 25 degC (Stokes-Einstein radius 24.5 nm
 # with water's viscosity) in a swollen mesh of 60 nm (xi_dry = 26 nm): free-volume law
@@ -141,7 +142,7 @@ def test_anb_drug_schedule_of_a_protein(planner) -> None:
     # collapsed shell, so a rest at T_start, not a heating, lets most of it out: measured on
     # 200 cells, a 0.02 heating releases 0.35 and the 0.5 rest after it 0.65 of the load.
     req = DrugScheduleRequest("ANB", 302, 308, PROTEIN, doses=[0.3] * 3, rests=[0.5, 0.5],
-                              dry_radius_um=50, settings=SETTINGS)
+                              dry_radius_um=50, settings=SETTINGS, constants=PAPER)
     ans = plan_drug_schedule(planner, req)
     assert not ans.corrected["met"]
     assert any("rest 1 leaks" in w for w in ans.warnings)
@@ -153,7 +154,7 @@ def test_anb_drug_schedule_of_a_protein(planner) -> None:
     finite = DrugScheduleRequest("ANB", 302, 308, DrugModel(**{**PROTEIN.to_dict(),
                                                                 "release_volume_ul": 1.0}),
                                  doses=[0.3] * 3, rests=[0.5, 0.5], dry_radius_um=50,
-                                 settings=SETTINGS, correct=False)
+                                 settings=SETTINGS, correct=False, constants=PAPER)
     conc = plan_drug_schedule(planner, finite).protocol_check["medium_concentration_ug_per_ul"]
     assert len(conc) == 3 and 0.3 / 1.01 < conc[0] < 0.3 * 1.01 and np.all(np.diff(conc) >= 0)
 
@@ -162,7 +163,7 @@ def test_anb_drug_schedule_of_a_protein(planner) -> None:
 def test_a_leaky_drug_cannot_meet_its_later_doses(planner) -> None:
     drug = DrugModel(diffusivity_cm2_s=1e-6, load_ug=1.0)  # a small drug: it leaks freely
     req = DrugScheduleRequest("ANB", 302, 308, drug, doses=[0.3] * 3, rests=[0.5, 0.5],
-                              settings=SETTINGS, check_protocol=False)
+                              settings=SETTINGS, check_protocol=False, constants=PAPER)
     ans = plan_drug_schedule(planner, req)
     assert not ans.corrected["met"] and len(ans.corrected["actuation_times"]) == 1
     assert "medium_concentration_ug_per_ul" not in ans.corrected  # a perfect sink
@@ -241,7 +242,7 @@ def test_drug_answer_states_its_uncertainty_in_three_parts(planner) -> None:
     fluid validation at the fluid fraction expelled by then, once it is cached (before, they
     are not measured and the text says how to measure them)."""
     req = DrugDoseRequest("ANB", 302, 308, SMALL, dose_fraction=0.5, dry_radius_um=50,
-                          settings=SETTINGS)
+                          settings=SETTINGS, constants=PAPER)
     ans = plan_drug_dose(planner, req)
     u = ans.uncertainty
     assert u.numerical.relative is not None and u.numerical.relative < 0.01, u.numerical.text

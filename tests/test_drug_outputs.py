@@ -20,7 +20,7 @@ import pytest
 
 import dosing.drug as drug_module
 import dosing.drug_dose as drug_dose
-from dosing import Planner
+from dosing import PhysicalConstants, Planner
 from dosing.drug import DrugModel, step_outputs
 from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
 from dosing.scenario import SolverSettings
@@ -53,7 +53,8 @@ def _ten_percent(tmp_path, monkeypatch, long: bool = False, **module: float) -> 
         req = DrugDoseRequest("ANB", 302, 308, DrugModel(diffusivity_cm2_s=1e-7, load_ug=1.0,
                                                          hindrance="none"),
                               dose_fraction=0.1, dry_radius_um=50,
-                              settings=SolverSettings(interfacial_length=0.01))
+                              settings=SolverSettings(interfacial_length=0.01),
+                              constants=PhysicalConstants.paper())  # D0 / D_gel = 9: fast
         ans = plan_drug_dose(p, req, validate=True)
         assert ans.model == "full+solute" or ans.model == "full"
         return ans.time

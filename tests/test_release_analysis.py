@@ -406,7 +406,8 @@ def test_cli_release_compare_states_f2_beside_the_residuals(tmp_path, capsys) ->
                     "120,42,44,43\n200,57,59,58\n")
     args = ["release", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--until", "0.1",
             "--dry-radius-um", "50", "--drug-diffusivity-cm2-s", "1e-7", "--hindrance", "none",
-            "--n", "100", "--samples", "200", "--json", "--compare", str(meas)]
+            "--n", "100", "--samples", "200", "--paper-constants", "--json",
+            "--compare", str(meas)]  # the profile's hours are the paper's tau (2205 s)
     assert main(args) == 0
     out = json.loads(capsys.readouterr().out)
     c = out["compare"]

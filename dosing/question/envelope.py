@@ -541,7 +541,11 @@ def mesh_part(planner: Any, request: Any, result: Any, blocking: bool) -> list[P
         if out is None or isinstance(out, Pending) or not point[0] > 0.0:
             missing.append(f"{label} (its runs are not stored)")
             continue
-        times.append((label, max(t / p for t, p in zip(_points(out), point, strict=True))))
+        got = _points(out)
+        if len(got) != len(point):  # a schedule the variant meets in another number of heatings
+            missing.append(f"{label} (its schedule has {len(got)} heatings, not {len(point)})")
+            continue
+        times.append((label, max(t / p for t, p in zip(got, point, strict=True))))
     if not times:
         return [Part("mesh", 1.0, 1.0, (
             "mesh: not measured in this answer (its reruns need solute runs not stored: "
