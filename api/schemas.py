@@ -355,6 +355,13 @@ class ConstantsIn(RequestModel):
         None, gt=0.0, le=1.0e-10, examples=[8.0e-20],
         description="permeability scale k0 in m^2, 0 < k0 <= 1e-10 (default 8e-20 m^2; the "
                     "paper prints m^3)")
+    k0_law: Literal["constant", "tokita-tanaka"] | None = Field(
+        None, description="k0's temperature law, entering the envelope only (default "
+                          "'constant'; 'tokita-tanaka': the network-water friction falling "
+                          "by three decades toward the transition, Tokita & Tanaka 1991)")
+    k0_reference_t_k: float | None = Field(
+        None, ge=273.15, le=373.15, description="the temperature at which k0 is given, K "
+                                                 "(default 298.15)")
     mesh_length_nm: float | None = Field(
         None, gt=0.0, le=1.0e3, examples=[4.0],
         description="the gel's dry mesh (interfacial) length xi_dry in nm, 0 < xi <= 1000: "

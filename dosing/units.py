@@ -66,6 +66,10 @@ class PhysicalConstants:
     diffusivity_m2_s: float | None = None  # a kinetics fit's D at diffusivity_t_k (pins tau)
     diffusivity_t_k: float | None = None
     diffusivity_source: str | None = None  # e.g. "kinetics fit of stored gel 'mygel'"
+    # k0's temperature law, entering the envelope only (the answer keeps k0 as given):
+    # "constant" (the model's), or "tokita-tanaka" (friction falling near the transition)
+    k0_law: str = "constant"
+    k0_reference_t_k: float = REFERENCE_TEMPERATURE_K  # where k0 is given (uncalibrated)
 
     def __post_init__(self) -> None:
         v = self.viscosity_pa_s
@@ -94,6 +98,10 @@ class PhysicalConstants:
             raise ParameterError("constants.mesh_length_range_nm", self.mesh_length_range_nm,
                                  "two finite numbers 0 < lo <= mesh_length_nm <= hi (nm)")
         object.__setattr__(self, "mesh_length_range_nm", (lo, hi))
+        if self.k0_law not in K0_LAWS:
+            raise ParameterError("constants.k0_law", self.k0_law, " or ".join(map(repr, K0_LAWS)))
+        object.__setattr__(self, "k0_reference_t_k", check_temperature(
+            self.k0_reference_t_k, "constants.k0_reference_t_k"))
         if (self.diffusivity_m2_s is None) != (self.diffusivity_t_k is None):
             raise ParameterError("constants.diffusivity_t_k", self.diffusivity_t_k,
                                  "given together with constants.diffusivity_m2_s (the "
@@ -130,7 +138,8 @@ class PhysicalConstants:
         if self.calibrated:
             return self.diffusivity_source or "kinetics fit"
         paper = self.paper(mesh_length_nm=self.mesh_length_nm,
-                           mesh_length_range_nm=self.mesh_length_range_nm)
+                           mesh_length_range_nm=self.mesh_length_range_nm,
+                           k0_law=self.k0_law, k0_reference_t_k=self.k0_reference_t_k)
         if self == paper:
             return ("the paper's constants (eta = 1e-3 Pa s, Omega_p = 3e-25 m^3, "
                     "k0 = 8e-20 m^2)")
@@ -283,6 +292,32 @@ def volume_to_ul(volume: float, dry_radius_um: float) -> float:
 def ul_to_volume(volume_ul: float, dry_radius_um: float) -> float:
     """Microlitres to a dimensionless volume (in dry-radius^3 units)."""
     return volume_ul * UM3_PER_UL / dry_radius_um**3
+
+
+# ------------------------------------------------------------------ k0's temperature law
+K0_LAWS = ("constant", "tokita-tanaka")
+# Tokita & Tanaka (Science 253, 1121, 1991): the friction between water and a PNIPAM network
+# at constant volume falls reversibly by three orders of magnitude as the gel approaches its
+# transition.  The stand-in: log10 of the friction falls linearly by TOKITA_DECADES between
+# TOKITA_T_K[0] (20 degC) and TOKITA_T_K[1] (34 degC), constant outside (not a fit to their
+# points: a bracket of the size and place of the effect).
+TOKITA_DECADES = 3.0
+TOKITA_T_K = (293.15, 307.15)
+
+
+def k0_temperature_factor(law: str, temperature: float, reference: float) -> float:
+    """k0(T) / k0(T_ref) of ``law`` ("constant": 1; "tokita-tanaka": the stand-in above;
+    the friction is 1 / k0, so tau scales by the inverse)."""
+    if law == "constant":
+        return 1.0
+    if law != "tokita-tanaka":
+        raise ParameterError("constants.k0_law", law, " or ".join(map(repr, K0_LAWS)))
+    lo, hi = TOKITA_T_K
+
+    def decades(t: float) -> float:
+        return TOKITA_DECADES * min(max((t - lo) / (hi - lo), 0.0), 1.0)
+
+    return 10.0 ** (decades(temperature) - decades(reference))
 
 
 # ---------------------------------------------------------------- the constants' range

@@ -181,3 +181,76 @@ def test_a_sieved_drug_carries_its_mesh_part(planner) -> None:
     assert "xi_dry" in mesh["text"] and "stretch" in mesh["text"]
     lo, hi = d["envelope_seconds"]
     assert lo < d["seconds"] * mesh["low"] * 1.0001
+
+
+def test_a_fibre_radius_adds_the_other_microstructure_to_the_mesh_part() -> None:
+    """The sieving's microstructure stated as a bound: with a fibre radius, the mesh part
+    reruns the drug in the other one (fibre matrix: Ogston's diffusion and partition; pore:
+    free-volume diffusion, constant partition)."""
+    from dosing.question import Drug
+
+    planned = Request("ANB", 302, Jump(308), Dose(0.5), dry_radius_um=50, payload=Drug(
+        {"diffusivity_cm2_s": 1e-6, "fiber_radius_nm": 1.0})).planned
+    variants = Drug({"diffusivity_cm2_s": 1e-6, "fiber_radius_nm": 1.0}).mesh_variants(planned)
+    labels = [label for label, _ in variants]
+    assert labels[-1].startswith("fibre-matrix microstructure")
+    fibre = variants[-1][1].model
+    assert (fibre.hindrance, fibre.partition_law_used()) == ("ogston", "ogston")
+    planned_fibre = Request("ANB", 302, Jump(308), Dose(0.5), dry_radius_um=50,
+                            payload=Drug(fibre)).planned
+    back = Drug(fibre).mesh_variants(planned_fibre)[-1]
+    assert back[0].startswith("pore microstructure") and back[1].model.hindrance == "free-volume"
+    plain = Drug({"diffusivity_cm2_s": 1e-6})
+    assert len(plain.mesh_variants(Request("ANB", 302, Jump(308), Dose(0.5), dry_radius_um=50,
+                                           payload=plain).planned)) == 3  # no fibre radius
+
+
+def test_k0s_temperature_law_enters_the_envelope_when_asked(planner, capsys) -> None:
+    """Tokita & Tanaka's friction fall, asked for (k0_law): the point keeps k0 as given, the
+    envelope's low end moves by k0(T_ref) / k0(T_end) (the stand-in: three decades over
+    20-34 degC, so x10^(3 (25 - 20) / 14) at 25 degC against the full three at 308 K);
+    the same part through the CLI and HTTP."""
+    import json
+
+    from dosing.units import k0_temperature_factor
+
+    base = plan(Request("ANB", 302, Jump(308), Dose(0.8), dry_radius_um=50), planner).to_dict()
+    law = PhysicalConstants(k0_law="tokita-tanaka")
+    d = plan(Request("ANB", 302, Jump(308), Dose(0.8), dry_radius_um=50, constants=law),
+             planner).to_dict()
+    f = k0_temperature_factor("tokita-tanaka", 308.0, 298.15)
+    assert f == pytest.approx(10 ** (3.0 - 3.0 * 5.0 / 14.0), rel=1e-12)
+    part = _parts(d)["k0_temperature"]
+    assert part["counted"] and part["low"] == pytest.approx(1.0 / f) and part["high"] == 1.0
+    assert d["seconds"] == base["seconds"]  # the point keeps k0 as given
+    assert d["envelope_seconds"][0] == pytest.approx(base["envelope_seconds"][0] / f)
+    assert d["envelope_seconds"][1] == pytest.approx(base["envelope_seconds"][1])
+    assert "k0_temperature" not in _parts(base)
+    assert d["dominant_uncertainty"]["name"] in ("timescale", "k0_temperature")
+    assert k0_temperature_factor("tokita-tanaka", 290.0, 298.15) < 1.0  # colder: slower
+    with pytest.raises(Exception) as err:
+        PhysicalConstants(k0_law="arrhenius")
+    assert err.value.field == "constants.k0_law"
+    from api.cli import main
+
+    assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction",
+                 "0.8", "--dry-radius-um", "50", "--k0-law", "tokita-tanaka", "--json"]) == 0
+    cli = json.loads(capsys.readouterr().out)
+    assert cli["envelope_seconds"] == pytest.approx(d["envelope_seconds"], rel=1e-9)
+    with pytest.raises(SystemExit) as exit_:
+        main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction",
+              "0.8", "--dry-radius-um", "50", "--k0-law", "cubic"])
+    assert exit_.value.code == 2
+    assert "--k0-law" in capsys.readouterr().err
+    from fastapi.testclient import TestClient
+
+    from api.http import create_app
+
+    with TestClient(create_app(planner=planner, warm=False)) as c:
+        body = {"gel": "ANB", "t_start": 302, "t_end": 308, "dose_fraction": 0.8,
+                "dry_radius_um": 50, "constants": {"k0_law": "tokita-tanaka"}}
+        r = c.post("/v1/dose-time", json=body)
+        assert r.status_code == 200, r.text
+        assert r.json()["envelope_seconds"] == pytest.approx(d["envelope_seconds"], rel=1e-9)
+        bad = c.post("/v1/dose-time", json={**body, "constants": {"k0_law": "cubic"}})
+        assert bad.status_code == 422 and "k0_law" in bad.text

@@ -11,7 +11,8 @@ import argparse
 from typing import Any
 
 FIELDS = {"viscosity": "viscosity_pa_s", "polymer_volume_m3": "polymer_volume_m3",
-          "k0_m2": "permeability_m2", "mesh_length_nm": "mesh_length_nm"}
+          "k0_m2": "permeability_m2", "mesh_length_nm": "mesh_length_nm",
+          "k0_law": "k0_law", "k0_reference_t_k": "k0_reference_t_k"}
 
 
 def viscosity(text: str) -> float | str:
@@ -34,6 +35,12 @@ def add_constants_options(p: Any, *, mesh: bool = True, k0: bool = True) -> None
     if k0:
         p.add_argument("--k0-m2", type=float, default=None,
                        help="permeability scale k0 in m^2 (default 8e-20)")
+        p.add_argument("--k0-law", choices=["constant", "tokita-tanaka"], default=None,
+                       help="k0's temperature law, in the envelope only (default constant; "
+                            "tokita-tanaka: the friction's fall near the transition, Tokita "
+                            "& Tanaka 1991)")
+        p.add_argument("--k0-reference-t-k", type=float, default=None, metavar="K",
+                       help="the temperature at which k0 is given (default 298.15 K)")
     if mesh:
         p.add_argument("--mesh-length-nm", type=float, default=None, metavar="XI",
                        help="the gel's dry mesh (interfacial) length xi_dry in nm: the "

@@ -36,7 +36,7 @@ from solver.errors import NotApplicableError, ParameterError, SolverError
 
 from ..answers import Pending
 from ..truth import delayed_settings
-from ..units import HOW_TO_PIN, radius_after_dose, timescale_uncertainty
+from ..units import HOW_TO_PIN, k0_temperature_factor, radius_after_dose, timescale_uncertainty
 
 # the review's measured delayed / Maxwell ratios span 1.05-2.65 (ANB and HHT, jumps and
 # ramps: ../shared/design/honest-answers.md sec. 1): the bracket stated when the lattice
@@ -56,6 +56,8 @@ PIN = {
     "mesh": ("measure the drug's release from a swollen bead at T_start (sieving) or the "
              "gel's mesh size"),
     "parameters": "more swelling points near the transition, then fit the gel again",
+    "k0_temperature": ("kinetics fits at two or more jump temperatures measure D(T), hence "
+                       "k0(T) (thermogel fit kinetics at each T_end)"),
 }
 
 
@@ -555,10 +557,14 @@ def mesh_part(planner: Any, request: Any, result: Any, blocking: bool) -> list[P
     ratios = [r for _, r in times]
     low, high = min(min(ratios), 1.0), max(max(ratios), 1.0)
     listing = ", ".join(f"{label}: x{r:.3g}" for label, r in times)
+    drug = getattr(request.planned, "drug", None)
+    micro = ("" if getattr(drug, "fiber_radius_nm", None) is not None else
+             "; the microstructure (pore transmission with free-volume diffusion against a "
+             "fibre matrix) is not bounded: give the drug a fibre radius to rerun it")
     return [Part("mesh", low, high, (
         f"mesh: x{high / low:.3g}, the sieving rerun over the mesh's plausible range, "
         f"both stretch bounds and, with a fibre radius, the other microstructure ({listing}"
-        + (f"; not run: {', '.join(missing)}" if missing else "") + ")"),
+        + (f"; not run: {', '.join(missing)}" if missing else "") + ")" + micro),
         details={"variants": dict(times)})]
 
 
@@ -575,6 +581,29 @@ def parameter_parts(ans: Any) -> list[Part]:
                  .strip())]
 
 
+def k0_temperature_part(request: Any) -> list[Part]:
+    """k0's temperature law, when the constants ask for one (``k0_law``): the answer keeps
+    k0 as given (at ``k0_reference_t_k``, or at a kinetics fit's temperature), the part the
+    time's factor k0(T_ref) / k0(T_hot) at the heating's hottest temperature (a bracket: a
+    ramp passes cooler temperatures on its way)."""
+    planned = request.planned
+    constants, t_hot = getattr(planned, "constants", None), getattr(planned, "t_end", None)
+    law = getattr(constants, "k0_law", "constant")
+    if constants is None or t_hot is None or law == "constant":
+        return []
+    t_ref = (constants.diffusivity_t_k if constants.calibrated
+             else constants.k0_reference_t_k)
+    f = k0_temperature_factor(law, float(t_hot), float(t_ref))
+    where = ("the kinetics fit's temperature" if constants.calibrated
+             else "where k0 is given")
+    return [Part("k0_temperature", min(1.0, 1.0 / f), max(1.0, 1.0 / f), (
+        f"k0's temperature law '{law}': k0 at {float(t_hot):g} K is x{f:.3g} its value at "
+        f"{float(t_ref):g} K ({where}), so the time x{1.0 / f:.3g} (Tokita & Tanaka, Science "
+        "253, 1121, 1991: the network-water friction falls by three decades approaching the "
+        "transition; the law is a log-linear stand-in over 20-34 degC, not a fit)"),
+        details={"law": law, "k0_ratio": f, "t_hot": float(t_hot), "t_ref": float(t_ref)})]
+
+
 def envelope(planner: Any, request: Any, result: Any, blocking: bool = False) -> Envelope:
     """The envelope of ``result`` (the answer to ``request`` on ``planner``; ``blocking``:
     the answer itself waited on runs, so may its mesh reruns)."""
@@ -585,5 +614,5 @@ def envelope(planner: Any, request: Any, result: Any, blocking: bool = False) ->
         parts.append(ts)
     parts.append(front_law_part(planner, request, result))
     parts += (batch_parts(result) + mesh_part(planner, request, result, blocking)
-              + parameter_parts(result.answer))
+              + parameter_parts(result.answer) + k0_temperature_part(request))
     return Envelope(_points(result), _seconds_of(result), tuple(parts))
