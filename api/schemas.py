@@ -360,8 +360,8 @@ class ConstantsIn(RequestModel):
                           "'constant'; 'tokita-tanaka': the network-water friction falling "
                           "by three decades toward the transition, Tokita & Tanaka 1991)")
     k0_reference_t_k: float | None = Field(
-        None, ge=273.15, le=373.15, description="the temperature at which k0 is given, K "
-                                                 "(default 298.15)")
+        None, ge=T_MIN, le=T_MAX, description=f"the temperature at which k0 is given, K, "
+                                              f"{T_MIN}-{T_MAX} (default 298.15)")
     mesh_length_nm: float | None = Field(
         None, gt=0.0, le=1.0e3, examples=[4.0],
         description="the gel's dry mesh (interfacial) length xi_dry in nm, 0 < xi <= 1000: "
