@@ -75,30 +75,31 @@ def _one_shot(cache_path: str | None, executor: Executor | None, **kw: Any) -> P
 
 
 def plan_dose(req: DoseRequest, validate: bool = False, cache_path: str | None = None,
-              executor: Executor | None = None, **planner_kw: Any) -> DoseAnswer:
-    """One dose with a throw-away :class:`Planner` (the cache persists); a request with a
-    ``size_distribution`` is answered for the batch (a ``dosing.question.DoseResult``: its
-    headline the batch's own time)."""
-    planner = _one_shot(cache_path, executor, **planner_kw)
-    try:
-        if getattr(req, "size_distribution", None) is not None:  # a batch: its own time
-            from .question import run
-            from .question.legacy import request_of
-
-            return run(planner, request_of(req, validate))  # type: ignore[return-value]
-        return planner.dose(req, validate=validate)
-    finally:
-        planner.close()
-        if executor is None:
-            planner.jobs.executor.shutdown(wait=True)
+              executor: Executor | None = None, **planner_kw: Any) -> Any:
+    """One dose with a throw-away :class:`Planner` (the cache persists), through the one
+    pipeline (``dosing.question``): a ``DoseResult`` whatever the request's cell (a batch's
+    own time for a batch), with the envelope; the cell's answer's fields read through it
+    (``time``, ``seconds``, ``error_estimate``, ...) as the older ``DoseAnswer``'s did."""
+    return _one_request(req, validate, cache_path, executor, planner_kw)
 
 
 def plan_schedule(req: ScheduleRequest, cache_path: str | None = None,
-                  executor: Executor | None = None, **planner_kw: Any) -> ScheduleAnswer:
-    """One schedule with a throw-away :class:`Planner` (the cache persists)."""
+                  executor: Executor | None = None, **planner_kw: Any) -> Any:
+    """One schedule with a throw-away :class:`Planner` (the cache persists), through the one
+    pipeline: a ``ScheduleResult`` (its headline the corrected times when corrected), with
+    the envelope; the ``ScheduleAnswer``'s fields read through it."""
+    return _one_request(req, False, cache_path, executor, planner_kw)
+
+
+def _one_request(req: Any, validate: bool, cache_path: str | None,
+                 executor: Executor | None, planner_kw: dict[str, Any]) -> Any:
+    from .question import run
+    from .question.legacy import request_of
+
+    request = request_of(req, validate)  # a bad request fails before a planner starts
     planner = _one_shot(cache_path, executor, **planner_kw)
     try:
-        return planner.schedule(req)
+        return run(planner, request)
     finally:
         planner.close()
         if executor is None:
