@@ -9,7 +9,7 @@ given.  Nothing here imports fastapi or matplotlib.
 
 from __future__ import annotations
 
-from concurrent.futures import Executor, ThreadPoolExecutor
+from concurrent.futures import Executor
 from typing import TYPE_CHECKING, Any
 
 from solver.lazy import lazy_names
@@ -67,13 +67,6 @@ _LAZY = {
 __getattr__ = lazy_names(__name__, _LAZY, globals())
 
 
-def _one_shot(cache_path: str | None, executor: Executor | None, **kw: Any) -> Planner:
-    # A one-shot call runs any full-solver work in this process (no pool start-up).
-    from .planner import Planner
-
-    return Planner(cache_path=cache_path, executor=executor or ThreadPoolExecutor(2), **kw)
-
-
 def plan_dose(req: DoseRequest, validate: bool = False, cache_path: str | None = None,
               executor: Executor | None = None, **planner_kw: Any) -> Any:
     """One dose with a throw-away :class:`Planner` (the cache persists), through the one
@@ -93,11 +86,12 @@ def plan_schedule(req: ScheduleRequest, cache_path: str | None = None,
 
 def _one_request(req: Any, validate: bool, cache_path: str | None,
                  executor: Executor | None, planner_kw: dict[str, Any]) -> Any:
+    from . import planner as planner_module
     from .question import run
     from .question.legacy import request_of
 
     request = request_of(req, validate)  # a bad request fails before a planner starts
-    planner = _one_shot(cache_path, executor, **planner_kw)
+    planner = planner_module.one_shot(cache_path, executor, **planner_kw)
     try:
         return run(planner, request)
     finally:

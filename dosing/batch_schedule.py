@@ -494,9 +494,9 @@ def plan_batch_schedule(req: ScheduleRequest, size_distribution: Any,
                         cache_path: str | None = None, **planner_kw: Any) -> BatchScheduleAnswer:
     """One batch schedule with a throw-away planner (the cache persists; cf.
     ``dosing.plan_schedule``)."""
-    from . import _one_shot
+    from . import planner as planner_module
 
-    planner = _one_shot(cache_path, None, **planner_kw)
+    planner = planner_module.one_shot(cache_path, None, **planner_kw)
     try:
         return batch_schedule_with(planner, req, size_distribution)
     finally:

@@ -677,3 +677,9 @@ def _covers(traj: Trajectory, sc: Scenario, need_radius: float | None, need_time
     if need_radius is not None and traj.radius.min() > need_radius:
         return False
     return traj.horizon >= need_time
+
+
+def one_shot(cache_path: str | None, executor: Executor | None, **kw: Any) -> Planner:
+    """A throw-away planner on ``cache_path`` whose full-solver work runs in this process (no
+    pool start-up): the one-call functions' (``plan_dose``, ``question.plan``, the CLI)."""
+    return Planner(cache_path=cache_path, executor=executor or ThreadPoolExecutor(2), **kw)

@@ -300,3 +300,82 @@ def test_every_combination_of_the_axes_has_a_cell() -> None:
     product = {tuple(c.key for c in cell) for cell in
                itertools.product(PAYLOADS, POPULATIONS, HEATINGS, QUESTIONS)}
     assert set(CELLS) == product
+
+
+# ------------------------------------------------- the dosing import graph (issue 35)
+def _module_name(rel: Path) -> str:
+    parts = rel.with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def import_cycles(sources: dict[str, str]) -> list[list[str]]:
+    """The strongly connected parts (more than one module) of the import graph of
+    ``sources`` (module name -> source; a package's ``__init__`` under the package's name),
+    counting every import: module-level, function-level and under TYPE_CHECKING."""
+    packages = {m for m in sources if any(o.startswith(m + ".") for o in sources)}
+    graph: dict[str, set[str]] = {m: set() for m in sources}
+    for mod, text in sources.items():
+        pkg = mod if mod in packages else mod.rsplit(".", 1)[0]
+        for node in ast.walk(ast.parse(text)):
+            targets: list[str] = []
+            if isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    up = pkg
+                    for _ in range(node.level - 1):
+                        up = up.rsplit(".", 1)[0]
+                    base = up + ("." + node.module if node.module else "")
+                targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in sources else base
+                           for a in node.names]
+            elif isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            graph[mod] |= {t for t in targets if t in sources and t != mod}
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:  # Tarjan
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            part = []
+            while True:
+                w = stack.pop()
+                part.append(w)
+                if w == v:
+                    break
+            if len(part) > 1:
+                out.append(sorted(part))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_the_dosing_import_graph_is_acyclic() -> None:
+    """No circle in dosing/, counting function-level imports (the 11-module circle of the
+    wings, then the 8 through the package's ``_one_shot``, now ``planner.one_shot``)."""
+    sources = {_module_name(p.relative_to(ROOT)): p.read_text()
+               for p in sorted((ROOT / "dosing").rglob("*.py"))}
+    assert import_cycles(sources) == []
+
+
+def test_the_cycle_finder_sees_function_level_imports() -> None:
+    sources = {"pkg": "from .a import f\nfrom .e import h\n",
+               "pkg.a": "def f():\n    from . import b\n",
+               "pkg.b": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+                        "    from .c import C\n",
+               "pkg.c": "def g():\n    from pkg import a\n", "pkg.d": "import pkg.c\n",
+               "pkg.e": "def h():\n    from pkg import f\n"}  # the package's own name
+    assert sorted(import_cycles(sources)) == [["pkg", "pkg.e"], ["pkg.a", "pkg.b", "pkg.c"]]
+    del sources["pkg.e"], sources["pkg.c"]
+    sources["pkg"] = "from .a import f\n"
+    assert import_cycles(sources) == []

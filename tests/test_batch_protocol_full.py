@@ -13,7 +13,7 @@ from concurrent.futures import ThreadPoolExecutor
 import pytest
 from dosing_fakes import FakeSolver
 
-import dosing
+import dosing.planner
 from api.cli import main
 from dosing import DoseRequest, PhysicalConstants, Planner
 from dosing.batch_protocol import (
@@ -99,11 +99,12 @@ def test_from_the_cache_only(planner, tmp_path) -> None:
 
 def test_cli_batch_outside_the_region_runs_the_full_solver(monkeypatch, capsys,
                                                            tmp_path) -> None:
-    fake, real = FakeSolver(), dosing._one_shot
-    monkeypatch.setattr(dosing, "_one_shot", lambda path, ex, **kw: real(path, ex, solver=fake,
-                                                                          **kw))
+    fake, real = FakeSolver(), dosing.planner.one_shot
+    monkeypatch.setattr(dosing.planner, "one_shot",
+                        lambda path, ex, **kw: real(path, ex, solver=fake, **kw))
     assert main(["dose", "--t-start", "302", "--protocol", RAMP[0], "--fraction", "0.8",
-                 "--dry-radius-um", str(OUT_UM), "--size-cv", "0.2", "--paper-constants", "--json",
+                 "--dry-radius-um", str(OUT_UM), "--size-cv", "0.2", "--paper-constants",
+                 "--json",
                  "--cache", str(tmp_path / "c.sqlite")]) == 0
     got = json.loads(capsys.readouterr().out)
     assert got["model"] == "front-slow-sharp+full" and fake.calls

@@ -143,11 +143,11 @@ SCHED = ["schedule", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--do
 @pytest.fixture
 def cli_on_fake(monkeypatch):
     """``thermogel schedule`` with its one-shot planner on a fake solver."""
-    import dosing
+    import dosing.planner
 
-    fake, real = FakeSolver(), dosing._one_shot
-    monkeypatch.setattr(dosing, "_one_shot", lambda path, ex, **kw: real(path, ex, solver=fake,
-                                                                          **kw))
+    fake, real = FakeSolver(), dosing.planner.one_shot
+    monkeypatch.setattr(dosing.planner, "one_shot",
+                        lambda path, ex, **kw: real(path, ex, solver=fake, **kw))
     return fake
 
 

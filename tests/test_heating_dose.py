@@ -218,11 +218,11 @@ def test_real_solver_ramp_until_equals_dose(tmp_path):
 @pytest.fixture
 def cli_on_fake(monkeypatch, fake):
     """``thermogel dose`` with its one-shot planner on the fake solver."""
-    import dosing
+    import dosing.planner
 
-    real = dosing._one_shot
-    monkeypatch.setattr(dosing, "_one_shot", lambda path, ex, **kw: real(path, ex, solver=fake,
-                                                                          **kw))
+    real = dosing.planner.one_shot
+    monkeypatch.setattr(dosing.planner, "one_shot",
+                        lambda path, ex, **kw: real(path, ex, solver=fake, **kw))
 
 
 def test_cli_protocol_dose_json_equals_python(cli_on_fake, capsys, tmp_path, fake):

@@ -182,10 +182,10 @@ def test_a_batch_schedule_under_a_protocol(fake_planner) -> None:
 @pytest.fixture
 def cli_on_fake(monkeypatch, fake_planner):
     """The CLI's one-shot planner on the fake solver."""
-    import dosing
+    import dosing.planner
 
-    real = dosing._one_shot
-    monkeypatch.setattr(dosing, "_one_shot", lambda path, ex, **kw: real(
+    real = dosing.planner.one_shot
+    monkeypatch.setattr(dosing.planner, "one_shot", lambda path, ex, **kw: real(
         path, ex, solver=fake_planner.solver, **kw))
 
 

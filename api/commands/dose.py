@@ -409,11 +409,11 @@ def add_wait_options(p: argparse.ArgumentParser) -> None:
 
 
 def _planner(args: argparse.Namespace) -> Any:
-    """The command's one-shot planner (``dosing._one_shot``: runs in this process; its
+    """The command's one-shot planner (``dosing.planner.one_shot``: runs in this process; its
     executor stops with it, :func:`close_planner`)."""
-    import dosing
+    import dosing.planner
 
-    return dosing._one_shot(args.cache, None)
+    return dosing.planner.one_shot(args.cache, None)
 
 
 def close_planner(planner: Any) -> None:

@@ -482,9 +482,9 @@ def _candidate_jumps(ask: ExperimentAsk, gel: Any, branch: str) -> list[float]:
 def design_experiment(ask: ExperimentAsk, planner: Any = None) -> ExperimentDesign:
     """The recommended shrinking-curve experiment and its predicted envelope (module doc)."""
     if planner is None:
-        from .. import _one_shot
+        from ..planner import one_shot
 
-        p = _one_shot(None, None)
+        p = one_shot(None, None)
         try:
             return design_experiment(ask, p)
         finally:

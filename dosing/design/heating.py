@@ -569,9 +569,9 @@ def _confidence(search: _Search, env: Any, p: float) -> dict[str, Any]:
 def design_heating(target: HeatingTarget, planner: Any = None) -> HeatingDesign:
     """The heating at which the dose is out at ``target.at_seconds`` (module doc)."""
     if planner is None:
-        from .. import _one_shot
+        from ..planner import one_shot
 
-        p = _one_shot(None, None)
+        p = one_shot(None, None)
         try:
             return design_heating(target, p)
         finally:

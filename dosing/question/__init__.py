@@ -53,9 +53,9 @@ def plan(request: Request, planner: Any = None, cache_path: str | None = None,
     """The answer, blocking, on ``planner`` or a throw-away one on the cache."""
     if planner is not None:
         return run(planner, request)
-    from .. import _one_shot
+    from .. import planner as planner_module
 
-    p = _one_shot(cache_path, executor)
+    p = planner_module.one_shot(cache_path, executor)
     try:
         return run(p, request)
     finally:
