@@ -2,8 +2,11 @@
 
 For a warm planner (its runs stored), per answer: the cell's own answer
 (``request.cell.now``, what `answer` cost before issue 36) against the same answer with its
-envelope (``dosing.question.answer``), for a jump and a ramp; and once, cold, the delayed-law
-lattice run the front-law part needs (stored after it).  CPU time (process_time), medians
+envelope (``dosing.question.answer``), for a jump and a ramp; and once, cold and blocking
+(``dosing.question.run``), the answer with every run it needs (a ramp at the default
+constants is 1.8 K/tau for 50 um ANB, below the reduced model's region: the full solver),
+the delayed-law lattice runs of the front-law part and the timescale candidates' reruns
+(stored after it).  CPU time (process_time), medians
 of ``--repeat`` rounds, the ratio beside them.
 
     python -m benchmarks.envelope_cost [--repeat 200]
@@ -18,7 +21,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 
 from dosing import Planner
-from dosing.question import Dose, Heating, Jump, Request, answer
+from dosing.question import Dose, Heating, Jump, Request, answer, run
 
 
 def _cpu(fn, repeat: int) -> float:
@@ -45,7 +48,7 @@ def main() -> None:
               f"{'+envelope (ms)':>15s} {'ratio':>6s}")
         for name, req in cases.items():
             t = time.process_time()
-            answer(p, req)  # cold: the lattice run, stored
+            run(p, req)  # cold: the runs and the lattice runs, stored
             cold = time.process_time() - t
             bare = _cpu(lambda req=req: req.cell.now(p, req), args.repeat)
             full = _cpu(lambda req=req: answer(p, req), args.repeat)

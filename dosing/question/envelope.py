@@ -376,6 +376,25 @@ def _law_over_timescale(planner: Any, request: Any, result: Any) -> dict[str, fl
     candidate whose answer needs new full-solver runs is left out."""
     if request.heating.tau_free:
         return {}
+    try:  # memo: the same request under an unchanged run store gives the same ratios
+        key = ("law", str(planner.cache.path), planner.cache.generation(),
+               json.dumps(request.to_dict(), sort_keys=True, default=str))
+    except (AttributeError, TypeError):
+        key = None
+    with _LATTICE_LOCK:
+        if key is not None and key in _RERUNS:
+            return dict(_RERUNS[key])  # type: ignore[arg-type]
+    got = _law_candidates(planner, request)
+    if key is not None:
+        with _LATTICE_LOCK:
+            _RERUNS[key] = got  # type: ignore[assignment]
+            while len(_RERUNS) > 4096:
+                _RERUNS.popitem(last=False)
+    return dict(got)
+
+
+def _law_candidates(planner: Any, request: Any) -> dict[str, float]:
+    """:func:`_law_over_timescale` without the memo."""
     planned = request.planned
     constants, t_end = getattr(planned, "constants", None), getattr(planned, "t_end", None)
     if constants is None or t_end is None or constants.calibrated:
@@ -446,7 +465,7 @@ def front_law_part(planner: Any, request: Any, result: Any) -> Part:
 
 
 _LATTICE_TIMES: OrderedDict[tuple[str, str, float], float] = OrderedDict()
-_RERUNS: OrderedDict[tuple[Any, ...], float | None] = OrderedDict()
+_RERUNS: OrderedDict[tuple[Any, ...], Any] = OrderedDict()  # ratios, law spreads
 _LATTICE_LOCK = threading.Lock()
 
 
