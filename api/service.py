@@ -298,10 +298,13 @@ def dose_time(planner: Planner, body: s.DoseTimeRequest,
 
 
 def _rough_hold(planner: Planner, body: s.ScheduleRequest) -> list[dict[str, Any]] | None:
-    """A schedule's hold reading while its job runs, when it is at hand without runs."""
+    """A schedule's hold reading while its job runs, when it is at hand without runs: the
+    cell's own reading (``cell.now``), not ``question.answer``, whose envelope (a lattice run
+    in the request's thread) the 202 would wait on and then drop."""
     try:
-        quick = question.answer(planner, to_request(body.model_copy(
-            update={"check_protocol": False, "correct": False})))
+        request = to_request(body.model_copy(update={"check_protocol": False,
+                                                     "correct": False}))
+        quick = request.cell.now(planner, request)
     except ParameterError:
         return None
     return None if quick is None or isinstance(quick, Pending) else quick.to_dict()["hold"]

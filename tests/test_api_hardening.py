@@ -295,9 +295,7 @@ def test_schedule_job_survives_kill_and_restart(tmp_path: Path) -> None:
     """Schedule jobs are stored in the cache: submit, kill -9, restart, poll to done."""
     cache = tmp_path / "c.sqlite"
     body = {**SCHEDULE, "check_protocol": True, "correct": False}
-    # 3 s a run: the job cannot end while the POST itself is answered (0.7-1.5 s, the
-    # envelope's kernels compiled or loaded), so the first poll finds it queued or running
-    with fake_server(cache, 3.0) as (url, _), Client(url) as c:
+    with fake_server(cache, 0.5) as (url, _), Client(url) as c:
         job = c.schedule(body)
         assert job.status == "pending" and job.validation_id.startswith("schedule-")
         assert c.validation(job.validation_id).status in ("pending", "running")
