@@ -10,8 +10,8 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("solver", "dosing", "api", "thermogel")
 
 
-def _module_name(path: Path) -> str:
-    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+def _module_name(path: Path, root: Path = ROOT) -> str:
+    parts = list(path.relative_to(root).with_suffix("").parts)
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
@@ -35,16 +35,19 @@ def _imports(path: Path, name: str, modules: set[str], annotations: bool = False
                 up = package.split(".")
                 up = up[:len(up) - (node.level - 1)]
                 base = ".".join([*up, base] if base else up)
-            targets = [base] + [f"{base}.{a.name}" for a in node.names]
+            # ``from pkg import sub``: an edge to the submodule (the package's __init__ runs
+            # first, but that edge is the package's own); ``from pkg import name``: to pkg
+            targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in modules else base
+                       for a in node.names]
         else:
             continue
         out.update(t for t in targets if t in modules and t != name)
     return out
 
 
-def import_graph(packages: tuple[str, ...] = PACKAGES,
-                 annotations: bool = False) -> dict[str, set[str]]:
-    files = {_module_name(p): p for pkg in packages for p in (ROOT / pkg).rglob("*.py")}
+def import_graph(packages: tuple[str, ...] = PACKAGES, annotations: bool = False,
+                 root: Path = ROOT) -> dict[str, set[str]]:
+    files = {_module_name(p, root): p for pkg in packages for p in (root / pkg).rglob("*.py")}
     mods = set(files)
     return {m: _imports(p, m, mods, annotations) for m, p in files.items()}
 
@@ -104,3 +107,28 @@ def test_the_planner_has_no_circle_even_in_its_annotations() -> None:
     pruned = {m: {t for t in ts if not m.startswith(t + ".")} for m, ts in graph.items()}
     found = cycles(pruned)
     assert not found, found
+
+
+def test_the_planner_has_no_circle_through_its_own_package() -> None:
+    """dosing/ (issue 35) without the pruning above: no module reaches back into
+    ``dosing/__init__`` (the one-shot planner was there, imported by ``question/`` and
+    ``batch_schedule``, an 8-module circle; it is ``dosing.planner.one_shot`` now)."""
+    found = cycles(import_graph(("dosing",), annotations=True))
+    assert not found, found
+
+
+def test_the_edges_tell_a_submodule_from_a_name() -> None:
+    """``from . import sub`` is an edge to the submodule, ``from . import name`` to the
+    package: a circle through a package's __init__ is seen, one through a sibling is not
+    invented."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        pkg = Path(tmp) / "pk"
+        pkg.mkdir()
+        (pkg / "__init__.py").write_text("from .a import f\n")
+        (pkg / "a.py").write_text("def f():\n    from . import b\n")
+        (pkg / "b.py").write_text("def g():\n    from . import name\n")
+        graph = import_graph(("pk",), annotations=True, root=Path(tmp))
+    assert graph == {"pk": {"pk.a"}, "pk.a": {"pk.b"}, "pk.b": {"pk"}}
+    assert cycles(graph) == [["pk", "pk.a", "pk.b"]]
