@@ -203,7 +203,6 @@ def anyio_backend() -> str:
 
 @pytest.mark.anyio
 async def test_http_size_distribution_matches_python(planner, tmp_path) -> None:
-    import asyncio
 
     from api_support import asgi
 
@@ -226,11 +225,7 @@ async def test_http_size_distribution_matches_python(planner, tmp_path) -> None:
         r = await raw.post("/v1/schedule", json=body)
         assert r.status_code == 202, r.text
         vid = r.json()["validation_id"]
-        for _ in range(2400):  # 120 s at most on a loaded machine
-            v = await api.validation(vid)
-            if v.status in ("done", "failed"):
-                break
-            await asyncio.sleep(0.05)
+        v = await api.wait_validation(vid, timeout=120.0, interval=0.05)
         assert v.status == "done", v.error
     want = batch_schedule_with(planner, _req(), {"cv": 0.2}).to_dict()
     assert v.result["batch"] is True

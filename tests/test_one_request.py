@@ -210,7 +210,6 @@ async def test_a_schedule_reads_the_same_whatever_the_way_in(
         name, heating, population, cli, body, fake_planner, cli_on_fake, capsys,
         tmp_path) -> None:
     """The corrected times lead, the same through Python, the CLI and HTTP (a job)."""
-    import asyncio
 
     q = Schedule([0.3, 0.3], rests=[0.5])
     py = plan(Request(**FAKE_CASE, heating=heating, question=q, population=population),
@@ -224,11 +223,7 @@ async def test_a_schedule_reads_the_same_whatever_the_way_in(
         r = await raw.post("/v1/schedule", json={**FAKE_CASE, "doses": [0.3, 0.3],
                                                  "rests": [0.5], **body})
         assert r.status_code == 202, r.text
-        for _ in range(2400):
-            v = await api.validation(r.json()["validation_id"])
-            if v.status in ("done", "failed"):
-                break
-            await asyncio.sleep(0.05)
+        v = await api.wait_validation(r.json()["validation_id"], timeout=120.0, interval=0.05)
     assert v.status == "done", v.error
     for d in (out, v.result):
         assert d["cell"] == py.cell and d["reading"] == "corrected"

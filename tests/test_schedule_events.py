@@ -167,7 +167,6 @@ def test_the_builder_takes_any_answer_with_its_request(fake_planner) -> None:
 @pytest.mark.anyio
 async def test_http_schedule_job_answers_with_events(fake_planner) -> None:
     """The HTTP job's result carries the same events as Python's answer."""
-    import asyncio
 
     key = ("fluid", "batch", "jump", "schedule")
     py = plan(_request(key), planner=fake_planner)
@@ -176,11 +175,7 @@ async def test_http_schedule_job_answers_with_events(fake_planner) -> None:
                                                  "doses": [0.3, 0.3], "rests": [0.5],
                                                  "size_distribution": CV})
         assert r.status_code == 202, r.text
-        for _ in range(2400):
-            v = await api.validation(r.json()["validation_id"])
-            if v.status in ("done", "failed"):
-                break
-            await asyncio.sleep(0.05)
+        v = await api.wait_validation(r.json()["validation_id"], timeout=120.0, interval=0.05)
     assert v.status == "done", v.error
     got = v.result["events"]
     assert [e["kind"] for e in got] == ["heat", "rest", "heat"]
