@@ -19,6 +19,13 @@ def _private_gel_store(tmp_path_factory: pytest.TempPathFactory):
     mp.undo()
 
 
+@pytest.fixture(scope="session")
+def anyio_backend() -> str:
+    """The async tests' event loop (pytest-anyio): asyncio only (session-wide, so module
+    fixtures may be async too)."""
+    return "asyncio"
+
+
 @pytest.fixture
 def planner(tmp_path):
     """A real planner on a temporary cache with a one-thread executor (closed after the

@@ -31,10 +31,6 @@ SENSITIVITY = {"vary": [{"name": "dry_radius_um", "low": 40.0, "high": 60.0}],
                "method": "morris", "samples": 4}
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 def _spec() -> dict:
     app = create_app(cache_path=None, warm=False)

@@ -29,10 +29,6 @@ LFRONT = {**FRONT, "validation_method": "ladder"}  # issue 8's truth (the ladder
 LSMOOTH = {**SMOOTH, "validation_method": "ladder"}
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.fixture
 def fake():

@@ -17,10 +17,6 @@ DOSE = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.3,
         "dry_radius_um": 50.0, "interfacial_length": 0.01}
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 
 

@@ -163,10 +163,6 @@ def test_body_limit_is_413_before_parsing_and_others_are_not_held_up(tmp_path: P
     assert p99 < 100.0, p99
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.fixture
 async def raw_client(tmp_path):

@@ -87,10 +87,6 @@ def test_lone_surrogates_are_422_naming_the_field_on_every_post_route(tmp_path: 
         conn.close()
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.fixture
 def planner(tmp_path):

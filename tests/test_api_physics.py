@@ -28,10 +28,6 @@ class _NoPlanner:
         pass
 
 
-@pytest.fixture(scope="module")
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.fixture(scope="module")
 async def clients():

@@ -16,11 +16,6 @@ from api.http import create_app
 
 
 @pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
-
-@pytest.fixture
 def planner(tmp_path):
     with fake_full_solver(delay=0.0) as fake, \
             fake_planner(tmp_path / "c.sqlite", fake, max_pending=4) as p:

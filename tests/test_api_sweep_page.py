@@ -29,10 +29,6 @@ SWEEP = {"t_start": 302.0, "t_ends": [305.0, 308.0, 310.0], "dry_radii_um": [20.
          "doses": [0.3, 0.8]}
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.fixture
 async def raw(tmp_path):

@@ -82,10 +82,6 @@ def test_bad_batch_medium_input_is_refused_naming_the_field() -> None:
     assert exc.value.field == "wait"
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.mark.anyio
 async def test_http_refuses_bad_batch_medium_fields(tmp_path) -> None:

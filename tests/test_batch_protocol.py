@@ -83,10 +83,6 @@ def test_cli_batch_under_a_protocol(capsys) -> None:
     # tests/test_batch_protocol_full.py (on the fake solver)
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.mark.anyio
 async def test_http_batch_under_a_protocol(planner) -> None:

@@ -111,10 +111,6 @@ def test_cli_batch_outside_the_region_runs_the_full_solver(monkeypatch, capsys,
     assert got["seconds"] == got["batch"]["seconds"]
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.mark.anyio
 async def test_http_batch_outside_the_region_is_a_job(planner) -> None:

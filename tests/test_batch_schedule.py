@@ -196,10 +196,6 @@ def test_cli_refuses_an_empty_or_negative_table(cli_on_fake, capsys, tmp_path) -
         assert "--sizes" in capsys.readouterr().err
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.mark.anyio
 async def test_http_size_distribution_matches_python(planner, tmp_path) -> None:

@@ -80,10 +80,6 @@ def test_cli_refuses_a_drug_batch_with_a_per_bead_medium(capsys, tmp_path) -> No
     assert "release_volume_ul" in capsys.readouterr().err
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.mark.anyio
 async def test_http_size_distribution_matches_python(tmp_path) -> None:

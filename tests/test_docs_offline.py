@@ -36,10 +36,6 @@ def _loaded(html: str) -> list[str]:
     return p.urls + inline + re.findall(r"@import\s+['\"]([^'\"]+)", html)
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.mark.anyio
 @pytest.mark.parametrize("page", ["/docs", "/redoc"])

@@ -120,10 +120,6 @@ def test_uncalibrated_answers_state_the_constants_range(capsys) -> None:
     assert "UNCALIBRATED seconds" in capsys.readouterr().out
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.mark.anyio
 async def test_http_lists_fitted_gels_and_doses_with_their_timescale(calibrated, env) -> None:

@@ -82,10 +82,6 @@ def test_cli_bad_csv_is_exit_2_naming_the_column(env, capsys) -> None:
     assert "stored fitted gel" in capsys.readouterr().err
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.mark.anyio
 async def test_http_fit_is_a_job(env) -> None:

@@ -277,11 +277,6 @@ def test_cli_trace_file_in_degc(cli_on_fake, capsys, tmp_path):
 
 
 # ----------------------------------------------------------------------------- HTTP
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
-
 @pytest.mark.anyio
 async def test_http_protocol_202_then_answer(tmp_path, fake):
     import asyncio

@@ -105,10 +105,6 @@ def test_refusals_name_the_field() -> None:
     assert exc.value.field == "wait"
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.mark.anyio
 async def test_cli_python_and_http_give_the_same_number(planner, capsys) -> None:

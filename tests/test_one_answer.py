@@ -28,10 +28,6 @@ CLI_JUMP = ["--gel", "ANB", "--t-start", "302", "--t-end", "308", "--dry-radius-
 SAME = ("model", "time", "seconds", "interfacial_length", "error_estimate", "truth")
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.fixture
 def planner(tmp_path: Path):

@@ -67,10 +67,6 @@ CHEAP = [
 ]
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.fixture(scope="module")
 def planner(tmp_path_factory):

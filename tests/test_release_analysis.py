@@ -424,11 +424,6 @@ def test_cli_release_compare_states_f2_beside_the_residuals(tmp_path, capsys) ->
 
 
 # ------------------------------------------------------------------------ HTTP
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
-
 def _shah_body(name: str) -> dict:
     p = read_profile(SHAH[name])
     return {"time": p.times.tolist(), "time_unit": "min", "units": p.units.T.tolist(),

@@ -125,10 +125,6 @@ def test_cli_json_and_plot(tmp_path: Path, capsys) -> None:
                  "--vary", "bogus=1:2"]) == 2
 
 
-@pytest.fixture
-def anyio_backend() -> str:
-    return "asyncio"
-
 
 @pytest.mark.anyio
 async def test_http_answers_at_once_and_refuses_a_bad_name(tmp_path: Path) -> None:
