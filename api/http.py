@@ -20,7 +20,7 @@ from fastapi import APIRouter, FastAPI
 from fastapi.concurrency import run_in_threadpool
 from fastapi.routing import APIRoute
 
-from dosing.jobs import exit_with_parent
+from dosing.runs.jobs import exit_with_parent
 
 from . import docs_pages, errors, guard, openapi_spec
 from .auth import HostCheck, TokenAuth
@@ -140,7 +140,7 @@ def app_from_env() -> FastAPI:
     THERMOGEL_MAX_BODY (bytes), THERMOGEL_LEASE_SECONDS, THERMOGEL_WARMUP ('0' skips the
     warm-up), THERMOGEL_API_TOKEN (the bearer token), THERMOGEL_ALLOWED_HOSTS (comma-
     separated Host names), THERMOGEL_RUN_SECONDS (the wall-clock budget of one full-solver run,
-    read by dosing.scenario.run_budget; default 600).  A uvicorn worker process
+    read by dosing.runs.scenario.run_budget; default 600).  A uvicorn worker process
     (``--workers`` > 1) ends itself when the supervisor it was started by is gone.
     """
     from dosing.settings import settings

@@ -9,7 +9,7 @@ from typing import Any
 
 from dosing.question import Batch, Dose, Drug, Fluid, Heating, Jump, OneBead, Request, Schedule
 from dosing.request import resolve_gel
-from dosing.scenario import SolverSettings
+from dosing.runs.scenario import SolverSettings
 from solver.errors import ParameterError
 from solver.gel import Gel
 

@@ -27,7 +27,7 @@ from pydantic import (
 
 from dosing.quantity import from_edge
 from dosing.request import ScheduleRequest as PlannerSchedule
-from dosing.scenario import DEFAULT_INTERFACIAL_LENGTH
+from dosing.runs.scenario import DEFAULT_INTERFACIAL_LENGTH
 from dosing.units import REFERENCE_TEMPERATURE_K
 from solver.limits import (
     BEAD_COUNT_RANGE,

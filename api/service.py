@@ -29,7 +29,7 @@ from dosing import (
     UnknownValidationError,
     question,
 )
-from dosing.jobs import DEFAULT_LEASE_SECONDS
+from dosing.runs.jobs import DEFAULT_LEASE_SECONDS
 from solver.equilibrium import equilibria, folds
 from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.gel import PRESETS, Gel
@@ -236,7 +236,7 @@ class ServiceState:
 
 
 def _pool_status(planner: Any) -> dict[str, Any]:
-    """The full-solver pool's health (dosing.jobs.JobRunner.pool_status), {} without one."""
+    """The full-solver pool's health (dosing.runs.jobs.JobRunner.pool_status), {} without one."""
     status = getattr(getattr(planner, "jobs", None), "pool_status", None)
     return status() if callable(status) else {}
 

@@ -194,7 +194,7 @@ def _tiny_drug_run() -> None:
 def _tiny_full_runs() -> None:
     """A few steps of the full solver on every grid and integrator (N = 20): compiles its
     kernels into numba's disk cache, which the planner's worker processes then load."""
-    from dosing.scenario import GRIDS, INTEGRATORS
+    from dosing.runs.scenario import GRIDS, INTEGRATORS
     from solver.full import simulate
     from solver.gel import ANB
 

@@ -32,7 +32,7 @@ import numpy as np
 from dosing import Planner
 from dosing.fit import data_dict, fit_shrinking, fit_swelling, front_radius_model, kinetics_data
 from dosing.fit_uncertainty import dose_time_interval, sample_dose_times
-from dosing.scenario import Scenario, SolverSettings
+from dosing.runs.scenario import Scenario, SolverSettings
 from dosing.units import timescale
 from solver.equilibrium import folds
 from solver.fit import fit_gel

@@ -49,7 +49,7 @@ import numpy as np
 
 from benchmarks.front_model import median_time
 from benchmarks.full_solver import dense_radius, max_error
-from dosing.scenario import TRUTH
+from dosing.runs.scenario import TRUTH
 from solver.errors import BudgetExceeded, NotApplicableError, ParameterError, SolverError
 from solver.front import fraction_radius, front_applicability, front_trajectory
 from solver.full import FullResult, simulate

@@ -39,11 +39,11 @@ if TYPE_CHECKING:
         ValidationReport,
         ValidationStatus,
     )
-    from .cache import ValidationCache
-    from .jobs import JobRunner, QueueFullError
     from .planner import Planner, UnknownValidationError
     from .request import DoseRequest, ScheduleRequest
-    from .scenario import LADDER, PAPER, TRUTH, Scenario, SolverSettings, Trajectory
+    from .runs.cache import ValidationCache
+    from .runs.jobs import JobRunner, QueueFullError
+    from .runs.scenario import LADDER, PAPER, TRUTH, Scenario, SolverSettings, Trajectory
     from .schedule import ScheduleAnswer
     from .truth import Uncertainty
     from .units import PhysicalConstants, Timescale, timescale, water_viscosity
@@ -53,11 +53,11 @@ if TYPE_CHECKING:
 _LAZY = {
     **dict.fromkeys(("Answered", "DoseAnswer", "ModelChoice", "Pending", "ValidationReport",
                      "ValidationStatus"), ".answers"),
-    "ValidationCache": ".cache", "JobRunner": ".jobs", "QueueFullError": ".jobs",
+    "ValidationCache": ".runs.cache", "JobRunner": ".runs.jobs", "QueueFullError": ".runs.jobs",
     "Planner": ".planner", "UnknownValidationError": ".planner",
     "DoseRequest": ".request", "ScheduleRequest": ".request",
     **dict.fromkeys(("LADDER", "PAPER", "TRUTH", "Scenario", "SolverSettings", "Trajectory"),
-                    ".scenario"),
+                    ".runs.scenario"),
     "ScheduleAnswer": ".schedule", "Uncertainty": ".truth",
     **dict.fromkeys(("PhysicalConstants", "Timescale", "timescale", "water_viscosity"),
                     ".units"),

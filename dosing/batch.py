@@ -27,10 +27,10 @@ from scipy.optimize import brentq
 
 from solver.errors import NotApplicableError, ParameterError
 
-from .lru import ByteLRU
 from .model_choice import MODEL_NAMES, front_run, model_answer
 from .request import DoseRequest
-from .scenario import SolverSettings
+from .runs.lru import ByteLRU
+from .runs.scenario import SolverSettings
 from .size_distribution import DrySizes
 from .units import timescale
 

@@ -51,7 +51,7 @@ from solver.errors import NotApplicableError, ParameterError, SolverError
 from . import heating_reduced
 from .batch import PERCENTILES, BatchAnswer, Quadrature, batch_sizes
 from .heating_program import program_spec, solver_program
-from .scenario import DIRECT_ELL_RANGE
+from .runs.scenario import DIRECT_ELL_RANGE
 from .units import timescale
 
 FRACTIONS = np.linspace(0.0, 1.0, 201)[1:-1]  # of the gel's expellable fluid (x max_fraction)
@@ -191,7 +191,7 @@ def node_request(req: Any, radius_um: float) -> Any:
     bead of ``radius_um`` (its own interfacial length ell = xi_dry / a_d when the batch's
     reference runs at its own, as ``dosing.batch_truth.size_settings``)."""
     from .request import DoseRequest, _clamp_length
-    from .scenario import SolverSettings
+    from .runs.scenario import SolverSettings
 
     d = req.settings.request_dict()
     own = _clamp_length(req.constants.interfacial_lengths(req.bead_dry_radius_um)[0])
@@ -270,7 +270,7 @@ class FullNodeCurve:
         """The scenario of the program followed by a hold at its last temperature until
         ``horizon_s`` seconds (no stop)."""
         from .protocol_dose import TAIL, _open
-        from .scenario import Scenario
+        from .runs.scenario import Scenario
 
         until = horizon_s / self.tau_s
         r = self.req

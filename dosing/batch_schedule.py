@@ -55,7 +55,7 @@ from .protocol import (
 from .quantity import micrometres
 from .question.events import schedule_events
 from .request import ScheduleRequest, _clamp_length
-from .scenario import Scenario, SolverSettings
+from .runs.scenario import Scenario, SolverSettings
 from .schedule import SchedulePlanner, hold_schedule
 from .size_distribution import DrySizes, as_distribution
 from .truth import truth_text
@@ -532,9 +532,9 @@ def drug_batch_schedule_with(planner: SchedulePlanner, req: Any,
     bead's load ~ R^3: the volume weights), into a perfect sink; the reference bead's hold
     reading as the first guesses, shot by the one shooting routine on the lifted heatings
     (``protocol.NodeHeatings``) on the first rule, checked on the next (its quadrature)."""
-    from .drug import runs_for
     from .drug_dose import DrugHeatings
     from .drug_schedule import hold_reading
+    from .runs.solute import runs_for
 
     sizes = schedule_sizes(req, size_distribution)
     ref = sizes.mean_um

@@ -35,7 +35,7 @@ from scipy.optimize import brentq
 
 from .batch import BatchAnswer, batch_answer, batch_sizes
 from .request import DoseRequest, _clamp_length
-from .scenario import SolverSettings
+from .runs.scenario import SolverSettings
 from .size_distribution import DrySizes
 from .truth import delayed_settings, role
 from .units import radius_after_dose

@@ -20,7 +20,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 from .planner import Planner
 from .request import DoseRequest
-from .scenario import SolverSettings
+from .runs.scenario import SolverSettings
 from .validation import PRIOR_FRACTIONS, front_prior
 
 CASES = (("ANB", 302.0, 308.0), ("HHT", 304.0, 308.0))

@@ -34,25 +34,20 @@ import hashlib
 import io
 import json
 import math
-import threading
 import time
-import weakref
-from collections import OrderedDict
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from solver.errors import ParameterError, SolverError
+from solver.errors import ParameterError
 from solver.gel import Gel
 from solver.limits import T_MAX, T_MIN
 from solver.solute import Hindrance, ReleaseResult, Solute, crank_sphere
 from solver.solute.result import RELEASE_ARRAYS
 
-from .cache import ValidationCache
-from .lru import ByteLRU
-from .scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
+from .runs.scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
 from .units import (
     BOLTZMANN,
     REFERENCE_TEMPERATURE_K,
@@ -398,13 +393,20 @@ class DrugScenario:
 
 @functools.cache
 def drug_code_version() -> str:
-    """Digest of the solute sources and this module (with the mechanics' code version)."""
+    """Digest of what a drug run computes: the mechanics' code version, the solute sources,
+    and the source of the functions here that set up, run and store it (not this module's
+    other text: moving code around it keeps the stored runs)."""
+    import inspect
+
     import solver.solute
 
     h = hashlib.sha256(code_version().encode())
-    for p in sorted(Path(solver.solute.__file__).parent.glob("*.py")) + [Path(__file__)]:
+    for p in sorted(Path(solver.solute.__file__).parent.glob("*.py")):
         h.update(p.name.encode())
         h.update(p.read_bytes())
+    for obj in (DrugScenario, drug_settings, step_outputs, simulate_protocol,
+                mechanics_prefix, run_drug_scenario, to_npz, from_npz):
+        h.update(inspect.getsource(obj).encode())
     return h.hexdigest()[:16]
 
 
@@ -430,12 +432,14 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
     ``budget`` wall seconds; one FullResult with its state after every step.  ``start``:
     the mechanics of a protocol's first steps (a :func:`mechanics_prefix`), continued from
     its last state (``simulate(..., initial=state)``, joined by ``FullResult.after``)."""
-    from solver.full import simulate
+    from .runs.full import full_solver
+
+    simulate = full_solver()
     from solver.full.moving import MeshOptions
 
     s = drug_settings(settings)
     if budget is None:
-        from .scenario import run_budget
+        from .runs.scenario import run_budget
 
         budget = run_budget(RUN_BUDGET_S)
     run = [(float(d), temp) for d, temp in steps if d > 0.0]
@@ -522,160 +526,6 @@ def from_npz(blob: bytes, meta: dict[str, Any]) -> ReleaseResult:
     return ReleaseResult(**arrays, mass_balance_error=float(meta.get("mass_balance_error", 0.0)),
                          effective_diffusivity=float(meta.get("effective_diffusivity", 0.0)),
                          diagnostics=dict(meta))
-
-
-_SCHEMA = """
-CREATE TABLE IF NOT EXISTS drug_runs (
-    key TEXT PRIMARY KEY,
-    meta TEXT NOT NULL,
-    data BLOB NOT NULL,
-    created REAL NOT NULL
-);
-"""
-
-
-class DrugCache(ValidationCache):
-    """Drug runs in the validation cache's SQLite file, in a table of their own."""
-
-    def __init__(self, path: str | Path | None = None) -> None:
-        super().__init__(path)
-        self._con().executescript(_SCHEMA)
-
-    def put_run(self, key: str, meta: dict[str, Any], blob: bytes) -> None:
-        """Store a drug run (one atomic transaction)."""
-        import sqlite3
-
-        self._write("INSERT OR REPLACE INTO drug_runs (key, meta, data, created) "
-                    "VALUES (?, ?, ?, ?)", (key, json.dumps(meta), sqlite3.Binary(blob),
-                                            time.time()))
-
-    def get_run(self, key: str) -> ReleaseResult | None:
-        """The stored drug run, or None."""
-        row = self._con().execute("SELECT meta, data FROM drug_runs WHERE key = ?",
-                                  (key,)).fetchone()
-        return None if row is None else from_npz(bytes(row[1]), json.loads(row[0]))
-
-
-MECHANICS_MEMORY = 64e6  # bytes of drug-run mechanics (profiles) a planner keeps
-
-
-class DrugRuns:
-    """Drug runs for a planner: memory, then the cache file, then its executor.  The
-    mechanics of the latest runs (profiles, up to MECHANICS_MEMORY bytes) are kept, and a
-    run whose protocol starts with one of theirs continues from there (``restarts``
-    counts them): a schedule's shooting runs only the heating it varies."""
-
-    def __init__(self, planner: Any) -> None:
-        self.planner = planner
-        self.cache = DrugCache(planner.cache.path)
-        self._mem: ByteLRU = ByteLRU(MECHANICS_MEMORY, max_items=32)  # bytes, not entries
-        self._lock = threading.Lock()
-        # key -> (case, protocol, mechanics, the run's solute as a dict)
-        self._mech: OrderedDict[str, tuple[tuple, tuple[Step, ...], Any, dict[str, Any]]] = \
-            OrderedDict()
-        self.restarts = 0
-
-    def cached(self, sc: DrugScenario) -> ReleaseResult | None:
-        """The stored run, or None (no computation)."""
-        key = sc.key()
-        with self._lock:
-            hit = self._mem.get(key)
-        if hit is None:
-            hit = self.cache.get_run(key)
-            if hit is not None:
-                self._remember(key, hit)
-        return hit
-
-    def _remember(self, key: str, rel: ReleaseResult) -> None:
-        with self._lock:
-            self._mem[key] = rel
-            self._mem.move_to_end(key)
-            while len(self._mem) > 32:
-                self._mem.popitem(last=False)
-
-    def run(self, sc: DrugScenario) -> ReleaseResult:
-        """The drug run for ``sc`` (blocking; cached)."""
-        hit = self.cached(sc)
-        if hit is not None:
-            return hit
-
-        def store(fut: Any) -> None:
-            meta, blob = fut.result()[:2]
-            self.cache.put_run(meta["key"], meta, blob)
-
-        start, solute_from = self._start(sc)
-        fn = functools.partial(run_drug_scenario, start=start, keep=True,
-                               solute_from=solute_from)
-        meta, blob, mech = self.planner.jobs.submit(sc.key(), fn, sc.to_dict(),
-                                                    on_done=store).result()
-        self._keep(sc, mech)
-        rel = from_npz(blob, meta)
-        if rel.mass_balance_error > 1e-10:
-            raise SolverError(f"drug run lost mass: {rel.mass_balance_error:.3g}", meta)
-        self._remember(sc.key(), rel)
-        return rel
-
-    @staticmethod
-    def _case(sc: DrugScenario) -> tuple:
-        return (sc.gel.key(), sc.t_start, sc.branch, drug_settings(sc.settings))
-
-    def _start(self, sc: DrugScenario) -> tuple[Any, ReleaseResult | None]:
-        """The kept mechanics of the longest prefix of ``sc``'s protocol (or None), and the
-        drug run they came from if its solute was ``sc``'s (its states continue it)."""
-        case, steps = self._case(sc), tuple(sc.protocol)
-        best, best_j = None, 0
-        with self._lock:
-            for key, (c, kept, _m, _s) in self._mech.items():
-                if c != case:
-                    continue
-                j = 0
-                while j < min(len(kept), len(steps)) and kept[j] == steps[j]:
-                    j += 1
-                if j > best_j:
-                    best, best_j = key, j
-            if best is None:
-                return None, None
-            self._mech.move_to_end(best)
-            _, _, mech, solute = self._mech[best]
-        start = mechanics_prefix(mech, steps[:best_j])
-        if start is None:
-            return None, None
-        self.restarts += 1
-        if solute != sc.solute.to_dict():
-            return start, None
-        with self._lock:
-            rel = self._mem.get(best)
-        return start, rel if rel is not None else self.cache.get_run(best)
-
-    def _keep(self, sc: DrugScenario, mech: Any) -> None:
-        """Keep a run's mechanics (the latest first out past MECHANICS_MEMORY bytes)."""
-        if mech is None or not mech.boundary_states:
-            return
-        with self._lock:
-            self._mech[sc.key()] = (self._case(sc), tuple(sc.protocol), mech,
-                                    sc.solute.to_dict())
-            self._mech.move_to_end(sc.key())
-            while len(self._mech) > 1 and sum(
-                    m.phi.nbytes + m.nodes.nbytes for _, _, m, _ in self._mech.values()
-            ) > MECHANICS_MEMORY:
-                self._mech.popitem(last=False)
-
-    def close(self) -> None:
-        """Close this object's connections to the cache file."""
-        self.cache.close()
-
-
-_RUNS: weakref.WeakKeyDictionary[Any, DrugRuns] = weakref.WeakKeyDictionary()
-_RUNS_LOCK = threading.Lock()
-
-
-def runs_for(planner: Any) -> DrugRuns:
-    """The planner's drug runs (one per planner, kept while the planner lives)."""
-    with _RUNS_LOCK:
-        runs = _RUNS.get(planner)
-        if runs is None:
-            runs = _RUNS[planner] = DrugRuns(planner)
-        return runs
 
 
 @dataclass(kw_only=True)

@@ -23,19 +23,11 @@ import numpy as np
 from solver.errors import ParameterError, require_finite_positive
 from solver.limits import DRUG_STEP_MAX
 
-from .drug import (
-    DrugModel,
-    DrugRuns,
-    DrugScenario,
-    StatedTruth,
-    carried_by_fluid,
-    drug_settings,
-    leak_time,
-    runs_for,
-)
+from .drug import DrugModel, DrugScenario, StatedTruth, carried_by_fluid, drug_settings, leak_time
 from .protocol import READ_OFF_FLOOR, Reach, Short, read_off, windows
 from .request import Case, _resolve_protocol, at_start, resolve_case
-from .scenario import SolverSettings, Step
+from .runs.scenario import SolverSettings, Step
+from .runs.solute import DrugRuns, runs_for
 from .truth import Part, Uncertainty, truth_text
 from .units import timescale, volume_to_ul
 

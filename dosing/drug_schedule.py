@@ -28,11 +28,12 @@ import numpy as np
 from solver.errors import ParameterError, SolverError, require_finite_positive
 
 from .answers import HoldRow
-from .drug import DrugRuns, StatedTruth, carried_by_fluid, drug_settings, leak_time, runs_for
+from .drug import StatedTruth, carried_by_fluid, drug_settings, leak_time
 from .drug_dose import DrugCase, DrugHeatings, first_heating
 from .protocol import Short, read_off, shoot_durations
 from .question.events import schedule_events
 from .request import ScheduleCase, ScheduleRequest
+from .runs.solute import DrugRuns, runs_for
 from .schedule import hold_schedule
 from .truth import Part, Uncertainty, truth_text
 from .units import timescale, volume_to_ul

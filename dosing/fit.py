@@ -33,7 +33,7 @@ from .fit_csv import read_table
 from .model_choice import choose_model, front_model_name, front_run
 from .planner import Planner
 from .request import resolve_dry_radius, resolve_gel, resolve_jump
-from .scenario import Scenario, SolverSettings
+from .runs.scenario import Scenario, SolverSettings
 from .units import BOLTZMANN, PhysicalConstants
 
 SIZE_COLUMNS = tuple(SIZE_POWER)

@@ -31,9 +31,9 @@ from solver.errors import ParameterError
 from .drug import DrugModel, drug_settings
 from .heating import Protocol
 from .heating_program import program_spec, solver_program
-from .lru import ByteLRU
 from .request import bead_settings
-from .scenario import SolverSettings, run_budget
+from .runs.lru import ByteLRU
+from .runs.scenario import SolverSettings, run_budget
 from .units import PhysicalConstants, timescale
 
 SAMPLES = 600  # mechanics outputs over the horizon (the solute's steps adapt within them)
@@ -90,7 +90,9 @@ def protocol_mechanics(gel: Any, prot: Protocol, dry_radius_um: float, horizon_s
         if hit is not None:
             _MEMO.move_to_end(key)
             return hit
-    from solver.full import simulate
+    from .runs.full import full_solver
+
+    simulate = full_solver()
 
     started = time.process_time()
     res = simulate(gel, prot.t_start, protocol=solver_program(spec), until=horizon,

@@ -55,7 +55,9 @@ def full_dose_time(gel: Gel, t_start: float, t_end: float, branch: str,
     smooth jump: no coexistence on the path, so no interface and no interfacial length
     matters): the paper's model on SMOOTH_N Lagrangian cells, stopped at the dose radius
     (eqs. PDE_Dimless to Boundary_Dimless); the horizon grows x4 up to 64 tau."""
-    from solver.full import simulate
+    from .runs.full import full_solver
+
+    simulate = full_solver()
 
     target = radius_after_dose(equilibrium(gel, t_start, branch).stretch, fraction)
     until = 1.0

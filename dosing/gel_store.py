@@ -18,7 +18,7 @@ from typing import Any
 from solver.errors import ParameterError
 from solver.gel import PRESETS, Gel
 
-from .scenario import code_version
+from .runs.scenario import code_version
 
 ENV = "THERMOGEL_GELS"
 SCHEMA = 1

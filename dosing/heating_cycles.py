@@ -29,7 +29,7 @@ from .heating import Piece
 from .heating_program import program_spec, staircase
 from .protocol import heat_cool_protocol
 from .request import ScheduleRequest
-from .scenario import Scenario, Step
+from .runs.scenario import Scenario, Step
 from .units import timescale
 
 
@@ -132,7 +132,7 @@ class ProtocolHeatings(protocol.FluidHeatings):
 
     def rows(self, sc: Scenario) -> list[list[Any]]:  # type: ignore[override]
         """The run's steps as plain rows: the program's, or the staircase's."""
-        from .scenario import plain
+        from .runs.scenario import plain
 
         return [plain(list(row)) for row in (sc.program["steps"] if sc.program is not None
                                              else sc.protocol)]

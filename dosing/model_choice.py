@@ -20,7 +20,7 @@ from solver.phase import JumpClass, classify_jump
 
 from .answers import DoseAnswer, ModelChoice, ValidationReport
 from .request import DoseRequest
-from .scenario import Scenario, SolverSettings
+from .runs.scenario import Scenario, SolverSettings
 from .truth import Uncertainty, truth_text
 from .units import (
     SYMBOLIC_FORMULA,

@@ -19,12 +19,11 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
-import sqlite3
 import threading
 import time
 from collections import OrderedDict
-from concurrent.futures import Executor, Future, ThreadPoolExecutor, wait
-from dataclasses import fields, replace
+from concurrent.futures import Executor, ThreadPoolExecutor
+from dataclasses import fields
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from solver.errors import SolverError
@@ -39,43 +38,26 @@ from .answers import (
     ValidationStatus,
     plain,
 )
-from .cache import ValidationCache
-from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner
-from .lru import ByteLRU
 from .model_choice import (
     build_answer,
     front_time,
     model_answer,
 )
 from .request import DoseRequest, ScheduleRequest
-from .restart import Start, restartable, stopped_as_run
-from .scenario import (
+from .runs.jobs import DEFAULT_LEASE_SECONDS
+from .runs.scenario import (
     Scenario,
     Solver,
     SolverSettings,
-    Trajectory,
-    hard_limit,
-    run_budget,
-    run_scenario,
 )
-from .truth import delayed_settings, is_model_form_run, range_settings
+from .runs.store import DEFAULT_HORIZON, RunStore
+from .truth import delayed_settings, range_settings
 from .validation import error_estimate, failure, validation_report
 
 if TYPE_CHECKING:
     from .schedule import ScheduleAnswer
 
-DEFAULT_HORIZON = 1.0  # first simulated time of a jump (extended x4 when a dose needs more)
-# the moving grid's first horizon: a direct run at the bead's ell costs most after the front
-# (small steps while the core relaxes), so it stops soon after the dose (the 90 % doses of
-# ANB and HHT are reached by 0.4)
-MOVING_HORIZON = 0.1
-# the model-form (delayed-transition) runs' first horizon: this many times the front model's
-# time to the dose, at least MOVING_HORIZON (their dose: 1.5x the truth's for ANB 80 %, 3x for
-# HHT 80 %, up to 9x for HHT's 10 % dose, whose front time is tiny: the floor covers it);
-# a run that falls short is extended (x4) like every other
-MODEL_FORM_REACH = 4.0
 VERDICTS = 1024  # front-model verdicts remembered per planner (keyed by cache generation)
-RUN_FAILURE = "run-failure-"  # the id prefix of a run whose worker died (the cache's jobs)
 
 
 class UnknownValidationError(KeyError):
@@ -128,7 +110,6 @@ def request_scenarios(req: DoseRequest | ScheduleRequest) -> tuple[Scenario, ...
                                 req.interfacial_range)
 
 
-RUNS_MEMORY = 64e6  # bytes of runs a planner keeps in memory (dosing.lru.ByteLRU)
 
 
 class Planner:
@@ -147,234 +128,43 @@ class Planner:
                  max_pending: int = 64, horizon: float = DEFAULT_HORIZON,
                  lease_seconds: float = DEFAULT_LEASE_SECONDS,
                  solver: Solver | None = None) -> None:
-        self._solver = solver  # None: solver.full.simulate, imported when a run is queued
-        self.cache = ValidationCache(cache_path)
-        self.jobs = JobRunner(executor, max_pending, leases=self.cache,
-                              lease_seconds=lease_seconds,
-                              hard_seconds=hard_limit(run_budget()))
-        self.jobs.on_worker_died = self._remember_death
-        self.horizon = float(horizon)
-        self._row_digest: dict[str, str] = {}  # the cache row each _mem entry came from
-        # runs held in memory: RUNS_MEMORY bytes at most (a run of a long trace program
-        # weighs hundreds of ordinary ones), and at most 64 of them
-        self._mem: ByteLRU = ByteLRU(RUNS_MEMORY, max_items=64,
-                                     on_evict=lambda key: self._row_digest.pop(key, None))
-        self._mem_lock = threading.Lock()
-        # protocol prefixes with a stored state at their end: prefix key -> (the stored
-        # run's scenario, steps) (module ``restart``; kept for this planner's life)
-        self._starts: OrderedDict[str, tuple[Scenario, int]] = OrderedDict()
-        self.restarts = 0  # protocol runs started from a stored prefix's state
+        # every full-solver run, stored or queued: dosing.runs.store (the planner's cache
+        # file, jobs and solver are the store's)
+        self.runs = RunStore(cache_path, executor, max_pending, horizon, lease_seconds, solver)
+        self.cache = self.runs.cache
+        self.jobs = self.runs.jobs
+        # the store's run lookups, under the names the planner's callers use
+        self.cached = self.runs.cached
+        self.cached_many = self.runs.cached_many
+        self.submit = self.runs.submit
+        self.run_here = self.runs.run_here
+        self.trajectory = self.runs.trajectory
+        self._trajectories = self.runs.trajectories
         # a front-model dose's verdict from the stored runs (:meth:`_front_dose`): (request's
         # verdict key, cache generation) -> _Verdict, least recently used dropped
         self._verdicts: OrderedDict[tuple[Any, ...], _Verdict] = OrderedDict()
+        self._mem_lock = threading.Lock()
 
     @property
     def solver(self) -> Solver:
-        """What runs a scenario (default ``solver.full.simulate``, imported on first use: a
-        front-model answer loads no kernels)."""
-        if self._solver is None:
-            from solver.full import simulate
+        """What runs a scenario (the store's: default ``solver.full.simulate``)."""
+        return self.runs.solver
 
-            self._solver = simulate
-        return self._solver
+    @property
+    def horizon(self) -> float:
+        """The first simulated time of a jump's run (the store's)."""
+        return self.runs.horizon
+
+    @property
+    def restarts(self) -> int:
+        """Protocol runs started from a stored prefix's state (the store's count)."""
+        return self.runs.restarts
 
     # ------------------------------------------------------------------ trajectories
     def scenarios(self, req: DoseRequest | ScheduleRequest) -> list[Scenario]:
         """The jump's validation runs (``SolverSettings.rungs``): the ladder of interfacial
         lengths, or the paper's model on the truth grid and then the other grid."""
         return list(request_scenarios(req))
-
-    def cached(self, sc: Scenario, need_radius: float | None = None,
-               need_time: float = 0.0) -> Trajectory | None:
-        """The stored trajectory if it covers the need (no computation), else None."""
-        key = sc.key()
-        with self._mem_lock:
-            traj = self._mem.get(key)
-        if traj is None or not _covers(traj, sc, need_radius, need_time):
-            traj = self.cache.get(key)
-            if traj is None:
-                return None
-            with self._mem_lock:
-                self._mem[key] = traj
-                self._row_digest.pop(key, None)  # its row unknown: cached_many reads it
-                self._mem.move_to_end(key)
-                while len(self._mem) > 64:
-                    self._row_digest.pop(self._mem.popitem(last=False)[0], None)
-        return traj if _covers(traj, sc, need_radius, need_time) else None
-
-    def cached_many(self, scs: list[Scenario] | tuple[Scenario, ...],
-                    need_radius: float | None = None,
-                    need_time: float = 0.0) -> list[Trajectory | None]:
-        """:meth:`cached` of several runs with one cache query (for the runs this planner
-        does not hold in memory already; only rows found are decoded, once)."""
-        with self._mem_lock:
-            out: list[Trajectory | None] = [self._mem.get(sc.key()) for sc in scs]
-        ask = [i for i, (sc, t) in enumerate(zip(scs, out, strict=True))
-               if t is None or not _covers(t, sc, need_radius, need_time)]
-        short = [scs[i].key() for i in ask if out[i] is not None]  # held, short of the need
-        if short:  # read again only a row that changed since (a longer run stored)
-            now = self.cache.digests(short)
-            ask = [i for i in ask if out[i] is None
-                   or now[scs[i].key()] != self._row_digest.get(scs[i].key())]
-        if ask:
-            found: dict[str, str] = {}
-            rows = self.cache.get_many([scs[i].key() for i in ask], found)
-            for i in ask:
-                key = scs[i].key()
-                raw = rows.get(key)
-                if raw is None:
-                    continue
-                traj = Trajectory.from_npz(raw[1], raw[0])
-                with self._mem_lock:
-                    self._mem[key] = traj
-                    self._row_digest[key] = found[key]
-                    self._mem.move_to_end(key)
-                    while len(self._mem) > 64:
-                        self._row_digest.pop(self._mem.popitem(last=False)[0], None)
-                out[i] = traj
-        if all(t is None for t in out):
-            return out
-        return [t if t is not None and _covers(t, sc, need_radius, need_time) else None
-                for sc, t in zip(scs, out, strict=True)]
-
-    def _store(self, fut: Future) -> None:
-        meta, blob = fut.result()
-        self.cache.put_if_longer(meta["key"], meta, blob)
-
-    def _fetch(self, sc: Scenario, need_radius: float | None,
-               need_time: float) -> tuple[dict[str, Any], bytes] | None:
-        """(meta, blob) of a stored run covering the need (one another process stored)."""
-        raw = self.cache.get_raw(sc.key())
-        if raw is None or not _covers(Trajectory.from_npz(raw[1], raw[0]), sc, need_radius,
-                                      need_time):
-            return None
-        return raw
-
-    def _job(self, sc: Scenario, need_radius: float | None, need_time: float) -> Job:
-        """The full-solver run for ``sc`` as a job: past the stored horizon (x4)."""
-        meta = self.cache.meta(sc.key())
-        first = self.horizon
-        if sc.settings.grid == "moving":
-            first = min(first, MOVING_HORIZON)
-        elif is_model_form_run(sc.settings):  # its dose comes 1.5-9x after the truth's
-            first = min(first, max(MOVING_HORIZON, MODEL_FORM_REACH * need_time))
-        horizon = first if meta is None else 4.0 * float(meta.get("horizon", 0.0))
-        start = self._start(sc) if restartable(self.solver) else None
-        if start is not None:
-            self.restarts += 1
-        return Job(sc.key(), functools.partial(run_scenario, solver=self.solver, start=start),
-                   (sc.to_dict(compact=True), max(horizon, first), need_radius, need_time),
-                   on_done=self._store,
-                   fetch=functools.partial(self._fetch, sc, need_radius, need_time))
-
-    def submit(self, sc: Scenario, need_radius: float | None = None,
-               need_time: float = 0.0) -> Future:
-        """Queue the full-solver run for ``sc`` (deduplicated by key); returns its future."""
-        return self.jobs.submit_group(sc.key(), [self._job(sc, need_radius, need_time)])[0]
-
-    def run_here(self, sc: Scenario, need_radius: float | None = None,
-                 budget: float = 30.0) -> Trajectory:
-        """The trajectory for ``sc``, stored or run in this thread (not queued behind the
-        pool's validations) within ``budget`` seconds of wall time, and stored: for the
-        sub-second runs an answer's envelope needs (the delayed-law lattice).  Not kept in
-        this planner's memory (its caller keeps the number it needs)."""
-        with self._mem_lock:
-            traj = self._mem.get(sc.key())
-        if traj is not None and _covers(traj, sc, need_radius, 0.0):
-            return traj
-        raw = self._fetch(sc, need_radius, 0.0)
-        if raw is not None:
-            return Trajectory.from_npz(raw[1], raw[0])
-        meta, blob = run_scenario(sc.to_dict(), self.horizon, need_radius, budget=budget,
-                                  solver=self.solver)
-        self.cache.put_if_longer(meta["key"], meta, blob)
-        return Trajectory.from_npz(blob, meta)
-
-    def trajectory(self, sc: Scenario, need_radius: float | None = None,
-                   need_time: float = 0.0) -> Trajectory:
-        """The full-solver trajectory for ``sc`` covering the need (blocking, cached)."""
-        for _ in range(6):
-            traj = self.cached(sc, need_radius, need_time)
-            if traj is not None:
-                return self._keep_states(sc, traj)
-            meta, blob = self.submit(sc, need_radius, need_time).result()
-            traj = Trajectory.from_npz(blob, meta)
-            if _covers(traj, sc, need_radius, need_time):
-                return self._keep_states(sc, traj)
-        raise SolverError("the full-solver run does not cover the dose", {"key": sc.key()})
-
-    def _keep_states(self, sc: Scenario, traj: Trajectory) -> Trajectory:
-        """Remember where a protocol run kept its state after each step (module
-        ``restart``), so that a later protocol sharing those steps starts there."""
-        states = traj.boundary_states if sc.protocol is not None else []
-        alias = stopped_as_run(sc, traj) if states else None
-        if alias is not None:  # a read-off heating's run is also the run to its dose
-            self._keep_states(*alias)
-            key = alias[0].key()
-            self.cache.put_if_longer(key, alias[1].meta, alias[1].to_npz())
-            with self._mem_lock:
-                self._mem[key] = alias[1]
-                self._mem.move_to_end(key)
-                while len(self._mem) > 64:
-                    self._mem.popitem(last=False)
-        if states:
-            new = []
-            with self._mem_lock:
-                for st in states:
-                    if st.stopped:
-                        continue
-                    j = st.steps
-                    key = _prefix(sc, j).key()
-                    if self._starts.get(key) != (sc, j):
-                        new.append((key, sc.to_dict(), j))
-                    self._starts[key] = (sc, j)
-                    self._starts.move_to_end(key)
-                while len(self._starts) > 4096:
-                    self._starts.popitem(last=False)
-            try:  # kept in the cache too: a restarted planner starts from the same states
-                self.cache.put_starts(new)
-            except sqlite3.Error:
-                pass  # only where a run starts is lost (a full disk): it starts earlier
-        return traj
-
-    def _start(self, sc: Scenario) -> Start | None:
-        """Where ``sc``'s protocol run starts: the state after its longest prefix that a
-        run this planner, or one before it on this cache, has seen kept (the cache's
-        ``starts``: a job resumed after a restart starts where it would have), or a stored
-        run of that prefix itself (the run store keeps each run's states: another
-        process's runs serve too); None: t = 0."""
-        if sc.protocol is None or len(sc.protocol) < 2:
-            return None
-        for j in range(len(sc.protocol) - 1, 0, -1):
-            pre = _prefix(sc, j)
-            with self._mem_lock:
-                hit = self._starts.get(pre.key())
-            if hit is None:
-                try:
-                    row = self.cache.get_start(pre.key())
-                except sqlite3.Error:
-                    row = None
-                if row is not None:
-                    hit = (Scenario.from_dict(row[0]), row[1])
-            stored = self.cached(pre if hit is None else hit[0])
-            start = None if stored is None else Start.of(stored, j if hit is None else hit[1])
-            if start is not None:
-                return start
-        return None
-
-    def _trajectories(self, scs: list[Scenario], need_radius: float,
-                      need_time: float) -> list[Trajectory | BaseException]:
-        """The runs' trajectories, run concurrently; a failure is returned, not raised.
-        The runs not stored yet are admitted to the queue together (or none is)."""
-        todo = [sc for sc in scs if self.cached(sc, need_radius, need_time) is None]
-        if todo:
-            group = hashlib.sha256(json.dumps([sc.key() for sc in scs]).encode()).hexdigest()
-            self.jobs.submit_group(group[:24], [self._job(sc, need_radius, need_time)
-                                                for sc in todo])
-        with ThreadPoolExecutor(len(scs)) as pool:
-            futs = [pool.submit(self.trajectory, sc, need_radius, need_time) for sc in scs]
-            wait(futs)
-        return [f.exception() or f.result() for f in futs]
 
     # ------------------------------------------------------------------ doses
     def unvalidated(self, req: DoseRequest) -> bool:
@@ -399,11 +189,10 @@ class Planner:
         the answer), else :class:`Pending` with the id of the validation queued for it.
         ``validate``: also queue the validation of an answered dose (its id in the answer).
         The one call the HTTP service makes per dose request."""
-        if getattr(req, "heating", None) is not None:  # a dose under a heating protocol
-            from . import protocol_dose
+        return _DOSE_PATHS[req.heating_kind].answer(self, req, validate)
 
-            out = protocol_dose.answer(self, req, validate)
-            return out if isinstance(out, Pending) else Answered(out)  # type: ignore[arg-type]
+    def _jump_answer(self, req: DoseRequest, validate: bool) -> Answered | Pending:
+        """:meth:`answer` for a jump to T_end (the planner's own models and runs)."""
         choice, scs, ans = self._now(req)
         if ans is None:
             return Pending(self._submit_validation(req, choice, scs))
@@ -435,10 +224,10 @@ class Planner:
         it).  A batch's request is answered here for its number-weighted mean bead; the
         batch's own answer is the one request's (``dosing.plan_dose``,
         ``dosing.question.plan``), above the planner."""
-        if getattr(req, "heating", None) is not None:  # a dose under a heating protocol
-            from . import protocol_dose
+        return _DOSE_PATHS[req.heating_kind].dose(self, req, validate)
 
-            return protocol_dose.dose(self, req, validate)  # type: ignore[return-value]
+    def _jump_dose(self, req: DoseRequest, validate: bool) -> DoseAnswer:
+        """:meth:`dose` for a jump to T_end."""
         choice = self.model_answer(req)
         if not (choice.needs_full or validate):
             return self._front_dose(req, choice)
@@ -536,26 +325,6 @@ class Planner:
             self.cache.put_validation(vid, record)
         return vid
 
-    def _remember_death(self, key: str, err: BaseException) -> None:
-        """A run whose pool worker died while it ran (killed by the OS, or at the hard
-        limit): kept in the cache, so that a poll (here or after a restart) reports it
-        failed instead of running it into the same death; asking again runs it."""
-        jid = RUN_FAILURE + key
-        self.cache.put_job(jid, "run-failure", {"key": key})
-        self.cache.finish_job(jid, "failed", error=str(err))
-
-    def _died(self, key: str, retry: bool) -> BaseException | None:
-        """The remembered death of run ``key`` (None: none; ``retry`` forgets it)."""
-        row = self.cache.get_job(RUN_FAILURE + key)
-        if row is None:
-            return None
-        if retry:
-            self.cache.forget_job(RUN_FAILURE + key)
-            return None
-        from .jobs import WorkerDied
-
-        return WorkerDied(row["error"] or "its pool worker died while it ran")
-
     def _advance(self, record: dict[str, Any], vid: str,
                  retry: bool = False) -> tuple[list[Any], list[str]]:
         """Per run: a covering trajectory, an exception, or None and its job state in the
@@ -567,11 +336,11 @@ class Planner:
         trajs = [self.cached(sc, need_r, need_t) for sc in scs]
         for i, sc in enumerate(scs):
             if trajs[i] is None and self.jobs.state(sc.key()) is None:
-                trajs[i] = self._died(sc.key(), retry)
+                trajs[i] = self.runs.died(sc.key(), retry)
         todo = [sc for sc, traj in zip(scs, trajs, strict=True) if traj is None
                 and self.jobs.state(sc.key()) not in ("pending", "running", "failed")]
         if todo:  # never run, or short of the dose
-            self.jobs.submit_group(vid, [self._job(sc, need_r, need_t) for sc in todo])
+            self.jobs.submit_group(vid, [self.runs.job(sc, need_r, need_t) for sc in todo])
         out: list[Any] = []
         states = []
         for sc, traj in zip(scs, trajs, strict=True):
@@ -627,8 +396,7 @@ class Planner:
 
     def close(self) -> None:
         """Shut down an owned executor and close the cache."""
-        self.jobs.shutdown(wait=False)
-        self.cache.close()
+        self.runs.close()
 
     def __enter__(self) -> Planner:
         return self
@@ -664,22 +432,43 @@ def _copy_report(rep: ValidationReport) -> ValidationReport:
 _REPORT_FIELDS = tuple(f.name for f in fields(ValidationReport))
 
 
-def _prefix(sc: Scenario, steps: int) -> Scenario:
-    """The run of ``sc``'s first ``steps`` protocol steps (to their end: no stop)."""
-    if steps == len(sc.protocol) and sc.stop_expelled is None:
-        return sc
-    return replace(sc, protocol=sc.protocol[:steps], stop_expelled=None)
-
-
-def _covers(traj: Trajectory, sc: Scenario, need_radius: float | None, need_time: float) -> bool:
-    if sc.protocol is not None or sc.program is not None:
-        return True
-    if need_radius is not None and traj.radius.min() > need_radius:
-        return False
-    return traj.horizon >= need_time
-
-
 def one_shot(cache_path: str | None, executor: Executor | None, **kw: Any) -> Planner:
     """A throw-away planner on ``cache_path`` whose full-solver work runs in this process (no
     pool start-up): the one-call functions' (``plan_dose``, ``question.plan``, the CLI)."""
     return Planner(cache_path=cache_path, executor=executor or ThreadPoolExecutor(2), **kw)
+
+
+class _JumpPath:
+    """A jump's dose: the planner's own models and the jump's validation runs."""
+
+    @staticmethod
+    def answer(planner: Planner, req: DoseRequest, validate: bool) -> Answered | Pending:
+        return planner._jump_answer(req, validate)
+
+    @staticmethod
+    def dose(planner: Planner, req: DoseRequest, validate: bool) -> Any:
+        return planner._jump_dose(req, validate)
+
+
+class _ProtocolPath:
+    """A dose under heating steps (``dosing.protocol_dose``: the reduced slow-heating
+    model in its region, else the full solver)."""
+
+    @staticmethod
+    def answer(planner: Planner, req: DoseRequest, validate: bool) -> Answered | Pending:
+        from . import protocol_dose
+
+        out = protocol_dose.answer(planner, req, validate)
+        return out if isinstance(out, Pending) else Answered(out)  # type: ignore[arg-type]
+
+    @staticmethod
+    def dose(planner: Planner, req: DoseRequest, validate: bool) -> Any:
+        from . import protocol_dose
+
+        return protocol_dose.dose(planner, req, validate)
+
+
+# the dose paths by the request's heating (``DoseRequest.heating_kind``): a registry like
+# ``dosing.question.cells.CELLS``, so the planner's entry points do not branch on it
+_DOSE_PATHS: dict[str, type[_JumpPath] | type[_ProtocolPath]] = {
+    "jump": _JumpPath, "protocol": _ProtocolPath}

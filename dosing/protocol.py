@@ -22,7 +22,7 @@ from scipy.optimize import brentq
 from solver.errors import ParameterError, SolverError
 
 from .request import ScheduleRequest
-from .scenario import Step, Trajectory
+from .runs.scenario import Step, Trajectory
 
 Runner = Callable[..., Trajectory]  # run(steps, stop_expelled=None): the protocol's run
 STOP_MARGIN = 1e-6  # a read-off heating stops this much (relative) past its dose's volume

@@ -38,7 +38,7 @@ from .answers import Pending
 from .heating import Piece, Protocol, Until, reference_text
 from .heating_program import MOBILITY_TEXT, STAIR_KELVIN, program_spec, staircase
 from .request import DoseRequest
-from .scenario import Scenario, Trajectory
+from .runs.scenario import Scenario, Trajectory
 from .truth import truth_text
 from .units import expelled_volume, radius_after_dose, timescale, ul_to_volume, volume_to_ul
 from .validation import validation_report
@@ -169,10 +169,10 @@ class Mode:
 def mode_for(planner: Any, req: DoseRequest) -> Mode:
     """Continuous on the real solver (its mobility: 'water' with water's viscosity, else
     'kT'); the staircase on a stand-in solver."""
-    from solver.full import simulate
+    from .runs.full import is_full_solver
 
     mobility = "water" if req.constants.viscosity_pa_s == "water" else "kT"
-    return Mode(planner.solver is simulate, mobility)
+    return Mode(is_full_solver(planner.solver), mobility)
 
 
 def _settings_list(req: DoseRequest, check: Any) -> list[Any]:

@@ -89,8 +89,8 @@ def code_version() -> str:
 def version_info() -> dict[str, str]:
     """``{"package", "code", "solver"}``: the package version, the code version (package
     + git describe of a checkout) and the digest of the full solver's sources (the
-    validation cache's key, dosing.scenario.code_version)."""
-    from .scenario import code_version as solver_digest
+    validation cache's key, dosing.runs.scenario.code_version)."""
+    from .runs.scenario import code_version as solver_digest
 
     return {"package": package_version(), "code": code_version(), "solver": solver_digest()}
 

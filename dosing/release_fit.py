@@ -45,7 +45,7 @@ from .drug import DrugModel
 from .fit_csv import read_table
 from .gel_store import calibrated_constants
 from .request import resolve_gel
-from .scenario import SolverSettings
+from .runs.scenario import SolverSettings
 from .units import REFERENCE_TEMPERATURE_K, PhysicalConstants
 
 D_BOUNDS = (1e-12, 1e-3)  # cm^2/s: the fit's bounds on D0

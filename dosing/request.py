@@ -19,7 +19,7 @@ from solver.gel import Gel, Permeability, check_temperature
 from solver.limits import DRY_RADIUS_UM_RANGE, REST_RANGE
 
 from .gel_store import calibrated_constants, lookup
-from .scenario import DIRECT_ELL_RANGE, TRUTH, SolverSettings
+from .runs.scenario import DIRECT_ELL_RANGE, TRUTH, SolverSettings
 from .units import PhysicalConstants, stored_volume, timescale, ul_to_volume, volume_to_ul
 
 BRANCHES = ("swollen", "shrunken")
@@ -346,6 +346,12 @@ class DoseRequest(Case):
                 f"{jump.max_fraction:.1%} of it at T_end"
                 + ("; this dose is larger than the stored fluid" if f > 1.0 else ""))
         return f
+
+    @property
+    def heating_kind(self) -> str:
+        """The key of the request's heating in the planner's dose paths: ``"jump"`` (T_end
+        held, the paper's) or ``"protocol"`` (steps of ``dosing.heating``)."""
+        return "jump" if self.heating is None else "protocol"
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form of the request as resolved (gel parameters, fraction, sizes)."""

@@ -29,7 +29,7 @@ from .answers import DoseAnswer, HoldRow
 from .heating_cycles import ProtocolHeatings
 from .question.events import schedule_events
 from .request import DoseRequest, ScheduleRequest
-from .scenario import Scenario, Step
+from .runs.scenario import Scenario, Step
 from .truth import truth_text
 from .units import SYMBOLIC_FORMULA, stored_volume, timescale, volume_to_ul
 

@@ -22,7 +22,7 @@ Every variable thermogel reads is a field here, under the name it has always had
 ``THERMOGEL_ARTIFACTS``                where the browser test writes its screenshots
 ``THERMOGEL_RUN_SECONDS``              the wall-clock budget of one full-solver run, s
                                        (default 600; read where a run starts:
-                                       ``dosing.scenario.run_budget``)
+                                       ``dosing.runs.scenario.run_budget``)
 =====================================  ====================================================
 
 An empty variable is unset; a value of the wrong type is a ``ParameterError`` naming the

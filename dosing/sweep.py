@@ -27,10 +27,10 @@ from solver.gel import Gel
 from solver.json_safe import json_safe
 from solver.presenters import presenter
 
-from .jobs import QueueFullError
 from .model_choice import front_answer, jump_class
 from .request import DoseRequest, resolve_gel
-from .scenario import SolverSettings
+from .runs.jobs import QueueFullError
+from .runs.scenario import SolverSettings
 from .units import PhysicalConstants, timescale
 from .validation import error_estimate
 

@@ -26,7 +26,7 @@ import math
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
-from .scenario import TRUTH, SolverSettings
+from .runs.scenario import TRUTH, SolverSettings
 
 # the ell = 0 lattice's N (its answer: the finest).  N = 800 cost two thirds of a cold
 # validation and moved the ANB 80 % bound by 0.4 % (issue 23), inside the N-spread the

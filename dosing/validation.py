@@ -22,7 +22,7 @@ from solver.phase import nucleation_level
 
 from .answers import ValidationReport
 from .ladder import dose_limit
-from .scenario import Scenario, Trajectory
+from .runs.scenario import Scenario, Trajectory
 from .truth import role, uncertainty
 from .units import expelled_volume
 

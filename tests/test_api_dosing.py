@@ -17,7 +17,7 @@ from api_support import asgi, fake_full_solver, fake_planner
 from api.client import ApiError
 from api.http import create_app
 from dosing import DoseRequest, Planner
-from dosing.scenario import LADDER
+from dosing.runs.scenario import LADDER
 from dosing.units import radius_after_dose
 
 pytestmark = pytest.mark.anyio

@@ -9,7 +9,7 @@ import pytest
 from api_support import asgi
 
 from api.http import create_app
-from dosing.drug import DrugCache
+from dosing.runs.solute import DrugCache
 
 pytestmark = pytest.mark.anyio
 

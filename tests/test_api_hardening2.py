@@ -339,7 +339,7 @@ def test_a_corrupted_row_is_detected_and_computed_again(tmp_path: Path) -> None:
     """N5: flip bytes in a stored trajectory's blob; a new planner on the file detects it
     (checksum), drops the row, computes the run again and gives the same answer."""
     from dosing import DoseRequest, SolverSettings
-    from dosing.cache import ValidationCache
+    from dosing.runs.cache import ValidationCache
 
     cache = tmp_path / "c.sqlite"
     req = DoseRequest("ANB", 300.0, 303.0, dose_fraction=0.2,

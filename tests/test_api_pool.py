@@ -46,7 +46,7 @@ def _poisoned_validation(cache: Path) -> str:
     """A validation stored by a server before the fix: one run whose program the solver
     refuses (an open bath of 1e6 tau: 40 time constants, 4e7 tau, past its 1e6 per step)."""
     from dosing import ValidationCache
-    from dosing.scenario import Scenario, SolverSettings
+    from dosing.runs.scenario import Scenario, SolverSettings
     from solver.gel import preset
 
     sc = Scenario(preset("ANB"), 302.0, program={"steps": [["bath", 308.0, 1e6, 4e7]],
@@ -168,7 +168,7 @@ def _alive(pid: int) -> bool:
 
 
 def test_a_worker_dies_with_its_parent_even_inside_a_compiled_loop() -> None:
-    """dosing.jobs.kill_with_parent: the watchdog process kills a process whose parent is
+    """dosing.runs.jobs.kill_with_parent: the watchdog process kills a process whose parent is
     gone while that process sits in a numba loop holding the GIL."""
     import subprocess
     import sys
@@ -176,7 +176,7 @@ def test_a_worker_dies_with_its_parent_even_inside_a_compiled_loop() -> None:
     script = (
         "import os, sys, time\n"
         "from numba import njit\n"
-        "from dosing.jobs import kill_with_parent\n"
+        "from dosing.runs.jobs import kill_with_parent\n"
         "@njit\n"
         "def spin(n):\n"
         "    x = 0.0\n"

@@ -247,7 +247,8 @@ AXIS_TYPES = {"Fluid", "Drug", "OneBead", "Batch", "Jump", "Heating", "Dose", "S
 # axis (api/requests.py and dosing/question/legacy.py are where a body or an old request
 # picks its axes' values: exempt)
 NO_AXIS_BRANCH = ("dosing/question/__init__.py", "dosing/question/request.py",
-                  "dosing/question/cells.py", "dosing/question/result.py", "api/service.py")
+                  "dosing/question/cells.py", "dosing/question/result.py", "api/service.py",
+                  "dosing/planner.py")
 
 
 def axis_branches(source: str, where: str) -> list[str]:
@@ -300,3 +301,37 @@ def test_every_combination_of_the_axes_has_a_cell() -> None:
     product = {tuple(c.key for c in cell) for cell in
                itertools.product(PAYLOADS, POPULATIONS, HEATINGS, QUESTIONS)}
     assert set(CELLS) == product
+
+
+# ----------------------------------------------------------- one run store (issue 35)
+def full_solver_imports(tree: ast.AST, where: str) -> list[str]:
+    """Imports of the full solver's entry point: ``from solver.full[.run] import simulate``,
+    ``import solver.full[.run]`` and ``solver.full.simulate`` spelled out."""
+    out = []
+    for node in ast.walk(tree):
+        if (isinstance(node, ast.ImportFrom) and node.module in ("solver.full", "solver.full.run")
+                and any(a.name == "simulate" for a in node.names)):
+            out.append(f"{where}:{node.lineno} from {node.module} import simulate")
+        elif isinstance(node, ast.Import) and any(
+                a.name in ("solver.full", "solver.full.run") for a in node.names):
+            out.append(f"{where}:{node.lineno} import solver.full")
+        elif isinstance(node, ast.Attribute) and ast.unparse(node) in (
+                "solver.full.simulate", "solver.full.run.simulate"):
+            out.append(f"{where}:{node.lineno} solver.full.simulate")
+    return out
+
+
+def test_one_dosing_module_reaches_the_full_solver() -> None:
+    """Every full-solver run of the planner goes through dosing/runs/ (the store, and the
+    run functions its executor calls), which take the solver from dosing/runs/full.py."""
+    found = {hit.split(":")[0] for where, tree in _dosing_modules()
+             for hit in full_solver_imports(tree, where)}
+    assert found == {"dosing/runs/full.py"}, found
+
+
+def test_the_full_solver_import_checker_can_fail() -> None:
+    source = ("from solver.full import simulate\nimport solver.full\n"
+              "def f():\n    from solver.full.run import simulate\n"
+              "    return solver.full.simulate\n")
+    assert len(full_solver_imports(ast.parse(source), "x.py")) == 4
+    assert not full_solver_imports(ast.parse("from solver.full import FullResult\n"), "y.py")

@@ -142,7 +142,7 @@ def test_http_job_answers_the_python_batch(tmp_path) -> None:
 @functools.lru_cache(maxsize=16)
 def _coarse(temp: float, n: int):
     from dosing.drug import simulate_protocol
-    from dosing.scenario import SolverSettings
+    from dosing.runs.scenario import SolverSettings
 
     return simulate_protocol(as_gel("ANB"), 302.0, [(0.5, temp)], "swollen",
                              SolverSettings(grid="lagrangian", n=n, interfacial_length=0.0))

@@ -15,7 +15,7 @@ from api.cli import main
 from dosing import Planner
 from dosing.design import ExperimentAsk, design_experiment
 from dosing.question import Dose, Jump, Request, plan
-from dosing.scenario import Scenario
+from dosing.runs.scenario import Scenario
 from dosing.units import PhysicalConstants, timescale
 
 SPEED = 1.0 / 3.0  # the true D over the planner's default (the timescale bracket's fast end):

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from dosing import ValidationCache
-from dosing.scenario import Trajectory
+from dosing.runs.scenario import Trajectory
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -63,7 +63,7 @@ def test_default_path_from_environment(tmp_path: Path, monkeypatch: pytest.Monke
 _WRITER = textwrap.dedent("""
     import hashlib, sys
     import numpy as np
-    from dosing.cache import ValidationCache
+    from dosing.runs.cache import ValidationCache
     cache = ValidationCache(sys.argv[1])
     for i in range(1000):
         data = np.random.default_rng(i).bytes(int(sys.argv[2]))
@@ -114,7 +114,7 @@ def test_sigkill_mid_write_keeps_every_committed_row(tmp_path: Path) -> None:
 
 _WORKER = textwrap.dedent("""
     import sys
-    from dosing.cache import ValidationCache
+    from dosing.runs.cache import ValidationCache
     cache, me = ValidationCache(sys.argv[1]), int(sys.argv[2])
     seen = 0
     for i in range(15):

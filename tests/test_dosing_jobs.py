@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from dosing import DoseRequest, JobRunner, Planner, QueueFullError, ValidationCache
-from dosing.jobs import BACKGROUND_NICENESS, Job, default_executor, stop_executor
+from dosing.runs.jobs import BACKGROUND_NICENESS, Job, default_executor, stop_executor
 from dosing.units import radius_after_dose
 from solver.gel import HHT
 
@@ -124,7 +124,7 @@ def test_a_run_past_its_wall_budget_fails_clearly() -> None:
     """No validation run can hang: past its budget the run stops with a SolverError that
     names the settings (the solver reports progress at least every 4096 steps)."""
     from dosing import Scenario, SolverSettings
-    from dosing.scenario import run_scenario
+    from dosing.runs.scenario import run_scenario
     from solver.errors import BudgetExceeded, SolverError
 
     sc = Scenario(HHT, 304.0, 307.6, settings=SolverSettings(n=50, interfacial_length=0.0))
@@ -247,7 +247,7 @@ def test_default_executor_does_not_rerun_an_unguarded_script(tmp_path: Path) -> 
     import sys
 
     script = tmp_path / "pasted.py"
-    script.write_text("from dosing.jobs import default_executor, stop_executor\n"
+    script.write_text("from dosing.runs.jobs import default_executor, stop_executor\n"
                       "print('script body ran', flush=True)\n"
                       "ex = default_executor(1)\n"
                       "print('result', ex.submit(abs, -3).result(timeout=60), flush=True)\n"
@@ -266,7 +266,7 @@ def test_errors_from_a_pool_worker_come_back_and_the_pool_survives() -> None:
     (a WorkerError naming it) come back as errors; the pool is never broken by them."""
     import pool_jobs
 
-    from dosing.jobs import WorkerError
+    from dosing.runs.jobs import WorkerError
     from solver.errors import ParameterError
 
     runner = JobRunner(max_pending=8)
@@ -287,7 +287,7 @@ def test_a_dead_worker_fails_its_job_only_and_the_pool_is_replaced() -> None:
     jobs queued behind it run on the replacement pool, /health's pool status counts it."""
     import pool_jobs
 
-    from dosing.jobs import WorkerDied
+    from dosing.runs.jobs import WorkerDied
 
     runner = JobRunner(max_pending=8)
     try:
@@ -308,7 +308,7 @@ def test_a_job_past_its_hard_limit_is_killed_and_failed() -> None:
     hard limit; the job after it runs."""
     import pool_jobs
 
-    from dosing.jobs import WorkerDied
+    from dosing.runs.jobs import WorkerDied
 
     runner = JobRunner(max_pending=8, hard_seconds=2.0)
     try:
@@ -329,7 +329,7 @@ def test_a_runs_budget_covers_all_its_solver_calls(monkeypatch: pytest.MonkeyPat
     BudgetExceeded naming the settings, not after a budget per call."""
     from dosing_fakes import FakeSolver
 
-    from dosing.scenario import (
+    from dosing.runs.scenario import (
         RUN_BUDGET_S,
         Scenario,
         SolverSettings,

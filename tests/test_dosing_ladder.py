@@ -63,7 +63,7 @@ def test_limit_after_nucleation_removes_the_delay() -> None:
 def test_http_schema_bounds_match_the_planner() -> None:
     """api.schemas imports no physics, so it repeats the default and the ladder's range."""
     from api import schemas
-    from dosing.scenario import (
+    from dosing.runs.scenario import (
         DEFAULT_INTERFACIAL_LENGTH,
         ELL_RANGE,
         LADDER_TOP,

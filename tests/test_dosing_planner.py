@@ -13,7 +13,7 @@ import pytest
 from dosing_fakes import FakeSolver, exact_time
 
 from dosing import DoseRequest, Planner, QueueFullError, ScheduleRequest, UnknownValidationError
-from dosing.scenario import LADDER, PAPER
+from dosing.runs.scenario import LADDER, PAPER
 from dosing.units import expelled_volume, radius_after_dose
 from dosing.validation import front_prior
 from solver import HHT, equilibrium
@@ -267,7 +267,7 @@ def test_typed_answers_keep_their_json(planner, fake) -> None:
 def test_a_run_short_of_the_dose_radius_is_reported_not_raised() -> None:
     # a stored run that never reaches the asked radius is that run's error in the report
     # (the validation poll raised it before: a 500 on GET /v1/validations/{id})
-    from dosing.scenario import Scenario
+    from dosing.runs.scenario import Scenario
     from dosing.validation import failure, validation_report
     from solver.full import simulate
     from solver.gel import preset

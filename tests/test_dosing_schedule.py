@@ -14,7 +14,7 @@ import pytest
 
 from dosing import DoseRequest, Planner, ScheduleRequest
 from dosing.protocol import heat_cool_protocol, windows
-from dosing.scenario import PAPER
+from dosing.runs.scenario import PAPER
 from solver.full import simulate
 
 DOSES, RESTS = [0.3, 0.3, 0.3], [0.5, 0.5]

@@ -14,7 +14,7 @@ import pytest
 from dosing_fakes import ELL_C, ELL_ORDER, MOVING_C, FakeSolver, exact_time
 
 from dosing import DoseRequest, Planner, ScheduleRequest
-from dosing.scenario import GRIDS, LADDER, PAPER, Scenario, SolverSettings
+from dosing.runs.scenario import GRIDS, LADDER, PAPER, Scenario, SolverSettings
 from dosing.truth import DELAYED_NS, Uncertainty, delayed_settings
 from dosing.units import PhysicalConstants, radius_after_dose
 from dosing.validation import NO_PRIOR_ESTIMATE, front_prior

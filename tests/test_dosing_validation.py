@@ -19,7 +19,7 @@ import pytest
 
 from api.cli import main
 from dosing import DoseRequest, Planner
-from dosing.scenario import LADDER, PAPER
+from dosing.runs.scenario import LADDER, PAPER
 from dosing.validation import front_prior
 
 ANB80 = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0, "dose_fraction": 0.8}

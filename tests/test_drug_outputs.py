@@ -23,7 +23,7 @@ import dosing.drug_dose as drug_dose
 from dosing import PhysicalConstants, Planner
 from dosing.drug import DrugModel, step_outputs
 from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
-from dosing.scenario import SolverSettings
+from dosing.runs.scenario import SolverSettings
 
 
 def test_step_outputs_are_geometric_early_then_uniform() -> None:

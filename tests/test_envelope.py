@@ -132,7 +132,7 @@ def test_a_calibrated_gels_envelope_contains_the_truth(tmp_path, capsys, monkeyp
     import numpy as np
 
     from api.cli import main
-    from dosing.scenario import Scenario, SolverSettings
+    from dosing.runs.scenario import Scenario, SolverSettings
     from dosing.units import radius_after_dose
     from solver.gel import ANB
 

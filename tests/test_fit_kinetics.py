@@ -9,7 +9,7 @@ import pytest
 
 from dosing import Planner
 from dosing.fit import fit_shrinking, front_radius_model, kinetics_data, read_kinetics_csv
-from dosing.scenario import Scenario, SolverSettings
+from dosing.runs.scenario import Scenario, SolverSettings
 from dosing.units import PhysicalConstants, timescale
 from solver.errors import ParameterError
 from solver.gel import ANB

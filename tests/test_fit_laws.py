@@ -9,7 +9,7 @@ import pytest
 
 from dosing import Planner
 from dosing.fit import fit_front_laws, kinetics_data
-from dosing.scenario import Scenario, SolverSettings
+from dosing.runs.scenario import Scenario, SolverSettings
 from dosing.units import timescale
 from solver.gel import ANB
 

@@ -1,5 +1,5 @@
 """Protocol runs continued from a protocol boundary (issue 23; solver.full.state,
-dosing.restart).
+dosing.runs.restart).
 
 The full solver keeps a protocol run's state after every step and continues a protocol from
 one exactly (``simulate(..., initial=state)``, joined by ``FullResult.after``); the planner
@@ -18,8 +18,8 @@ from grid_support import every_grid
 
 from dosing import Planner, ScheduleRequest
 from dosing.protocol import FluidHeatings, windows
-from dosing.restart import Start, run_protocol
-from dosing.scenario import Scenario, SolverSettings
+from dosing.runs.restart import Start, run_protocol
+from dosing.runs.scenario import Scenario, SolverSettings
 from solver.errors import ParameterError
 from solver.full import FullResult, simulate
 from solver.full.state import BoundaryState
@@ -245,9 +245,10 @@ def test_a_drug_run_continues_the_kept_mechanics_of_its_prefix(tmp_path) -> None
     # a drug run continues the kept mechanics of its protocol's prefix from their state
     # after it (one simulate call): the outputs of a fresh run, and its mechanics up to the
     # moving grid's mesh history (see the first test)
-    from dosing.drug import DrugModel, DrugRuns
+    from dosing.drug import DrugModel
     from dosing.drug_dose import DrugHeatings
     from dosing.drug_schedule import DrugScheduleRequest
+    from dosing.runs.solute import DrugRuns
 
     req = DrugScheduleRequest("ANB", 302, 308, DrugModel(diffusivity_cm2_s=1e-8, load_ug=1.0,
                                                          hindrance="none"),
@@ -339,11 +340,11 @@ def test_a_restarted_planner_starts_where_the_first_would_have(tmp_path) -> None
                  solver=Counting()) as first:
         run = Scenario(preset("ANB"), 302.0, protocol=PROTOCOL, settings=MOVING)
         first.trajectory(run)
-        want = first._start(Scenario(preset("ANB"), 302.0, protocol=other, settings=MOVING))
+        want = first.runs._start(Scenario(preset("ANB"), 302.0, protocol=other, settings=MOVING))
     assert want is not None and want.steps == 2 and want.record.meta["key"] == run.key()
     with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1),
                  solver=Counting()) as second:
-        got = second._start(Scenario(preset("ANB"), 302.0, protocol=other, settings=MOVING))
+        got = second.runs._start(Scenario(preset("ANB"), 302.0, protocol=other, settings=MOVING))
     assert got is not None and got.steps == 2 and got.record.meta["key"] == run.key()
     same = got.record.boundary_state(2), want.record.boundary_state(2)
     assert same[0].phi.tobytes() == same[1].phi.tobytes() and same[0].t == same[1].t

@@ -53,9 +53,9 @@ def test_chosen_commands() -> None:
 
 
 def test_grid_names_match_the_solver_registry() -> None:
-    """dosing.scenario.GRIDS is written out (no kernels at import): it must stay the
+    """dosing.runs.scenario.GRIDS is written out (no kernels at import): it must stay the
     registry's names, in its order."""
-    from dosing.scenario import GRIDS
+    from dosing.runs.scenario import GRIDS
     from solver.full import GRIDS as REGISTRY
 
     assert GRIDS == tuple(REGISTRY)

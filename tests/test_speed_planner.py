@@ -14,7 +14,7 @@ from dosing_fakes import FakeSolver
 
 from dosing import DoseRequest, Planner
 from dosing.planner import request_scenarios
-from dosing.scenario import STOP_MARGIN, Scenario, SolverSettings, run_scenario
+from dosing.runs.scenario import STOP_MARGIN, Scenario, SolverSettings, run_scenario
 from solver import ANB
 from solver.full.result import FullResult
 
@@ -72,7 +72,7 @@ def test_one_batched_lookup_per_answer_and_none_without_a_stored_truth(
         assert calls == []  # no run of this truth stored: no keys, no lookup
         assert plain.scenario_key == request_scenarios(req)[0].key()
         validated = planner.dose(req, validate=True)
-        planner._mem.clear()
+        planner.runs._mem.clear()
         calls.clear()
         again = planner.dose(req)
         assert again.validation is not None
@@ -103,7 +103,7 @@ def test_a_stored_run_short_of_the_dose_is_not_read_again(tmp_path: Path) -> Non
 
         FullResult.from_npz = staticmethod(counting)  # type: ignore[method-assign]
         try:
-            planner._mem.clear()
+            planner.runs._mem.clear()
             large = DoseRequest(**FRONT, dose_fraction=0.8, dry_radius_um=50.0)
             first = planner.dose(large)
             n = len(decoded)
@@ -120,7 +120,7 @@ def test_a_stored_run_short_of_the_dose_is_not_read_again(tmp_path: Path) -> Non
 
 
 def test_get_many_returns_stored_rows_only(tmp_path: Path) -> None:
-    from dosing.cache import ValidationCache
+    from dosing.runs.cache import ValidationCache
 
     with ValidationCache(tmp_path / "c.sqlite") as cache:
         cache.put("a", {"horizon": 1.0}, b"blob-a")
@@ -188,7 +188,7 @@ def test_get_many_sees_every_write_after_remembering_absent_keys(tmp_path: Path)
     connection, by another thread's, or by another cache object (another process) shows."""
     import threading
 
-    from dosing.cache import ValidationCache
+    from dosing.runs.cache import ValidationCache
 
     path = tmp_path / "c.sqlite"
     with ValidationCache(path) as cache, ValidationCache(path) as other:
@@ -243,7 +243,7 @@ def test_plain_is_asdict() -> None:
 def _copy_rows(src: Planner, dst_path: Path) -> None:
     """Every run ``src`` stored, written to ``dst_path`` by a cache object of its own (as
     another process would)."""
-    from dosing.cache import ValidationCache
+    from dosing.runs.cache import ValidationCache
 
     with ValidationCache(dst_path) as other:
         for key in src.cache.keys():

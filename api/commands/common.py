@@ -125,7 +125,7 @@ def gel_bounds(args: argparse.Namespace) -> dict[str, Any] | None:
 def checked_cache(path: str | None) -> str | None:
     """``path`` if the validation cache can be opened there (a ParameterError naming
     ``--cache`` otherwise: a directory, a read-only file, not a database)."""
-    from dosing.cache import ValidationCache, default_path
+    from dosing.runs.cache import ValidationCache, default_path
 
     try:
         ValidationCache(path).close()

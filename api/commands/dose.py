@@ -6,7 +6,7 @@ import argparse
 import sys
 from typing import Any
 
-from dosing.scenario import GRIDS, METHODS
+from dosing.runs.scenario import GRIDS, METHODS
 from solver.errors import ParameterError
 
 from .common import (

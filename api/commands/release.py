@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
     """Simulate, then print (or JSON) the release."""
     from dosing.drug import drug_settings
     from dosing.request import bead_settings
-    from dosing.scenario import SolverSettings
+    from dosing.runs.scenario import SolverSettings
     from dosing.units import timescale
     from solver.equilibrium import equilibrium
     from solver.gel import check_temperature

@@ -182,8 +182,8 @@ def write_events(result: Any, args: argparse.Namespace) -> Path:
 def _plot(planner: Any, req: Any, ans: Any, path: str) -> None:
     """Cumulative drug through the corrected (else the checked) protocol."""
     from api.plots.release import draw_schedule_release
-    from dosing.drug import runs_for
     from dosing.drug_dose import DrugHeatings
+    from dosing.runs.solute import runs_for
 
     res = ans.corrected if ans.corrected and ans.corrected.get("actuation_times") \
         else ans.protocol_check

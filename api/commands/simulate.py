@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from dosing.scenario import GRIDS, PAPER, TRUTH
+from dosing.runs.scenario import GRIDS, PAPER, TRUTH
 from solver.errors import ParameterError
 
 from .common import add_gel_options, gel_from_args, print_json
@@ -134,8 +134,8 @@ def _progress_bar(enabled: bool) -> Iterator[Callable[[float], None] | None]:
 
 def model_options(args: argparse.Namespace) -> tuple[str, int, float]:
     """(grid, n, ell) of a run: by default the planner's truth without a bead size (the
-    well-posed model on the moving grid, dosing.scenario.TRUTH); ``--paper`` the paper's
-    model (dosing.scenario.PAPER).  On the moving grid at ell <= the default, fewer than
+    well-posed model on the moving grid, dosing.runs.scenario.TRUTH); ``--paper`` the paper's
+    model (dosing.runs.scenario.PAPER).  On the moving grid at ell <= the default, fewer than
     MOVING_N_FLOOR cells cannot follow the interface: refused (exit 2)."""
     base = PAPER if args.paper or args.interfacial_length == 0.0 else TRUTH
     ell = base.interfacial_length if args.interfacial_length is None \

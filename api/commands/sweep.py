@@ -139,7 +139,7 @@ def _executor(args: argparse.Namespace, stack: ExitStack) -> Any:
     if args.workers is not None:
         if args.workers < 1:
             raise ParameterError("--workers", args.workers, "an integer >= 1")
-        from dosing.jobs import default_executor
+        from dosing.runs.jobs import default_executor
 
         return stack.enter_context(default_executor(args.workers))
     if args.dask is None and args.dask_local is None:

@@ -20,7 +20,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from dosing.model_choice import choose_model, front_model_name, front_run
 from dosing.request import resolve_jump
-from dosing.scenario import SolverSettings
+from dosing.runs.scenario import SolverSettings
 from solver.errors import NotApplicableError
 
 from ..safe_route import SafeRoute

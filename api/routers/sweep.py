@@ -24,7 +24,7 @@ from fastapi.responses import JSONResponse, Response
 from pydantic import BaseModel, ConfigDict, Field, create_model, field_validator, model_validator
 
 from dosing import JobRunner, SolverSettings, UnknownValidationError
-from dosing.lru import ByteLRU
+from dosing.runs.lru import ByteLRU
 from dosing.sweep import COLUMNS, SweepGrid, SweepResult, fill_validations, run_sweep
 from solver.errors import ParameterError
 from solver.json_safe import json_safe
@@ -160,7 +160,7 @@ class _Sweeps:
         self.runner = JobRunner(ThreadPoolExecutor(1, thread_name_prefix="sweep"),
                                 max_pending=SWEEP_QUEUE, what="sweeps")
         self.progress: dict[str, list[int]] = {}
-        # JSON, CSV, SVG bodies: RENDERED_BYTES at most (dosing.lru: bytes, not entries)
+        # JSON, CSV, SVG bodies: RENDERED_BYTES at most (dosing.runs.lru: bytes, not entries)
         self.rendered: ByteLRU = ByteLRU(RENDERED_BYTES, sizeof=len)
         self.lock = threading.Lock()
 

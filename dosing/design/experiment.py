@@ -162,7 +162,7 @@ def jump_curves(planner: Any, gel: Any, t_start: float, t_end: float, branch: st
     from scipy.interpolate import PchipInterpolator
 
     from ..model_choice import front_run
-    from ..scenario import TRUTH, Scenario
+    from ..runs.scenario import TRUTH, Scenario
     from ..truth import delayed_settings
 
     fr = front_run(gel, t_start, t_end, branch, True)

@@ -161,7 +161,7 @@ class Jump:
     @staticmethod
     def lattice(planned: Any, settings: Any, target: float) -> Any:
         """The jump's run under ``settings`` (the envelope's delayed-law lattice)."""
-        from ..scenario import Scenario
+        from ..runs.scenario import Scenario
 
         return Scenario(planned.gel, planned.t_start, planned.t_end, branch=planned.branch,
                         settings=settings)

@@ -506,7 +506,7 @@ def calibration_ratio(planned: Any) -> float | None:
 
 
 def _truth() -> Any:
-    from ..scenario import TRUTH
+    from ..runs.scenario import TRUTH
 
     return TRUTH
 

@@ -237,7 +237,7 @@ def run_budget(default: float = RUN_BUDGET_S) -> float:
 
 def hard_limit(budget: float) -> float:
     """When a run that has not stopped at its ``budget`` is killed from outside (its
-    worker: ``dosing.jobs.JobRunner(hard_seconds=...)``): the budget, plus half of it or
+    worker: ``dosing.runs.jobs.JobRunner(hard_seconds=...)``): the budget, plus half of it or
     at least a minute for the record to be written."""
     return float(budget) + max(60.0, 0.5 * float(budget))
 
@@ -361,7 +361,7 @@ def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver,
               stop: float | None = None, start: Any = None) -> FullResult:
     """One run of ``sc`` (a jump runs for ``horizon``, or until its radius reaches
     ``stop``) within ``budget`` s, as stored.  A protocol runs from ``start`` (a
-    :class:`dosing.restart.Start`, or t = 0) where the solver continues exactly, its record
+    :class:`dosing.runs.restart.Start`, or t = 0) where the solver continues exactly, its record
     keeping the state after each step (``FullResult.boundary_states``)."""
     from . import restart
 
@@ -370,7 +370,7 @@ def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver,
         res = rec = restart.run_protocol(sc, solver, budget, start)
     else:
         if sc.program is not None:  # a continuous temperature program (dosing.heating)
-            from .heating_program import solver_program
+            from ..heating_program import solver_program
 
             kw = {"protocol": solver_program(sc.program), "stop": sc.stop}
         else:
@@ -450,12 +450,14 @@ def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: fl
     event); all its runs together get ``budget`` seconds of wall time (default
     :func:`run_budget`; past it a BudgetExceeded naming the settings), on ``solver`` (the
     planner's: a module-level function pickles by name).
-    A protocol starts from ``start`` (:class:`dosing.restart.Start`: a stored run's state
+    A protocol starts from ``start`` (:class:`dosing.runs.restart.Start`: a stored run's state
     after its first steps) when given.
     Top-level and free of shared state, so process pools and Dask workers can run it.
     """
     if solver is None:
-        from solver.full import simulate as solver
+        from .full import full_solver
+
+        solver = full_solver()
     sc = Scenario.from_dict(scenario)
     wall = time.perf_counter()
     budget = run_budget() if budget is None else float(budget)

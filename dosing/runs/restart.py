@@ -43,16 +43,14 @@ def restartable(solver: Any) -> bool:
     asking loads no kernels)."""
     if getattr(solver, "restartable", False):
         return True
-    if getattr(solver, "__module__", None) != "solver.full.run":
-        return False
-    from solver.full import simulate
+    from .full import is_full_solver
 
-    return solver is simulate
+    return is_full_solver(solver)
 
 
 def run_protocol(sc: Any, solver: Any, budget: float, start: Start | None = None
                  ) -> FullResult:
-    """``sc``'s protocol run (a :class:`dosing.scenario.Scenario` with ``protocol``) as
+    """``sc``'s protocol run (a :class:`dosing.runs.scenario.Scenario` with ``protocol``) as
     stored (no profiles; its boundary states kept): one ``simulate`` from ``start`` (or
     t = 0) within ``budget`` wall seconds, output at the one-shot run's times and at every
     protocol boundary.  With ``sc.stop_expelled`` the last step stops where it has expelled

@@ -70,7 +70,7 @@ class QueueFullError(RuntimeError):
 
 
 class Leases(Protocol):
-    """A shared store of expiring claims on keys (``dosing.cache.ValidationCache``)."""
+    """A shared store of expiring claims on keys (``dosing.runs.cache.ValidationCache``)."""
 
     def claim(self, key: str, owner: str, seconds: float) -> bool:
         """Take the lease on ``key`` if it is free, expired, or already ours."""
@@ -186,7 +186,7 @@ def _main_not_reimported() -> Iterator[None]:
     multiprocessing's spawn makes each child import the parent's main script again (as
     ``__mp_main__``), so a script without an ``if __name__ == "__main__"`` guard would run
     again in every worker, start pools of its own and never finish.  The pool's work is
-    importable by name (``dosing.scenario.run_scenario``, ``solver.full.simulate``), so its
+    importable by name (``dosing.runs.scenario.run_scenario``, ``solver.full.simulate``), so its
     workers need nothing from the script: the README's code runs as pasted.
     """
     with _SPAWN_LOCK:

@@ -121,7 +121,7 @@ def _add_checksum_column(con: sqlite3.Connection) -> None:
 def default_path() -> Path:
     """$THERMOGEL_CACHE, else the user cache folder's validations.sqlite
     (~/.cache/thermogel/ on Linux; dosing.settings)."""
-    from .settings import settings
+    from ..settings import settings
 
     return settings().cache_path
 
@@ -424,7 +424,7 @@ class ValidationCache:
                                   (vid,)).fetchone()
         return None if row is None else json.loads(row[0])
 
-    # leases (dosing.jobs.Leases) -------------------------------------------------------
+    # leases (dosing.runs.jobs.Leases) -------------------------------------------------------
     def claim(self, key: str, owner: str, seconds: float) -> bool:
         """Take the lease on ``key`` for ``seconds`` if it is free, expired, ours, or held
         by a process of this host that has ended; True if we hold it now."""

@@ -1,0 +1,26 @@
+"""The full solver as dosing/ reaches it: ``solver.full.simulate`` (eqs. PDE_Dimless to
+Boundary_Dimless), imported on first use so that a front-model answer loads no kernels.
+
+This is the one import of the full solver in dosing/ (tests/test_architecture.py checks
+it).  A planner's runs take the store's ``solver`` (:class:`dosing.runs.store.RunStore`:
+this one by default, a stand-in in tests); the run functions a pool worker imports by name
+(``dosing.runs.scenario.run_scenario``, ``dosing.drug.run_drug_scenario``) and a fit's dose
+time, which have no planner, take it from here.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+def full_solver() -> Any:
+    """``solver.full.simulate``."""
+    from solver.full import simulate
+
+    return simulate
+
+
+def is_full_solver(solver: Any) -> bool:
+    """True when ``solver`` is the full solver itself, not a stand-in (asking loads no
+    kernels unless it may be)."""
+    return getattr(solver, "__module__", None) == "solver.full.run" and solver is full_solver()
