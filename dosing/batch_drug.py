@@ -7,7 +7,7 @@ time t / tau_k (module ``batch``): the sizes are cut into the fluid batch's band
 (``batch_truth.band_edges``: even in ln R over the volume-weighted central 99 %), each band
 run once at the ell of its geometric-centre bead (ell = xi_dry / a_d, as every truth's).
 The solute of every size class and the medium are solved together (module
-``batch_medium``), so the beads see one concentration c_med(t) and take drug back from it.
+``solver.solute.medium``), so the beads see one concentration c_med(t) and take drug back from it.
 The classes are Gauss-Legendre nodes over the volume-weighted law (a bead's load is
 ~ R^3), the rows of a measured table exactly.
 
@@ -33,9 +33,13 @@ import numpy as np
 
 from solver.errors import ParameterError
 from solver.limits import BEAD_COUNT_RANGE, MEDIUM_VOLUME_ML_RANGE
+from solver.solute import MediumRelease, coupled_release
 
-from .batch_medium import MediumRelease, coupled_release
+from .batch_schedule import ladder, rule
 from .batch_truth import band_edges, size_settings
+from .drug import drug_settings
+from .drug_dose import GROWTH, MAX_HORIZON, check_protocol
+from .fit_release_protocol import protocol_mechanics
 from .quantity import micrometres, to_unit
 from .request import _clamp_length
 from .size_distribution import DrySizes, SizeDistribution, as_distribution
@@ -47,6 +51,8 @@ POINTS = 200  # steps of the coupled solve (x SUB), geometric from START x the h
 START = 1e-5
 SUB = (1, 2)  # steps per interval: the answer's and its check (their gap: numerical error)
 HORIZON = 0.5  # tau of the reference bead's mechanics run (every class rests after its end)
+PROTOCOL_POINTS = 400  # a protocol's coupled solve: outputs even in ln t from START x horizon
+PROTOCOL_FIRST_HORIZON = 0.05  # tau_ref past the protocol's end: the first runs' horizon
 
 
 def medium_volume_ml(value: Any, field: str = "medium_volume_ml") -> float | None:
@@ -366,9 +372,7 @@ def _pore(req: Any, v0: float | None) -> float | None:
 def _protocol_answer(req: Any, sizes: DrySizes,
                      medium: tuple[float | None, float | None, float | None]
                      ) -> DrugBatchAnswer:
-    """The batch's drug dose under ``req.heating`` (``dosing.batch_drug_protocol``)."""
-    from .batch_drug_protocol import protocol_batch_time, protocol_parts
-
+    """The batch's drug dose under ``req.heating`` (:func:`protocol_batch_time`)."""
     ml, n_beads, v0 = medium
     res = protocol_batch_time(req, sizes, v0)
     t, best, f = res["time"], res["release"], req.fraction
@@ -407,6 +411,84 @@ def _protocol_answer(req: Any, sizes: DrySizes,
         bands=[{"dry_radius_um": float(r), "interfacial_length":
                 float(m.settings.interfacial_length)} for r, m in zip(res["radii"], runs,
                                                                       strict=True)])
+
+
+def _protocol_solve(req: Any, sizes: DrySizes, n: int, horizon_s: float, v0: float | None,
+           sub: int) -> tuple[MediumRelease, np.ndarray, list[Any]]:
+    """The coupled release of the n-node rule's classes, each on its own mechanics run of
+    the protocol to ``horizon_s`` seconds; (release, the nodes' radii, their runs)."""
+    from solver.solute import node_volumes
+
+    prot = check_protocol(req)
+    ref = sizes.mean_um
+    settings = drug_settings(req.settings)
+    r, v, _ = rule(sizes, n)
+    runs = [protocol_mechanics(req.gel, prot, float(x), horizon_s, req.constants,
+                               size_settings(settings, req.constants, ref, float(x)))
+            for x in r]
+    tau_ref = timescale(ref, req.t_end, req.constants).seconds
+    t_max = horizon_s / tau_ref
+    times = np.concatenate(([0.0], np.geomspace(t_max * START, t_max, PROTOCOL_POINTS)))
+    mr = coupled_release([np.asarray(m.result.t, dtype=float) for m in runs],
+                         [node_volumes(m.result) for m in runs], req.solute,
+                         (r / ref) ** 2, v, v0, times, sub=sub, points=0,
+                         band=np.arange(len(r)))
+    return mr, r, runs
+
+
+def protocol_batch_time(req: Any, sizes: DrySizes, v0: float | None) -> dict[str, Any]:
+    """The batch's dose time (tau_ref) under ``req.heating`` and its checks: every size
+    node runs the protocol's mechanics at its own size and ell (a protocol in seconds is
+    a different dimensionless program per size, tau ~ R^2, eq. timescale), the coupled
+    solve takes one mechanics per node in its own time t / rho_k; the nodes are the batch
+    schedule's few-node rule (3 checked on 5), grown x GROWTH until the dose is in."""
+    prot = check_protocol(req)
+    tau_ref = timescale(sizes.mean_um, req.t_end, req.constants).seconds
+    total = sum(p.duration or 0.0 for p in prot.program(tau_ref)
+                if math.isfinite(p.duration or 0.0))
+    rungs = ladder(sizes)
+    n, fine = rungs[0], (rungs[1] if len(rungs) > 1 else None)
+    horizon = total + PROTOCOL_FIRST_HORIZON
+    while True:
+        best, radii, runs = _protocol_solve(req, sizes, n, horizon * tau_ref, v0, 2)
+        try:
+            t = best.time_to_release(req.fraction)
+            break
+        except ValueError:
+            if horizon >= total + MAX_HORIZON:
+                raise ParameterError(
+                    "dose_fraction", req.fraction, f"below {best.released.max():.4f} of the "
+                    "batch's load", f"the protocol and {MAX_HORIZON:g} tau at its last "
+                    "temperature release at most that (the collapsed shells hold the rest)"
+                ) from None
+            horizon = min(GROWTH * horizon, total + MAX_HORIZON)
+    half, _, _ = _protocol_solve(req, sizes, n, horizon * tau_ref, v0, 1)
+    t_half = half.time_to_release(req.fraction)
+    quad = 0.0
+    if fine is not None:
+        check, _, _ = _protocol_solve(req, sizes, fine, horizon * tau_ref, v0, 2)
+        quad = abs(check.time_to_release(req.fraction) / t - 1.0)
+    return {"time": t, "release": best, "radii": radii, "runs": runs,
+            "numerical": abs(t_half / t - 1.0), "quadrature": quad,
+            "nodes": len(radii), "check_nodes": None if fine is None else fine,
+            "horizon": horizon, "texts": prot.texts}
+
+
+def protocol_parts(res: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """The answer's parts under a protocol (module doc), in numbers and words."""
+    return {
+        "numerical": {"relative": res["numerical"], "text": (
+            f"numerical: {res['numerical']:.1e} (the coupled solve's steps halved); the "
+            "mechanics' n / 2 check is not run per node (the single bead's drug dose under "
+            "the protocol gives it)")},
+        "interfacial_length_range": {"relative": None, "text": (
+            "interfacial length: not measured under a protocol (each node runs at its own "
+            "ell = xi_dry / a_d)")},
+        "model_form": {"relative": None, "text": (
+            "model form: D0 is held at the protocol's hottest temperature; what that costs "
+            "is not run per node (the single bead's drug dose under the protocol bounds "
+            "it)")},
+    }
 
 
 def check_batch_body(body: Any) -> None:

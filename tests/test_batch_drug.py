@@ -177,9 +177,8 @@ def test_each_band_runs_at_its_own_ell_and_the_three_parts(coarse_mechanics, med
     class follows one of the central band's other runs (n / 2 cells; xi 2 and 8 nm; the
     delayed lattice)."""
     from dosing.batch_drug import CLASSES, POINTS, START, batch_classes
-    from dosing.batch_medium import coupled_release
     from dosing.batch_truth import band_edges
-    from solver.solute import node_volumes
+    from solver.solute import coupled_release, node_volumes
 
     req = DrugDoseRequest("ANB", 302, 308, DRUG, dose_fraction=0.5, dry_radius_um=50.0)
     assert req.settings.direct
@@ -251,7 +250,7 @@ def test_under_a_protocol_each_size_runs_its_own_program() -> None:
     each node's own release on its own run of the protocol (the adaptive solute solver),
     every node a different dimensionless program; later than its mean bead; a shared medium
     conserves the drug and the sink sum overstates it."""
-    from dosing.batch_drug_protocol import protocol_batch_time
+    from dosing.batch_drug import protocol_batch_time
     from dosing.batch_schedule import rule
     from solver.solute import release
 

@@ -11,10 +11,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dosing.batch_medium import coupled_release
 from solver.errors import ParameterError
 from solver.full import simulate
-from solver.solute import Hindrance, Solute, crank_sphere_finite, node_volumes, release
+from solver.solute import (
+    Hindrance,
+    Solute,
+    coupled_release,
+    crank_sphere_finite,
+    node_volumes,
+    release,
+)
 
 
 @pytest.fixture(scope="module")

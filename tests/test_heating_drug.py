@@ -1,5 +1,5 @@
-"""A drug dose under a heating protocol (dosing/drug_protocol.py, issue 24): the drug on the
-full solver's mechanics of the protocol, in Python, the CLI and HTTP."""
+"""A drug dose under a heating protocol (dosing/drug_dose.py under heating steps, issue 24):
+the drug on the full solver's mechanics of the protocol, in Python, the CLI and HTTP."""
 
 from __future__ import annotations
 

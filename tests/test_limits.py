@@ -5,7 +5,7 @@ from pathlib import Path
 
 import solver.limits as limits
 from api import schemas
-from dosing import scenario
+from dosing.runs import scenario
 from solver import gel
 from solver.full import options
 

@@ -362,7 +362,7 @@ def _heating(ans: Any) -> tuple[list[str] | None, float | None]:
         return None, None
     if isinstance(p, list):  # a fluid dose (dosing.protocol_dose.ProtocolDoseAnswer)
         return p, ans.temperature_at_dose
-    return list(p.steps), p.temperature_at_dose  # a drug dose's (dosing.drug_protocol)
+    return list(p.steps), p.temperature_at_dose  # a drug dose's (ProtocolDrugDose)
 
 
 def _print_fluid(ans: Any) -> None:
