@@ -18,9 +18,10 @@ import time
 
 import numpy as np
 
-from dosing.batch_drug import SUB, Bands, batch_classes, coupled, mechanics
+from dosing.batch_drug import HORIZON, SUB, Bands, batch_classes, coupled
 from dosing.drug import drug_settings
 from dosing.drug_dose import DrugDoseRequest
+from dosing.runs.mechanics import jump_mechanics
 from dosing.size_distribution import as_distribution
 from solver.solute import node_volumes
 
@@ -39,7 +40,7 @@ def main() -> None:
         sizes = as_distribution(SIZES).resolve(req.start_radius)
         st = drug_settings(req.settings)
         c0 = time.process_time()
-        res = mechanics(req.gel, req.t_start, req.t_end, req.branch, st)
+        res = jump_mechanics(req.gel, req.t_start, req.t_end, req.branch, st, HORIZON)
         mech = time.process_time() - c0
         s, s3 = np.asarray(res.t, dtype=float), node_volumes(res)
         one = Bands(np.array([]), [s], [s3], [st])  # the reference bead's mechanics

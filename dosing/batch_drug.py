@@ -24,7 +24,6 @@ model form (the delayed-transition lattice, ``truth.delayed_settings``).
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -39,9 +38,9 @@ from .batch_schedule import ladder, rule
 from .batch_truth import band_edges, size_settings
 from .drug import drug_settings
 from .drug_dose import GROWTH, MAX_HORIZON, check_protocol
-from .fit_release_protocol import protocol_mechanics
 from .quantity import micrometres, to_unit
 from .request import _clamp_length
+from .runs.mechanics import jump_mechanics, protocol_mechanics
 from .size_distribution import DrySizes, SizeDistribution, as_distribution
 from .truth import delayed_settings
 from .units import UM3_PER_UL, timescale
@@ -90,15 +89,6 @@ def batch_dry_volume_ul(sizes: DrySizes, count: float) -> float:
     r, v = sizes.nodes(64)
     mean_r3 = 1.0 / float(np.sum(v / r**3))
     return count * 4.0 * math.pi / 3.0 * mean_r3 / UM3_PER_UL
-
-
-@functools.lru_cache(maxsize=8)
-def mechanics(gel: Any, t_start: float, t_end: float, branch: str | None,
-              settings: Any) -> Any:
-    """The reference bead's full-solver run to HORIZON (memoised; a FullResult)."""
-    from .drug import simulate_protocol
-
-    return simulate_protocol(gel, t_start, [(HORIZON, t_end)], branch or "swollen", settings)
 
 
 @dataclass
@@ -249,7 +239,8 @@ def run_bands(req: Any, sizes: DrySizes, edges: np.ndarray, settings: list[Any])
     """Each band's mechanics (memoised full-solver runs to HORIZON)."""
     from solver.solute import node_volumes
 
-    runs = [mechanics(req.gel, req.t_start, req.t_end, req.branch, x) for x in settings]
+    runs = [jump_mechanics(req.gel, req.t_start, req.t_end, req.branch, x, HORIZON)
+            for x in settings]
     return Bands(edges, [np.asarray(r.t, dtype=float) for r in runs],
                  [node_volumes(r) for r in runs], list(settings))
 

@@ -24,9 +24,10 @@ from solver.errors import ParameterError, SolverError, require_finite_positive
 from solver.limits import DRUG_STEP_MAX
 
 from .drug import DrugModel, DrugScenario, StatedTruth, carried_by_fluid, drug_settings, leak_time
-from .fit_release_protocol import parse_protocol, protocol_mechanics, squeezed_under
+from .fit_release_protocol import parse_protocol, squeezed_under
 from .protocol import READ_OFF_FLOOR, Reach, Short, read_off, windows
 from .request import Case, _resolve_protocol, at_start, resolve_case
+from .runs.mechanics import protocol_mechanics
 from .runs.scenario import SolverSettings, Step
 from .runs.solute import DrugRuns, runs_for
 from .truth import Part, Uncertainty, truth_text
@@ -490,7 +491,7 @@ def _conc(req: DrugDoseRequest, released: float, radius: float) -> float | None:
 # The mechanics are the full solver's run of the protocol's continuous program (eqs.
 # PDE_Dimless to Boundary_Dimless with T(t) in the kernels, at the bead's own interfacial
 # length on the moving grid: the truth's settings), the one the release fits under a
-# protocol use (``dosing.fit_release_protocol.protocol_mechanics``, memoised); the drug is
+# protocol use (``dosing.runs.mechanics.protocol_mechanics``, memoised); the drug is
 # the passive solute on those mechanics (``solver.solute.release``: advection with the pore
 # fluid, hindered diffusion D0 H(phi), the drug's partition, a perfect sink or a well-mixed
 # medium).  The run's horizon starts at ``FIRST_HORIZON`` tau and grows x ``GROWTH`` (up

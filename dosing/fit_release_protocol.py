@@ -8,7 +8,7 @@ program ``solver.heating.Program`` of the protocol, eqs. PDE_Dimless to Boundary
 the bead's own interfacial length on the moving grid, as every answer's truth) serves every
 trial D0 of the fit; each trial costs one solute run on its samples (~0.1-0.2 s; the
 mechanics ~2 s at n = 100, rtol 1e-4, and about a minute at the truth's n = 400,
-rtol 1e-5).  Mechanics runs are kept in memory (``MEMO_SIZE``, keyed by the scenario).
+rtol 1e-5).  Mechanics runs are kept in memory (``dosing.runs.mechanics``).
 
 D0 is the drug's diffusivity in water at the protocol's hottest temperature (tau's
 reference, eq. timescale), where the solute's dimensionless D0 / D_gel is taken, as for
@@ -17,47 +17,16 @@ the planner's drug answers (``dosing.drug.DrugModel.solute``).
 
 from __future__ import annotations
 
-import json
-import threading
-import time
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from solver.equilibrium import equilibrium
 from solver.errors import ParameterError
 
-from .drug import DrugModel, drug_settings
+from .drug import DrugModel
 from .heating import Protocol
-from .heating_program import program_spec, solver_program
-from .request import bead_settings
-from .runs.lru import ByteLRU
-from .runs.scenario import SolverSettings, run_budget
-from .units import PhysicalConstants, timescale
-
-SAMPLES = 600  # mechanics outputs over the horizon (the solute's steps adapt within them)
-HORIZON_MARGIN = 1.02  # the run goes this far past the last measured time
-MEMO_SIZE = 8
-MEMO_BYTES = 128e6  # mechanics (with profiles) kept, bytes
-
-
-@dataclass(frozen=True)
-class ReleaseMechanics:
-    """One mechanics run of a protocol for release fits: the run (dimensionless), tau in
-    seconds at ``t_ref`` (the protocol's hottest), the start stretch, its settings and cost."""
-
-    result: Any
-    tau_s: float
-    t_ref: float
-    start_radius: float
-    settings: SolverSettings
-    seconds: float
-    protocol: tuple[str, ...]
-
-
-_MEMO: ByteLRU = ByteLRU(MEMO_BYTES, max_items=MEMO_SIZE)  # bytes, not only entries
-_LOCK = threading.Lock()
+from .runs.mechanics import ReleaseMechanics
+from .units import PhysicalConstants
 
 
 def parse_protocol(t_start: float, protocol: Any) -> Protocol:
@@ -69,43 +38,6 @@ def parse_protocol(t_start: float, protocol: Any) -> Protocol:
         raise ParameterError(f"protocol[{i}].until", prot.texts[i], "a step with a duration "
                              "('for 5 min'): a release fit runs the protocol as it was run")
     return prot
-
-
-def protocol_mechanics(gel: Any, prot: Protocol, dry_radius_um: float, horizon_s: float,
-                       constants: PhysicalConstants,
-                       settings: SolverSettings | None = None) -> ReleaseMechanics:
-    """The mechanics of ``prot`` up to ``horizon_s`` (memoised; module doc)."""
-    t_ref = prot.hottest
-    tau = timescale(dry_radius_um, t_ref, constants).seconds
-    s, _ = bead_settings(settings or SolverSettings(), constants, dry_radius_um)
-    s = drug_settings(s)
-    mobility = "water" if constants.viscosity_pa_s == "water" else "kT"
-    spec = program_spec(prot.program(tau), mobility, t_ref)
-    horizon = HORIZON_MARGIN * horizon_s / tau
-    key = json.dumps({"gel": gel.to_dict(), "t_start": prot.t_start, "program": spec,
-                      "horizon": horizon, "settings": repr(s), "samples": SAMPLES},
-                     sort_keys=True, default=str)
-    with _LOCK:
-        hit = _MEMO.get(key)
-        if hit is not None:
-            _MEMO.move_to_end(key)
-            return hit
-    from .runs.full import full_solver
-
-    simulate = full_solver()
-
-    started = time.process_time()
-    res = simulate(gel, prot.t_start, protocol=solver_program(spec), until=horizon,
-                   every=horizon / SAMPLES, grid=s.grid, n=s.n, integrator=s.integrator,
-                   rtol=s.rtol, branch="swollen", interfacial_length=s.interfacial_length,
-                   max_seconds=run_budget())
-    mech = ReleaseMechanics(res, tau, t_ref, equilibrium(gel, prot.t_start, "swollen").stretch,
-                            s, time.process_time() - started, tuple(prot.texts))
-    with _LOCK:
-        _MEMO[key] = mech
-        while len(_MEMO) > MEMO_SIZE:
-            _MEMO.popitem(last=False)
-    return mech
 
 
 def released_under(mech: ReleaseMechanics, drug: DrugModel, d0: float,

@@ -171,9 +171,10 @@ def fit_release(time_s: Any, released: Any, gel: Any, t_start: float, t_end: flo
                           "Crank's sphere series (eq. 6.20) with D_eff = D0 H(phi0)")
     else:
         from . import fit_release_protocol as fp
+        from .runs.mechanics import protocol_mechanics
 
         prot = fp.parse_protocol(t0, protocol)
-        mech = fp.protocol_mechanics(g, prot, r_um, float(t.max()), c, settings)
+        mech = protocol_mechanics(g, prot, r_um, float(t.max()), c, settings)
         a0, t_ref = mech.start_radius, mech.t_ref
         spent = [0, 0.0]
 

@@ -13,9 +13,10 @@ from api_support import asgi
 
 from api.cli import main
 from api.http import create_app
-from dosing.batch_drug import batch_dry_volume_ul, drug_batch_dose, mechanics
+from dosing.batch_drug import HORIZON, batch_dry_volume_ul, drug_batch_dose
 from dosing.drug import drug_settings
 from dosing.drug_dose import DrugDoseRequest
+from dosing.runs.mechanics import jump_mechanics
 from dosing.size_distribution import as_distribution
 from solver.errors import ParameterError
 from solver.gel import as_gel
@@ -43,7 +44,8 @@ def test_equal_beads_match_one_bead_in_its_share_of_the_medium() -> None:
     sizes = as_distribution({"cv": 0.0, "mean_um": 50.0}).resolve(req.start_radius)
     v0 = 20.0e3 / batch_dry_volume_ul(sizes, 1e6)
     assert ans.medium_over_pore_volume == pytest.approx(v0 / (req.start_radius**3 - 1))
-    res = mechanics(req.gel, req.t_start, req.t_end, req.branch, drug_settings(req.settings))
+    res = jump_mechanics(req.gel, req.t_start, req.t_end, req.branch,
+                         drug_settings(req.settings), HORIZON)
     rel = release(res, Solute(diffusivity=req.solute.diffusivity,
                               hindrance=req.solute.hindrance, release_volume=v0), rtol=1e-10)
     assert ans.time == pytest.approx(rel.time_to_release(0.5), rel=1e-3)  # numerical 2e-4
@@ -161,11 +163,11 @@ def coarse_mechanics(monkeypatch):
 
     calls = []
 
-    def mech(gel, t_start, t_end, branch, settings):
+    def mech(gel, t_start, t_end, branch, settings, horizon):
         calls.append(settings)
         return _coarse(*_stand_in(settings))
 
-    monkeypatch.setattr(bd, "mechanics", mech)
+    monkeypatch.setattr(bd, "jump_mechanics", mech)
     return calls
 
 

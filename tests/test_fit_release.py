@@ -13,6 +13,7 @@ from dosing import SolverSettings
 from dosing import fit_release_protocol as fp
 from dosing.drug import DrugModel
 from dosing.release_fit import f2, fit_release
+from dosing.runs.mechanics import protocol_mechanics
 from dosing.units import PhysicalConstants
 from solver.equilibrium import equilibrium
 from solver.errors import ParameterError
@@ -147,7 +148,7 @@ def ramp_curve(seed: int = 0, noise: float = 0.01) -> tuple[np.ndarray, np.ndarr
     at COARSE settings), 1% noise."""
     t = np.linspace(10.0, 600.0, 25)
     prot = fp.parse_protocol(T, RAMP)
-    mech = fp.protocol_mechanics(ANB, prot, DRY_UM, float(t.max()), DEFAULTS,
+    mech = protocol_mechanics(ANB, prot, DRY_UM, float(t.max()), DEFAULTS,
                                  COARSE)
     clean = fp.released_under(mech, DrugModel(hindrance="none"), D0_RAMP,
                               DEFAULTS, DRY_UM, t)
