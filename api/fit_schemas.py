@@ -8,7 +8,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from api.outputs import FitReport
 from api.schemas import GelSpec, RequestModel
-from dosing.gel_store import check_name
+from dosing.fits.gel_store import check_name
 from solver.limits import T_MAX, T_MIN, TRUTH_N_RANGE
 
 SIZE_FIELDS = ("radius", "diameter", "volume_ratio")
@@ -151,7 +151,7 @@ class KineticsFitRequest(_In):
 
 class ReleaseFitRequest(RequestModel):
     """A cumulative release curve to fit the drug's free diffusivity D0 to: isothermal at
-    ``t_start`` or under a heating ``protocol`` from it (dosing.release_fit)."""
+    ``t_start`` or under a heating ``protocol`` from it (dosing.fits.release)."""
 
     model_config = ConfigDict(
         extra="forbid",
@@ -217,7 +217,7 @@ class ReleaseBand(BaseModel):
 
 
 class ReleaseFitReport(BaseModel):
-    """A release fit's report (dosing.release_fit.fit_release)."""
+    """A release fit's report (dosing.fits.release.fit_release)."""
 
     model_config = ConfigDict(extra="allow")
 

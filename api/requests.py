@@ -29,7 +29,7 @@ def http_protocol(t_start: float, steps: Any) -> Any:
     """The one parser of a protocol sent over HTTP (every route): steps as text or data, a
     measured trace as CSV text or lists; a step naming a file ('Trace from <path>') is a
     422 naming it (``protocol[i].trace``): no route opens a path a request names."""
-    from dosing.heating import Protocol
+    from dosing.heating.grammar import Protocol
 
     for i, step in enumerate(steps if isinstance(steps, list) else []):
         for key, value in (step.items() if isinstance(step, dict) else ()):
@@ -69,7 +69,7 @@ def _payload(body: Any) -> Fluid | Drug:
                 raise ParameterError(name, value, "null without a drug and a "
                                      "size_distribution (the medium a drug batch shares)")
         return Fluid()
-    from dosing.drug import DrugModel
+    from dosing.payload.drug import DrugModel
 
     return Drug(DrugModel(**body.drug.model_kwargs()), wait=body.drug.wait,
                 wait_seconds=body.drug.wait_seconds, **medium)

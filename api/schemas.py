@@ -51,7 +51,7 @@ ELL_RANGE = TRUTH_LADDER_START_RANGE
 DIRECT_ELL_RANGE = TRUTH_DIRECT_ELL_RANGE
 Method = Literal["direct", "ladder"]
 
-# a preset ('ANB', 'HHT') or a stored fitted gel (dosing.gel_store; an unknown name is a 422)
+# a preset ('ANB', 'HHT') or a stored fitted gel (dosing.fits.gel_store; an unknown name is a 422)
 GelName = Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")]
 Branch = Literal["swollen", "shrunken"]
 
@@ -381,7 +381,7 @@ class ConstantsIn(RequestModel):
 
 
 class SizeDistributionIn(RequestModel):
-    """A batch of beads (dosing.size_distribution; docs/batch.md): a lognormal by mean_um
+    """A batch of beads (dosing.population.sizes; docs/batch.md): a lognormal by mean_um
     and cv (or median_um and gsd), a normal by mean_um and cv (or sd_um; truncated to > 1 %
     of the mean), or a measured table of sizes_um (with counts or not); number- or
     volume-weighted; dry or swollen (at T_start) sizes; radii or diameters.  Without a
@@ -426,7 +426,7 @@ class QuadratureOut(_Out):
 
 
 class BatchOut(_Out):
-    """A batch's dose (dosing.batch.BatchAnswer): times in the reference (number-weighted
+    """A batch's dose (dosing.population.front.BatchAnswer): times in the reference (number-weighted
     mean) bead's tau and in seconds."""
 
     distribution: dict[str, Any] = Field(description="the size distribution as resolved")
@@ -519,7 +519,7 @@ class DrugIn(RequestModel):
         return self
 
     def model_kwargs(self) -> dict[str, Any]:
-        """The fields of dosing.drug.DrugModel (the wait excluded)."""
+        """The fields of dosing.payload.drug.DrugModel (the wait excluded)."""
         return self.model_dump(exclude={"wait", "wait_seconds"}, exclude_none=True)
 
 
@@ -903,7 +903,7 @@ class ScheduleRequest(RequestModel):
     size_distribution: SizeDistributionIn | None = Field(
         None, description="a batch of beads (fluid doses only; docs/batch.md): the actuation "
                           "times meet each dose of the batch's stored fluid, every size its "
-                          "own full-solver run (a stored job; dosing.batch_schedule); "
+                          "own full-solver run (a stored job; dosing.population.cycles); "
                           "dry_radius_um is the batch's number-weighted mean")
 
     _ell = field_validator("interfacial_length")(check_interfacial_length)
@@ -987,7 +987,7 @@ class ScheduleOut(AnswerOut):
 
 
 class BatchScheduleResponse(EnvelopeFields):
-    """A batch's schedule (dosing.batch_schedule.BatchScheduleAnswer): actuation times in
+    """A batch's schedule (dosing.population.cycles.BatchScheduleAnswer): actuation times in
     the reference (number-weighted mean) bead's tau and seconds whose summed release meets
     each dose of the batch's stored fluid; the size nodes run and the quadrature."""
 
@@ -1033,7 +1033,7 @@ class ScheduleResponse(ScheduleOut):
 
 # the drug answers: the fluid answers' fields (DoseOut, ScheduleOut) and what a drug adds
 class DrugOut(_Out):
-    """What every drug answer adds (dosing.drug_dose.DrugCase): the load, the wait before
+    """What every drug answer adds (dosing.payload.release.DrugCase): the load, the wait before
     the first heating, and how fast the bead leaks at T_start."""
 
     drug: Literal[True] = Field(True, description="always true: a drug answer")

@@ -1,4 +1,4 @@
-"""Pydantic models of ``POST /v1/sensitivity`` (dosing.sensitivity): strict and finite."""
+"""Pydantic models of ``POST /v1/sensitivity`` (dosing.studies.sensitivity): strict and finite."""
 
 from __future__ import annotations
 

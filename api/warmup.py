@@ -213,7 +213,7 @@ def _start_pool(planner: Any) -> Any:
     jobs = getattr(planner, "jobs", None)
     if jobs is None:
         return None
-    return jobs.executor.submit(_import, "dosing.drug").result(timeout=300)
+    return jobs.executor.submit(_import, "dosing.payload.drug").result(timeout=300)
 
 
 def _import(name: str) -> None:
@@ -225,8 +225,8 @@ def _drug_dose_lookup(planner: Any) -> Any:
     """A drug dose with diffusion looked up in the cache (nothing is computed): the first
     real one then finds its modules imported and its kernels loaded (a burst of drug doses
     does not hold the GIL for seconds in the server process)."""
-    from dosing.drug import DrugModel
-    from dosing.drug_dose import DrugDoseRequest, drug_dose_now
+    from dosing.payload.drug import DrugModel
+    from dosing.payload.release import DrugDoseRequest, drug_dose_now
 
     return drug_dose_now(planner, DrugDoseRequest(
         "ANB", 302.0, 308.0, DrugModel(diffusivity_cm2_s=1e-7, load_ug=1.0),

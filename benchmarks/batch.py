@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 from dosing import DoseRequest
-from dosing.batch import batch_answer
+from dosing.population.front import batch_answer
 
 JUMP = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0}
 CASES = [("lognormal", 0.1), ("lognormal", 0.2), ("lognormal", 0.3), ("normal", 0.2),

@@ -1,4 +1,5 @@
-"""A drug batch's bands and three-part uncertainty on the truth (issue 26, dosing.batch_drug).
+"""A drug batch's bands and three-part uncertainty on the truth (issue 26,
+dosing.population.medium).
 
 Run:  PYTHONPATH=. .venv/bin/python benchmarks/batch_drug_parts.py [--cv 0.3]
 
@@ -14,8 +15,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from dosing.batch_drug import drug_batch_dose
-from dosing.drug_dose import DrugDoseRequest
+from dosing.payload.release import DrugDoseRequest
+from dosing.population.medium import drug_batch_dose
 
 
 def main() -> None:

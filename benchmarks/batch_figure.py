@@ -16,7 +16,7 @@ import argparse
 import numpy as np
 
 from dosing import DoseRequest
-from dosing.batch import batch_answer, batch_release, design_map
+from dosing.population.front import batch_answer, batch_release, design_map
 
 
 def main() -> None:

@@ -4,7 +4,7 @@ Run:  PYTHONPATH=. .venv/bin/python benchmarks/batch_medium.py [--d0 1e-6 1e-7]
 
 Two bead sizes (dry radii 40 and 60 um, equal numbers), ANB 302 -> 308 K, the drug
 uniformly loaded (hindrance none, K = 1), the reference bead's full-solver mechanics at its
-own interfacial length (dosing.batch_drug).  For a medium of 1x and 10x the batch's
+own interfacial length (dosing.population.medium).  For a medium of 1x and 10x the batch's
 partition-weighted pore volume, prints by how much the sum of perfect-sink beads overstates
 the drug released at the sink sum's own 30 / 50 / 80 % dose times and at the end of the
 run, the coupled batch's dose times, the mass balance, the numerical error (steps halved)
@@ -18,11 +18,11 @@ import time
 
 import numpy as np
 
-from dosing.batch_drug import HORIZON, SUB, Bands, batch_classes, coupled
-from dosing.drug import drug_settings
-from dosing.drug_dose import DrugDoseRequest
+from dosing.payload.drug import drug_settings
+from dosing.payload.release import DrugDoseRequest
+from dosing.population.medium import HORIZON, SUB, Bands, batch_classes, coupled
+from dosing.population.sizes import as_distribution
 from dosing.runs.mechanics import jump_mechanics
-from dosing.size_distribution import as_distribution
 from solver.solute import node_volumes
 
 SIZES = {"kind": "table", "sizes_um": [40.0, 60.0]}

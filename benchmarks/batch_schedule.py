@@ -1,4 +1,4 @@
-"""A schedule for a batch of beads on the truth (issue 26, dosing.batch_schedule).
+"""A schedule for a batch of beads on the truth (issue 26, dosing.population.cycles).
 
 Run:  PYTHONPATH=. .venv/bin/python benchmarks/batch_schedule.py [--cv 0 0.2] [--cache FILE]
 
@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 from dosing import ScheduleRequest
-from dosing.batch_schedule import plan_batch_schedule
+from dosing.population.cycles import plan_batch_schedule
 
 
 def main() -> None:

@@ -19,8 +19,8 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from dosing import DoseRequest, Planner
-from dosing.batch import batch_answer
-from dosing.batch_truth import validated_batch
+from dosing.population.bands import validated_batch
+from dosing.population.front import batch_answer
 
 
 def main() -> None:

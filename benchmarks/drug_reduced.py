@@ -2,9 +2,10 @@
 
 Run:  nice -n 10 .venv/bin/python -m benchmarks.drug_reduced
           (the stored error table; --table recomputes it, --region: where it answers,
-           --emit: dosing.drug_reduced.MEASURED's JSON, --convergence: its own numerical error)
+           --emit: dosing.payload.reduced.MEASURED's JSON, --convergence: its own numerical error)
 
-Full-solver reference: the planner's drug run of a 50 um bead (``dosing.drug``: the mechanics
+Full-solver reference: the planner's drug run of a 50 um bead (``dosing.payload.drug``: the
+mechanics
 on the truth's settings, the moving grid at the bead's own ell, N = 400, rtol 1e-5, its
 heating cut at ``CUTS`` so that every decade of time from 1e-5 tau has 200 outputs, then
 the solute on its 400 resampled cells, ``solver.solute.release_on_nodes``), read by the
@@ -28,7 +29,7 @@ JUMPS = {"ANB": ("ANB", 302.0, 308.0), "HHT": ("HHT", 304.0, 308.0)}
 DRY_UM = 50.0
 HORIZON = 2.0  # tau: the full solver's drug run covers every dose of the table
 # the reference's protocol steps (tau): one heating, cut so that simulate_protocol's outputs
-# (at least dosing.drug.MIN_SAMPLES a step) resolve every decade of time from 1e-5 tau: a
+# (at least dosing.payload.drug.MIN_SAMPLES a step) resolve every decade of time from 1e-5 tau: a
 # fast drug's small doses are out long before the planner's first output at 5e-4 tau
 CUTS = (1e-5, 1e-4, 1e-3, 1e-2, 0.5, HORIZON)
 
@@ -43,7 +44,7 @@ def fluid_request(name: str):
 
 def mechanics(name: str, cache: Path = CACHE):
     """The full solver's drug mechanics for ``name`` (cached on disk)."""
-    from dosing.drug import drug_settings, simulate_protocol
+    from dosing.payload.drug import drug_settings, simulate_protocol
     from solver.full import FullResult
 
     cache.mkdir(parents=True, exist_ok=True)
@@ -88,7 +89,7 @@ REF = {"cells": 384, "per_cell": 3, "rtol": 1e-6, "hold": 200}  # the reduced mo
 
 def solute(name: str, law: str, d0: float):
     """The dimensionless solute of the table's drug on the 50 um bead of ``name``."""
-    from dosing.drug import DrugModel
+    from dosing.payload.drug import DrugModel
 
     req = fluid_request(name)
     drug = DrugModel(diffusivity_cm2_s=d0, **LAWS[law])
@@ -243,7 +244,7 @@ def markdown(rows: list[dict]) -> str:
 
 
 def measured(rows: list[dict]) -> dict:
-    """``dosing.drug_reduced.MEASURED``: law -> [((r_s / xi_dry, r_s / r_f), D0 / D_gel of
+    """``dosing.payload.reduced.MEASURED``: law -> [((r_s / xi_dry, r_s / r_f), D0 / D_gel of
     its rows, the largest |error| of both gels per dose; None where a dose is not reached
     by both)] (the Stokes-Einstein rows, whose ratios change with D0, are left out)."""
     out: dict[str, list] = {}
@@ -271,9 +272,9 @@ def measured(rows: list[dict]) -> dict:
 
 
 def region(rows: list[dict], limit: float = 0.05) -> str:
-    """Where the reduced model answers (dosing.drug_reduced.stated_error), per law: the
+    """Where the reduced model answers (dosing.payload.reduced.stated_error), per law: the
     doses answered at each measured D0 (a cell needs all its corners within ``limit``)."""
-    import dosing.drug_reduced as dr
+    import dosing.payload.reduced as dr
 
     table = measured(rows)
     lines = ["| law | D0 (cm^2/s) | " + " | ".join(f"{int(100 * f)} %" for f in DOSES)
@@ -300,7 +301,7 @@ def main() -> None:
     p.add_argument("--convergence", action="store_true",
                    help="the reduced model's own numerical error and cost")
     p.add_argument("--emit", action="store_true",
-                   help="write dosing.drug_reduced.MEASURED (its JSON) from the stored table")
+                   help="write dosing.payload.reduced.MEASURED (its JSON) from the stored table")
     p.add_argument("--region", action="store_true",
                    help="print where the reduced model answers and its stated error")
     args = p.parse_args()

@@ -30,8 +30,14 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from dosing import Planner
-from dosing.fit import data_dict, fit_shrinking, fit_swelling, front_radius_model, kinetics_data
-from dosing.fit_uncertainty import dose_time_interval, sample_dose_times
+from dosing.fits.gel import (
+    data_dict,
+    fit_shrinking,
+    fit_swelling,
+    front_radius_model,
+    kinetics_data,
+)
+from dosing.fits.uncertainty import dose_time_interval, sample_dose_times
 from dosing.runs.scenario import Scenario, SolverSettings
 from dosing.units import timescale
 from solver.equilibrium import folds
@@ -124,7 +130,7 @@ def dose_interval() -> None:
 def coverage(seeds: int) -> None:
     """The dose-time intervals' coverage over ``seeds`` noise seeds (module doc): the test's
     synthetic HHT data (35 points, scale 41.27), one local fit warm-started at the truth."""
-    from dosing.fit_uncertainty import dose_time
+    from dosing.fits.uncertainty import dose_time
 
     true_t = dose_time(HHT, 304.0, 308.0, "swollen", 0.8, True)
     truth = {"omega": HHT.omega, "a0": HHT.a0, "b0": HHT.b0, "a1": HHT.a1, "b1": HHT.b1,

@@ -11,8 +11,8 @@ truth's time (the full solver at the bead's own interfacial length on the moving
 mobility 'kT', cached on disk by benchmarks/heating_truth.py) and the error of the
 slow-heating front model (solver/front/slow.py, sharp-interface front condition), with the
 model's CPU time per trajectory.  Where |error| <= the stated bound
-(dosing.heating_reduced.STATED_ERROR) and inside the planner's region
-(dosing.heating_reduced.choose) the planner answers from the model.  ``--summary``: one
+(dosing.heating.reduced.STATED_ERROR) and inside the planner's region
+(dosing.heating.reduced.choose) the planner answers from the model.  ``--summary``: one
 table, each cell the largest |error| over the three gels, in brackets outside the region.
 ``--sizes``: other dry radii (the truth at each bead's own interfacial length; the same
 heatings in K/min and s, so other rates in K per tau): the jump, 5 and 20 K/min ramps,
@@ -130,9 +130,9 @@ def sizes(dries: list[float], gels: list[str], constants: str = "consistent",
 
 
 def in_region(kind: str, fraction: float, value: float = 0.0) -> bool:
-    """The planner's region (dosing/heating_reduced.py) for a table's heating: ``kind``
+    """The planner's region (dosing/heating/reduced.py) for a table's heating: ``kind``
     its label or kind, ``value`` its ramp in K per tau or bath time constant in tau."""
-    from dosing.heating_reduced import BATH_FRACTION_MIN, BATH_MAX, FRACTION_RANGE, RAMP_MIN
+    from dosing.heating.reduced import BATH_FRACTION_MIN, BATH_MAX, FRACTION_RANGE, RAMP_MIN
 
     bath = kind.startswith("bath")
     if bath and value > BATH_MAX or kind.startswith("ramp") and value < RAMP_MIN:
@@ -148,7 +148,7 @@ def summary(gels: list[str], constants: str = "consistent", rates: tuple[float, 
     largest over the gels.  Otherwise one row per gel and heating, ordered by the heating
     in the solver's units (ramps slowest first, baths shortest first), since the same K/min
     is a different K per tau for each gel."""
-    from dosing.heating_reduced import STATED_ERROR
+    from dosing.heating.reduced import STATED_ERROR
 
     per = {g: rows(g, constants, rates, baths, dimensionless) for g in gels}
     worst_in = 0.0

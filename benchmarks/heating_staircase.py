@@ -15,8 +15,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from dosing.heating import Protocol
-from dosing.heating_program import staircase
+from dosing.heating.grammar import Protocol
+from dosing.heating.program import staircase
 from dosing.units import PhysicalConstants, radius_after_dose, timescale
 from solver.full import simulate
 from solver.gel import preset

@@ -6,8 +6,8 @@ Run:  PYTHONPATH=. .venv/bin/python -m benchmarks.regression_table \\
 
 Every answer goes through the public Python API (``dosing.DoseRequest``,
 ``dosing.ScheduleRequest``, ``dosing.plan_dose``, ``dosing.plan_schedule``,
-``dosing.Planner``, ``dosing.batch.batch_answer``, ``dosing.batch_protocol.
-batch_protocol_answer``, ``dosing.drug_dose.DrugDoseRequest`` with ``plan_drug_dose``) on a
+``dosing.Planner``, ``dosing.population.front.batch_answer``, ``dosing.population.curves.
+batch_protocol_answer``, ``dosing.payload.release.DrugDoseRequest`` with ``plan_drug_dose``) on a
 temporary cache (no stored run is reused), over the combinations that answer without a
 long full-solver run:
 
@@ -176,7 +176,7 @@ class Table:
 
     def fluid_batches(self) -> None:
         from dosing import DoseRequest, plan_dose
-        from dosing.batch import batch_answer
+        from dosing.population.front import batch_answer
 
         kind = "fluid/batch/jump/dose"
         for gel, t0, ends in JUMPS:
@@ -190,12 +190,12 @@ class Table:
                     return {**_pick(mean, FLUID_FIELDS), **_pick(batch, BATCH_FIELDS, "batch.")}
 
                 self.add(kind, ident, args,
-                         {"call": "dosing.plan_dose + dosing.batch.batch_answer",
+                         {"call": "dosing.plan_dose + dosing.population.front.batch_answer",
                           "request": "DoseRequest", "args": args}, compute)
 
     def protocols(self) -> None:
         from dosing import DoseRequest, plan_dose, timescale
-        from dosing.heating_reduced import choose  # the guard only: no full-solver run
+        from dosing.heating.reduced import choose  # the guard only: no full-solver run
 
         kind = "fluid/one/protocol/dose"
         for gel, t0, _ in JUMPS:
@@ -219,7 +219,7 @@ class Table:
 
     def batch_protocols(self) -> None:
         from dosing import DoseRequest, plan_dose
-        from dosing.batch_protocol import batch_protocol_answer
+        from dosing.population.curves import batch_protocol_answer
 
         kind = "fluid/batch/protocol/dose"
         for gel, t0, step, f in BATCH_PROTOCOLS:
@@ -233,7 +233,7 @@ class Table:
                 return {**_pick(mean, PROTOCOL_FIELDS), **_pick(batch, BATCH_FIELDS, "batch.")}
 
             self.add(kind, ident, args,
-                     {"call": "dosing.plan_dose + dosing.batch_protocol.batch_protocol_answer",
+                     {"call": "dosing.plan_dose + dosing.population.curves.batch_protocol_answer",
                       "request": "DoseRequest", "args": args}, compute)
         for gel, t0, _ in JUMPS:  # tried: a 50 um batch is refused (its small beads)
             args = dose_args(gel, t0, None, 0.8, BEAD_UM, protocol=[RAMPS[0]],
@@ -246,7 +246,7 @@ class Table:
 
     def drugs(self) -> None:
         from dosing import Planner
-        from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
+        from dosing.payload.release import DrugDoseRequest, plan_drug_dose
 
         class NoFullRun:
             """Drug runs refused: an answer that needs the full solver is not tabled."""
@@ -277,7 +277,7 @@ class Table:
 
                     if inside:
                         self.add(kind, ident, args,
-                                 {"call": "dosing.drug_dose.plan_drug_dose(Planner(...), .)",
+                                 {"call": "dosing.payload.release.plan_drug_dose(Planner(...), .)",
                                   "request": "DrugDoseRequest", "args": args}, compute)
                     else:
                         try:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from dosing.sensitivity import sensitivity
+from dosing.studies.sensitivity import sensitivity
 
 CHEAP = ["dry_radius_um=10:100:log", "permeability_m2=1e-20:1e-19:log",
          "viscosity_pa_s=5e-4:2e-3", "polymer_volume_m3=1e-25:1e-24:log",

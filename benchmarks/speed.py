@@ -179,7 +179,7 @@ from solver.solute import Solute, release
 release(simulate("ANB", 302, 308, until=1e-3, grid="moving", n=40, interfacial_length=1e-3,
                  saveat=[0.0, 5e-4, 1e-3]), Solute(1.0))  # the solute's kernels loaded
 from dosing import Planner
-from dosing.drug import DrugModel
+from dosing.payload.drug import DrugModel
 """
 
 DRUG_START = """
@@ -191,7 +191,7 @@ p = Planner(cache_path={cache!r}, executor=ThreadPoolExecutor(2))
 """
 
 DRUG = DRUG_KERNELS + """
-from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
+from dosing.payload.release import DrugDoseRequest, plan_drug_dose
 """ + DRUG_START + """
 ans = plan_drug_dose(p, DrugDoseRequest("ANB", 302, 308,
                                         DrugModel(diffusivity_cm2_s=1e-7, hindrance="none"),
@@ -202,7 +202,7 @@ p.close()
 """
 
 DRUG_SCHEDULE = DRUG_KERNELS + """
-from dosing.drug_schedule import DrugScheduleRequest, plan_drug_schedule
+from dosing.payload.cycles import DrugScheduleRequest, plan_drug_schedule
 """ + DRUG_START + """
 ans = plan_drug_schedule(p, DrugScheduleRequest(
     "ANB", 302, 308, DrugModel(diffusivity_cm2_s=1e-8, hindrance="none", load_ug=1.0),

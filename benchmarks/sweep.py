@@ -18,7 +18,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from dosing import DoseRequest, Planner
-from dosing.sweep import SweepGrid, run_sweep
+from dosing.studies.sweep import SweepGrid, run_sweep
 
 GRID = SweepGrid(t_ends=np.linspace(307.5, 311.5, 10), dry_radii_um=np.geomspace(10, 200, 10),
                  doses=[0.1, 0.3, 0.5, 0.7, 0.9])

@@ -1,6 +1,6 @@
 """thermogel dose planner: actuation times, schedules, units, validation cache.
 
-    from dosing import DoseRequest, plan_dose
+    from . import DoseRequest, plan_dose
     ans = plan_dose(DoseRequest("ANB", 302, 308, dose_fraction=0.8, dry_radius_um=50))
 
 Times are dimensionless (by tau of eq. timescale) and in seconds when a bead size is
@@ -16,19 +16,16 @@ from solver.lazy import lazy_names
 from solver.presenters import register as _register_presenters
 
 # the solver's records (runs, fits) and the planner's answers get their tables, netCDF and
-# notebook views from this layer (dosing.export, dosing.tables), imported only when asked
+# notebook views from this layer (dosing.present: export, tables), imported only when asked
+_EXPORT, _TABLES = "dosing.present.export:", "dosing.present.tables:"
 _register_presenters(
-    run_dataset="dosing.export:run_dataset", fit_dataset="dosing.export:fit_dataset",
-    to_netcdf="dosing.export:to_netcdf", run_frame="dosing.tables:run_frame",
-    run_html="dosing.tables:run_html", fit_frame="dosing.tables:fit_frame",
-    fit_html="dosing.tables:fit_html",
-    # the planner's own answers, schedules and sweeps (their tables live above them: no
-    # import of dosing.tables / dosing.export from the modules they present)
-    answer_frame="dosing.tables:answer_frame", answer_html="dosing.tables:answer_html",
-    schedule_frame="dosing.tables:schedule_frame",
-    schedule_html="dosing.tables:schedule_html",
-    schedule_dataset="dosing.export:schedule_dataset",
-    sweep_frame="dosing.tables:sweep_frame", sweep_dataset="dosing.export:sweep_dataset")
+    **{name: _EXPORT + name for name in ("run_dataset", "fit_dataset", "to_netcdf",
+                                         "schedule_dataset", "sweep_dataset")},
+    # the planner's own answers, schedules and sweeps among them (their tables live above
+    # them: no import of dosing.present from the modules they present)
+    **{name: _TABLES + name for name in ("run_frame", "run_html", "fit_frame", "fit_html",
+                                         "answer_frame", "answer_html", "schedule_frame",
+                                         "schedule_html", "sweep_frame")})
 
 if TYPE_CHECKING:
     from .answers import (
@@ -40,11 +37,11 @@ if TYPE_CHECKING:
         ValidationStatus,
     )
     from .planner import Planner, UnknownValidationError
+    from .question.schedule import ScheduleAnswer
     from .request import DoseRequest, ScheduleRequest
     from .runs.cache import ValidationCache
     from .runs.jobs import JobRunner, QueueFullError
     from .runs.scenario import LADDER, PAPER, TRUTH, Scenario, SolverSettings, Trajectory
-    from .schedule import ScheduleAnswer
     from .truth import Uncertainty
     from .units import PhysicalConstants, Timescale, timescale, water_viscosity
 
@@ -58,7 +55,7 @@ _LAZY = {
     "DoseRequest": ".request", "ScheduleRequest": ".request",
     **dict.fromkeys(("LADDER", "PAPER", "TRUTH", "Scenario", "SolverSettings", "Trajectory"),
                     ".runs.scenario"),
-    "ScheduleAnswer": ".schedule", "Uncertainty": ".truth",
+    "ScheduleAnswer": ".question.schedule", "Uncertainty": ".truth",
     **dict.fromkeys(("PhysicalConstants", "Timescale", "timescale", "water_viscosity"),
                     ".units"),
 }

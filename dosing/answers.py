@@ -148,7 +148,7 @@ class DoseAnswer:
     scenario_key: str
     behaviour: str
     note: str
-    parameter_interval: dict[str, Any] | None = None  # a fitted gel's (dosing.fit_uncertainty)
+    parameter_interval: dict[str, Any] | None = None  # a fitted gel's (dosing.fits.uncertainty)
     method: str = "direct"  # the truth: 'direct', 'ladder' or 'paper'
     bead_dry_radius_um: float | None = None  # the bead size the truth's ell assumes
     uncertainty: Uncertainty | None = None  # the direct truth's three parts (validated)

@@ -38,24 +38,16 @@ from .answers import (
     ValidationStatus,
     plain,
 )
-from .model_choice import (
-    build_answer,
-    front_time,
-    model_answer,
-)
+from .model_choice import build_answer, front_time, model_answer
 from .request import DoseRequest, ScheduleRequest
 from .runs.jobs import DEFAULT_LEASE_SECONDS
-from .runs.scenario import (
-    Scenario,
-    Solver,
-    SolverSettings,
-)
+from .runs.scenario import Scenario, Solver, SolverSettings
 from .runs.store import DEFAULT_HORIZON, RunStore
 from .truth import delayed_settings, range_settings
 from .validation import error_estimate, failure, validation_report
 
 if TYPE_CHECKING:
-    from .schedule import ScheduleAnswer
+    from .question.schedule import ScheduleAnswer
 
 VERDICTS = 1024  # front-model verdicts remembered per planner (keyed by cache generation)
 
@@ -295,7 +287,7 @@ class Planner:
             rep = _copy_report(rep)
         ans = build_answer(req, choice, verdict.time, verdict.estimate, verdict.explanation,
                            rep, verdict.key)
-        from .gel_store import record_for
+        from .fits.gel_store import record_for
 
         if record_for(req.gel) is None:  # a preset or custom gel: no fit, no interval
             from .units import timescale_uncertainty
@@ -303,7 +295,7 @@ class Planner:
             ans.timescale_uncertainty = timescale_uncertainty(  # its seconds' range, stated
                 req.gel.omega, req.t_end, req.constants, ans.seconds, None)
             return ans
-        from .fit_uncertainty import attach_parameter_interval  # scipy.stats: fitted gels only
+        from .fits.uncertainty import attach_parameter_interval  # scipy.stats: fitted gels only,
 
         return attach_parameter_interval(req, ans)
 
@@ -382,15 +374,15 @@ class Planner:
     # ------------------------------------------------------------------ schedules
     def schedule(self, req: ScheduleRequest) -> ScheduleAnswer:
         """Plan a multi-dose schedule (hold assumption, protocol check, shooting:
-        :func:`dosing.schedule.plan_schedule_with`)."""
-        from .schedule import plan_schedule_with
+        :func:`dosing.question.schedule.plan_schedule_with`)."""
+        from .question.schedule import plan_schedule_with
 
         return plan_schedule_with(self, req)
 
     def schedule_now(self, req: ScheduleRequest) -> ScheduleAnswer | None:
         """The hold schedule when no dose needs a new full-solver run and neither the
         protocol check nor the correction is asked for, else None (queues nothing)."""
-        from .schedule import hold_now
+        from .question.schedule import hold_now
 
         return hold_now(self, req)
 
@@ -451,19 +443,19 @@ class _JumpPath:
 
 
 class _ProtocolPath:
-    """A dose under heating steps (``dosing.protocol_dose``: the reduced slow-heating
+    """A dose under heating steps (``dosing.heating.response``: the reduced slow-heating
     model in its region, else the full solver)."""
 
     @staticmethod
     def answer(planner: Planner, req: DoseRequest, validate: bool) -> Answered | Pending:
-        from . import protocol_dose
+        from .heating import response as protocol_dose
 
         out = protocol_dose.answer(planner, req, validate)
         return out if isinstance(out, Pending) else Answered(out)  # type: ignore[arg-type]
 
     @staticmethod
     def dose(planner: Planner, req: DoseRequest, validate: bool) -> Any:
-        from . import protocol_dose
+        from .heating import response as protocol_dose
 
         return protocol_dose.dose(planner, req, validate)
 

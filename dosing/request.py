@@ -18,7 +18,7 @@ from solver.errors import ParameterError, require_finite_positive
 from solver.gel import Gel, Permeability, check_temperature
 from solver.limits import DRY_RADIUS_UM_RANGE, REST_RANGE
 
-from .gel_store import calibrated_constants, lookup
+from .fits.gel_store import calibrated_constants, lookup
 from .runs.scenario import DIRECT_ELL_RANGE, TRUTH, SolverSettings
 from .units import PhysicalConstants, stored_volume, timescale, ul_to_volume, volume_to_ul
 
@@ -58,7 +58,7 @@ def gel_with(base: str, overrides: dict[str, Any] | None = None,
 
 
 def resolve_gel(value: Gel | str | dict[str, Any]) -> Gel:
-    """A Gel from a Gel, a preset name, a stored fitted gel's name (``dosing.gel_store``),
+    """A Gel from a Gel, a preset name, a stored fitted gel's name (``dosing.fits.gel_store``),
     a full parameter dict (``Gel.to_dict``) or a partial one on a named base
     (``{"base": "ANB", "omega": 300}``, see :func:`gel_with`); field ``gel``."""
     if isinstance(value, Gel):
@@ -172,7 +172,7 @@ def resolve_case(req: Case) -> tuple[Jump, float | None]:
     object.__setattr__(req, "interfacial_range", ell_range)
     heating = getattr(req, "heating", None)
     if heating is not None:  # what the grammar accepts, the solver must (issue 40, R1)
-        from .heating_program import check_program
+        from .heating.program import check_program
 
         check_program(heating, None if dry is None else
                       timescale(dry, jump.t_end, req.constants).seconds)
@@ -292,15 +292,16 @@ class DoseRequest(Case):
     dose_volume_ul: float | None = None
     drug_mass_ug: float | None = None
     concentration_ug_per_ul: float | None = None
-    size_distribution: Any = field(default=None, kw_only=True)  # a batch (dosing.batch)
+    size_distribution: Any = field(default=None, kw_only=True)  # a batch (dosing.population.front)
     fraction: float = field(init=False, repr=False, compare=False)
-    # a heating protocol in place of t_end (dosing.heating; the dose: dosing.protocol_dose)
+    # a heating protocol in place of t_end (dosing.heating.grammar; the dose:
+    # dosing.heating.response)
     protocol: Any = field(default=None, kw_only=True)
     heating: Any = field(init=False, repr=False, compare=False, default=None)
 
     def __post_init__(self) -> None:
         _resolve_protocol(self)
-        from .size_distribution import request_sizes
+        from .population.sizes import request_sizes
 
         request_sizes(self)  # a batch: its number-weighted mean is the bead size
         jump, dry = resolve_case(self)
@@ -350,7 +351,7 @@ class DoseRequest(Case):
     @property
     def heating_kind(self) -> str:
         """The key of the request's heating in the planner's dose paths: ``"jump"`` (T_end
-        held, the paper's) or ``"protocol"`` (steps of ``dosing.heating``)."""
+        held, the paper's) or ``"protocol"`` (steps of ``dosing.heating.grammar``)."""
         return "jump" if self.heating is None else "protocol"
 
     def to_dict(self) -> dict[str, Any]:
@@ -365,13 +366,13 @@ class DoseRequest(Case):
 
 
 def _resolve_protocol(req: Any) -> None:
-    """A request's heating protocol (``dosing.heating.Protocol``) in place of t_end: its
+    """A request's heating protocol (``dosing.heating.grammar.Protocol``) in place of t_end: its
     hottest temperature is the jump's T_end (the dose's limit, tau's reference)."""
     if req.protocol is None:
         if req.t_end is None:
             raise ParameterError("t_end", None, "a temperature in K (or give a protocol)")
         return
-    from .heating import Protocol
+    from .heating.grammar import Protocol
 
     if req.t_end is not None:
         raise ParameterError("t_end", req.t_end, "None when a protocol is given (the "
@@ -436,7 +437,7 @@ class ScheduleCase(Case):
     check_protocol: bool = field(default=True, kw_only=True)
     correct: bool = field(default=True, kw_only=True)
     tolerance: float = field(default=0.01, kw_only=True)
-    # every heating follows this protocol in place of a jump to t_end (dosing.heating_cycles)
+    # every heating follows this protocol in place of a jump to t_end (dosing.heating.cycles)
     protocol: Any = field(default=None, kw_only=True)
     heating: Any = field(init=False, repr=False, compare=False, default=None)
     rest_max: ClassVar[float] = REST_RANGE[1]  # tau: the longest rest (a drug case: shorter)

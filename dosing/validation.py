@@ -28,11 +28,11 @@ from .units import expelled_volume
 
 # Prior relative error of an unvalidated front-model time, by dose fraction: the largest
 # validated estimate over ANB 302->308 K and HHT 304->308 K, rounded up (printed by
-# `python -m dosing.calibrate [--method ladder] [--interfacial-length 0]`).  Paper's model:
+# `python -m dosing.fits.calibrate [--method ladder] [--interfacial-length 0]`).  Paper's model:
 # gap to either grid at N = 400 (small doses worst: the full model's shell takes time to
 # form).  Sharp-interface model against the direct truth (issue 12; no bead size: the
 # moving grid at ell = 1e-4, standing for ell -> 0): gap plus the numerical bound, measured
-# (`python -m dosing.calibrate`, ~3.5 min of CPU; front, truth, truth's numerical bound,
+# (`python -m dosing.fits.calibrate`, ~3.5 min of CPU; front, truth, truth's numerical bound,
 # estimate):
 #   f    ANB 302->308 K                     HHT 304->308 K
 #   0.1  0.00060 0.00062 0.06%  2.2%        0.00051 0.00076 0.07% 49.0%

@@ -191,7 +191,7 @@ async def test_an_unexpected_exception_is_a_500_with_a_stable_code(planner, raw_
 @pytest.mark.parametrize("name", ["abc\n", "", "Custom", "CUSTOM", "anb", "a/b", "x" * 65])
 def test_unusable_gel_names_are_refused(name: str) -> None:
     """N11-N13: a control character, an empty name, a reserved name in any case."""
-    from dosing.gel_store import check_name
+    from dosing.fits.gel_store import check_name
     from solver.errors import ParameterError
 
     with pytest.raises(ParameterError):
@@ -202,7 +202,7 @@ def test_unusable_gel_names_are_refused(name: str) -> None:
 @pytest.mark.anyio
 async def test_an_unknown_gel_lists_a_few_stored_names(raw_client, tmp_path, monkeypatch):
     """N14: with 12 stored gels, an unknown gel's 422 names at most five of them."""
-    from dosing.gel_store import GelStore
+    from dosing.fits.gel_store import GelStore
     from solver.gel import PRESETS
 
     monkeypatch.setenv("THERMOGEL_GELS", str(tmp_path / "gels"))
@@ -462,7 +462,8 @@ def test_serve_beyond_loopback_needs_a_token(monkeypatch) -> None:
 def test_a_fit_csv_over_the_limit_is_refused_before_it_is_read(tmp_path, monkeypatch) -> None:
     """N15: a CSV over the readers' limit is refused from its size (read_text is never
     called)."""
-    from dosing import fit, fit_csv
+    from dosing.fits import csv_tables as fit_csv
+    from dosing.fits import gel as fit
     from solver.errors import ParameterError
 
     big = tmp_path / "big.csv"

@@ -410,7 +410,7 @@ def test_a_release_fit_the_data_do_not_pin_has_a_finite_interval() -> None:
     range instead, with a warning."""
     import numpy as np
 
-    from dosing.release_fit import D_BOUNDS, _fit_log_d0
+    from dosing.fits.release import D_BOUNDS, _fit_log_d0
 
     t = np.array([30.0, 60.0, 120.0])
     y = np.array([0.2, 0.3, 0.4])

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from api.http import create_app
 from api.requests import http_protocol
-from dosing.fit_release_protocol import parse_protocol
+from dosing.fits.release_steps import parse_protocol
 from solver.errors import NotApplicableError, ParameterError
 
 NUMBERS = st.one_of(

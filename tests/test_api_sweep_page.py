@@ -1,6 +1,6 @@
 """Design-map routes and the page's routes through httpx's ASGI transport (issue 17).
 
-The sweep job returns the same table as ``dosing.sweep.run_sweep`` (JSON with units, CSV),
+The sweep job returns the same table as ``dosing.studies.sweep.run_sweep`` (JSON with units, CSV),
 reports failing points as rows, queues validations on the planner (fake full solver);
 ``/v1/front-curve`` is the planner's own front trajectory; the page and its assets are
 served from the package.
@@ -20,7 +20,7 @@ from api_support import asgi, fake_full_solver, fake_planner, fake_server
 from api.http import create_app
 from dosing.model_choice import front_run
 from dosing.request import resolve_jump
-from dosing.sweep import SweepGrid, run_sweep
+from dosing.studies.sweep import SweepGrid, run_sweep
 from solver.gel import preset
 
 pytestmark = pytest.mark.anyio

@@ -335,3 +335,36 @@ def test_the_full_solver_import_checker_can_fail() -> None:
               "    return solver.full.simulate\n")
     assert len(full_solver_imports(ast.parse(source), "x.py")) == 4
     assert not full_solver_imports(ast.parse("from solver.full import FullResult\n"), "y.py")
+
+
+# ----------------------------------------------------------- the axes' modules (issue 35)
+AXIS_WORDS = {
+    "payload": {"fluid", "drug", "solute"},
+    "population": {"bead", "batch", "size", "sizes"},
+    "heating": {"jump", "protocol", "heating", "ramp", "bath"},
+    "question": {"dose", "schedule"},
+}
+OLD_WINGS = ("batch_drug", "batch_drug_protocol", "batch_protocol", "batch_schedule",
+             "drug_dose", "drug_protocol", "drug_schedule", "protocol_dose")
+
+
+def axes_named(relpath: str) -> set[str]:
+    """The axes a module's path inside dosing/ names (its folders and file name, split at
+    '/' and '_'): ``batch_drug.py`` names population and payload."""
+    words = set(relpath.removesuffix(".py").replace("/", "_").split("_"))
+    return {axis for axis, values in AXIS_WORDS.items() if words & values}
+
+
+def test_no_dosing_module_is_named_after_two_axes() -> None:
+    """A value of an axis is a class behind that axis's seam (dosing/question/axes.py), a
+    model or population is a module in its own package: no module per combination."""
+    two = {rel: sorted(axes_named(rel)) for rel in
+           (str(p.relative_to(ROOT / "dosing")) for p in (ROOT / "dosing").rglob("*.py"))
+           if len(axes_named(rel)) > 1}
+    assert not two, two
+
+
+def test_the_two_axes_rule_can_fail() -> None:
+    assert all(len(axes_named(f"{name}.py")) >= 2 for name in OLD_WINGS)
+    assert axes_named("population/medium.py") == set()
+    assert axes_named("heating/response.py") == {"heating"}

@@ -7,7 +7,8 @@ from scipy.optimize import brentq
 from scipy.stats import qmc
 
 from dosing import DoseRequest
-from dosing.batch import (
+from dosing.model_choice import front_answer, front_run
+from dosing.population.front import (
     NODE_LADDER,
     batch_answer,
     batch_release,
@@ -15,7 +16,6 @@ from dosing.batch import (
     exact_release_fraction,
     release_fraction,
 )
-from dosing.model_choice import front_answer, front_run
 
 JUMP = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0}
 
@@ -154,7 +154,7 @@ def test_release_curves_reach_the_dose_at_the_dose_time() -> None:
 
 
 def test_design_map_and_the_tolerated_spread() -> None:
-    from dosing.batch import design_map, tolerated_cv, with_cv
+    from dosing.population.front import design_map, tolerated_cv, with_cv
 
     base = _req(0.8)
     m = design_map(base, [0.0, 0.1, 0.2], [0.3, 0.8])

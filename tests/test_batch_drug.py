@@ -1,5 +1,5 @@
 """A batch's drug dose into a shared medium through every way in (issue 26):
-dosing.batch_drug, `thermogel dose` with a drug and --size-cv, POST /v1/dose-time with a drug
+dosing.population.medium, `thermogel dose` with a drug and --size-cv, POST /v1/dose-time with a drug
 and a size_distribution.  Coarse mechanics (Lagrangian, n = 40, ell = 0) keep it quick."""
 
 from __future__ import annotations
@@ -13,11 +13,11 @@ from api_support import asgi
 
 from api.cli import main
 from api.http import create_app
-from dosing.batch_drug import HORIZON, batch_dry_volume_ul, drug_batch_dose
-from dosing.drug import drug_settings
-from dosing.drug_dose import DrugDoseRequest
+from dosing.payload.drug import drug_settings
+from dosing.payload.release import DrugDoseRequest
+from dosing.population.medium import HORIZON, batch_dry_volume_ul, drug_batch_dose
+from dosing.population.sizes import as_distribution
 from dosing.runs.mechanics import jump_mechanics
-from dosing.size_distribution import as_distribution
 from solver.errors import ParameterError
 from solver.gel import as_gel
 from solver.solute import Solute, release
@@ -143,7 +143,7 @@ def test_http_job_answers_the_python_batch(tmp_path) -> None:
 # --------------------------------------------- each band at its own ell, the three parts
 @functools.lru_cache(maxsize=16)
 def _coarse(temp: float, n: int):
-    from dosing.drug import simulate_protocol
+    from dosing.payload.drug import simulate_protocol
     from dosing.runs.scenario import SolverSettings
 
     return simulate_protocol(as_gel("ANB"), 302.0, [(0.5, temp)], "swollen",
@@ -159,7 +159,7 @@ def _stand_in(settings) -> tuple[float, int]:
 
 @pytest.fixture
 def coarse_mechanics(monkeypatch):
-    import dosing.batch_drug as bd
+    import dosing.population.medium as bd
 
     calls = []
 
@@ -178,8 +178,8 @@ def test_each_band_runs_at_its_own_ell_and_the_three_parts(coarse_mechanics, med
     from the runs by hand), and each part of the uncertainty the batch's change when every
     class follows one of the central band's other runs (n / 2 cells; xi 2 and 8 nm; the
     delayed lattice)."""
-    from dosing.batch_drug import CLASSES, POINTS, START, batch_classes
-    from dosing.batch_truth import band_edges
+    from dosing.population.bands import band_edges
+    from dosing.population.medium import CLASSES, POINTS, START, batch_classes
     from solver.solute import coupled_release, node_volumes
 
     req = DrugDoseRequest("ANB", 302, 308, DRUG, dose_fraction=0.5, dry_radius_um=50.0)
@@ -236,7 +236,7 @@ def test_under_a_protocol_cv_zero_is_the_single_beads_drug_dose(tmp_path) -> Non
     from concurrent.futures import ThreadPoolExecutor
 
     from dosing import Planner
-    from dosing.drug_dose import plan_drug_dose
+    from dosing.payload.release import plan_drug_dose
 
     req = _protocol_req()
     with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(1)) as p:
@@ -252,8 +252,8 @@ def test_under_a_protocol_each_size_runs_its_own_program() -> None:
     each node's own release on its own run of the protocol (the adaptive solute solver),
     every node a different dimensionless program; later than its mean bead; a shared medium
     conserves the drug and the sink sum overstates it."""
-    from dosing.batch_drug import protocol_batch_time
-    from dosing.batch_schedule import rule
+    from dosing.population.cycles import rule
+    from dosing.population.medium import protocol_batch_time
     from solver.solute import release
 
     req = _protocol_req()
@@ -282,7 +282,7 @@ def test_a_drug_batch_under_a_protocol_is_the_same_answer_by_every_way_in(
     drug_batch_dose; the HTTP body (its stored 'drug-dose' job, run here blocking) reaches the
     same function with the same protocol, drug and sizes (HTTP runs at the truth's settings,
     too costly here: the call is recorded instead)."""
-    import dosing.batch_drug as batch_drug
+    import dosing.population.medium as batch_drug
 
     ans = drug_batch_dose(_protocol_req(), {"cv": 0.2})
     argv = ["dose", "--gel", "ANB", "--t-start", "302", "--protocol", RAMP[0], "--fraction",

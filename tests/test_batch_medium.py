@@ -1,5 +1,5 @@
 """A batch sharing one finite medium (issue 26): solver.solute.medium (through the planner's
-names, dosing.batch_medium), dosing.batch_drug.
+names, dosing.batch_medium), dosing.population.medium.
 
 References: the full solute solver's own finite-medium boundary condition (one bead in a
 medium V / N, ``solver.solute.release``) and Crank's finite-bath sphere (eq. 6.30) for a
@@ -95,7 +95,7 @@ def test_bad_input_names_the_field(shrink) -> None:
     with pytest.raises(ParameterError) as exc:
         coupled_release(res.t, s3, sol, [1.0], [1.0], -1.0, res.t)
     assert exc.value.field == "medium_volume"
-    from dosing.batch_drug import bead_count, medium_volume_ml
+    from dosing.population.medium import bead_count, medium_volume_ml
 
     assert medium_volume_ml("250 uL") == pytest.approx(0.25)
     assert medium_volume_ml(2) == 2.0

@@ -1,4 +1,4 @@
-"""A batch of beads under a heating protocol (dosing/batch_protocol.py, issues 24 and 26):
+"""A batch of beads under a heating protocol (dosing/population/curves.py, issues 24 and 26):
 one reduced slow-heating trajectory per quadrature node, each size its own program."""
 
 from __future__ import annotations
@@ -8,9 +8,10 @@ import json
 import pytest
 
 from api.cli import main
-from dosing import DoseRequest, PhysicalConstants, heating_reduced
-from dosing.batch_protocol import BatchCurves, batch_protocol_answer
-from dosing.protocol_dose import Mode, reduced_dose
+from dosing import DoseRequest, PhysicalConstants
+from dosing.heating import reduced as heating_reduced
+from dosing.heating.response import Mode, reduced_dose
+from dosing.population.curves import BatchCurves, batch_protocol_answer
 from solver.errors import ParameterError
 
 RAMP = ["Heat to 308 K at 5 K/min"]

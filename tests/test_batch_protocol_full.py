@@ -1,7 +1,8 @@
-"""A batch under a heating protocol outside the reduced model's region (dosing/batch_protocol.py):
-the nodes outside it run on the planner's full solver (the fake's closed-form a(t) here, as a
-staircase of holds: it takes no program), the others keep the reduced model; no planner, no
-full runs: refused as before.  Over HTTP such a batch is a job (202), answered by its result."""
+"""A batch under a heating protocol outside the reduced model's region
+(dosing/population/curves.py): the nodes outside it run on the planner's full solver (the fake's
+closed-form a(t) here, as a staircase of holds: it takes no program), the others keep the
+reduced model; no planner, no full runs: refused as before.  Over HTTP such a batch is a job
+(202), answered by its result."""
 
 from __future__ import annotations
 
@@ -16,7 +17,8 @@ from dosing_fakes import FakeSolver
 import dosing.planner
 from api.cli import main
 from dosing import DoseRequest, PhysicalConstants, Planner
-from dosing.batch_protocol import (
+from dosing.heating.response import mode_for
+from dosing.population.curves import (
     BatchCurves,
     FullNodeCurve,
     OutsideRegion,
@@ -24,7 +26,6 @@ from dosing.batch_protocol import (
     batch_protocol_answer,
     converge,
 )
-from dosing.protocol_dose import mode_for
 from dosing.question import Batch, Dose, Heating, Request, plan
 
 RAMP = ["Heat to 308 K at 5 K/min"]

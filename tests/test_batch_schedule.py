@@ -1,4 +1,4 @@
-"""A schedule for a batch of beads (issue 26, dosing.batch_schedule) on the fake full solver
+"""A schedule for a batch of beads (issue 26, dosing.population.cycles) on the fake full solver
 (closed-form a(t) whose rate depends on ell and n: each bead size its own trajectory)."""
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ from dosing_fakes import FakeSolver
 from scipy.special import ndtri
 
 from dosing import ScheduleRequest
-from dosing.batch_schedule import batch_schedule_with, schedule_sizes
-from dosing.protocol import delivery, heat_cool_protocol
+from dosing.population.cycles import batch_schedule_with, schedule_sizes
+from dosing.question.shooting import delivery, heat_cool_protocol
 from solver.errors import ParameterError
 
 DOSES, RESTS = [0.3, 0.3, 0.2], [0.5, 0.5]

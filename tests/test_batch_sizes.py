@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from dosing import DoseRequest
-from dosing.size_distribution import MAX_ROWS, SizeDistribution, read_sizes_csv
+from dosing.population.sizes import MAX_ROWS, SizeDistribution, read_sizes_csv
 from solver import ParameterError
 
 JUMP = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0}

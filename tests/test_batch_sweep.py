@@ -1,4 +1,4 @@
-"""Sweeps with the batch's CV as an axis (issue 26): dosing.sweep's size_cvs and
+"""Sweeps with the batch's CV as an axis (issue 26): dosing.studies.sweep's size_cvs and
 `thermogel sweep --size-cv` (the CV x dose design map: the spread a dose tolerates)."""
 
 from __future__ import annotations
@@ -7,8 +7,8 @@ import pytest
 
 from api.cli import main
 from dosing import DoseRequest
-from dosing.batch import batch_answer
-from dosing.sweep import SweepGrid, run_sweep
+from dosing.population.front import batch_answer
+from dosing.studies.sweep import SweepGrid, run_sweep
 from solver.errors import ParameterError
 
 

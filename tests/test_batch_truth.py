@@ -13,7 +13,7 @@ from dosing_fakes import ELL_C, ELL_ORDER, MOVING_C, RATES, FakeSolver
 from scipy.optimize import brentq
 
 from dosing import DoseRequest, Planner
-from dosing.batch_truth import band_edges, validated_batch
+from dosing.population.bands import band_edges, validated_batch
 
 JUMP = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0}
 

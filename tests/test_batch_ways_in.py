@@ -13,7 +13,7 @@ from api_support import asgi
 from api.cli import main
 from api.http import create_app
 from dosing import DoseRequest, Planner
-from dosing.batch import batch_answer
+from dosing.population.front import batch_answer
 
 JUMP = {"gel": "ANB", "t_start": 302.0, "t_end": 308.0}
 ARGS = ["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308", "--fraction", "0.8"]

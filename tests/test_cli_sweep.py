@@ -11,7 +11,7 @@ import pytest
 
 from api.cli import main
 from api.commands.sweep import parse_axis
-from dosing.sweep import SweepGrid, run_sweep
+from dosing.studies.sweep import SweepGrid, run_sweep
 
 
 def test_axes_from_lists_and_ranges() -> None:

@@ -18,7 +18,7 @@ from api.cli import main
 from dosing import Planner
 from dosing.design import ExperimentAsk, design_experiment
 from dosing.design.experiment import greedy_times, jump_curves, tau_sd
-from dosing.fit import fit_front_laws, kinetics_data
+from dosing.fits.gel import fit_front_laws, kinetics_data
 from solver.errors import ParameterError
 from solver.gel import HHT
 

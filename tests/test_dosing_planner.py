@@ -12,7 +12,13 @@ from pathlib import Path
 import pytest
 from dosing_fakes import FakeSolver, exact_time
 
-from dosing import DoseRequest, Planner, QueueFullError, ScheduleRequest, UnknownValidationError
+from dosing import (
+    DoseRequest,
+    Planner,
+    QueueFullError,
+    ScheduleRequest,
+    UnknownValidationError,
+)
 from dosing.runs.scenario import LADDER, PAPER
 from dosing.units import expelled_volume, radius_after_dose
 from dosing.validation import front_prior

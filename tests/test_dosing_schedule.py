@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from dosing import DoseRequest, Planner, ScheduleRequest
-from dosing.protocol import heat_cool_protocol, windows
+from dosing.question.shooting import heat_cool_protocol, windows
 from dosing.runs.scenario import PAPER
 from solver.full import simulate
 

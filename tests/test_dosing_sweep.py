@@ -1,4 +1,4 @@
-"""Design maps (dosing.sweep): every point answered as the planner answers it alone, failing
+"""Design maps (dosing.studies.sweep): every point answered as the planner answers it alone, failing
 points reported with their message, validations queued for a subset, the same table on any
 executor (inline, a thread pool, a Dask LocalCluster of worker processes)."""
 
@@ -15,7 +15,14 @@ import pytest
 from dosing_fakes import FakeSolver
 
 from dosing import DoseRequest, Planner
-from dosing.sweep import COLUMNS, SweepGrid, chunks, fill_validations, run_sweep, vary_gel
+from dosing.studies.sweep import (
+    COLUMNS,
+    SweepGrid,
+    chunks,
+    fill_validations,
+    run_sweep,
+    vary_gel,
+)
 from solver.errors import ParameterError
 
 # ANB from 302 K: 305 K is a smooth jump (full solver only), 308-310 K front jumps
@@ -122,7 +129,7 @@ def test_dask_local_cluster_returns_the_identical_table(tmp_path: Path) -> None:
             on_dask = run_sweep(grid, executor=planner.jobs.executor, planner=planner)
         finally:
             planner.close()
-        ran = client.run(lambda: "dosing.sweep" in sys.modules)  # in the worker process
+        ran = client.run(lambda: "dosing.studies.sweep" in sys.modules)  # in the worker process
         assert list(ran.values()) == [True]
     assert len(on_dask.rows) == 500 and on_dask.counts == inline.counts
     assert on_dask.rows == inline.rows

@@ -230,7 +230,7 @@ def test_hht_small_doses_have_a_numerical_bound_below_10_percent(real_planner) -
 
 
 def test_sweep_keeps_the_bead_ell_unresolved() -> None:
-    from dosing.sweep import SweepGrid
+    from dosing.studies.sweep import SweepGrid
 
     grid = SweepGrid(t_ends=[308.0], dry_radii_um=[50.0], doses=[0.3], gels=["ANB"],
                      t_start=302.0, settings=SolverSettings())

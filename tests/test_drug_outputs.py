@@ -1,4 +1,5 @@
-"""The full solver's drug runs resolve the first moments of a jump (dosing.drug.step_outputs).
+"""The full solver's drug runs resolve the first moments of a jump
+(dosing.payload.drug.step_outputs).
 
 Between outputs the solute code takes the bead to shrink linearly in time; a fast drug's
 small doses leave in the first 5e-4 tau, before the uniform outputs' first sample.  Measured
@@ -18,11 +19,11 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import pytest
 
-import dosing.drug as drug_module
-import dosing.drug_dose as drug_dose
+import dosing.payload.drug as drug_module
+import dosing.payload.release as drug_dose
 from dosing import PhysicalConstants, Planner
-from dosing.drug import DrugModel, step_outputs
-from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
+from dosing.payload.drug import DrugModel, step_outputs
+from dosing.payload.release import DrugDoseRequest, plan_drug_dose
 from dosing.runs.scenario import SolverSettings
 
 

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from dosing import PhysicalConstants
-from dosing.drug import DrugModel
-from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
-from dosing.drug_reduced import MEASURED, STATED_LIMIT, stated_error
 from dosing.model_choice import front_run
+from dosing.payload.drug import DrugModel
+from dosing.payload.reduced import MEASURED, STATED_LIMIT, stated_error
+from dosing.payload.release import DrugDoseRequest, plan_drug_dose
 from solver.errors import ParameterError
 from solver.front.solute import dry_grid, front_geometry, front_release, time_to_release
 from solver.gel import ANB
@@ -174,9 +174,9 @@ def test_stated_error_is_none_outside_measured_ranges():
 
 @pytest.mark.parametrize("fraction", [0.01, 0.1, 0.5, 0.7])
 def test_leak_time_is_cranks_root(fraction):
-    """dosing.drug.leak_time: the closed root of Crank 6.21 (fraction <= 0.5), else the
+    """dosing.payload.drug.leak_time: the closed root of Crank 6.21 (fraction <= 0.5), else the
     bisection on 6.20; either way Crank's series there gives the fraction back."""
-    from dosing.drug import leak_time
+    from dosing.payload.drug import leak_time
 
     sol = Solute(2.0, FREE)
     t = leak_time(sol, 2.29, fraction)

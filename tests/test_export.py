@@ -18,9 +18,10 @@ xr = pytest.importorskip("xarray")
 pd = pytest.importorskip("pandas")
 
 from api.cli import main  # noqa: E402
-from dosing import DoseRequest, Planner, ScheduleRequest, export  # noqa: E402
+from dosing import DoseRequest, Planner, ScheduleRequest  # noqa: E402
 from dosing.answers import Answered  # noqa: E402
-from dosing.sweep import COLUMNS, SweepGrid, run_sweep  # noqa: E402
+from dosing.present import export  # noqa: E402
+from dosing.studies.sweep import COLUMNS, SweepGrid, run_sweep  # noqa: E402
 from dosing.truth import Part, Uncertainty  # noqa: E402
 from solver.fit import fit_equilibrium  # noqa: E402
 from solver.fit.synthetic import synthetic_swelling  # noqa: E402

@@ -16,8 +16,9 @@ xr = pytest.importorskip("xarray")
 pd = pytest.importorskip("pandas")
 
 from api.cli import main  # noqa: E402
-from dosing import Planner, ScheduleRequest, export  # noqa: E402
-from dosing.sweep import SweepGrid, run_sweep  # noqa: E402
+from dosing import Planner, ScheduleRequest  # noqa: E402
+from dosing.present import export  # noqa: E402
+from dosing.studies.sweep import SweepGrid, run_sweep  # noqa: E402
 from solver.fit import fit_equilibrium  # noqa: E402
 from solver.fit.synthetic import synthetic_swelling  # noqa: E402
 from solver.gel import HHT  # noqa: E402

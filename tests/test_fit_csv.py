@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from api.cli import main
-from dosing.fit import read_kinetics_csv, read_swelling_csv
-from dosing.fit_csv import MAX_BYTES
+from dosing.fits.csv_tables import MAX_BYTES
+from dosing.fits.gel import read_kinetics_csv, read_swelling_csv
 from solver.errors import ParameterError
 
 

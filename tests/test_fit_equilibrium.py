@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from dosing.fit import read_swelling_csv
+from dosing.fits.gel import read_swelling_csv
 from solver.equilibrium import folds
 from solver.errors import ParameterError
 from solver.fit import SwellingData, fit_equilibrium

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from dosing import Planner
-from dosing.fit import fit_shrinking, front_radius_model, kinetics_data, read_kinetics_csv
+from dosing.fits.gel import fit_shrinking, front_radius_model, kinetics_data, read_kinetics_csv
 from dosing.runs.scenario import Scenario, SolverSettings
 from dosing.units import PhysicalConstants, timescale
 from solver.errors import ParameterError

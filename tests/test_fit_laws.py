@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from dosing import Planner
-from dosing.fit import fit_front_laws, kinetics_data
+from dosing.fits.gel import fit_front_laws, kinetics_data
 from dosing.runs.scenario import Scenario, SolverSettings
 from dosing.units import timescale
 from solver.gel import ANB
@@ -49,7 +49,7 @@ def test_a_delayed_curve_is_recognised_by_aic(planner) -> None:
 def test_the_default_kinetics_fit_compares_the_laws(planner) -> None:
     """Issue 36: a delayed-law curve fitted with the defaults (no flag) is recognised as
     such, with a warning; a Maxwell curve is not flagged."""
-    from dosing.fit import kinetics_report
+    from dosing.fits.gel import kinetics_report
 
     st = SolverSettings(grid="lagrangian", n=200, rtol=1e-5, interfacial_length=0.0)
     traj = planner.trajectory(Scenario(ANB, 302.0, 308.0, settings=st), need_radius=1.12,
@@ -72,6 +72,6 @@ def test_the_default_kinetics_fit_compares_the_laws(planner) -> None:
 
 def _maxwell_curve(td: np.ndarray) -> np.ndarray:
     """The front-sharp model's radius after the jump (the fit's own model), um."""
-    from dosing.fit import front_radius_model
+    from dosing.fits.gel import front_radius_model
 
     return DRY_UM * front_radius_model(ANB, 302.0, 308.0, "swollen")(None)(td)

@@ -18,8 +18,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dosing.fit import compare_chi_models, dose_under_objectives, fit_swelling
-from dosing.fit_uncertainty import dose_time
+from dosing.fits.gel import compare_chi_models, dose_under_objectives, fit_swelling
+from dosing.fits.uncertainty import dose_time
 from solver.fit.equilibrium import judge
 from solver.fit.synthetic import synthetic_swelling
 from solver.gel import HHT
@@ -116,7 +116,7 @@ def test_a_smooth_jump_gets_the_full_solvers_time_and_a_one_sided_flag(data, ort
     ((0.0249, [0.0203, 0.0306]), (0.0747, [0.0033, 1.70]), True),
 ])
 def test_disagreement_rule(a, b, flag) -> None:
-    from dosing.fit import _disagreement
+    from dosing.fits.gel import _disagreement
 
     out = _disagreement({"time": a[0], "interval": a[1]}, {"time": b[0], "interval": b[1]})
     assert out["disagree"] is flag
@@ -153,7 +153,7 @@ def test_dose_time_interval_coverage_over_50_seeds() -> None:
     is one local fit warm-started at the generating parameters (the global search's optimum,
     checked on seed 0; a tenth of its cost); all 50 seeds kept (binomial argument in
     tests/test_fit_equilibrium.py)."""
-    from dosing.fit_uncertainty import dose_time_interval
+    from dosing.fits.uncertainty import dose_time_interval
     from solver.fit import fit_gel
 
     true_t = dose_time(HHT, 304.0, 308.0, "swollen", 0.8, True)
@@ -198,7 +198,7 @@ def test_a_disagreement_widens_a_saved_gels_interval() -> None:
     """Issue 36: a gel saved from a fit whose objectives disagreed carries the spread."""
     import math
 
-    from dosing.fit_uncertainty import objective_spread
+    from dosing.fits.uncertainty import objective_spread
 
     rec = {"swelling": {"fit": {"dose_time_by_objective": {"disagree": True, "ratio": 1 / 3}}}}
     assert objective_spread(rec) == pytest.approx(math.log(3.0))

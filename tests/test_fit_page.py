@@ -9,7 +9,7 @@ import httpx
 import pytest
 from test_page_browser import _fill, browser_page
 
-from dosing.gel_store import GelStore
+from dosing.fits.gel_store import GelStore
 from solver.gel import HHT
 
 D_FIT = 3.0e-13  # m^2/s at 310 K: slower than either reading of the constants

@@ -10,9 +10,9 @@ import pytest
 
 from api.cli import main
 from dosing import SolverSettings
-from dosing import fit_release_protocol as fp
-from dosing.drug import DrugModel
-from dosing.release_fit import f2, fit_release
+from dosing.fits import release_steps as fp
+from dosing.fits.release import f2, fit_release
+from dosing.payload.drug import DrugModel
 from dosing.runs.mechanics import protocol_mechanics
 from dosing.units import PhysicalConstants
 from solver.equilibrium import equilibrium

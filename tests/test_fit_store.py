@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from dosing import DoseRequest, plan_dose
-from dosing.fit import data_dict, fit_swelling
-from dosing.fit_uncertainty import dose_time_interval, sample_dose_times
-from dosing.gel_store import GelStore, lookup, record_for
+from dosing.fits.gel import data_dict, fit_swelling
+from dosing.fits.gel_store import GelStore, lookup, record_for
+from dosing.fits.uncertainty import dose_time_interval, sample_dose_times
 from dosing.request import resolve_gel
 from solver.errors import ParameterError
 from solver.fit import fit_gel

@@ -11,7 +11,7 @@ import pytest
 from api.cli import main
 from api.http import create_app
 from dosing import DoseRequest, PhysicalConstants, plan_dose
-from dosing.fit import front_radius_model
+from dosing.fits.gel import front_radius_model
 from dosing.units import timescale, timescale_uncertainty
 from solver.gel import HHT
 

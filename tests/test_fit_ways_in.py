@@ -12,7 +12,7 @@ import pytest
 
 from api.cli import main
 from api.http import create_app
-from dosing.fit import front_radius_model
+from dosing.fits.gel import front_radius_model
 from dosing.units import timescale
 from solver.fit.synthetic import synthetic_swelling
 from solver.gel import HHT
@@ -131,7 +131,7 @@ async def test_release_fit_same_numbers_every_way_in(env, capsys) -> None:
     """A release curve under a ramp (tests/test_fit_release.py) through Python, the CLI and
     POST /v1/fit/release (a stored job: 202 + Location, polled at /v1/jobs/{id}): the same
     D0, interval and f2; the job's result is typed in the OpenAPI document."""
-    from dosing.release_fit import fit_release
+    from dosing.fits.release import fit_release
     from tests.test_fit_release import COARSE, RAMP, ramp_curve
 
     t, y = ramp_curve(seed=5)

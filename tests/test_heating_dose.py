@@ -1,4 +1,4 @@
-"""A dose under a heating protocol (dosing.protocol_dose) on the planner.
+"""A dose under a heating protocol (dosing.heating.response) on the planner.
 
 The planner's logic runs on the closed-form fake solver (tests/dosing_fakes.py: a^3 relaxes
 exponentially to each step's equilibrium), so every expected time is computable; one slow
@@ -17,7 +17,7 @@ from dosing_fakes import FakeSolver
 
 from dosing import DoseRequest, Planner
 from dosing.answers import Answered, Pending
-from dosing.heating import Protocol
+from dosing.heating.grammar import Protocol
 from dosing.units import PhysicalConstants, radius_after_dose, timescale
 from solver.errors import ParameterError
 
@@ -190,7 +190,7 @@ def test_seconds_need_a_bead_size(planner):
 def test_real_solver_ramp_until_equals_dose(tmp_path):
     """The full solver (moving grid, the bead's own ell): the 30 % dose under a 5 K/min ramp
     is later than the jump's, and the until-hold ends at it to the printed digits."""
-    from dosing.protocol_dose import Mode, blocking_getter, dose, protocol_dose
+    from dosing.heating.response import Mode, blocking_getter, dose, protocol_dose
 
     with Planner(cache_path=tmp_path / "c.sqlite", executor=ThreadPoolExecutor(2)) as p:
         ramp = dose(p, _req(["Heat to 308 K at 5 K/min"], 0.3), model="full")
@@ -364,7 +364,7 @@ async def test_http_protocol_errors_422(tmp_path, fake, change, where):
 def test_heater_sweep_answers_which_heater(planner):
     """'Which heater do I need for a 30 % dose within a time?': faster ramps and smaller
     bath constants are sooner; the least demanding heater meeting the time is named."""
-    from dosing.protocol_dose import heater_needed, heater_sweep
+    from dosing.heating.response import heater_needed, heater_sweep
 
     fields = {**BEAD, "dose_fraction": 0.3}
     ramps = heater_sweep(planner, "ramp", [1.0, 5.0, 50.0], 308.0, **fields)
@@ -387,7 +387,7 @@ def test_a_schedule_runs_as_one_protocol_with_until_steps_and_rests(planner):
     """Two 30 % doses, a 5 K/min heating each, a 10 min rest at T_start between: one
     protocol; each dose ends at its until-step, the second heating starts after the rest,
     and the released fraction at each end is the cumulative dose."""
-    from dosing.protocol_dose import protocol_schedule, schedule_steps
+    from dosing.heating.response import protocol_schedule, schedule_steps
 
     steps = schedule_steps([0.3, 0.3], 302.0, 308.0, "10 min", "5 K/min")
     assert steps == ["Heat to 308 K at 5 K/min", "Hold at 308 K until 30 % released",
@@ -406,7 +406,7 @@ def test_a_schedule_runs_as_one_protocol_with_until_steps_and_rests(planner):
 
 
 def test_schedule_doses_are_checked():
-    from dosing.protocol_dose import schedule_steps
+    from dosing.heating.response import schedule_steps
 
     with pytest.raises(ParameterError) as e:
         schedule_steps([0.6, 0.5], 302.0, 308.0, "10 min")

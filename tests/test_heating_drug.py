@@ -1,4 +1,4 @@
-"""A drug dose under a heating protocol (dosing/drug_dose.py under heating steps, issue 24):
+"""A drug dose under a heating protocol (dosing/payload/release.py under heating steps, issue 24):
 the drug on the full solver's mechanics of the protocol, in Python, the CLI and HTTP."""
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ from api_support import asgi
 from api.cli import main
 from api.http import create_app
 from dosing import DoseRequest, PhysicalConstants, SolverSettings
-from dosing import protocol_dose as pd
-from dosing.drug import DrugModel, drug_settings, simulate_protocol
-from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
+from dosing.heating import response as pd
+from dosing.payload.drug import DrugModel, drug_settings, simulate_protocol
+from dosing.payload.release import DrugDoseRequest, plan_drug_dose
 from solver.errors import ParameterError
 from solver.solute import release
 
@@ -69,7 +69,7 @@ def test_a_slow_ramp_delays_the_drug_dose_against_the_jump(planner) -> None:
 
 def test_a_fast_ramp_is_the_jump_within_the_numerical_bound(planner) -> None:
     req, fast = drug_dose(["Heat to 308 K at 10000 K/min"])
-    # the jump's drug run (dosing.drug: the DrugScenario path, a hold at T_end) sampled
+    # the jump's drug run (dosing.payload.drug: the DrugScenario path, a hold at T_end) sampled
     # densely over the dose: the ramp can only delay the dose, by at most its own length
     s = drug_settings(req.settings)
     res = simulate_protocol(req.gel, 302.0, [(2.0 * fast.time, 308.0)], "swollen", s, 600)

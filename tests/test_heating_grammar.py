@@ -1,4 +1,4 @@
-"""The heating-step grammar (dosing.heating): strings, structured steps, traces, errors."""
+"""The heating-step grammar (dosing.heating.grammar): strings, structured steps, traces, errors."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from dosing.heating import (
+from dosing.heating.grammar import (
     Bath,
     Hold,
     Protocol,
@@ -18,7 +18,7 @@ from dosing.heating import (
     parse_step,
     trace_from_csv,
 )
-from dosing.heating_program import MAX_STAIRS, staircase
+from dosing.heating.program import MAX_STAIRS, staircase
 from solver.errors import ParameterError
 
 TAU = 2000.0  # s: a round timescale (a 50 um bead's is 2205 s at 308 K)

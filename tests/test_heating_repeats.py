@@ -10,7 +10,7 @@ from api_support import asgi
 
 from api.http import create_app
 from dosing import PhysicalConstants
-from dosing.heating import Hold, Protocol, Until, parse_step
+from dosing.heating.grammar import Hold, Protocol, Until, parse_step
 from dosing.question import Dose, Heating, Request, plan
 from solver.errors import ParameterError
 

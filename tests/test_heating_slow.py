@@ -1,5 +1,5 @@
 """The front model under slow heating (solver/front/slow.py) and the planner's use of it
-(dosing/heating_reduced.py): limits, numerics, applicability and the answer."""
+(dosing/heating/reduced.py): limits, numerics, applicability and the answer."""
 
 from __future__ import annotations
 
@@ -46,12 +46,12 @@ def test_a_jump_is_the_sharp_front_model(name, t0):
     Program((Ramp(308.0, 0.5 / 60 * TAU_50UM),), mobility="kT"),
     Program((Bath(308.0, 30.0 / TAU_50UM, 50.0),), mobility="kT")])
 def test_numerical_error_is_below_its_stated_bound(prog, monkeypatch):
-    """The answer's numerical part (dosing.heating_reduced.NUMERICAL = 1e-5): rtol 1e-8 ->
+    """The answer's numerical part (dosing.heating.reduced.NUMERICAL = 1e-5): rtol 1e-8 ->
     1e-10, the thin-shell start 1e-4 -> 1e-5, the level tables' degree 12 -> 20 and the
     nucleation curve's 24 -> 48 and 200 -> 800 stretches each move HHT's dose times by at
     most 2.4e-6
     (measured), so the stated bound holds twice over."""
-    from dosing.heating_reduced import NUMERICAL
+    from dosing.heating.reduced import NUMERICAL
 
     gel = preset("HHT")
     tg = _targets(gel, 304.0)
@@ -161,7 +161,7 @@ def test_a_ramp_dose_in_the_region_answers_from_the_reduced_model(real_planner):
     ([{"step": "trace", "csv": "time (s),T (K)\n0,302\n72,308\n"}], 0.8, "measured trace"),
 ])
 def test_outside_the_region_the_full_solver_answers(protocol, fraction, why):
-    from dosing.heating_reduced import choose
+    from dosing.heating.reduced import choose
 
     req = DoseRequest(**BEAD, protocol=protocol, dose_fraction=fraction)
     choice = choose(req, req.heating.program(2204.6), False)
@@ -169,7 +169,7 @@ def test_outside_the_region_the_full_solver_answers(protocol, fraction, why):
 
 
 def test_holds_after_the_heating_stay_in_the_region():
-    from dosing.heating_reduced import choose
+    from dosing.heating.reduced import choose
 
     req = DoseRequest(**BEAD, protocol=["Bath at 308 K with a time constant of 30 s for 2 min",
                                         "Hold at 308 K until 80 % released"], dose_fraction=0.8)
@@ -180,7 +180,7 @@ def test_the_region_edges_in_k_per_tau_and_tau():
     """The region measured at both timescales (benchmarks/heating_reduced.py, paper and
     gel-consistent constants): ramps from 10 K per tau (ANB's 30 % dose 4.9 % early at 9,
     8.1 % at 7.35), baths up to 0.17 tau (HHT's 90 % dose 4.6 %; 5.1 % at 0.19)."""
-    from dosing.heating_reduced import BATH_MAX, RAMP_MIN, choose
+    from dosing.heating.reduced import BATH_MAX, RAMP_MIN, choose
 
     assert RAMP_MIN == 10.0 and BATH_MAX == 0.17
     for protocol, fraction, inside in (
@@ -197,7 +197,7 @@ def test_the_region_edges_in_k_per_tau_and_tau():
 
 
 def test_beads_under_50_um_and_no_bead_size_go_to_the_full_solver():
-    from dosing.heating_reduced import choose
+    from dosing.heating.reduced import choose
 
     for fields in ({**BEAD, "dry_radius_um": 20.0}, {"gel": "ANB", "t_start": 302.0}):
         req = DoseRequest(**fields, protocol=["Heat to 308 K at 500 K/tau"], dose_fraction=0.8)
@@ -210,7 +210,7 @@ def test_beads_under_50_um_and_no_bead_size_go_to_the_full_solver():
 
 
 def test_validate_asks_for_the_full_solver():
-    from dosing.heating_reduced import choose
+    from dosing.heating.reduced import choose
 
     req = DoseRequest(**BEAD, protocol=["Heat to 308 K at 5 K/min"], dose_fraction=0.8)
     assert choose(req, req.heating.program(2204.6), False).reduced
@@ -230,8 +230,8 @@ def test_until_hold_after_a_ramp_ends_at_the_reduced_dose_time(real_planner):
 
 
 def test_a_reduced_model_failure_falls_back_to_the_full_solver(monkeypatch):
-    import dosing.protocol_dose as pdose
-    from dosing.heating_reduced import Choice
+    import dosing.heating.response as pdose
+    from dosing.heating.reduced import Choice
     from solver.errors import SolverError
 
     def boom(*a, **k):

@@ -20,7 +20,7 @@ def test_every_layer_uses_the_one_definition() -> None:
     assert scenario.ELL_RANGE == limits.TRUTH_LADDER_ELL_RANGE
     assert schemas.ELL_RANGE == limits.TRUTH_LADDER_START_RANGE
     assert scenario.LADDER_TOP == limits.TRUTH_LADDER_START_RANGE[1]
-    from dosing import heating as grammar
+    from dosing.heating.grammar import grammar as grammar
     from solver import heating as program
 
     assert program.DURATION_MAX == grammar.TAU_MAX == limits.PROGRAM_STEP_MAX
@@ -53,7 +53,7 @@ def test_a_time_at_start_has_one_rule() -> None:
     HTTP fields say the same."""
     import pytest
 
-    from dosing.drug_dose import MAX_HORIZON, DrugCase
+    from dosing.payload.release import MAX_HORIZON, DrugCase
     from dosing.request import ScheduleCase, at_start
     from dosing.units import PhysicalConstants
     from solver.errors import ParameterError

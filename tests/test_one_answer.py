@@ -17,9 +17,9 @@ from api_support import asgi
 from api.cli import main
 from api.http import create_app
 from dosing import DoseRequest, Planner, ScheduleRequest
-from dosing.drug import DrugModel
-from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
-from dosing.sweep import SweepGrid, run_sweep
+from dosing.payload.drug import DrugModel
+from dosing.payload.release import DrugDoseRequest, plan_drug_dose
+from dosing.studies.sweep import SweepGrid, run_sweep
 
 pytestmark = pytest.mark.anyio
 

@@ -17,7 +17,7 @@ from api.plots.fit import _band_rows, size_label
 from api.plots.phase_map import draw_phase_map, region_bounds, region_masks
 from api.plots.sweep import draw_sweep
 from api.plots.validation import draw_validation
-from dosing.sweep import SweepGrid, run_sweep
+from dosing.studies.sweep import SweepGrid, run_sweep
 from solver.gel import ANB
 
 

@@ -28,7 +28,7 @@ import pytest
 
 import dosing
 from dosing import DoseRequest, Planner, ScheduleRequest, plan_dose, plan_schedule
-from dosing.drug_dose import DrugDoseRequest, plan_drug_dose
+from dosing.payload.release import DrugDoseRequest, plan_drug_dose
 from dosing.units import PhysicalConstants
 
 TABLE = json.loads((Path(__file__).parent / "data" / "regression_70c49c7.json").read_text())

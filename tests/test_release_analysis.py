@@ -358,7 +358,7 @@ def test_measured_against_predicted() -> None:
 
 
 def test_release_fit_report_calls_f2_a_similarity_not_a_goodness_of_fit() -> None:
-    from dosing.release_fit import fit_release
+    from dosing.fits.release import fit_release
 
     t = np.linspace(30.0, 1200.0, 12)
     y = crank_sphere(t, 2e-7 * 1e8, 50.0 * 1.9) + 0.01 * np.random.default_rng(0).normal(

@@ -17,7 +17,7 @@ import pytest
 from grid_support import every_grid
 
 from dosing import Planner, ScheduleRequest
-from dosing.protocol import FluidHeatings, windows
+from dosing.question.shooting import FluidHeatings, windows
 from dosing.runs.restart import Start, run_protocol
 from dosing.runs.scenario import Scenario, SolverSettings
 from solver.errors import ParameterError
@@ -217,9 +217,14 @@ def test_a_drug_dose_run_stops_soon_after_its_dose(tmp_path, monkeypatch) -> Non
     # the full solver's drug run is read off a heating of twice the reduced drug model's
     # time (it ran to FIRST_HEATING = 0.5 tau, 66x this dose): the same dose within the
     # answer's numerical bound (the drug run on n / 2 cells)
-    from dosing import drug_dose
-    from dosing.drug import DrugModel
-    from dosing.drug_dose import DrugDoseRequest, DrugHeatings, first_heating, plan_drug_dose
+    from dosing.payload import release as drug_dose
+    from dosing.payload.drug import DrugModel
+    from dosing.payload.release import (
+        DrugDoseRequest,
+        DrugHeatings,
+        first_heating,
+        plan_drug_dose,
+    )
 
     req = DrugDoseRequest("ANB", 302, 308, DrugModel(diffusivity_cm2_s=1e-7, hindrance="none"),
                           dose_fraction=0.5, dry_radius_um=50,
@@ -245,9 +250,9 @@ def test_a_drug_run_continues_the_kept_mechanics_of_its_prefix(tmp_path) -> None
     # a drug run continues the kept mechanics of its protocol's prefix from their state
     # after it (one simulate call): the outputs of a fresh run, and its mechanics up to the
     # moving grid's mesh history (see the first test)
-    from dosing.drug import DrugModel
-    from dosing.drug_dose import DrugHeatings
-    from dosing.drug_schedule import DrugScheduleRequest
+    from dosing.payload.cycles import DrugScheduleRequest
+    from dosing.payload.drug import DrugModel
+    from dosing.payload.release import DrugHeatings
     from dosing.runs.solute import DrugRuns
 
     req = DrugScheduleRequest("ANB", 302, 308, DrugModel(diffusivity_cm2_s=1e-8, load_ug=1.0,

@@ -211,7 +211,7 @@ def test_cli_acceptance_events_and_csv(tmp_path, capsys) -> None:
     assert main([*args, "--out", str(tmp_path / "s.nc")]) == 0
     text = capsys.readouterr().out
     assert "events (corrected times):" in text and "13.81 s" in text
-    from dosing import export
+    from dosing.present import export
 
     ds = export.open_netcdf(tmp_path / "s.nc")
     assert ds["duration_s"].attrs["units"] == "s" and list(ds["kind"].values)[:2] == [

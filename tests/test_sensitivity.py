@@ -21,7 +21,7 @@ pytest.importorskip("SALib")
 from api.cli import main
 from dosing import DoseRequest
 from dosing.model_choice import front_answer
-from dosing.sensitivity import (
+from dosing.studies.sensitivity import (
     Base,
     DoseTimeModel,
     Vary,

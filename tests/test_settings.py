@@ -11,7 +11,7 @@ import pytest
 
 from api.connection_limits import ConnectionLimits
 from api.http import app_from_env
-from dosing.gel_store import default_dir
+from dosing.fits.gel_store import default_dir
 from dosing.runs.cache import default_path
 from dosing.settings import fields, settings
 from solver.errors import ParameterError
@@ -62,7 +62,7 @@ def test_a_bad_value_names_its_variable(monkeypatch: pytest.MonkeyPatch) -> None
 
 
 def test_importing_dosing_reads_no_settings() -> None:
-    code = ("import sys, dosing, dosing.runs.cache, dosing.gel_store; "
+    code = ("import sys, dosing, dosing.runs.cache, dosing.fits.gel_store; "
             "print('pydantic_settings' in sys.modules)")
     out = subprocess.run([__import__("sys").executable, "-c", code], capture_output=True,
                          text=True, cwd=ROOT, check=True).stdout.strip()

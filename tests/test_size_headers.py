@@ -9,7 +9,7 @@ import json
 import pytest
 
 from api.cli import main
-from dosing.size_distribution import read_header, read_sizes_csv
+from dosing.population.sizes import read_header, read_sizes_csv
 from solver.equilibrium import equilibrium
 from solver.errors import ParameterError
 from solver.gel import ANB

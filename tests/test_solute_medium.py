@@ -64,9 +64,9 @@ def test_the_solver_entry_point_reproduces_the_old_kernel_bit_for_bit() -> None:
 
 
 def test_the_planner_names_are_the_solvers() -> None:
-    """The planner's drug batch (dosing.batch_drug, the one user of the coupled solve)
+    """The planner's drug batch (dosing.population.medium, the one user of the coupled solve)
     calls the solver's own names, with no physics of its own."""
-    import dosing.batch_drug as planner
+    import dosing.population.medium as planner
     import solver.solute.medium as medium
 
     assert planner.coupled_release is medium.coupled_release is coupled_release

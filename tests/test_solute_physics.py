@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from dosing.drug import DrugModel
+from dosing.payload.drug import DrugModel
 from dosing.units import PhysicalConstants, water_viscosity
 from solver.solute import Hindrance, Solute, simulate_release
 

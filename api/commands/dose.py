@@ -131,7 +131,7 @@ def print_lead(result: Any, what: str, explain: bool) -> None:
 
 
 def add_protocol_option(p: argparse.ArgumentParser, what: str) -> None:
-    """--protocol in place of --t-end (repeatable; the step grammar of dosing.heating)."""
+    """--protocol in place of --t-end (repeatable; the step grammar of dosing.heating.grammar)."""
     for action in p._actions:  # --protocol stands in for --t-end (checked in run)
         if action.dest == "t_end":
             action.required = False
@@ -168,7 +168,7 @@ def add_batch_options(p: argparse.ArgumentParser) -> None:
 
 def batch_distribution(args: argparse.Namespace) -> Any:
     """The size distribution the batch options give (None: a single bead)."""
-    from dosing.size_distribution import SizeDistribution, read_sizes_csv
+    from dosing.population.sizes import SizeDistribution, read_sizes_csv
 
     state = "swollen" if args.swollen_radius_um is not None else "dry"
     if args.sizes is not None:
@@ -360,7 +360,7 @@ def _heating(ans: Any) -> tuple[list[str] | None, float | None]:
     p = getattr(ans, "protocol", None)
     if p is None:
         return None, None
-    if isinstance(p, list):  # a fluid dose (dosing.protocol_dose.ProtocolDoseAnswer)
+    if isinstance(p, list):  # a fluid dose (dosing.heating.response.ProtocolDoseAnswer)
         return p, ans.temperature_at_dose
     return list(p.steps), p.temperature_at_dose  # a drug dose's (ProtocolDrugDose)
 

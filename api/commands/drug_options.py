@@ -12,7 +12,7 @@ DRUG_FIELDS = ("diffusivity_cm2_s", "solute_radius_nm", "hindrance", "mesh_size_
 
 
 def add_drug_options(p: argparse.ArgumentParser, required: bool = False) -> None:
-    """The drug in the pore fluid (dosing.drug.DrugModel); any of them switches the dose and
+    """The drug in the pore fluid (dosing.payload.drug.DrugModel); any of them switches the dose and
     schedule commands to drug doses."""
     g = p.add_argument_group("drug (a passive solute in the pore fluid)")
     g.add_argument("--drug-diffusivity-cm2-s", dest="diffusivity_cm2_s", type=float,
@@ -57,6 +57,6 @@ def drug_from_args(args: argparse.Namespace, always: bool = False) -> Any:
     given = {k: v for k, v in given.items() if v is not None}
     if not given and not always:
         return None  # a fluid answer: the drug's model (numba, scipy) is not imported
-    from dosing.drug import DrugModel
+    from dosing.payload.drug import DrugModel
 
     return DrugModel(**given)

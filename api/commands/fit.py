@@ -150,8 +150,8 @@ def _interval(iv: Any) -> str:
 
 def run_swelling(args: argparse.Namespace) -> int:
     """Fit, print, plot, save."""
-    from dosing.fit import data_dict, fit_swelling, read_swelling_csv
-    from dosing.gel_store import GelStore, check_name
+    from dosing.fits.gel import data_dict, fit_swelling, read_swelling_csv
+    from dosing.fits.gel_store import GelStore, check_name
 
     if args.save:
         check_name(args.save)
@@ -169,13 +169,13 @@ def run_swelling(args: argparse.Namespace) -> int:
     report = res.to_dict()
     report["read"] = read
     if args.compare_models:
-        from dosing.fit import compare_chi_models
+        from dosing.fits.gel import compare_chi_models
 
         report["model_comparison"] = compare_chi_models(
             data, sigma_t=args.sigma_t, size_rel_sigma=args.size_rel_sigma,
             objective=args.objective, fixed=dict(args.fix))
     if jump is not None:
-        from dosing.fit import dose_under_objectives
+        from dosing.fits.gel import dose_under_objectives
 
         report["dose_time_by_objective"] = dose_under_objectives(
             data, jump[0], jump[1], args.dose_fraction, sigma_t=args.sigma_t,
@@ -183,7 +183,7 @@ def run_swelling(args: argparse.Namespace) -> int:
             fits={args.objective: res})
     dd = data_dict(data)
     if args.out:
-        from dosing import export
+        from dosing.present import export
 
         report["file"] = str(export.save(res.to_xarray(request=request_of(args)), args.out))
     if args.save:
@@ -263,8 +263,8 @@ def _print_notes(res: Any, report: dict[str, Any]) -> None:
 def run_kinetics(args: argparse.Namespace) -> int:
     """Fit, print, plot, save."""
     from dosing import Planner, SolverSettings
-    from dosing.fit import data_dict, kinetics_report, read_kinetics_csv
-    from dosing.gel_store import GelStore, check_name, lookup
+    from dosing.fits.gel import data_dict, kinetics_report, read_kinetics_csv
+    from dosing.fits.gel_store import GelStore, check_name, lookup
 
     if args.save:
         check_name(args.save)
@@ -291,7 +291,7 @@ def run_kinetics(args: argparse.Namespace) -> int:
     report["read"] = read
     dd = data_dict(data)
     if args.out:
-        from dosing import export
+        from dosing.present import export
 
         report["file"] = str(export.save(res.to_xarray(request=request_of(args)), args.out))
     if args.save:
@@ -340,7 +340,7 @@ def run_kinetics(args: argparse.Namespace) -> int:
 def run_release(args: argparse.Namespace) -> int:
     """Fit D0 to a release curve, print (or JSON), plot."""
     from dosing import SolverSettings
-    from dosing.release_fit import fit_release, read_release_csv
+    from dosing.fits.release import fit_release, read_release_csv
 
     read: dict[str, Any] = {}
     t, y = read_release_csv(args.file, args.loaded_ug, read)

@@ -1,5 +1,5 @@
 """``--out FILE``: .npz (the run's own codec), .nc (netCDF with units and provenance) or
-.csv (tidy, ``name [unit]`` headers), chosen by the suffix (dosing.export)."""
+.csv (tidy, ``name [unit]`` headers), chosen by the suffix (dosing.present.export)."""
 
 from __future__ import annotations
 
@@ -55,11 +55,11 @@ class Saved(str):
 
 def save(path: str, save_npz: Callable[[str], Path], dataset: Callable[[], Any]) -> Saved:
     """Write ``path`` by its suffix: ``save_npz`` for .npz (and no suffix), else the
-    Dataset ``dataset()`` through :mod:`dosing.export` (.csv: the series at ``path``, the
+    Dataset ``dataset()`` through :mod:`dosing.present.export` (.csv: the series at ``path``, the
     profiles long form beside it, bounded; a table too large is refused naming .nc)."""
     suffix = Path(path).suffix
     if suffix == ".csv":
-        from dosing import export
+        from dosing.present import export
         from solver.errors import ParameterError
 
         try:
@@ -72,7 +72,7 @@ def save(path: str, save_npz: Callable[[str], Path], dataset: Callable[[], Any])
                                  "size", str(exc)) from None
         return Saved(files[0], files, notes)
     if suffix in (".nc", ".xlsx"):
-        from dosing import export
+        from dosing.present import export
         from solver.errors import ParameterError
 
         try:

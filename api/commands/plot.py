@@ -26,7 +26,7 @@ def run(args: argparse.Namespace) -> int:
 
     dry, tau = None, None
     if args.run.endswith(".nc"):
-        from dosing.export import open_netcdf, run_from_dataset
+        from dosing.present.export import open_netcdf, run_from_dataset
 
         ds = open_netcdf(args.run)
         res = run_from_dataset(ds)

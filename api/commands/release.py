@@ -54,7 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Simulate, then print (or JSON) the release."""
-    from dosing.drug import drug_settings
+    from dosing.payload.drug import drug_settings
     from dosing.request import bead_settings
     from dosing.runs.scenario import SolverSettings
     from dosing.units import timescale
@@ -115,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
            "solute_seconds": rel.diagnostics.get("wall_time")}
     if args.release_volume_ul is not None:
         out["medium_concentration_ug_per_ul"] = _medium(rel, drug, args, a0)
-    from dosing.drug import sieved_out
+    from dosing.payload.drug import sieved_out
 
     warning = sieved_out(solute, a0, float(rel.released_fraction[-1]),
                          float(np.max(rel.expelled_fraction)))
@@ -184,7 +184,7 @@ def _medium(rel: object, drug: object, args: argparse.Namespace, a0: float) -> l
 def _dataset(rel: object, args: argparse.Namespace, tau: object, settings: object) -> object:
     """The release run as an xarray Dataset with units and provenance (the run's own grid,
     cells and interfacial length: the resolved settings, whatever the options left unset)."""
-    from dosing.export import release_dataset
+    from dosing.present.export import release_dataset
 
     ell = settings.interfacial_length  # type: ignore[attr-defined]
     return release_dataset(

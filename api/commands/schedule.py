@@ -168,7 +168,7 @@ def print_events(events: list[dict[str, Any]]) -> None:
 
 def write_events(result: Any, args: argparse.Namespace) -> Path:
     """The answer's events (dosing.question.events) to ``args.out`` (.csv or .nc)."""
-    from dosing import export
+    from dosing.present import export
     from dosing.question.events import events_dataset
 
     from .outfile import request_of
@@ -182,7 +182,7 @@ def write_events(result: Any, args: argparse.Namespace) -> Path:
 def _plot(planner: Any, req: Any, ans: Any, path: str) -> None:
     """Cumulative drug through the corrected (else the checked) protocol."""
     from api.plots.release import draw_schedule_release
-    from dosing.drug_dose import DrugHeatings
+    from dosing.payload.release import DrugHeatings
     from dosing.runs.solute import runs_for
 
     res = ans.corrected if ans.corrected and ans.corrected.get("actuation_times") \
@@ -194,7 +194,7 @@ def _plot(planner: Any, req: Any, ans: Any, path: str) -> None:
 
 
 def print_batch_schedule(req: Any, ans: Any) -> None:
-    """A batch's schedule (dosing.batch_schedule) in words: its readings, nodes and errors."""
+    """A batch's schedule (dosing.population.cycles) in words: its readings, nodes and errors."""
     print(f"{req.gel.name} {req.t_start:g} K -> {req.t_end:g} K, a batch ({ans.description}), "
           f"doses {', '.join(f'{d:.0%}' for d in ans.doses)} of its stored fluid, rests "
           f"{', '.join(f'{r:.4g}' for r in ans.rests) or '-'} (reference tau "

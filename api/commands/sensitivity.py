@@ -1,4 +1,5 @@
-"""``thermogel sensitivity``: Sobol or Morris indices of the dose time (dosing.sensitivity)."""
+"""``thermogel sensitivity``: Sobol or Morris indices of the dose time
+(dosing.studies.sensitivity)."""
 
 from __future__ import annotations
 
@@ -33,7 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Compute and print the indices (or JSON), optionally the bar plot."""
-    from dosing.sensitivity import sensitivity
+    from dosing.studies.sensitivity import sensitivity
 
     res = sensitivity(gel_from_args(args), args.t_start, args.t_end, args.fraction,
                       args.vary, dry_radius_um=args.dry_radius_um, method=args.method,

@@ -35,17 +35,17 @@ def _pairs(text: str) -> list[tuple[float, float]]:
 def protocol_pairs(args: argparse.Namespace, dry_radius_um: float | None = None,
                    constants: Any = None) -> list[tuple[float, float]] | None:
     """The --protocol steps as (duration in tau, temperature) pairs: given so ('0.05:308,
-    0.5:302'), or steps of the heating grammar (dosing.heating: 'Heat to 308 K at 5 K/min',
+    0.5:302'), or steps of the heating grammar (dosing.heating.grammar: 'Heat to 308 K at 5 K/min',
     'Hold at 308 K for 2 min', baths, traces; repeatable or joined by ';'), run as their
-    staircase of holds (0.05 K stairs, dosing.heating_program.staircase; seconds through tau
+    staircase of holds (0.05 K stairs, dosing.heating.program.staircase; seconds through tau
     at the protocol's hottest temperature with a bead size); None without --protocol."""
     if not args.protocol:
         return None
     texts = [t.strip() for arg in args.protocol for t in arg.split(";") if t.strip()]
     if not any(c.isalpha() for t in texts for c in t):
         return [pair for t in texts for pair in _pairs(t)]
-    from dosing.heating import Protocol
-    from dosing.heating_program import staircase
+    from dosing.heating.grammar import Protocol
+    from dosing.heating.program import staircase
     from dosing.units import timescale
 
     prot = Protocol(args.t_start, texts)

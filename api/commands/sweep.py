@@ -72,7 +72,7 @@ def _validate_arg(text: str | None) -> Any:
 
 def gels_from_args(presets: list[str] | None, vary: list[str] | None) -> list[Any]:
     """The grid's gels: each preset, or each preset along the --vary axes."""
-    from dosing.sweep import vary_gel
+    from dosing.studies.sweep import vary_gel
 
     names = presets or ["ANB"]
     if not vary:
@@ -174,7 +174,7 @@ def _wait(planner: Any, result: Any, quiet: bool) -> None:
 
     from tqdm import tqdm
 
-    from dosing.sweep import fill_validations
+    from dosing.studies.sweep import fill_validations
 
     total = sum(1 for r in result.rows if r["validation_id"])
     with tqdm(total=total, desc="validations", unit="run", disable=quiet,
@@ -190,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from dosing import Planner, SolverSettings
-    from dosing.sweep import SweepGrid, run_sweep
+    from dosing.studies.sweep import SweepGrid, run_sweep
 
     settings = (None if args.interfacial_length is None
                 else SolverSettings(interfacial_length=args.interfacial_length))
@@ -219,7 +219,7 @@ def run(args: argparse.Namespace) -> int:
             _wait(planner, result, args.no_progress)
     table = result.to_dict()
     if args.out:
-        from dosing import export
+        from dosing.present import export
 
         print(f"wrote {export.save(result.to_xarray(request=request_of(args)), args.out)}",
               file=sys.stderr)

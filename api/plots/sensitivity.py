@@ -1,4 +1,4 @@
-"""Bar plot of global sensitivity indices of the dose time (dosing.sensitivity)."""
+"""Bar plot of global sensitivity indices of the dose time (dosing.studies.sensitivity)."""
 
 from __future__ import annotations
 

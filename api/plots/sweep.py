@@ -1,4 +1,4 @@
-"""Heat maps of a design map (``dosing.sweep``): actuation time with iso-time contours and
+"""Heat maps of a design map (``dosing.studies.sweep``): actuation time with iso-time contours and
 its validated error over T_end x bead size, one column per dose; points without a
 front-model answer are hatched grey."""
 

@@ -15,14 +15,14 @@ from fastapi import APIRouter
 from fastapi.responses import JSONResponse
 
 from dosing import PhysicalConstants, SolverSettings, UnknownValidationError
-from dosing.fit import (
+from dosing.fits.gel import (
     data_dict,
     fit_swelling,
     kinetics_data,
     kinetics_report,
     swelling_data,
 )
-from dosing.gel_store import GelStore, check_name
+from dosing.fits.gel_store import GelStore, check_name
 from solver.errors import ParameterError
 from solver.fit import fit_gel
 from solver.gel import Gel
@@ -65,7 +65,7 @@ def _swelling(_: Any, body: SwellingFitRequest) -> dict[str, Any]:
                        objective=body.objective, dry_size=body.dry_size)
     report = json_safe(res.to_dict())
     if body.dose_jump:
-        from dosing.fit import dose_under_objectives
+        from dosing.fits.gel import dose_under_objectives
 
         report["dose_time_by_objective"] = json_safe(dose_under_objectives(
             data, body.dose_jump[0], body.dose_jump[1], body.dose_fraction,
@@ -105,7 +105,7 @@ def _kinetics(planner: Any, body: KineticsFitRequest) -> dict[str, Any]:
 
 
 def _release_data(body: ReleaseFitRequest) -> tuple[Any, Any]:
-    from dosing.release_fit import release_data
+    from dosing.fits.release import release_data
 
     return release_data(body.time_s, body.released, body.released_unit, body.loaded_ug)
 
@@ -117,8 +117,8 @@ def _release_settings(body: ReleaseFitRequest) -> SolverSettings | None:
 
 
 def _release(_: Any, body: ReleaseFitRequest) -> dict[str, Any]:
-    """The release fit's report (a stored job's run; dosing.release_fit, f2)."""
-    from dosing.release_fit import fit_release
+    """The release fit's report (a stored job's run; dosing.fits.release, f2)."""
+    from dosing.fits.release import fit_release
 
     t, y = _release_data(body)
     prot = None if body.protocol is None else http_protocol(body.t_start, body.protocol)
@@ -166,7 +166,7 @@ def _check_body(body: SwellingFitRequest | KineticsFitRequest | ReleaseFitReques
         _release_settings(body)
         to_gel(body.gel)
         if body.protocol is not None:
-            from dosing.fit_release_protocol import parse_protocol
+            from dosing.fits.release_steps import parse_protocol
 
             if body.t_end is not None:
                 raise ParameterError("t_end", body.t_end, "null when a protocol is given")
@@ -218,7 +218,7 @@ async def fit_kinetics_route(body: KineticsFitRequest, state: StateDep) -> Any:
                         429: {"description": "too many jobs queued; retry later"}})
 async def fit_release_route(body: ReleaseFitRequest, state: StateDep) -> Any:
     """Fit a drug's free diffusivity D0 to a cumulative release curve, isothermal or under a
-    heating protocol, with f2 (dosing.release_fit): a job, poll status_url."""
+    heating protocol, with f2 (dosing.fits.release): a job, poll status_url."""
     return await compute(_submit, state, "release", body)
 
 

@@ -23,7 +23,7 @@ async def gels() -> dict[str, Any]:
 
 def fitted_gels_answer() -> list[dict[str, Any]]:
     """The stored fitted gels with their folds (blocking: reads the store)."""
-    from dosing.gel_store import GelStore
+    from dosing.fits.gel_store import GelStore
     from solver.equilibrium import folds
     from solver.gel import Gel
 

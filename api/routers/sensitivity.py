@@ -8,7 +8,7 @@ from typing import Any
 
 from fastapi import APIRouter
 
-from dosing.sensitivity import sensitivity
+from dosing.studies.sensitivity import sensitivity
 from dosing.units import PhysicalConstants
 
 from ..safe_route import SafeRoute

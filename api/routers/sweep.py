@@ -25,7 +25,7 @@ from pydantic import BaseModel, ConfigDict, Field, create_model, field_validator
 
 from dosing import JobRunner, SolverSettings, UnknownValidationError
 from dosing.runs.lru import ByteLRU
-from dosing.sweep import COLUMNS, SweepGrid, SweepResult, fill_validations, run_sweep
+from dosing.studies.sweep import COLUMNS, SweepGrid, SweepResult, fill_validations, run_sweep
 from solver.errors import ParameterError
 from solver.json_safe import json_safe
 from solver.limits import T_MAX, T_MIN
@@ -120,7 +120,7 @@ def _row_field(name: str, unit: str, description: str) -> tuple[Any, Any]:
     return kind | None, Field(None, description=f"{description} [{unit or 'text'}]")
 
 
-# one row of the table: a field per column of dosing.sweep.COLUMNS (the one definition)
+# one row of the table: a field per column of dosing.studies.sweep.COLUMNS (the one definition)
 SweepRow = create_model("SweepRow", __config__=ConfigDict(extra="allow"),
                         __doc__="One point of the sweep (a row of the table).",
                         **{name: _row_field(name, *spec) for name, spec in COLUMNS.items()})

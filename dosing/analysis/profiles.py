@@ -1,7 +1,7 @@
 """Release profiles as a pharmaceutics lab records them: cumulative release against time,
 one column per dosage unit (vessel, bead batch, tablet), read and checked once.
 
-A CSV is read with the column rules of ``dosing.fit_csv`` (units from the header: ``time_s``
+A CSV is read with the column rules of ``dosing.fits.csv_tables`` (units from the header: ``time_s``
 / ``time (min)`` / ``t [h]``; ``released`` as a fraction, ``released (%)`` or a mass
 ``released_ug`` with ``loaded_ug``), extended to replicate units: several release columns,
 named ``released_1 (%)``, ``unit 01 (%)``, ``vessel 2 [%]``, ``R3`` or the same release
@@ -27,7 +27,15 @@ import numpy as np
 from solver.errors import ParameterError
 
 from .. import quantity
-from ..fit_csv import _canonical, _delimiter, _number, _split_unit, _trim, _unit_factor, read_text
+from ..fits.csv_tables import (
+    _canonical,
+    _delimiter,
+    _number,
+    _split_unit,
+    _trim,
+    _unit_factor,
+    read_text,
+)
 
 MIN_POINTS = 3
 PERCENT_RANGE = (-5.0, 105.0)  # a release outside it is a unit or typing error

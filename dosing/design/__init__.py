@@ -1,7 +1,7 @@
 """Design (issue 39): the heating that meets a target, and the experiment that pins the
 model.
 
-    from dosing.design import HeatingTarget, design_heating, ExperimentAsk, design_experiment
+    from . import HeatingTarget, design_heating, ExperimentAsk, design_experiment
     out = design_heating(HeatingTarget("ANB", 302, at_seconds=60, fraction=0.5,
                                        dry_radius_um=50, validate=True), planner)
     out.value            # the jump temperature (K) at which 50 % is out at 60 s

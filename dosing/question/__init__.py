@@ -1,7 +1,7 @@
 """One request, one answer: the planner as one pipeline over payload x population x heating
 x question (issue 35).
 
-    from dosing.question import Request, Jump, Dose, Batch, plan
+    from . import Request, Jump, Dose, Batch, plan
     ans = plan(Request("ANB", 302, Jump(308), Dose(0.8), population=Batch({"cv": 0.2}),
                        dry_radius_um=50))
     ans.seconds            # the batch's own time: the answer to the question asked

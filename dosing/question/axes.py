@@ -7,7 +7,7 @@ size, constants, truth settings) and one value of each axis:
   (a solute in it, with its medium);
 - population: :class:`OneBead` or :class:`Batch` (a size distribution or table);
 - heating: :class:`Jump` (T_start -> T_end at once, the paper's) or :class:`Heating` (the
-  step grammar of ``dosing.heating``: ramps, holds, baths, traces);
+  step grammar of ``dosing.heating.grammar``: ramps, holds, baths, traces);
 - question: :class:`Dose` (when is it out) or :class:`Schedule` (several doses with rests).
 
 Each value names itself (``key``) and gives the fields it contributes to the planner's
@@ -54,9 +54,9 @@ class Fluid:
 @dataclass(frozen=True)
 class Drug:
     """The payload is a drug dissolved in the pore fluid (``model``: a
-    ``dosing.drug.DrugModel`` or a dict of its fields), ``wait`` (tau) or ``wait_seconds`` at
-    T_start before the first heating; a batch shares a well-mixed ``medium_volume_ml`` with
-    ``bead_count`` beads (neither: a perfect sink)."""
+    ``dosing.payload.drug.DrugModel`` or a dict of its fields), ``wait`` (tau) or
+    ``wait_seconds`` at T_start before the first heating; a batch shares a well-mixed
+    ``medium_volume_ml`` with ``bead_count`` beads (neither: a perfect sink)."""
 
     model: Any
     wait: float | None = None
@@ -128,7 +128,7 @@ class OneBead:
 
 @dataclass(frozen=True)
 class Batch:
-    """A batch of beads: ``sizes`` is a ``dosing.size_distribution.SizeDistribution``, a
+    """A batch of beads: ``sizes`` is a ``dosing.population.sizes.SizeDistribution``, a
     measured table (``DrySizes``) or a dict of the distribution's fields."""
 
     sizes: Any
@@ -173,8 +173,8 @@ class Jump:
 
 @dataclass(frozen=True)
 class Heating:
-    """Heating by a protocol of steps (texts, dicts or a ``dosing.heating.Protocol``; the
-    grammar of ``dosing.heating``) from T_start; after the last step the bead holds at the
+    """Heating by a protocol of steps (texts, dicts or a ``dosing.heating.grammar.Protocol``; the
+    grammar of ``dosing.heating.grammar``) from T_start; after the last step the bead holds at the
     last temperature."""
 
     steps: Any
@@ -189,7 +189,7 @@ class Heating:
     @staticmethod
     def lattice(planned: Any, settings: Any, target: float) -> Any:
         """The protocol's run under ``settings`` (the envelope's delayed-law lattice)."""
-        from ..protocol_dose import lattice_scenario
+        from ..heating.response import lattice_scenario
 
         return lattice_scenario(planned, settings, target)
 

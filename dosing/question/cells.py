@@ -51,7 +51,7 @@ def _fluid_dose(request: Any) -> Any:
 
 
 def _drug_dose(request: Any) -> Any:
-    from ..drug_dose import DrugDoseRequest
+    from ..payload.release import DrugDoseRequest
 
     q = request.question
     for name, value in (("dose_volume_ul", q.volume_ul),
@@ -71,7 +71,7 @@ def _drug_one_dose(request: Any) -> Any:
 
 def _drug_batch_dose(request: Any) -> Any:
     """The reference bead's drug dose, its batch's medium checked before any run."""
-    from ..batch_drug import bead_count, medium_volume_ml
+    from ..population.medium import bead_count, medium_volume_ml
 
     p = request.payload
     if (p.medium_volume_ml is None) != (p.bead_count is None):
@@ -115,7 +115,7 @@ def _fluid_schedule(request: Any) -> Any:
 
 
 def _batch_schedule(request: Any) -> Any:
-    from ..batch_schedule import reference_fields, schedule_sizes
+    from ..population.cycles import reference_fields, schedule_sizes
     from ..request import ScheduleRequest
 
     q = request.question
@@ -129,7 +129,7 @@ def _batch_schedule(request: Any) -> Any:
 
 
 def _drug_schedule(request: Any) -> Any:
-    from ..drug_schedule import DrugScheduleRequest
+    from ..payload.cycles import DrugScheduleRequest
 
     q = request.question
     _one_medium(request)
@@ -140,8 +140,8 @@ def _drug_schedule(request: Any) -> Any:
 
 def _drug_batch_schedule(request: Any) -> Any:
     """A drug batch's schedule: into a perfect sink, doses of the batch's load, no wait."""
-    from ..batch_schedule import reference_fields, schedule_sizes
-    from ..drug_schedule import DrugScheduleRequest
+    from ..payload.cycles import DrugScheduleRequest
+    from ..population.cycles import reference_fields, schedule_sizes
 
     q, p = request.question, request.payload
     _one_medium(request)  # a shared medium is planned for a drug batch's dose only
@@ -185,7 +185,7 @@ def _with_batch(bead: Any, batch: Any) -> Any:
 
 
 def _batch_jump_now(planner: Any, request: Any) -> DoseResult | Pending | None:
-    from ..batch import batch_answer
+    from ..population.front import batch_answer
 
     if request.validate:  # the truth per interfacial-length band: a job
         return None
@@ -197,8 +197,8 @@ def _batch_jump_now(planner: Any, request: Any) -> DoseResult | Pending | None:
 
 
 def _batch_jump_run(planner: Any, request: Any) -> DoseResult:
-    from ..batch import batch_answer
-    from ..batch_truth import validated_batch
+    from ..population.bands import validated_batch
+    from ..population.front import batch_answer
 
     req = request.planned
     try:
@@ -211,7 +211,7 @@ def _batch_jump_run(planner: Any, request: Any) -> DoseResult:
 def _batch_protocol_now(planner: Any, request: Any) -> DoseResult | Pending | None:
     """The reduced model at every node (milliseconds); a node outside its region needs
     the full solver: from the cache when every run is there, else None (a job)."""
-    from ..batch_protocol import OutsideRegion, batch_protocol_answer
+    from ..population.curves import OutsideRegion, batch_protocol_answer
 
     try:
         batch = batch_protocol_answer(request.planned, validate=request.validate)
@@ -224,7 +224,7 @@ def _batch_protocol_now(planner: Any, request: Any) -> DoseResult | Pending | No
 
 
 def _batch_protocol_run(planner: Any, request: Any) -> DoseResult:
-    from ..batch_protocol import batch_protocol_answer
+    from ..population.curves import batch_protocol_answer
 
     batch = batch_protocol_answer(request.planned, validate=request.validate,
                                   planner=planner)
@@ -233,21 +233,21 @@ def _batch_protocol_run(planner: Any, request: Any) -> DoseResult:
 
 # ------------------------------------------------------------------ drug doses
 def _drug_now(planner: Any, request: Any) -> DoseResult | None:
-    from ..drug_dose import drug_dose_now
+    from ..payload.release import drug_dose_now
 
     ans = drug_dose_now(planner, request.planned, validate=request.validate)
     return None if ans is None else DoseResult(request.cell_name, ans)
 
 
 def _drug_run(planner: Any, request: Any) -> DoseResult:
-    from ..drug_dose import plan_drug_dose
+    from ..payload.release import plan_drug_dose
 
     return DoseResult(request.cell_name, plan_drug_dose(planner, request.planned,
                                                         validate=request.validate))
 
 
 def _drug_batch_run(planner: Any, request: Any) -> DoseResult:
-    from ..batch_drug import drug_batch_dose
+    from ..population.medium import drug_batch_dose
 
     p = request.payload
     return DoseResult(request.cell_name, None, batch=drug_batch_dose(
@@ -265,21 +265,21 @@ def _schedule_run(planner: Any, request: Any) -> ScheduleResult:
 
 
 def _batch_schedule_run(planner: Any, request: Any) -> ScheduleResult:
-    from ..batch_schedule import batch_schedule_with
+    from ..population.cycles import batch_schedule_with
 
     return ScheduleResult(request.cell_name, batch_schedule_with(
         planner, request.planned, request.population.sizes), tags={"batch": True})
 
 
 def _drug_batch_schedule_run(planner: Any, request: Any) -> ScheduleResult:
-    from ..batch_schedule import drug_batch_schedule_with
+    from ..population.cycles import drug_batch_schedule_with
 
     return ScheduleResult(request.cell_name, drug_batch_schedule_with(
         planner, request.planned, request.population.sizes), tags={"batch": True})
 
 
 def _drug_schedule_now(planner: Any, request: Any) -> ScheduleResult | None:
-    from ..drug import carried_by_fluid
+    from ..payload.drug import carried_by_fluid
 
     req = request.planned
     if req.check_protocol or req.correct or not carried_by_fluid(req.solute):
@@ -288,7 +288,7 @@ def _drug_schedule_now(planner: Any, request: Any) -> ScheduleResult | None:
 
 
 def _drug_schedule_run(planner: Any, request: Any) -> ScheduleResult:
-    from ..drug_schedule import plan_drug_schedule
+    from ..payload.cycles import plan_drug_schedule
 
     return ScheduleResult(request.cell_name, plan_drug_schedule(planner, request.planned))
 

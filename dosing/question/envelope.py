@@ -488,11 +488,11 @@ def lattice_time(planner: Any, sc: Any, target: float) -> float:
 
 def calibration_ratio(planned: Any) -> float | None:
     """delayed / Maxwell time on a calibrated gel's own kinetics curve (the Maxwell fit's
-    tau over the delayed fit's, both stored by ``dosing.fit.kinetics_report``), or None."""
+    tau over the delayed fit's, both stored by ``dosing.fits.gel.kinetics_report``), or None."""
     constants = getattr(planned, "constants", None)
     if constants is None or not getattr(constants, "calibrated", False):
         return None
-    from ..gel_store import record_for
+    from ..fits.gel_store import record_for
 
     try:
         rec = record_for(planned.gel) or {}

@@ -85,7 +85,7 @@ def _fmt_s(seconds: float | None, tau_value: float) -> str:
 
 
 def piece_text(p: Any, tau_s: float | None) -> str:
-    """One program piece (``dosing.heating.Piece``, in tau) in the step grammar's words."""
+    """One program piece (``dosing.heating.grammar.Piece``, in tau) in the step grammar's words."""
     d = float(p.duration or 0.0)
     span = _fmt_s(_seconds(d, tau_s), d)
     if p.shape == "ramp":
@@ -105,7 +105,7 @@ def piece_text(p: Any, tau_s: float | None) -> str:
 def _protocol_heating(req: Any, tau_s: float | None, duration: float) -> tuple[float, str]:
     """(set temperature at the heating's end, its steps in words) of a protocol heating of
     ``duration`` tau."""
-    from ..heating_cycles import _end, heating_pieces
+    from ..heating.cycles import _end, heating_pieces
 
     pieces = heating_pieces(req.heating.program(tau_s), float(duration))
     return _end(pieces[-1]), "; ".join(piece_text(p, tau_s) for p in pieces)
@@ -118,9 +118,9 @@ def _get(values: Sequence[Any] | None, k: int) -> Any:
 def schedule_events(answer: Any, req: Any) -> list[dict[str, Any]]:
     """The answer's schedule as events (module doc): one dict per step, in order.
 
-    ``answer``: a fluid (``dosing.schedule.ScheduleAnswer``), drug
-    (``dosing.drug_schedule.DrugScheduleAnswer``) or batch
-    (``dosing.batch_schedule.BatchScheduleAnswer``) schedule answer; ``req``: the planner's
+    ``answer``: a fluid (``dosing.question.schedule.ScheduleAnswer``), drug
+    (``dosing.payload.cycles.DrugScheduleAnswer``) or batch
+    (``dosing.population.cycles.BatchScheduleAnswer``) schedule answer; ``req``: the planner's
     request it answers (its temperatures, heating, rests and a drug's wait)."""
     reading, res = reading_of(answer)
     tau = getattr(answer, "timescale_seconds", None)
@@ -214,7 +214,7 @@ def events_frame(events: Sequence[dict[str, Any]], attrs: dict[str, Any] | None 
     """The events as a pandas DataFrame, one row per step, columns ``name [unit]``."""
     import pandas as pd
 
-    # ``name [unit]`` as every tidy table (dosing.export.header), no brackets without one
+    # ``name [unit]`` as every tidy table (dosing.present.export.header), no brackets without one
     cols = {(f"{name} [{unit}]" if unit else name): [e.get(name) for e in events]
             for name, (unit, _) in EVENT_COLUMNS.items()}
     df = pd.DataFrame(cols)

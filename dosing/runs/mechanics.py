@@ -16,9 +16,9 @@ from typing import Any
 
 from solver.equilibrium import equilibrium
 
-from ..drug import drug_settings
-from ..heating import Protocol
-from ..heating_program import program_spec, solver_program
+from ..heating.grammar import Protocol
+from ..heating.program import program_spec, solver_program
+from ..payload.drug import drug_settings
 from ..request import bead_settings
 from ..units import PhysicalConstants, timescale
 from .full import full_solver
@@ -90,6 +90,6 @@ def jump_mechanics(gel: Any, t_start: float, t_end: float, branch: str | None,
                    settings: Any, horizon: float) -> Any:
     """A drug run's mechanics of the jump to ``t_end`` held for ``horizon`` tau (a batch's
     reference bead, every class resting after its end; memoised, a FullResult)."""
-    from ..drug import simulate_protocol
+    from ..payload.drug import simulate_protocol
 
     return simulate_protocol(gel, t_start, [(horizon, t_end)], branch or "swollen", settings)

@@ -257,7 +257,7 @@ class Scenario:
     protocol: tuple[Step, ...] | None = None
     branch: str = "swollen"
     settings: SolverSettings = field(default_factory=SolverSettings)
-    # a continuous temperature program (dosing.heating_program.program_spec) and the
+    # a continuous temperature program (dosing.heating.program.program_spec) and the
     # radius at which its run stops (a terminal event); in place of t_end / protocol
     program: Any = None
     stop: float | None = None
@@ -369,8 +369,8 @@ def _simulate(sc: Scenario, horizon: float, budget: float, solver: Solver,
     if sc.protocol is not None and restart.restartable(solver):
         res = rec = restart.run_protocol(sc, solver, budget, start)
     else:
-        if sc.program is not None:  # a continuous temperature program (dosing.heating)
-            from ..heating_program import solver_program
+        if sc.program is not None:  # a continuous temperature program (dosing.heating.grammar)
+            from ..heating.program import solver_program
 
             kw = {"protocol": solver_program(sc.program), "stop": sc.stop}
         else:

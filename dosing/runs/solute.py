@@ -1,4 +1,4 @@
-"""The store's drug runs: a drug's mechanics and its solute (``dosing.drug``), in memory
+"""The store's drug runs: a drug's mechanics and its solute (``dosing.payload.drug``), in memory
 and in the cache file's ``drug_runs`` table, run on the store's executor; a run whose
 protocol starts with a kept run's steps continues from that run's state (its mechanics,
 and its solute when it is the same drug)."""
@@ -16,7 +16,14 @@ from typing import Any
 from solver.errors import SolverError
 from solver.solute import ReleaseResult
 
-from ..drug import DrugScenario, Step, drug_settings, from_npz, mechanics_prefix, run_drug_scenario
+from ..payload.drug import (
+    DrugScenario,
+    Step,
+    drug_settings,
+    from_npz,
+    mechanics_prefix,
+    run_drug_scenario,
+)
 from .cache import ValidationCache
 from .lru import ByteLRU
 

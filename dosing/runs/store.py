@@ -314,7 +314,7 @@ class RunStore:
         if retry:
             self.cache.forget_job(RUN_FAILURE + key)
             return None
-        from .runs.jobs import WorkerDied
+        from .jobs import WorkerDied
 
         return WorkerDied(row["error"] or "its pool worker died while it ran")
 

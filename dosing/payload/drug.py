@@ -1,0 +1,573 @@
+"""The drug: physical parameters, their dimensionless solute, and full-solver drug runs.
+
+A drug is a passive solute in the pore fluid (solver/solute).  Its diffusivity in water D0
+is given at a stated reference temperature (``reference_temperature_k``, default 25 degC)
+and carried to T_end by Stokes-Einstein with water's viscosity,
+D0(T) = D0(T_ref) (T / T_ref) eta_w(T_ref) / eta_w(T); its Stokes-Einstein radius is
+k_B T_ref / (6 pi eta_w(T_ref) D0(T_ref)) (or given, then D0(T) = k_B T / (6 pi eta_w(T)
+r_s)).  D0(T_end) is scaled by the gel's own D = R^2 / tau = k0 k_B T_end / (eta Omega_p)
+(eq. timescale), so one dimensionless run serves every bead size.  The hindrance (module
+``solver.solute.hindrance``): diffusion by Lustig & Peppas' free-volume law (default),
+Ogston-Preston-Wells, Amsden or none; convective sieving of the expelled fluid's solute;
+the partition K0 K_s(phi).  The gel's mesh is one length per gel: its dry mesh xi_dry =
+``PhysicalConstants.mesh_length_nm`` (the same length that sets the interfacial length),
+affine in the local (smallest principal) stretch; ``mesh_size_nm`` (the swollen mesh at
+T_start, xi_dry = mesh_size_nm / a0) overrides it for the drug alone, and the answer says
+so.  The retained solute's osmotic pressure is neglected: Staverman-van 't Hoff,
+Pi = sigma c R T with sigma = 1 - W <= 1, over the stress scale k_B T / Omega_p is at most
+c N_A Omega_p (the default Omega_p = Omega Omega_f, 3e-27 m^3 for ANB: 1.8e-6 per uM;
+the paper's 3e-25 m^3: 1.8e-4 per uM), times the enrichment of a
+retaining shell (at most the fluid's volume ratio a0^3 / a^3 ~ 10): below 2 % of the stress
+scale for retained loads under ~10 uM with the paper's Omega_p (0.7 mg/mL of a 66 kDa
+protein; ~1 mM with the default); small drugs pass the
+mesh (sigma ~ 0) and exert none.  Above that the answer overstates the collapse.
+A drug run is the full solver (Lagrangian grid, outputs at every protocol boundary
+and densely between them) followed by the solute on its cells; runs are cached per
+dimensionless drug scenario in the planner's SQLite file (own table, so nothing of the
+validation cache is touched).
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import io
+import json
+import math
+import time
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from solver.errors import ParameterError
+from solver.gel import Gel
+from solver.limits import T_MAX, T_MIN
+from solver.solute import Hindrance, ReleaseResult, Solute, crank_sphere
+from solver.solute.result import RELEASE_ARRAYS
+
+from ..runs.scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
+from ..units import (
+    BOLTZMANN,
+    REFERENCE_TEMPERATURE_K,
+    UM3_PER_UL,
+    PhysicalConstants,
+    water_viscosity,
+)
+
+# mechanics samples per unit time (at least MIN_SAMPLES per step): benchmarks/drug.py measures
+# the released fraction within 3e-3 of the load (1e-3 with sieving) at a cost <= 1.5 x
+SAMPLES_PER_TAU = 2000
+MIN_SAMPLES = 200
+# and geometric outputs from EARLY_OUTPUT tau after each step's start up to its first uniform
+# output, EARLY_PER_DECADE a decade: between outputs the solute code takes the bead to
+# shrink linearly in time, which the first 5e-4 tau of a jump are not (issue 23's reduced
+# drug model measured a fast drug's 10 % dose 17 % late without them, ANB, 1e-7 cm^2/s)
+EARLY_OUTPUT = 1e-6
+EARLY_PER_DECADE = 40
+D_RANGE_CM2_S = (0.0, 1e-3)
+HINDRANCE_LAWS = ("free-volume", "ogston", "amsden", "none")
+T_REF_RANGE = (T_MIN, T_MAX)  # solver.limits
+
+
+def _opt_positive(name: str, value: Any) -> float | None:
+    if value is None:
+        return None
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        x = math.nan
+    if isinstance(value, bool) or not (math.isfinite(x) and x > 0.0):
+        raise ParameterError(name, value, "a finite number > 0")
+    return x
+
+
+@dataclass(frozen=True)
+class DrugModel:
+    """A drug dissolved in the pore fluid, in physical units (validated on construction).
+
+    ``diffusivity_cm2_s`` D0 in water at ``reference_temperature_k`` (0: carried by the
+    fluid alone), or ``solute_radius_nm`` (D0 from Stokes-Einstein with water's viscosity);
+    ``hindrance`` law; ``mesh_size_nm`` of the swollen gel at T_start (default None: the
+    gel's own dry mesh, ``PhysicalConstants.mesh_length_nm``, affine in the stretch),
+    ``fiber_radius_nm`` (Ogston, Amsden; with it the partition's steric part is Ogston's
+    K_s(phi) unless ``partition_law`` says "constant"), ``free_volume_y`` Y; ``sieving``
+    (the convective sieving of the fluid's solute, on by default; hindrance "none" turns
+    every hindrance off); ``partition`` K0 = c_pore / c_medium (the affinity);
+    ``release_volume_ul`` of a well-mixed medium (None: a perfect sink); ``load_ug`` drug per
+    bead, or ``loading_concentration_ug_per_ul`` of the loading solution (the pore fluid
+    holds K times it).
+    """
+
+    diffusivity_cm2_s: float | None = None
+    solute_radius_nm: float | None = None
+    hindrance: str = "free-volume"
+    mesh_size_nm: float | None = None
+    fiber_radius_nm: float | None = None
+    free_volume_y: float = 1.0
+    partition: float = 1.0
+    release_volume_ul: float | None = None
+    load_ug: float | None = None
+    loading_concentration_ug_per_ul: float | None = None
+    reference_temperature_k: float = REFERENCE_TEMPERATURE_K
+    sieving: bool = True
+    partition_law: str | None = None
+    mesh_stretch: str = "smallest"
+
+    def __post_init__(self) -> None:
+        d = self.diffusivity_cm2_s
+        if d is not None:
+            try:
+                x = float(d)
+            except (TypeError, ValueError):
+                x = math.nan
+            if isinstance(d, bool) or not (math.isfinite(x)
+                                           and D_RANGE_CM2_S[0] <= x <= D_RANGE_CM2_S[1]):
+                raise ParameterError("drug.diffusivity_cm2_s", d,
+                                     f"a finite number {D_RANGE_CM2_S[0]:g} <= D0 <= "
+                                     f"{D_RANGE_CM2_S[1]:g} cm^2/s (0: no diffusion)")
+            object.__setattr__(self, "diffusivity_cm2_s", x)
+        for name in ("solute_radius_nm", "mesh_size_nm", "fiber_radius_nm", "release_volume_ul",
+                     "load_ug", "loading_concentration_ug_per_ul"):
+            object.__setattr__(self, name, _opt_positive(f"drug.{name}", getattr(self, name)))
+        if self.hindrance not in HINDRANCE_LAWS:
+            raise ParameterError("drug.hindrance", self.hindrance,
+                                 " or ".join(map(repr, HINDRANCE_LAWS)))
+        y = _opt_positive("drug.free_volume_y", self.free_volume_y)
+        if y is None or y > 100.0:
+            raise ParameterError("drug.free_volume_y", self.free_volume_y, "0 < Y <= 100")
+        object.__setattr__(self, "free_volume_y", y)
+        k = _opt_positive("drug.partition", self.partition)
+        if k is None or not 1e-6 <= k <= 1e6:
+            raise ParameterError("drug.partition", self.partition, "1e-6 <= K <= 1e6 (> 0)")
+        object.__setattr__(self, "partition", k)
+        if self.load_ug is not None and self.loading_concentration_ug_per_ul is not None:
+            raise ParameterError("drug.loading_concentration_ug_per_ul",
+                                 self.loading_concentration_ug_per_ul,
+                                 "None when drug.load_ug is given (give one of them)")
+        if self.hindrance in ("ogston", "amsden") and self.fiber_radius_nm is None:
+            raise ParameterError("drug.fiber_radius_nm", None,
+                                 f"a finite number > 0 (nm) for the {self.hindrance} law")
+        tr = self.reference_temperature_k
+        try:
+            x = float(tr)
+        except (TypeError, ValueError):
+            x = math.nan
+        if isinstance(tr, bool) or not (math.isfinite(x) and T_REF_RANGE[0] <= x
+                                        <= T_REF_RANGE[1]):
+            raise ParameterError("drug.reference_temperature_k", tr,
+                                 f"{T_REF_RANGE[0]:g}-{T_REF_RANGE[1]:g} K (liquid water)")
+        object.__setattr__(self, "reference_temperature_k", x)
+        if not isinstance(self.sieving, bool):
+            raise ParameterError("drug.sieving", self.sieving, "true or false")
+        if self.partition_law not in (None, "constant", "ogston"):
+            raise ParameterError("drug.partition_law", self.partition_law,
+                                 "None (Ogston's with a fibre radius, else constant), "
+                                 "'constant' or 'ogston'")
+        if self.partition_law == "ogston" and self.fiber_radius_nm is None:
+            raise ParameterError("drug.fiber_radius_nm", None,
+                                 "a finite number > 0 (nm) for Ogston's partition")
+        if self.mesh_stretch not in ("smallest", "volume"):
+            raise ParameterError("drug.mesh_stretch", self.mesh_stretch,
+                                 "'smallest' (default) or 'volume'")
+
+    # ------------------------------------------------------------------ physical values
+    def d0_cm2_s(self, t_end: float, constants: PhysicalConstants | None = None) -> float:
+        """D0 in water at ``t_end``: the given D0(T_ref) carried by Stokes-Einstein with
+        water's viscosity, or Stokes-Einstein from the solute radius, or 0 (``constants``
+        is not used: the drug diffuses in water whatever the gel's timescale assumes)."""
+        if self.diffusivity_cm2_s is not None:
+            t_ref = self.reference_temperature_k
+            return float(self.diffusivity_cm2_s) * (t_end / t_ref) * (
+                water_viscosity(t_ref) / water_viscosity(t_end))
+        if self.solute_radius_nm is not None:
+            return (BOLTZMANN * t_end / (6.0 * math.pi * water_viscosity(t_end)
+                                         * self.solute_radius_nm * 1e-9) * 1e4)
+        return 0.0
+
+    def solute_radius(self, t_end: float | None = None,
+                      constants: PhysicalConstants | None = None) -> float | None:
+        """r_s in nm: given, or Stokes-Einstein from D0 at the reference temperature with
+        water's viscosity there (None without either)."""
+        if self.solute_radius_nm is not None:
+            return self.solute_radius_nm
+        d = self.diffusivity_cm2_s
+        if d is None or d <= 0.0:
+            return None
+        t_ref = self.reference_temperature_k
+        return BOLTZMANN * t_ref / (6.0 * math.pi * water_viscosity(t_ref) * d * 1e-4) * 1e9
+
+    def dry_mesh_nm(self, start_radius: float, constants: PhysicalConstants) -> float:
+        """The dry mesh length xi_dry for the sieving: the gel's (the constants' mesh
+        length, the interfacial length's) unless ``mesh_size_nm`` overrides it."""
+        if self.mesh_size_nm is not None:
+            return self.mesh_size_nm / start_radius
+        return float(constants.mesh_length_nm)
+
+    def mesh_note(self, start_radius: float, constants: PhysicalConstants) -> str:
+        """The mesh the answer assumes, in words."""
+        xi = self.dry_mesh_nm(start_radius, constants)
+        rs = self.solute_radius()
+        src = (f"drug.mesh_size_nm = {self.mesh_size_nm:g} nm at T_start (overrides, for the "
+               f"drug only, the gel's mesh_length_nm = {constants.mesh_length_nm:g} nm of the "
+               "interfacial length)" if self.mesh_size_nm is not None
+               else "the gel's mesh_length_nm (the interfacial length's)")
+        size = "no solute radius" if rs is None else f"r_s = {rs:.3g} nm (Stokes-Einstein at " \
+            f"{self.reference_temperature_k:g} K)" if self.solute_radius_nm is None \
+            else f"r_s = {rs:.3g} nm"
+        return (f"Dry mesh xi_dry = {xi:.3g} nm from {src}, affine in the {self.mesh_stretch} "
+                f"principal stretch (swollen start {xi * start_radius:.3g} nm); {size}; "
+                + ("convective sieving W(r_s/xi) on" if self.sieving and
+                   self.hindrance != "none" else "no convective sieving")
+                + f"; partition {self.partition_law_used()}.")
+
+    def partition_law_used(self) -> str:
+        """'ogston' or 'constant' (the default: Ogston's with a fibre radius)."""
+        if self.hindrance == "none":
+            return "constant"
+        if self.partition_law is not None:
+            return self.partition_law
+        return "ogston" if self.fiber_radius_nm is not None else "constant"
+
+    def hindrance_law(self, start_radius: float, t_end: float,
+                      constants: PhysicalConstants) -> Hindrance:
+        """The dimensionless law: mesh r_s / xi_dry, fibre r_s / r_f (module
+        ``solver.solute.hindrance``)."""
+        if self.hindrance == "none":
+            return Hindrance("none", convective=False)
+        rs = self.solute_radius(t_end, constants)
+        if rs is None and self.hindrance in ("ogston", "amsden"):
+            raise ParameterError("drug.solute_radius_nm", None,
+                                 f"a finite number > 0 (nm; or D0 > 0) for the "
+                                 f"{self.hindrance} law")
+        if rs is None and self.mesh_size_nm is not None:
+            raise ParameterError("drug.solute_radius_nm", None, "a finite number > 0 "
+                                 "(nm; or D0 > 0) for the sieving by drug.mesh_size_nm")
+        mesh = 0.0 if rs is None else min(rs / self.dry_mesh_nm(start_radius, constants),
+                                          100.0)
+        fiber = 0.0 if rs is None or self.fiber_radius_nm is None else min(
+            rs / self.fiber_radius_nm, 100.0)
+        return Hindrance(self.hindrance, sieve=fiber if self.hindrance == "ogston" else mesh,
+                         y=self.free_volume_y, mesh=mesh, fiber=fiber,
+                         partition_law=self.partition_law_used(), convective=self.sieving,
+                         mesh_stretch=self.mesh_stretch)
+
+    def load(self, stored_fluid_ul: float | None, start_radius: float | None = None,
+             constants: PhysicalConstants | None = None) -> float | None:
+        """The drug per bead in ug: given, or K c_loading x the stored fluid with
+        K = K0 K_s(phi0) (the steric part at the start state when ``start_radius`` and
+        ``constants`` are given and the partition law is Ogston's; else K0), or None."""
+        if self.load_ug is not None:
+            return self.load_ug
+        if self.loading_concentration_ug_per_ul is not None and stored_fluid_ul is not None:
+            steric = 1.0
+            if start_radius is not None and constants is not None:
+                law = self.hindrance_law(start_radius, 298.15, constants)
+                steric = float(law.steric_partition(1.0 - 1.0 / start_radius**3))
+            return (self.partition * steric * self.loading_concentration_ug_per_ul
+                    * stored_fluid_ul)
+        return None
+
+    def solute(self, start_radius: float, t_end: float, constants: PhysicalConstants,
+               dry_radius_um: float | None) -> Solute:
+        """The dimensionless solute (D0 in units of the gel's R^2 / tau, volumes in
+        4 pi R^3 / 3); a release volume needs the bead size and must hold the bead."""
+        d_gel = constants.diffusivity(t_end) * 1e4  # cm^2/s
+        vol = None
+        if self.release_volume_ul is not None:
+            if dry_radius_um is None:
+                raise ParameterError("dry_radius_um", None, "a finite number > 0 (um; or "
+                                     "swollen_radius_um) to use drug.release_volume_ul")
+            unit = 4.0 * math.pi / 3.0 * dry_radius_um**3 / UM3_PER_UL  # uL
+            vol = self.release_volume_ul / unit
+            if not vol > start_radius**3:
+                raise ParameterError("drug.release_volume_ul", self.release_volume_ul,
+                                     f"> {start_radius**3 * unit:.4g} uL (the swollen bead's "
+                                     "volume: the medium must hold the bead)")
+        return Solute(diffusivity=self.d0_cm2_s(t_end, constants) / d_gel,
+                      hindrance=self.hindrance_law(start_radius, t_end, constants),
+                      partition=self.partition, release_volume=vol)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form."""
+        return asdict(self)
+
+    @classmethod
+    def from_any(cls, value: DrugModel | dict[str, Any]) -> DrugModel:
+        """A DrugModel from itself or a dict of its fields."""
+        if isinstance(value, DrugModel):
+            return value
+        if isinstance(value, dict):
+            try:
+                return cls(**value)
+            except TypeError as exc:
+                raise ParameterError("drug", value, f"a dict of {', '.join(asdict(cls()))}"
+                                     ) from exc
+        raise ParameterError("drug", value, "a DrugModel or a dict of its fields")
+
+
+def carried_by_fluid(solute: Solute) -> bool:
+    """True if the drug leaves exactly with the fluid on one heating: no diffusion and no
+    convective sieving (a D0 = 0 solute that the mesh sieves is retained, not carried)."""
+    h = solute.hindrance
+    return solute.diffusivity == 0.0 and not (h.convective and h.mesh_ratio > 0.0)
+
+
+def leak_time(solute: Solute, start_radius: float, fraction: float = 0.1) -> float:
+    """Dimensionless time a bead sitting at T_start (no flow, uniform) needs to leak
+    ``fraction`` of its load into a perfect sink: Crank's series with D0 f(phi0) (exact for
+    the isothermal bead; inf without diffusion)."""
+    phi0 = 1.0 - 1.0 / start_radius**3
+    d = solute.diffusivity * float(solute.hindrance.factor(phi0))
+    if d <= 0.0:
+        return math.inf
+    if fraction <= 0.5:  # Crank 6.21 for D t / a^2 < 0.05, whose erfc terms are < 1e-8 there:
+        # 6 x / sqrt(pi) - 3 x^2 = fraction, x = sqrt(D t) / a (a root, no bisection)
+        x = (6.0 / math.sqrt(math.pi) - math.sqrt(36.0 / math.pi - 12.0 * fraction)) / 6.0
+        return x * x * start_radius**2 / d
+    lo, hi = 0.0, start_radius**2 / d
+    while crank_sphere(np.array([hi]), d, start_radius)[0] < fraction:
+        hi *= 2.0
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        if crank_sphere(np.array([mid]), d, start_radius)[0] < fraction:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+# ---------------------------------------------------------------------- drug runs
+
+def drug_settings(settings: SolverSettings) -> SolverSettings:
+    """The mechanics of a drug run: the fluid answers' own settings (issue 12: one truth).
+    The direct truth runs on the moving grid at the bead's ell (the solute is resampled onto
+    uniform dry cells, :func:`solver.solute.node_volumes`); a ladder runs its coarsest rung
+    on the Lagrangian grid; the paper's model (ell = 0) moves to the Lagrangian grid with
+    its N (the solute lives on the dry coordinate's cells)."""
+    if settings.grid in ("lagrangian", "moving"):
+        return settings
+    return replace(settings, grid="lagrangian")
+
+
+@dataclass(frozen=True)
+class DrugScenario:
+    """A dimensionless drug run: a protocol from the start state, and the solute."""
+
+    gel: Gel
+    t_start: float
+    protocol: tuple[Step, ...]
+    solute: Solute
+    branch: str = "swollen"
+    settings: SolverSettings = field(default_factory=SolverSettings)
+
+    def mechanics(self) -> Scenario:
+        """The mechanical scenario (on the Lagrangian grid)."""
+        return Scenario(self.gel, self.t_start, protocol=self.protocol, branch=self.branch,
+                        settings=drug_settings(self.settings))
+
+    def key(self) -> str:
+        """Cache key: the mechanics' key dict plus the solute and the drug code's version."""
+        return self._key
+
+    @functools.cached_property
+    def _key(self) -> str:
+        d = {"kind": "drug", "mechanics": self.mechanics().key_dict(),
+             "solute": self.solute.to_dict(), "samples": SAMPLES_PER_TAU,
+             "min_samples": MIN_SAMPLES, "drug_code": drug_code_version()}
+        text = json.dumps(d, sort_keys=True, separators=(",", ":"))
+        return "drug-" + hashlib.sha256(text.encode()).hexdigest()[:32]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data for a worker process."""
+        return {"mechanics": self.mechanics().to_dict(), "solute": self.solute.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> DrugScenario:
+        """Inverse of :meth:`to_dict`."""
+        m = Scenario.from_dict(d["mechanics"])
+        return cls(m.gel, m.t_start, m.protocol, Solute.from_dict(d["solute"]), m.branch,
+                   m.settings)
+
+
+@functools.cache
+def drug_code_version() -> str:
+    """Digest of what a drug run computes: the mechanics' code version, the solute sources,
+    and the source of the functions here that set up, run and store it (not this module's
+    other text: moving code around it keeps the stored runs)."""
+    import inspect
+
+    import solver.solute
+
+    h = hashlib.sha256(code_version().encode())
+    for p in sorted(Path(solver.solute.__file__).parent.glob("*.py")):
+        h.update(p.name.encode())
+        h.update(p.read_bytes())
+    for obj in (DrugScenario, drug_settings, step_outputs, simulate_protocol,
+                mechanics_prefix, run_drug_scenario, to_npz, from_npz):
+        h.update(inspect.getsource(obj).encode())
+    return h.hexdigest()[:16]
+
+
+def step_outputs(duration: float, k: int) -> np.ndarray:
+    """A protocol step's output times: k uniform intervals, and geometric ones
+    (EARLY_PER_DECADE a decade from EARLY_OUTPUT) until their spacing reaches the uniform
+    one, so that no interval is longer than either (the step's jump is fast at first)."""
+    uniform = np.linspace(0.0, duration, k + 1)
+    ratio = 10.0 ** (1.0 / EARLY_PER_DECADE)
+    end = min(duration, uniform[1] / (ratio - 1.0))  # where t (ratio - 1) = the uniform dt
+    if end <= EARLY_OUTPUT:
+        return uniform
+    m = int(math.ceil(EARLY_PER_DECADE * math.log10(end / EARLY_OUTPUT)))
+    return np.union1d(uniform, np.geomspace(EARLY_OUTPUT, end, m + 1))
+
+
+def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
+                      settings: SolverSettings, budget: float | None = None,
+                      start: Any = None) -> Any:
+    """The mechanics of a protocol: one ``simulate`` of its steps of positive duration,
+    sampled densely after every step's start (:func:`step_outputs`; on the moving grid
+    between steps, ``MeshOptions.land`` False: docs/moving_mesh.md sec. 8), within
+    ``budget`` wall seconds; one FullResult with its state after every step.  ``start``:
+    the mechanics of a protocol's first steps (a :func:`mechanics_prefix`), continued from
+    its last state (``simulate(..., initial=state)``, joined by ``FullResult.after``)."""
+    from ..runs.full import full_solver
+
+    simulate = full_solver()
+    from solver.full.moving import MeshOptions
+
+    s = drug_settings(settings)
+    if budget is None:
+        from ..runs.scenario import run_budget
+
+        budget = run_budget(RUN_BUDGET_S)
+    run = [(float(d), temp) for d, temp in steps if d > 0.0]
+    if not run:
+        raise ParameterError("protocol", steps, "at least one step of positive duration")
+    times, t0 = [], 0.0
+    for duration, _ in run:
+        k = max(MIN_SAMPLES, int(math.ceil(duration * SAMPLES_PER_TAU)))
+        times.append(t0 + step_outputs(duration, k))
+        t0 += duration
+    state = None
+    if start is not None and start.boundary_states:
+        state = start.boundary_states[-1]
+        if state.stopped or state.steps >= len(run):
+            state = None
+    kw: dict[str, Any] = {"branch": branch} if state is None else {"initial": state}
+    if s.grid == "moving":  # dense outputs between steps (docs/moving_mesh.md sec. 8)
+        kw["mesh"] = MeshOptions(land=False)
+    res = simulate(gel, t_start, protocol=run, grid=s.grid, n=s.n, integrator=s.integrator,
+                   rtol=s.rtol, saveat=np.concatenate(times), max_seconds=budget,
+                   interfacial_length=s.interfacial_length, **kw)
+    if state is not None:
+        res = res.after(start)
+    res.diagnostics["mechanics_from_step"] = 0 if state is None else int(
+        start.diagnostics.get("prefix_steps", state.steps))
+    return res
+
+
+def mechanics_prefix(res: Any, steps: tuple[Step, ...]) -> Any:
+    """The mechanics of a :func:`simulate_protocol` run up to the end of the protocol's
+    first steps ``steps`` (its state after those of positive duration), as a FullResult of
+    the same kind; None if it kept no state there."""
+    state = res.boundary_state(sum(1 for d, _ in steps if d > 0.0))
+    if state is None:
+        return None
+    cut = res.truncated(state.t)
+    cut.diagnostics = {**res.diagnostics, "prefix_steps": len(steps)}
+    return cut
+
+
+def run_drug_scenario(scenario: dict[str, Any], budget: float | None = None,
+                      start: Any = None, keep: bool = False,
+                      solute_from: ReleaseResult | None = None) -> tuple[Any, ...]:
+    """A drug run: plain data in, (metadata, npz blob) out (for any executor); ``start``
+    the mechanics of its protocol's first steps (:func:`mechanics_prefix`) to continue, and
+    ``solute_from`` the stored drug run those mechanics came from, whose solute continues
+    from the same boundary where it kept its state (``solver.solute.SoluteStart``; else the
+    solute runs from t = 0); ``keep``: (metadata, blob, the mechanics) out, for the next
+    run to start from."""
+    from solver.solute import SoluteStart, release
+
+    sc = DrugScenario.from_dict(scenario)
+    wall = time.perf_counter()
+    res = simulate_protocol(sc.gel, sc.t_start, list(sc.protocol), sc.branch, sc.settings, budget,
+                            start)
+    mech = time.perf_counter() - wall
+    from_solute = None  # else from t = 0
+    if start is not None and solute_from is not None and sc.solute.squeezed_is_expelled \
+            and start.boundary_states:
+        from_solute = SoluteStart.at(solute_from, start.boundary_states[-1].t, res.t)
+    rel = release(res, sc.solute, start=from_solute)
+    meta = {"key": sc.key(), "scenario": sc.to_dict(), "mechanics_seconds": mech,
+            "solute_seconds": time.perf_counter() - wall - mech,
+            "mass_balance_error": rel.mass_balance_error,
+            "effective_diffusivity": rel.effective_diffusivity,
+            "solute_steps": rel.diagnostics.get("steps"), "created": time.time(),
+            "mechanics_from_step": res.diagnostics["mechanics_from_step"],
+            "solute_from_sample": rel.diagnostics.get("from_sample", 0)}
+    return (meta, to_npz(rel), res) if keep else (meta, to_npz(rel))
+
+
+def to_npz(rel: ReleaseResult) -> bytes:
+    """A release result's arrays as an .npz blob."""
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **{k: np.asarray(getattr(rel, k), dtype=float)
+                                for k in RELEASE_ARRAYS})
+    return buf.getvalue()
+
+
+def from_npz(blob: bytes, meta: dict[str, Any]) -> ReleaseResult:
+    """Inverse of :func:`to_npz` (scalars from the metadata)."""
+    with np.load(io.BytesIO(blob)) as z:
+        arrays = {k: np.array(z[k]) for k in RELEASE_ARRAYS if k in z}
+    return ReleaseResult(**arrays, mass_balance_error=float(meta.get("mass_balance_error", 0.0)),
+                         effective_diffusivity=float(meta.get("effective_diffusivity", 0.0)),
+                         diagnostics=dict(meta))
+
+
+@dataclass(kw_only=True)
+class StatedTruth:
+    """What every drug answer states (issue 12): the interfacial length and bead size of its
+    runs and the model in words; and its plain-data form."""
+
+    interfacial_length: float = 0.0
+    bead_dry_radius_um: float | None = None
+    truth: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form (JSON-ready)."""
+        return asdict(self)
+
+
+def sieved_out(solute: Any, start_radius: float, released: float | None = None,
+               expelled: float | None = None) -> str | None:
+    """A warning when the gel's mesh holds the solute in (issue 37), or None when it can
+    leave.  Either at the swollen start state (stretch ``start_radius``) neither diffusion
+    nor the fluid can carry it out (hindered D = 0 and convective transmission W = 0:
+    r_s >= xi), so it releases nothing however the bead is heated; or the run released
+    almost nothing (``released`` < 0.1 % of the load) while the bead expelled fluid
+    (``expelled`` > 1 % of the stored fluid): the mesh, tighter still in the collapsed
+    shell, sieved it out."""
+    h = solute.hindrance
+    if h.code == 0 and not h.convective:
+        return None
+    phi0 = 1.0 - 1.0 / start_radius**3
+    f = float(h.factor(phi0, start_radius))
+    w = float(h.sieving(phi0, start_radius)) if h.convective else 1.0
+    ratio = h.mesh_ratio / start_radius
+    got = "" if released is None else f"; it released {released:.4f} of its load"
+    fix = ("A larger mesh (--mesh-size-nm / drug.mesh_size_nm), a smaller drug "
+           "(--solute-radius-nm) or hindrance 'none' lets it out")
+    if f <= 0.0 and w <= 0.0:
+        return (f"the drug is sieved out: its radius is {ratio:.2f} x the swollen mesh at "
+                f"T_start (r_s / xi >= 1), so neither diffusion nor the expelled fluid can "
+                f"carry it out of the gel{got}.  {fix}")
+    if released is not None and expelled is not None and released < 1e-3 and expelled > 0.01:
+        return (f"the drug is sieved out: it released {released:.4f} of its load while the "
+                f"bead expelled {expelled:.0%} of its fluid (its radius is {ratio:.2f} x the "
+                f"swollen mesh at T_start, hindered {f:.2g} x D0 there; the collapsed shell's "
+                f"tighter mesh holds it in).  {fix}")
+    return None

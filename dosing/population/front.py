@@ -1,0 +1,382 @@
+"""A batch of beads: its released fluid, its dose time and the spread of its beads (issue 26).
+
+Every bead of a jump follows one dimensionless trajectory a(s) (s = t / tau): the front
+model's (memoised, ``model_choice.front_run``).  A bead of dry radius R has
+tau(R) = tau_ref (R / R_ref)^2 (eq. timescale) and stores (4 pi/3)(a0^3 - 1) R^3 of fluid
+(eq. FluidVolExpelled), so the batch's released fraction of its stored fluid is
+
+    V(t) = sum_k v_k F(t / rho_k),   F(s) = (a0^3 - a(s)^3) / (a0^3 - 1),   rho_k = (R_k/R_ref)^2
+
+with v_k the volume weights of the sizes (a quadrature over the volume-weighted law:
+Gauss-Hermite in ln R for a lognormal, Gauss-Legendre for a normal, the rows themselves for
+a measured table).  The batch's dose time T solves V(T) = f; it lies between the smallest
+and the largest bead's own dose time rho_k s_f (each F_k is monotone), so a bracketing root
+finder always converges.  The node count is doubled until T changes by less than ``tol``
+(the last change is the reported quadrature error).  R_ref is the number-weighted mean dry
+radius; times are in its tau.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+from scipy.optimize import brentq
+
+from solver.errors import NotApplicableError, ParameterError
+
+from ..model_choice import MODEL_NAMES, front_run, model_answer
+from ..request import DoseRequest
+from ..runs.lru import ByteLRU
+from ..runs.scenario import SolverSettings
+from ..units import timescale
+from .sizes import DrySizes
+
+QUADRATURE_TOL = 1e-6  # relative change of the batch's dose time between n / 2 and n nodes
+PERCENTILES = (0.1, 0.5, 0.9)
+
+
+def exact_release_fraction(fr: Any, s: Any) -> np.ndarray:
+    """F(s): the fraction of its stored fluid a bead has released at dimensionless time s
+    (eq. FluidVolExpelled on the front model's exact curve, Newton on t(R_f); F(0) = 0,
+    constant after the trajectory's end)."""
+    a0 = float(fr.radius[0])
+    t = np.clip(np.asarray(s, dtype=float), fr.t[0], fr.t_stop)
+    x = np.maximum(fr.curve.front_at(t.ravel()), fr.front_stop)
+    a = np.asarray(fr.curve.radius(x), dtype=float).reshape(t.shape)
+    return (a0**3 - a**3) / (a0**3 - 1.0)
+
+
+TABLE_POINTS = 8001  # F(s) tabulated at this many front positions: |error| < 1e-7
+_TABLES: ByteLRU = ByteLRU(32e6, max_items=16)  # bytes: a table and its trajectory
+
+
+def _table(fr: Any) -> tuple[np.ndarray, np.ndarray]:
+    """(s_i, F_i) on front positions clustered at the start (memoised per trajectory):
+    t(R_f) is the exact curve's integral and a(R_f) solid conservation (FrontEvolve), so
+    the table needs no root finding."""
+    hit = _TABLES.get(id(fr))
+    if hit is not None and hit[0] is fr:
+        return hit[1], hit[2]
+    c, a0 = fr.curve, float(fr.radius[0])
+    u = np.linspace(0.0, 1.0, TABLE_POINTS)
+    x = fr.front_stop + (c.x_start - fr.front_stop) * (1.0 - u**2)
+    s = np.asarray(c.time_of_front(x), dtype=float)
+    a = np.asarray(c.radius(x), dtype=float)
+    f = (a0**3 - a**3) / (a0**3 - 1.0)
+    s[0], s = fr.t[0], np.maximum.accumulate(s)
+    _TABLES[id(fr)] = (fr, s, f)
+    while len(_TABLES) > 16:
+        _TABLES.popitem(last=False)
+    return s, f
+
+
+def release_fraction(fr: Any, s: Any) -> np.ndarray:
+    """F(s) from the trajectory's table (linear interpolation, |error| < 1e-7 against
+    :func:`exact_release_fraction`; tests check it): microseconds for many beads."""
+    ts, fs = _table(fr)
+    return np.interp(np.asarray(s, dtype=float), ts, fs)
+
+
+def batch_fraction(fr: Any, rho: np.ndarray, v: np.ndarray, t: Any) -> np.ndarray:
+    """V(t) = sum_k v_k F(t / rho_k) for times ``t`` (any shape) on fixed nodes."""
+    tt = np.asarray(t, dtype=float)
+    s = tt.reshape(-1, 1) / rho.reshape(1, -1)
+    return (release_fraction(fr, s) @ v).reshape(tt.shape)
+
+
+class BatchRelease:
+    """V(t) for one batch and trajectory with ``n`` nodes per panel, the panels split at the
+    bead that finishes at t (its trajectory's end: the integrand's kink), so Gauss-Legendre
+    converges fast."""
+
+    def __init__(self, fr: Any, sizes: DrySizes, n: int) -> None:
+        self.fr, self.sizes, self.n = fr, sizes, n
+        self.ref = sizes.mean_um
+
+    def nodes(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """(rho_k, v_k) for time t."""
+        cut = self.ref * math.sqrt(t / self.fr.t_stop) if t > 0 else 0.0
+        r, v = self.sizes.nodes(self.n, (cut,) if cut > 0 else ())
+        return (r / self.ref) ** 2, v
+
+    def __call__(self, t: float) -> float:
+        rho, v = self.nodes(t)
+        return float(batch_fraction(self.fr, rho, v, t))
+
+    def curve(self, times: Any) -> np.ndarray:
+        """V at each of ``times``."""
+        return np.array([self(float(t)) for t in np.ravel(times)])
+
+    def dose_time(self, fraction: float, single: float, guess: float | None = None) -> float:
+        """T with V(T) = fraction; ``single`` is the reference bead's own time s_f.  The
+        root lies between the smallest and the largest bead's own time (each F_k is
+        monotone); ``guess`` (the previous rung's) narrows the bracket when it holds."""
+        rho, _ = self.nodes(single)
+        lo, hi = single * float(rho.min()), single * float(rho.max())
+        if hi <= lo * (1.0 + 1e-15):
+            return lo
+
+        def g(t: float) -> float:
+            return self(t) - fraction
+
+        # the tabulated F is within 1e-7 of the curve s_f came from: widen the bracket
+        # until it holds (never more than a few steps)
+        for _ in range(60):
+            if g(lo) <= 0.0:
+                break
+            lo *= 0.9
+        for _ in range(60):
+            if g(hi) >= 0.0:
+                break
+            hi *= 1.1
+
+        if guess is not None and lo < guess < hi:
+            a, b = max(lo, 0.98 * guess), min(hi, 1.02 * guess)
+            if g(a) < 0.0 < g(b):
+                lo, hi = a, b
+        return float(brentq(g, lo, hi, xtol=1e-13 * hi, rtol=1e-11))
+
+    def newton(self, t: float, fraction: float) -> float:
+        """One Newton step on V(t) = fraction from t (a central-difference slope)."""
+        h = 1e-4 * t
+        slope = (self(t + h) - self(t - h)) / (2.0 * h)
+        return t - (self(t) - fraction) / slope if slope > 0 else t
+
+
+NODE_LADDER = (8, 16, 32, 64, 128, 256)  # Gauss-Legendre nodes per panel
+FIRST_PANEL_NODES = 32  # the first rung of an answer (16 leaves 1e-4 at CV 0.3)
+
+
+@dataclass(frozen=True)
+class Quadrature:
+    """The quadrature over sizes: its rule, the nodes needed (in all), its error (the
+    relative change of the dose time from the previous rung), and its table (nodes, the
+    batch's dose time with that many nodes)."""
+
+    rule: str
+    nodes: int
+    error: float
+    converged: bool
+    table: list[tuple[int, float]]
+    per_panel: int = 0
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form."""
+        return asdict(self)
+
+
+def _rule(sizes: DrySizes) -> str:
+    if sizes.exact:
+        return ("exact: the sum over the table's distinct sizes" if sizes.spec.kind == "table"
+                else "exact: a single size")
+    var = "ln R" if sizes.spec.kind == "lognormal" else "R"
+    return (f"Gauss-Legendre in {var} over the volume-weighted law, split at the bead that "
+            "finishes at the dose time (the integrand's kink)")
+
+
+def _exact(fr: Any, sizes: DrySizes, fraction: float,
+           single: float) -> tuple[float, Quadrature, BatchRelease]:
+    rel = BatchRelease(fr, sizes, 0)
+    t = rel.dose_time(fraction, single)
+    k = len(rel.nodes(t)[0])
+    return t, Quadrature(_rule(sizes), k, 0.0, True, [(k, t)], k), rel
+
+
+def converge(fr: Any, sizes: DrySizes, fraction: float, single: float,
+             tol: float = QUADRATURE_TOL) -> tuple[float, Quadrature, BatchRelease]:
+    """The batch's dose time: solved with n nodes per panel (from FIRST_PANEL_NODES), then
+    checked with 2n by one Newton step on V_2n (its change is the quadrature error of the
+    n-node time; the answer is the 2n-node time, whose own error is far smaller); n is
+    doubled until the change is below ``tol``."""
+    if sizes.exact:
+        return _exact(fr, sizes, fraction, single)
+    table: list[tuple[int, float]] = []
+    n, t, err = FIRST_PANEL_NODES, None, math.inf
+    while True:
+        rel = BatchRelease(fr, sizes, n)
+        t = rel.dose_time(fraction, single, t)
+        table.append((len(rel.nodes(t)[0]), t))
+        fine = BatchRelease(fr, sizes, 2 * n)
+        t2 = fine.newton(t, fraction)
+        err = abs(t2 - t) / t2
+        table.append((len(fine.nodes(t2)[0]), t2))
+        if err < tol or 2 * n >= NODE_LADDER[-1]:
+            return t2, Quadrature(_rule(sizes), table[-1][0], err, err < tol, table,
+                                  2 * n), fine
+        n, t = 2 * n, t2
+
+
+def convergence_table(fr: Any, sizes: DrySizes, fraction: float, single: float,
+                      ladder: tuple[int, ...] = NODE_LADDER) -> list[tuple[int, float]]:
+    """(nodes, the batch's dose time solved with them) for every rung of ``ladder``
+    (nodes per panel): the quadrature's convergence table (tests, docs/batch.md)."""
+    out: list[tuple[int, float]] = []
+    t = None
+    for n in ladder:
+        rel = BatchRelease(fr, sizes, n)
+        t = rel.dose_time(fraction, single, t)
+        out.append((len(rel.nodes(t)[0]), t))
+    return out
+
+
+@dataclass
+class BatchAnswer:
+    """A batch's dose: its time (dimensionless in the reference bead's tau, and seconds),
+    the reference (number-weighted mean) bead's own time, the fraction of beads that have
+    delivered their own dose by then, the 10th / 50th / 90th percentile bead's dose time,
+    the distribution, the model and the quadrature."""
+
+    distribution: dict[str, Any]
+    description: str
+    model: str
+    dose_fraction: float
+    reference_dry_radius_um: float
+    time: float
+    seconds: float | None
+    timescale_seconds: float | None
+    mean_bead_time: float
+    mean_bead_seconds: float | None
+    delay: float
+    fraction_delivered: float
+    percentile_radii_um: list[float]
+    percentile_times: list[float]
+    percentile_seconds: list[float] | None
+    quadrature: Quadrature
+    note: str
+    uncertainty: dict[str, Any] | None = None  # a validated batch's (dosing.population.bands)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form (JSON-ready)."""
+        d = asdict(self)
+        d["quadrature"] = self.quadrature.to_dict()
+        return d
+
+
+def batch_sizes(req: DoseRequest) -> DrySizes:
+    """The request's batch as dry radii (swollen sizes over a0)."""
+    if req.size_distribution is None:
+        raise ParameterError("size_distribution", None, "a size distribution for a batch")
+    return req.size_distribution.resolve(req.start_radius, req.t_start)
+
+
+def batch_answer(req: DoseRequest, tol: float = QUADRATURE_TOL) -> BatchAnswer:
+    """The batch's dose from the front model (milliseconds; module doc)."""
+    sizes = batch_sizes(req)
+    choice = model_answer(req)
+    if choice.front_time is None:
+        raise NotApplicableError(f"a batch answer needs the front model: {choice.why}")
+    fr = front_run(req.gel, req.t_start, req.t_end, req.branch, req.settings.regularized)
+    single = choice.front_time
+    t, quad, _ = converge(fr, sizes, req.fraction, single, tol)
+    ref = sizes.mean_um
+    delivered = float(sizes.cdf(ref * math.sqrt(t / single))) if single > 0 else 1.0
+    pr = np.asarray(sizes.quantile(np.array(PERCENTILES)), dtype=float)
+    pt = (pr / ref) ** 2 * single
+    tau = timescale(ref, req.t_end, req.constants).seconds
+    note = (f"{MODEL_NAMES[choice.model]}: one dimensionless trajectory serves every bead "
+            f"(tau ~ R^2, fluid ~ R^3); the batch ({sizes.spec.describe()}) releases "
+            f"{req.fraction:.0%} of its fluid at {t:.4g} tau_ref = {t * tau:.4g} s, "
+            f"{t / single - 1.0:+.1%} against its number-weighted mean bead "
+            f"({ref:.4g} um dry); {delivered:.0%} of the beads have delivered their own dose "
+            f"by then. Quadrature: {quad.rule}, {quad.nodes} nodes, error {quad.error:.1e}.")
+    return BatchAnswer(
+        distribution=sizes.spec.to_dict(), description=sizes.spec.describe(),
+        model=choice.model, dose_fraction=req.fraction, reference_dry_radius_um=ref,
+        time=t, seconds=t * tau, timescale_seconds=tau, mean_bead_time=single,
+        mean_bead_seconds=single * tau, delay=t / single - 1.0, fraction_delivered=delivered,
+        percentile_radii_um=pr.tolist(), percentile_times=pt.tolist(),
+        percentile_seconds=(pt * tau).tolist(), quadrature=quad, note=note)
+
+
+def batch_release(req: DoseRequest, times: Any, tol: float = QUADRATURE_TOL) -> dict[str, Any]:
+    """The batch's released fraction at ``times`` (dimensionless, in the reference bead's
+    tau) and the 10th / 50th / 90th percentile beads' own curves (a release plot per size
+    class and for the batch)."""
+    sizes = batch_sizes(req)
+    choice = model_answer(req)
+    if choice.front_time is None:
+        raise NotApplicableError(f"a batch release needs the front model: {choice.why}")
+    fr = front_run(req.gel, req.t_start, req.t_end, req.branch, req.settings.regularized)
+    _, _, rel = converge(fr, sizes, req.fraction, choice.front_time, tol)
+    t = np.asarray(times, dtype=float)
+    ref = sizes.mean_um
+    pr = np.asarray(sizes.quantile(np.array(PERCENTILES)), dtype=float)
+    classes = {f"p{round(100 * p)}": release_fraction(fr, t / (r / ref) ** 2).tolist()
+               for p, r in zip(PERCENTILES, pr, strict=True)}
+    return {"time": t.tolist(), "batch": rel.curve(t).reshape(t.shape).tolist(),
+            "mean_bead": release_fraction(fr, t).tolist(), "size_classes": classes,
+            "size_class_radii_um": pr.tolist(), "reference_dry_radius_um": ref}
+
+
+def with_cv(req: DoseRequest, cv: float, fraction: float | None = None) -> DoseRequest:
+    """The request with its batch's CV (and dose) replaced: the same law and number-weighted
+    mean dry radius (a number-weighted spread of dry radii)."""
+    d = req.size_distribution.to_dict() if req.size_distribution is not None else {}
+    kind = d.get("kind", "lognormal")
+    if kind == "table":
+        raise ParameterError("size_distribution.kind", "table", "a lognormal or normal "
+                             "(a measured table has no CV to vary)")
+    spec = {"kind": kind, "cv": cv, "mean_um": batch_sizes(req).mean_um
+            if req.size_distribution is not None else req.bead_dry_radius_um}
+    return DoseRequest(req.gel, req.t_start, req.t_end,
+                       dose_fraction=req.fraction if fraction is None else fraction,
+                       constants=req.constants, branch=req.branch,
+                       settings=SolverSettings(**req.settings.request_dict()),
+                       size_distribution=spec)
+
+
+def design_map(req: DoseRequest, cvs: Any, fractions: Any) -> dict[str, Any]:
+    """A design map with the CV as an axis: the batch's dose time (in the reference bead's
+    tau and in seconds) and its delay against the mean bead, for every CV x dose."""
+    cv = np.asarray(cvs, dtype=float)
+    fr = np.asarray(fractions, dtype=float)
+    time = np.empty((fr.size, cv.size))
+    delay = np.empty_like(time)
+    for i, f in enumerate(fr):
+        for j, c in enumerate(cv):
+            b = batch_answer(with_cv(req, float(c), float(f)))
+            time[i, j], delay[i, j] = b.time, b.delay
+    tau = timescale(req.bead_dry_radius_um, req.t_end, req.constants).seconds
+    return {"cv": cv.tolist(), "dose_fraction": fr.tolist(), "time": time.tolist(),
+            "seconds": (time * tau).tolist(), "delay": delay.tolist()}
+
+
+def tolerated_cv(req: DoseRequest, tolerance: float, cv_max: float = 1.0) -> float:
+    """The largest CV whose batch dose comes at most ``tolerance`` (relative) after the mean
+    bead's (the delay grows with the CV): how much spread the dose tolerates."""
+    tol = float(tolerance)
+    if not (math.isfinite(tol) and tol > 0.0):
+        raise ParameterError("tolerance", tolerance, "a finite number > 0")
+
+    def excess(c: float) -> float:
+        return batch_answer(with_cv(req, c)).delay - tol
+
+    if excess(cv_max) <= 0.0:
+        return cv_max
+    return float(brentq(excess, 0.0, cv_max, xtol=1e-6))
+
+
+def check_cvs(values: Any) -> tuple[float, ...]:
+    """A sweep's CV axis: a non-empty list of CVs 0-2 (ParameterError names the entry)."""
+    from .sizes import _cv
+
+    out = []
+    for i, v in enumerate(values):
+        try:
+            out.append(_cv("cv", v))
+        except ParameterError as exc:
+            raise ParameterError(f"size_cvs[{i}]", v, exc.valid) from None
+    if not out:
+        raise ParameterError("size_cvs", list(values), "a non-empty list of CVs 0-2")
+    return tuple(out)
+
+
+def batch_row(req: DoseRequest, cv: float) -> dict[str, Any]:
+    """A sweep row's batch columns for the single-bead request ``req`` as the mean of a
+    number-weighted lognormal of CV ``cv`` (CV 0: the bead's own answer exactly)."""
+    b = batch_answer(with_cv(req, cv))
+    return {"time": b.time, "seconds": b.seconds, "size_cv": cv, "batch_delay": b.delay,
+            "fraction_delivered": b.fraction_delivered}
