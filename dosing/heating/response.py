@@ -192,12 +192,10 @@ def _reach_event(req: DoseRequest, get: Getter, pieces: list[Piece], target: flo
     spec = program_spec(pieces, mode.mobility, req.t_end)
     scs = [Scenario(req.gel, req.t_start, program=spec, stop=target, branch=req.branch,
                     settings=s) for s in _settings_list(req, check)]
-    trajs = get(scs, target, after)
+    trajs = _runs(get, scs, target, after)
     if isinstance(trajs, Pending):
         return trajs
     traj = trajs[0]
-    if isinstance(traj, BaseException):
-        raise traj
     t_hit = _event_time(traj, target)
     if t_hit is None:
         raise ParameterError(field, target, f"a radius the bead reaches: the run ends at "
@@ -207,6 +205,15 @@ def _reach_event(req: DoseRequest, get: Getter, pieces: list[Piece], target: flo
              is not None else ValueError(f"the run does not reach radius {target:.6g}")
              for k, tr in enumerate(trajs)]
     return t_hit, traj, scs, trajs
+
+
+def _runs(get: Getter, scs: list[Scenario], target: float, after: float
+          ) -> list[Any] | Pending:
+    """The runs' trajectories from ``get`` (or its Pending); the truth's failure raised."""
+    trajs = get(scs, target, after)
+    if not isinstance(trajs, Pending) and isinstance(trajs[0], BaseException):
+        raise trajs[0]
+    return trajs
 
 
 def _event_time(traj: Any, target: float) -> float | None:
@@ -231,12 +238,10 @@ def _reach(req: DoseRequest, get: Getter, pieces: list[Piece], target: float, af
     while True:
         steps = _open(pieces, tail)
         scs = [_scenario(req, steps, s) for s in _settings_list(req, check)]
-        trajs = get(scs, target, after)
+        trajs = _runs(get, scs, target, after)
         if isinstance(trajs, Pending):
             return trajs
         traj = trajs[0]
-        if isinstance(traj, BaseException):
-            raise traj
         try:
             t_hit = traj.time_to_radius(target, after)
         except ValueError:
