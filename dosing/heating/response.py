@@ -104,10 +104,6 @@ class ProtocolDoseAnswer:
         return asdict(self)
 
 
-def protocol_request(protocol: Any, **fields: Any) -> DoseRequest:
-    """A dose request under ``protocol`` (steps as texts, dicts or a Protocol), the other
-    fields as :class:`DoseRequest`'s (no t_end)."""
-    return DoseRequest(protocol=protocol, **fields)
 
 
 def _tau_seconds(req: DoseRequest) -> float | None:

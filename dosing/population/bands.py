@@ -329,23 +329,3 @@ def _kink_time(req: DoseRequest) -> float:
 
     return float(front_run(req.gel, req.t_start, req.t_end, req.branch,
                            req.settings.regularized).t_stop)
-
-
-def plan_batch(req: DoseRequest, validate: bool = False, cache_path: str | None = None,
-               planner: Any = None) -> BatchAnswer:
-    """A batch's answer: the front model's (milliseconds), or with ``validate`` the truth
-    per band (:func:`validated_batch`, on ``planner`` or a throw-away one on the cache)."""
-    if not validate:
-        return batch_answer(req)
-    if planner is not None:
-        return validated_batch(planner, req)
-    from concurrent.futures import ThreadPoolExecutor
-
-    from ..planner import Planner
-
-    p = Planner(cache_path=cache_path, executor=ThreadPoolExecutor(2))
-    try:
-        return validated_batch(p, req)
-    finally:
-        p.close()
-        p.jobs.executor.shutdown(wait=True)

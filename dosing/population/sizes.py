@@ -614,12 +614,6 @@ def read_header(name: str, field_name: str = f"{F}.sizes_um") -> SizeHeader:
                       name.strip())
 
 
-def _header_unit(name: str) -> tuple[str, str]:
-    """('radius' | 'diameter', unit) from a header such as 'diameter (um)' or 'radius_nm'."""
-    h = read_header(name)
-    return h.measure, h.unit
-
-
 def read_sizes_csv(source: str, field_name: str = f"{F}.sizes_um",
                    **spec: Any) -> SizeDistribution:
     """A table distribution from CSV text or a file path: a column of sizes, read as its
