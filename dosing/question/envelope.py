@@ -32,7 +32,7 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any
 
-from solver.errors import NotApplicableError, ParameterError, SolverError
+from solver.errors import BudgetExceeded, NotApplicableError, ParameterError, SolverError
 
 from ..answers import Pending
 from ..truth import delayed_settings
@@ -477,8 +477,12 @@ def lattice_time(planner: Any, sc: Any, target: float) -> float:
         if key in _LATTICE_TIMES:
             _LATTICE_TIMES.move_to_end(key)
             return _LATTICE_TIMES[key]
-    t = float(planner.run_here(sc, need_radius=target,
-                               budget=LATTICE_BUDGET_S).time_to_radius(target))
+    try:
+        traj = planner.run_here(sc, need_radius=target, budget=LATTICE_BUDGET_S)
+    except BudgetExceeded:  # a process's first run also compiles the solver's kernels
+        # (tens of seconds, cold numba cache) inside its budget: once more, compiled
+        traj = planner.run_here(sc, need_radius=target, budget=LATTICE_BUDGET_S)
+    t = float(traj.time_to_radius(target))
     with _LATTICE_LOCK:
         _LATTICE_TIMES[key] = t
         while len(_LATTICE_TIMES) > 4096:
