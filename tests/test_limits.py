@@ -20,7 +20,7 @@ def test_every_layer_uses_the_one_definition() -> None:
     assert scenario.ELL_RANGE == limits.TRUTH_LADDER_ELL_RANGE
     assert schemas.ELL_RANGE == limits.TRUTH_LADDER_START_RANGE
     assert scenario.LADDER_TOP == limits.TRUTH_LADDER_START_RANGE[1]
-    from dosing.heating.grammar import grammar as grammar
+    from dosing.heating import grammar
     from solver import heating as program
 
     assert program.DURATION_MAX == grammar.TAU_MAX == limits.PROGRAM_STEP_MAX
