@@ -189,15 +189,12 @@ def _sig(x: float, digits: int) -> str:
 
 # ------------------------------------------------------------------ the parts
 def _truth_parts(unc: Any) -> dict[str, Any]:
-    """An answer's uncertainty by name, its parts as ``dosing.truth.Part`` (an
+    """An answer's uncertainty by name, its parts ``dosing.truth.Part`` (an
     :class:`Uncertainty`'s fields, or the mapping a population's or a protocol's answer
     holds)."""
     if unc is None:
         return {}
-    out = unc.by_name() if isinstance(unc, Uncertainty) else dict(unc)
-    # a part still built as a dict (until every answer types its parts)
-    return {k: TruthPart(v.get("relative"), v.get("text", ""))
-            if isinstance(v, dict) and "relative" in v else v for k, v in out.items()}
+    return unc.by_name() if isinstance(unc, Uncertainty) else dict(unc)
 
 
 def error_parts(ans: Any) -> list[Part]:
