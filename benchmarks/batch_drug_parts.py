@@ -36,7 +36,7 @@ def main() -> None:
               + f"; quadrature {a.quadrature_error:.1e}; mass balance "
               f"{a.mass_balance_error:.1e}; {w:.0f} s wall")
         for part in a.uncertainty.values():
-            print(f"  {part['text']}")
+            print(f"  {part.text}")
 
 
 if __name__ == "__main__":

@@ -44,8 +44,8 @@ def main() -> None:
         print(f"| CV {cv:g} | {' / '.join(f'{x:.2f}' for x in k['actuation_seconds'])} | "
               f"{' / '.join(f'{x:.5f}' for x in k['delivered_fractions'])} | {nodes} | "
               f"{q.error:.1e} | {k['runs']} | "
-              f"{a.uncertainty['interfacial_length_range']['relative']:.2%} | "
-              f"{a.uncertainty['model_form']['relative']:.1%} | {w:.0f} s | "
+              f"{a.uncertainty['interfacial_length_range'].relative:.2%} | "
+              f"{a.uncertainty['model_form'].relative:.1%} | {w:.0f} s | "
               f"{c:.0f} s (this process) |")
 
 

@@ -64,7 +64,7 @@ def main() -> None:
     print("bands: " + ", ".join(f"{x['dry_radius_um']:.3g} um (ell {x['interfacial_length']:.3g})"
                                 for x in u["bands"]))
     for k in ("numerical", "interfacial_length_range", "model_form", "quadrature"):
-        print(f"  {u[k]['text']}")
+        print(f"  {u[k].text}")
 
 
 if __name__ == "__main__":

@@ -108,8 +108,8 @@ with Planner(cache_path=Path(tempfile.mkdtemp()) / "c.sqlite",
     c4 = cpu()
 unc = ans.uncertainty
 print(f"validated: {ans.model}, {ans.seconds:.2f} s, error parts "
-      f"{unc['numerical']['relative']:.2g} / {unc['interfacial_length_range']['relative']:.2g}"
-      f" / {unc['model_form']['relative']:.2g}")
+      f"{unc['numerical'].relative:.2g} / {unc['interfacial_length_range'].relative:.2g}"
+      f" / {unc['model_form'].relative:.2g}")
 print(f"reduced:   {fast.model}, {fast.seconds:.2f} s")
 print(f"cpu s: imports {c1 - c0:.2f}, validated dose {c2 - c1:.2f} (wall {wall:.2f}), "
       f"reduced answer cold {c3 - c2:.3f}, warm {c4 - c3:.4f}")

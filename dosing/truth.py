@@ -23,7 +23,7 @@ queues them with the truth's own two runs; :func:`uncertainty` reads them back b
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
 from .runs.scenario import TRUTH, SolverSettings
@@ -106,6 +106,11 @@ class Uncertainty:
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form."""
         return asdict(self)
+
+    def by_name(self) -> dict[str, Any]:
+        """Every field by name, the parts as :class:`Part` (an answer's uncertainty as a
+        mapping; its plain-data form is :meth:`to_dict`)."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any] | None) -> Uncertainty | None:

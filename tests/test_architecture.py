@@ -368,3 +368,54 @@ def test_the_two_axes_rule_can_fail() -> None:
     assert all(len(axes_named(f"{name}.py")) >= 2 for name in OLD_WINGS)
     assert axes_named("population/medium.py") == set()
     assert axes_named("heating/response.py") == {"heating"}
+
+
+# ----------------------------------------------------------- typed uncertainty parts
+PART_KEYS = {"relative", "text"}
+
+
+def dict_parts(tree: ast.AST, where: str) -> list[str]:
+    """Uncertainty parts built by hand: dict literals (and ``dict(...)`` calls) holding both
+    "relative" and "text" (``dosing.truth.Part`` is their type), outside a ``to_dict`` (a
+    record's own plain-data form, as ``dosing.question.envelope.Part.to_dict``)."""
+    exempt = {id(n) for fn in ast.walk(tree)
+              if isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)) and fn.name == "to_dict"
+              for n in ast.walk(fn)}
+    out = []
+    for node in ast.walk(tree):
+        if id(node) in exempt:
+            continue
+        if isinstance(node, ast.Dict):
+            keys = {k.value for k in node.keys if isinstance(k, ast.Constant)}
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+              and node.func.id == "dict"):
+            keys = {k.arg for k in node.keywords}
+        else:
+            continue
+        if PART_KEYS <= keys:
+            out.append(f"{where}:{node.lineno} {ast.unparse(node)[:60]}")
+    return out
+
+
+def test_no_dosing_module_builds_an_uncertainty_part_as_a_dict() -> None:
+    """An answer's uncertainty parts are ``dosing.truth.Part`` (their JSON the same
+    {"relative": ..., "text": ...}), never a dict built by hand."""
+    found = [x for where, tree in _dosing_modules() for x in dict_parts(tree, where)]
+    assert not found, found
+
+
+def test_the_dict_part_checker_can_fail() -> None:
+    source = '''
+def parts(num, why):
+    out = {"numerical": {"relative": num, "text": f"numerical: {num:.2%}"}}
+    out["nodes"] = {"relative": None, "full_um": [], "text": why, **out}
+    return out, dict(relative=None, text=why)
+
+class Part:
+    def to_dict(self):
+        return {"name": "x", "relative": self.relative, "text": self.text}
+'''
+    hits = dict_parts(ast.parse(source), "x.py")
+    assert sorted(h.split(" ")[0] for h in hits) == ["x.py:3", "x.py:4", "x.py:5"], hits
+    assert not dict_parts(ast.parse("p = Part(0.1, 'numerical')\nq = {'relative': 1.0}\n"
+                                    "r = dict(text='t')\n"), "y.py")

@@ -209,14 +209,14 @@ def test_each_band_runs_at_its_own_ell_and_the_three_parts(coarse_mechanics, med
     assert abs(ans.time / t0 - 1.0) > 1e-3  # the bands' own ells matter here
     u = ans.uncertainty
     check = batch_time([_coarse(308.0 + 1e4 * ells[1], 20)], one)
-    assert u["numerical"]["relative"] == pytest.approx(
+    assert u["numerical"].relative == pytest.approx(
         abs(check / t0 - 1.0) + ans.numerical_error, rel=1e-9)
     ell_runs = [batch_time([_coarse(308.0 + 1e4 * ells[1] * x, 40)], one) for x in (0.5, 2.0)]
-    assert u["interfacial_length_range"]["relative"] == pytest.approx(
+    assert u["interfacial_length_range"].relative == pytest.approx(
         max(abs(t / t0 - 1.0) for t in ell_runs), rel=1e-9)
-    assert u["model_form"]["relative"] == pytest.approx(
+    assert u["model_form"].relative == pytest.approx(
         abs(batch_time([_coarse(308.0, 40)], one) / t0 - 1.0), rel=1e-9)
-    assert all(p["relative"] > 0.0 for p in u.values())
+    assert all(p.relative > 0.0 for p in u.values())
     assert "interfacial length" in ans.note and "model form" in ans.note
 
 
@@ -270,7 +270,7 @@ def test_under_a_protocol_each_size_runs_its_own_program() -> None:
     single = drug_batch_dose(req, {"cv": 0.0}).time
     ans = drug_batch_dose(req, {"cv": 0.2})
     assert ans.time == t and ans.time > 1.1 * single
-    assert ans.quadrature_error < 1e-3 and ans.uncertainty["numerical"]["relative"] < 1e-3
+    assert ans.quadrature_error < 1e-3 and ans.uncertainty["numerical"].relative < 1e-3
     shared = drug_batch_dose(req, {"cv": 0.2}, 1.0, 1e5)
     assert shared.mass_balance_error < 1e-10 and shared.sink_overestimate > 0.0
     assert shared.time > ans.time and shared.sink_time == ans.time

@@ -52,11 +52,11 @@ def test_out_of_region_batch_answers_on_full_solver_nodes(planner) -> None:
     b = batch_protocol_answer(req, planner=planner)
     assert b.model == "front-slow-sharp+full" and planner.fake.calls
     nodes = b.uncertainty["nodes"]
-    assert nodes["full_um"] and max(nodes["full_um"]) < OUT_UM <= min(
-        r for r in nodes["reduced_um"] if r > max(nodes["full_um"]))
-    assert 0.0 < nodes["full_fluid_fraction"] < 1.0
-    assert "n vs n/2 check" in b.uncertainty["numerical"]["text"]
-    assert b.uncertainty["numerical"]["relative"] > 0.0
+    assert nodes.full_um and max(nodes.full_um) < OUT_UM <= min(
+        r for r in nodes.reduced_um if r > max(nodes.full_um))
+    assert 0.0 < nodes.full_fluid_fraction < 1.0
+    assert "n vs n/2 check" in b.uncertainty["numerical"].text
+    assert b.uncertainty["numerical"].relative > 0.0
     assert "split at" in b.quadrature.rule and b.quadrature.nodes <= 64
 
 
@@ -151,4 +151,4 @@ def test_real_solver_50um_batch(tmp_path) -> None:
     assert b.model == "front-slow-sharp+full" and b.quadrature.converged
     assert b.seconds == pytest.approx(269.5, rel=2e-3)
     assert b.mean_bead_seconds == pytest.approx(226.6, rel=1e-3)
-    assert b.uncertainty["numerical"]["relative"] < 1e-3
+    assert b.uncertainty["numerical"].relative < 1e-3

@@ -89,9 +89,9 @@ def test_the_interfacial_length_and_model_form_parts(planner) -> None:
     form = np.max(np.abs(_brute_force(req, 0.2, d, lattice=True) / base - 1.0))
     u = b.uncertainty
     assert ell > 1e-3 and form > 1e-3  # the fake's rate depends on both
-    assert u["interfacial_length_range"]["relative"] == pytest.approx(ell, abs=2e-4)
-    assert u["model_form"]["relative"] == pytest.approx(form, abs=2e-4)
-    assert "xi_dry 2-8 nm" in u["interfacial_length_range"]["text"]
+    assert u["interfacial_length_range"].relative == pytest.approx(ell, abs=2e-4)
+    assert u["model_form"].relative == pytest.approx(form, abs=2e-4)
+    assert "xi_dry 2-8 nm" in u["interfacial_length_range"].text
 
 
 def test_the_spread_lengthens_the_schedule(planner) -> None:

@@ -53,16 +53,16 @@ def test_bands_follow_each_beads_own_ell(planner, every_band) -> None:
     assert b.model == "truth-bands"
     u = b.uncertainty
     # numerical: every band at n / 2 cells; the fake's times scale as 1 + 2 / n
-    assert u["numerical"]["relative"] == pytest.approx((1 + 2 / 200) / (1 + 2 / 400) - 1,
-                                                       rel=0.05)
+    assert u["numerical"].relative == pytest.approx((1 + 2 / 200) / (1 + 2 / 400) - 1,
+                                                    rel=0.05)
     # interfacial length: xi 2 and 8 nm with n / 2 cells (as module truth runs them); the
     # fake's times as (1 + 200 ell^1.5)(1 + 2 / n): the batch's change lies within the bands'
     ratios = [(1 + ELL_C * (x * e) ** ELL_ORDER) / (1 + ELL_C * e**ELL_ORDER)
               * (1 + MOVING_C / 200) / (1 + MOVING_C / 400) - 1
               for e in ells for x in (0.5, 2.0)]
-    assert min(ratios) * 0.95 <= u["interfacial_length_range"]["relative"] <= max(ratios) * 1.05
-    assert u["quadrature"]["relative"] < 1e-5
-    assert u["model_form"]["relative"] is not None
+    assert min(ratios) * 0.95 <= u["interfacial_length_range"].relative <= max(ratios) * 1.05
+    assert u["quadrature"].relative < 1e-5
+    assert u["model_form"].relative is not None
     assert 0.0 < b.fraction_delivered < 1.0
 
 
@@ -74,6 +74,6 @@ def test_one_size_is_the_single_bead_validation(planner) -> None:
                           validate=True)
     assert b.time == pytest.approx(single.validation.time, rel=1e-6)
     assert b.delay == pytest.approx(0.0, abs=1e-9)
-    assert b.uncertainty["numerical"]["relative"] == pytest.approx(
+    assert b.uncertainty["numerical"].relative == pytest.approx(
         single.uncertainty.numerical.relative, rel=1e-3)
     assert math.isfinite(b.seconds)

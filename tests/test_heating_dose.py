@@ -172,7 +172,7 @@ def test_validate_adds_the_interfacial_length_range(planner, fake):
     ans = planner.dose(_req(["Heat to 308 K at 5 K/min"]), validate=True)
     roles = [r["role"] for r in ans.validation["runs"]]
     assert roles == ["truth", "check", "ell_range", "ell_range"]
-    assert ans.uncertainty["interfacial_length_range"]["relative"] > 0.0
+    assert ans.uncertainty["interfacial_length_range"].relative > 0.0
 
 
 def test_seconds_need_a_bead_size(planner):
@@ -204,7 +204,7 @@ def test_real_solver_ramp_until_equals_dose(tmp_path):
     assert ramp.error_estimate < 0.02 and "continuous T(t)" in ramp.program
     # the model-form part of a full-solver protocol answer: the reduced model's gap (2.0 %)
     mf = ramp.uncertainty["model_form"]
-    assert mf["relative"] < 0.05 and "reduced model" in mf["text"]
+    assert mf.relative < 0.05 and "reduced model" in mf.text
     assert "full solver was asked for" in ramp.model_reason
     # measured: 73.75 s against the jump's 13.81 s (issue 24: "about five times later")
     assert ramp.seconds > 4.0 * jump.seconds

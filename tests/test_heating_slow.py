@@ -143,7 +143,7 @@ def test_a_ramp_dose_in_the_region_answers_from_the_reduced_model(real_planner):
     ans = out.answer
     assert ans.model == "front-slow-sharp"
     assert "inside the region" in ans.model_reason
-    assert ans.uncertainty["model_form"]["relative"] == 0.05
+    assert ans.uncertainty["model_form"].relative == 0.05
     # the truth (benchmarks/heating_reduced.py) is 231.4 s: the model's 226.6 s is 2.1 % early
     assert ans.seconds == pytest.approx(231.4, rel=0.05)
     assert ans.curve["released_fraction"][-1] > 0.79

@@ -141,14 +141,14 @@ def wrap(text: str) -> str:
 
 
 def print_uncertainty(u: Any, what: str = "the truth") -> None:
-    """The three parts of an answer's uncertainty (dosing.truth.Uncertainty, or its dict),
-    in words."""
+    """The three parts of an answer's uncertainty (dosing.truth.Uncertainty, or a mapping
+    of its parts, dosing.truth.Part, by name), in words."""
     if u is None:
         return
     print(f"  uncertainty of {what}, in three parts:")
     for name in ("numerical", "interfacial_length_range", "model_form"):
         part = u[name] if isinstance(u, dict) else getattr(u, name)
-        print(wrap(f"- {part['text'] if isinstance(part, dict) else part.text}"))
+        print(wrap(f"- {part.text}"))
 
 
 def table_row(label: str, values: list[float], fmt: str = "{:.4g}") -> str:

@@ -201,8 +201,8 @@ def print_batch(b: Any) -> None:
     q = b.quadrature
     print(f"  quadrature: {q.rule}; {q.nodes} nodes, error {q.error:.1e}")
     for part in (b.uncertainty or {}).values():
-        if isinstance(part, dict) and "text" in part:
-            print(wrap(part["text"]))
+        if hasattr(part, "text"):  # a part, or the nodes' split (not the bands' list)
+            print(wrap(part.text))
 
 
 def request_from_args(args: argparse.Namespace, question: Any, steps: list[str] | None,

@@ -211,6 +211,6 @@ def print_batch_schedule(req: Any, ans: Any) -> None:
         f"{n['dry_radius_um']:.4g} {n['volume_weight']:.3f} {n['interfacial_length']:.3g}"
         for n in ans.nodes))
     for part in ans.uncertainty.values():
-        print(wrap(part["text"]))
+        print(wrap(part.text))
     print(wrap(f"truth of each node's runs: {ans.truth}"))
     print(wrap(ans.note))

@@ -56,6 +56,7 @@ from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.front.slow import slow_front_trajectory
 
 from ..request import DoseRequest
+from ..truth import Part
 from ..units import timescale
 from .grammar import Piece
 from .program import program_spec, solver_program
@@ -198,20 +199,20 @@ def reduced_time(req: DoseRequest, pieces: list[Piece], mobility: str,
 
 
 def model_form_part(req: DoseRequest, pieces: list[Piece], mobility: str, target: float,
-                    truth_time: float) -> dict[str, Any]:
+                    truth_time: float) -> Part:
     """The model-form part of a full-solver protocol answer: the gap between the reduced
     model and the truth at this dose (both exist: the reduced model costs milliseconds),
     not the delayed-transition lattice (not run for protocols)."""
     t_red = reduced_time(req, pieces, mobility, target)
     if t_red is None or truth_time <= 0.0:
-        return {"relative": None, "text": (
+        return Part(None, (
             "model form: not measured for this protocol: the reduced model does not apply "
             "(it covers heating only, with a front) and the delayed-transition lattice "
-            "(the step answers' model-form part) is not run for protocols")}
+            "(the step answers' model-form part) is not run for protocols"))
     gap = t_red / truth_time - 1.0
-    return {"relative": abs(gap), "text": (
+    return Part(abs(gap), (
         f"model form: {100 * abs(gap):.2g}%, the gap between the truth ({truth_time:.5g}) "
         f"and the reduced model ({t_red:.5g}; {MODEL_TEXT}): how far the leading-order "
         "physics of the front under heating is from the regularized model. The other "
         "consistent front law (the delayed transition of the ell = 0 lattice, the step "
-        "answers' model-form part) is not run for protocols")}
+        "answers' model-form part) is not run for protocols"))

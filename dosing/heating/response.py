@@ -36,7 +36,7 @@ from solver.front.slow import slow_front_trajectory
 from ..answers import Pending
 from ..request import DoseRequest
 from ..runs.scenario import Scenario, Trajectory
-from ..truth import truth_text
+from ..truth import Part, Uncertainty, truth_text
 from ..units import expelled_volume, radius_after_dose, timescale, ul_to_volume, volume_to_ul
 from ..validation import validation_report
 from . import reduced as heating_reduced
@@ -90,6 +90,8 @@ class ProtocolDoseAnswer:
     until_steps: list[UntilResult]
     error_estimate: float | None
     error_explanation: str
+    # the parts (dosing.truth.Part) by name; validated, also the truth's other fields
+    # (dosing.truth.Uncertainty.by_name)
     uncertainty: dict[str, Any] | None
     validation: dict[str, Any] | None
     scenario_key: str
@@ -321,11 +323,12 @@ def protocol_dose(req: DoseRequest, get: Getter, ranges: bool = False, mode: Mod
         return got
     time, traj, scs, trajs = got
     rep = _report(scs, trajs, req.start_radius, target)
-    unc = rep.uncertainty
+    truth = Uncertainty.from_dict(rep.uncertainty)  # the report's is plain data
+    unc = None if truth is None else truth.by_name()
     if unc is not None and mode.continuous:
-        unc = {**unc, "model_form": heating_reduced.model_form_part(
-            req, pieces, mode.mobility, target, float(rep.time or time))}
-    explain = (unc["numerical"]["text"] if unc else
+        unc["model_form"] = heating_reduced.model_form_part(
+            req, pieces, mode.mobility, target, float(rep.time or time))
+    explain = (unc["numerical"].text if unc else
                "numerical: not measured (the check run failed)")
     out = Outcome("full", why or "the full solver answers protocol doses", unc, rep.error,
                   explain, rep.to_dict(), scs[0].key(), _program_text(req, scs, mode))
@@ -385,18 +388,18 @@ def reduced_dose(req: DoseRequest, mode: Mode, choice: heating_reduced.Choice
     assert not isinstance(got, Pending)
     time, traj, scs, _ = got
     stated = heating_reduced.STATED_ERROR
-    unc = {
-        "numerical": {"relative": heating_reduced.NUMERICAL, "text": (
+    unc: dict[str, Any] = {
+        "numerical": Part(heating_reduced.NUMERICAL, (
             f"numerical: under {heating_reduced.NUMERICAL:.0e}: the compiled Dormand-Prince "
             "integration at rtol 1e-8 moves by under 1e-6 at rtol 1e-10, the thin-shell "
-            "start and the tables by at most 2.4e-6 (tests/test_heating_slow.py)")},
-        "interfacial_length_range": {"relative": None, "text": (
+            "start and the tables by at most 2.4e-6 (tests/test_heating_slow.py)")),
+        "interfacial_length_range": Part(None, (
             "interfacial length: not separate: the reduced model is the sharp-interface "
             "limit; the truth's dependence on the bead's own interfacial length is inside "
-            "the model-form part, measured at 50 um")},
-        "model_form": {"relative": stated, "text": (
+            "the model-form part, measured at 50 um")),
+        "model_form": Part(stated, (
             f"model form: {stated:.0%}, the reduced model's largest measured gap to the "
-            f"truth in its region ({heating_reduced.TABLE_TEXT})")},
+            f"truth in its region ({heating_reduced.TABLE_TEXT})")),
     }
     program = (f"the reduced model's T(t) (solver.heating.Program, T_ref = {req.t_end:g} K), "
                f"{MOBILITY_TEXT[mode.mobility]}")

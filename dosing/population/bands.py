@@ -35,7 +35,7 @@ from scipy.optimize import brentq
 
 from ..request import DoseRequest, _clamp_length
 from ..runs.scenario import SolverSettings
-from ..truth import delayed_settings, role
+from ..truth import Part, delayed_settings, role
 from ..units import radius_after_dose
 from .front import BatchAnswer, batch_answer, batch_sizes
 from .sizes import DrySizes
@@ -182,32 +182,31 @@ def validated_batch(planner: Any, req: DoseRequest, n_bands: int = BANDS,
     ell = max(abs(x - t_truth) / t_truth for x in ell_times)
     where = ("" if every_band or len(reps) == 1 else
              " (run in the central band, its relative change carried to the others)")
-    unc: dict[str, Any] = {
-        "numerical": {"relative": num, "text": (
+    unc: dict[str, Part | list[dict[str, float]]] = {
+        "numerical": Part(num, (
             f"numerical: {num:.2g}, the batch's time on the n / 2 runs{where} "
-            f"({t_of['check'][-1]:.5g}) against n ({t_truth:.5g})")},
-        "interfacial_length_range": {"relative": ell, "text": (
+            f"({t_of['check'][-1]:.5g}) against n ({t_truth:.5g})")),
+        "interfacial_length_range": Part(ell, (
             f"interfacial length: {ell:.2g}, the batch's time at xi_lo and xi_hi{where} "
             f"({ell_times[0]:.5g}, {ell_times[1]:.5g}); it also bounds the bands' "
-            "approximation of each bead's own ell")},
-        "quadrature": {"relative": quad, "text": (
+            "approximation of each bead's own ell")),
+        "quadrature": Part(quad, (
             f"quadrature: {quad:.2g}, {PANEL_NODES[0]} against {PANEL_NODES[1]} Gauss-Legendre "
-            "nodes per panel (panels split at the band edges and the front model's kink)")},
+            "nodes per panel (panels split at the band edges and the front model's kink)")),
         "bands": band_info,
     }
     if delayed is not None:
         rel = BandRelease(sizes, np.array([]), [_release(delayed, a0)], kink)
         t_d = rel.dose_time(req.fraction, PANEL_NODES[-1], ans.time)
         covered = t_d / rho_lower[0] <= _release(delayed, a0)[0][-1]
-        unc["model_form"] = {"relative": abs(t_d / t_truth - 1.0), "text": (
+        unc["model_form"] = Part(abs(t_d / t_truth - 1.0), (
             f"model form: {t_d / t_truth:.3g}x, the batch's time ({t_d:.5g}) if every bead "
             "followed the delayed-transition front law (the ell = 0 lattice; not part of the "
             "error estimate, docs/interfacial.md sec. 10)"
             + ("" if covered else "; its run ends before the smallest beads' time, which take "
-               "its last release, so this time is an upper bound"))}
+               "its last release, so this time is an upper bound")))
     else:
-        unc["model_form"] = {"relative": None, "text": "model form: not run (not a direct "
-                                                       "truth)"}
+        unc["model_form"] = Part(None, "model form: not run (not a direct truth)")
     # each band's own dose time (its curve reaching f), for the mean and percentile beads
     own = np.array([float(np.interp(req.fraction, f, s_)) for s_, f in runs["truth"]])
     ref = sizes.mean_um

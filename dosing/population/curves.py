@@ -51,8 +51,9 @@ from solver.errors import NotApplicableError, ParameterError, SolverError
 from ..heating import reduced as heating_reduced
 from ..heating.program import program_spec, solver_program
 from ..runs.scenario import DIRECT_ELL_RANGE
+from ..truth import Part
 from ..units import timescale
-from .front import PERCENTILES, BatchAnswer, Quadrature, batch_sizes
+from .front import PERCENTILES, BatchAnswer, NodesPart, Quadrature, batch_sizes
 
 FRACTIONS = np.linspace(0.0, 1.0, 201)[1:-1]  # of the gel's expellable fluid (x max_fraction)
 GRID_ERROR = 3e-5  # the batch time's change from 199 to 399 fractions (CV 0.2, 120 um, 5 K/min)
@@ -570,23 +571,23 @@ def _answer(req: Any, bc: BatchCurves, tol: float, validate: bool) -> BatchAnswe
 
 
 def _reduced_parts(bc: BatchCurves, quad: Quadrature, t_s: float,
-                   mean: Any) -> tuple[dict[str, Any], str]:
+                   mean: Any) -> tuple[dict[str, Part], str]:
     """The uncertainty and note of a batch answered by the reduced model alone."""
     req, sizes, ref = bc.req, bc.sizes, bc.sizes.mean_um
     stated = heating_reduced.STATED_ERROR
     unc = {
-        "numerical": {"relative": heating_reduced.NUMERICAL, "text": (
+        "numerical": Part(heating_reduced.NUMERICAL, (
             f"numerical: under {heating_reduced.NUMERICAL:.0e} per trajectory (the reduced "
             f"model's integration); the fraction grid ({len(FRACTIONS)} exact crossings per "
             f"bead, linear between them) {GRID_ERROR:.0e} (measured against twice as many at "
-            f"CV 0.2); quadrature {quad.error:.1e} ({quad.nodes} nodes)")},
-        "interfacial_length_range": {"relative": None, "text": (
+            f"CV 0.2); quadrature {quad.error:.1e} ({quad.nodes} nodes)")),
+        "interfacial_length_range": Part(None, (
             "interfacial length: not separate: the reduced model is the sharp-interface "
-            "limit; each node was checked at its own interfacial length")},
-        "model_form": {"relative": stated, "text": (
+            "limit; each node was checked at its own interfacial length")),
+        "model_form": Part(stated, (
             f"model form: {stated:.0%}, the reduced model's largest measured gap to the truth "
             "at doses of 30-90 % in its region; beads far from their own dose at the batch's "
-            "time are read outside the measured doses (not covered)")},
+            "time are read outside the measured doses (not covered)")),
     }
     note = (f"{heating_reduced.MODEL_TEXT}: one reduced trajectory per bead size, each its own "
             f"dimensionless program (tau ~ R^2); the batch ({sizes.spec.describe()}) releases "
@@ -619,7 +620,7 @@ def _check(bc: BatchCurves, mean: Any) -> tuple[float | None, str]:
 
 
 def _mixed_parts(bc: BatchCurves, quad: Quadrature, t_s: float,
-                 own: list[Any]) -> tuple[str, dict[str, Any], str]:
+                 own: list[Any]) -> tuple[str, dict[str, Part | NodesPart], str]:
     """The model, uncertainty and note of a batch with full-solver nodes: which nodes ran
     on which model, the check at one full node, the reduced nodes' stated part; ``own``
     the beads whose own time alone is read (the mean bead first, then the percentiles)."""
@@ -641,34 +642,34 @@ def _mixed_parts(bc: BatchCurves, quad: Quadrature, t_s: float,
                   "taken for every full-solver node (not measured at the others)"
                   if gap is not None else
                   f"the full solver's n vs n/2 check not run ({where})")
-    unc = {
-        "numerical": {"relative": numerical, "text": (
+    unc: dict[str, Part | NodesPart] = {
+        "numerical": Part(numerical, (
             f"numerical: {check_text}; the reduced nodes under "
             f"{heating_reduced.NUMERICAL:.0e} per trajectory, their fraction grid "
             f"{GRID_ERROR:.0e}; the full nodes' F(t) linear between the run's accepted "
             f"steps; quadrature {quad.error:.1e} ({quad.nodes} nodes; with full-solver "
             f"nodes the ladder stops at {FULL_MAX_NODES} per panel and converges to "
-            f"{FULL_QUADRATURE_TOL:.0e})")},
-        "interfacial_length_range": {"relative": None, "text": (
+            f"{FULL_QUADRATURE_TOL:.0e})")),
+        "interfacial_length_range": Part(None, (
             "interfacial length: not run: each full-solver node ran at its own interfacial "
             "length only (the xi_lo / xi_hi runs of a single dose are not run per node); the "
-            "reduced model is the sharp-interface limit")},
-        "model_form": {"relative": stated if red_r else None, "text": (
+            "reduced model is the sharp-interface limit")),
+        "model_form": Part(stated if red_r else None, (
             (f"model form: {stated:.0%} on the reduced-model nodes ({1.0 - w_full:.1%} of the "
              "fluid), the reduced model's largest measured gap to the truth at doses of "
              "30-90 % in its region (beads far from their own dose at the batch's time are "
              "read outside the measured doses, not covered); " if red_r else "model form: ")
             + f"the full-solver nodes ({w_full:.1%} of the fluid) are the truth at their own "
-            "interfacial length (the reduced model's gap to them is not computed per node)")},
-        "nodes": {"relative": None, "full_um": sorted(full_r), "reduced_um": sorted(red_r),
-                  "full_fluid_fraction": w_full, "own_time_full_um": own_full,
-                  "text": (
-            f"nodes: {len(full_r)} of the converged rule's {len(curves)} on the full solver "
-            f"({_um(full_r)} um; {w_full:.1%} of the fluid: outside the reduced model's "
-            f"region, or where it does not answer), {len(red_r)} on the reduced model "
-            f"({_um(red_r)} um; inside its region, or the smallest beads holding under "
-            f"{TAIL_WEIGHT:.0e} of the fluid); own times alone (mean bead, percentiles) on "
-            f"the full solver: {_um(own_full)} um")},
+            "interfacial length (the reduced model's gap to them is not computed per node)")),
+        "nodes": NodesPart(
+            relative=None, full_um=sorted(full_r), reduced_um=sorted(red_r),
+            full_fluid_fraction=w_full, own_time_full_um=own_full, text=(
+                f"nodes: {len(full_r)} of the converged rule's {len(curves)} on the full "
+                f"solver ({_um(full_r)} um; {w_full:.1%} of the fluid: outside the reduced "
+                f"model's region, or where it does not answer), {len(red_r)} on the reduced "
+                f"model ({_um(red_r)} um; inside its region, or the smallest beads holding "
+                f"under {TAIL_WEIGHT:.0e} of the fluid); own times alone (mean bead, "
+                f"percentiles) on the full solver: {_um(own_full)} um")),
     }
     note = (f"one trajectory per bead size, each its own dimensionless program (tau ~ R^2): "
             f"{len(red_r)} nodes on {heating_reduced.MODEL_TEXT}, {len(full_r)} on the full "

@@ -55,7 +55,7 @@ from ..question.shooting import (
 )
 from ..request import ScheduleRequest, _clamp_length
 from ..runs.scenario import Scenario, SolverSettings
-from ..truth import truth_text
+from ..truth import Part, truth_text
 from ..units import timescale
 from .bands import size_settings
 from .front import Quadrature
@@ -269,7 +269,7 @@ class BatchScheduleAnswer:
     protocol_check: dict[str, Any] | None
     corrected: dict[str, Any] | None
     quadrature: Quadrature
-    uncertainty: dict[str, Any]
+    uncertainty: dict[str, Part]  # numerical, quadrature, interfacial_length_range, model_form
     truth: str
     note: str
     t_start: float
@@ -416,7 +416,7 @@ def batch_schedule_with(planner: SchedulePlanner, req: ScheduleRequest,
 
 
 def truth_parts(planner: SchedulePlanner, req: ScheduleRequest, nodes: Sequence[Node],
-                corrected: dict[str, Any] | None) -> dict[str, dict[str, Any]]:
+                corrected: dict[str, Any] | None) -> dict[str, Part]:
     """The interfacial-length and model-form parts of a batch schedule: the largest
     relative change of a delivered dose when the found actuation times are run with every
     node at the mesh length's range (xi_lo, xi_hi: its ell scaled as its own) and on the
@@ -426,9 +426,9 @@ def truth_parts(planner: SchedulePlanner, req: ScheduleRequest, nodes: Sequence[
     if corrected is None or not req.settings.direct:
         why = ("no corrected times" if corrected is None else
                "the paper's model or a ladder (the direct truth, the default, states them)")
-        return {"interfacial_length_range": {"relative": None, "text": (
-                    f"interfacial length: not measured ({why})")},
-                "model_form": {"relative": None, "text": f"model form: not measured ({why})"}}
+        return {"interfacial_length_range": Part(None, (
+                    f"interfacial length: not measured ({why})")),
+                "model_form": Part(None, f"model form: not measured ({why})")}
     durations, base = corrected["actuation_times"], corrected["rule_delivered_fractions"] \
         if "rule_delivered_fractions" in corrected else corrected["delivered_fractions"]
 
@@ -444,31 +444,31 @@ def truth_parts(planner: SchedulePlanner, req: ScheduleRequest, nodes: Sequence[
     form = change(lambda n: lattice)
     xr = req.constants.mesh_length_range_nm
     return {
-        "interfacial_length_range": {"relative": ell, "text": (
+        "interfacial_length_range": Part(ell, (
             f"interfacial length: {ell:.2%}, the largest change of a delivered dose at the "
-            f"found times with every node at xi_dry {xr[0]:g}-{xr[1]:g} nm")},
-        "model_form": {"relative": form, "text": (
+            f"found times with every node at xi_dry {xr[0]:g}-{xr[1]:g} nm")),
+        "model_form": Part(form, (
             f"model form: {form:.2%}, the largest change of a delivered dose at the found "
             f"times if every bead followed the delayed-transition law (the ell = 0 Lagrangian "
-            f"lattice, N = {lattice.n}; not part of the error estimate)")}}
+            f"lattice, N = {lattice.n}; not part of the error estimate)"))}
 
 
 def _answer(req: ScheduleRequest, sizes: DrySizes, nodes: Sequence[Node], tau: float,
             hold: tuple[str, list[HoldRow]], checked: dict[str, Any] | None,
             corrected: dict[str, Any] | None, quad: Quadrature,
-            parts: dict[str, dict[str, Any]]) -> BatchScheduleAnswer:
+            parts: dict[str, Part]) -> BatchScheduleAnswer:
     ref = sizes.mean_um
     worst = None if corrected is None else corrected["max_relative_error"]
     unc = {
-        "numerical": {"relative": worst, "text": (
+        "numerical": Part(worst, (
             "numerical: each dose met within the tolerance "
             f"{req.tolerance:.0%} by the shooting (worst "
             + ("-" if worst is None else f"{worst:.2%}") + "); each node's run is the "
-            "truth's (its numerical part as a single bead's schedule)")},
-        "quadrature": {"relative": quad.error, "text": (
+            "truth's (its numerical part as a single bead's schedule)")),
+        "quadrature": Part(quad.error, (
             f"quadrature over sizes: {quad.rule}, {quad.nodes} nodes, error {quad.error:.1e} "
             "(the largest change of a dose on the next rule)"
-            + ("" if quad.converged else "; NOT converged within the rules tried"))},
+            + ("" if quad.converged else "; NOT converged within the rules tried"))),
         **parts,
     }
     heating = ("" if req.heating is None else
@@ -588,17 +588,17 @@ def drug_batch_schedule_with(planner: SchedulePlanner, req: Any,
                       rungs[0])
     worst = None if corrected is None else corrected["max_relative_error"]
     unc = {
-        "numerical": {"relative": worst, "text": (
+        "numerical": Part(worst, (
             f"numerical: each drug dose met within the tolerance {req.tolerance:.0%} by the "
             "shooting (worst " + ("-" if worst is None else f"{worst:.2%}") + "); each node's "
-            "drug run is the truth's mechanics with the solute on its cells")},
-        "quadrature": {"relative": err, "text": (
+            "drug run is the truth's mechanics with the solute on its cells")),
+        "quadrature": Part(err, (
             f"quadrature over sizes: {text}, {len(nodes)} nodes, error {err:.1e} (the largest "
-            "change of a delivered dose on the next rule)")},
-        "interfacial_length_range": {"relative": None, "text": (
+            "change of a delivered dose on the next rule)")),
+        "interfacial_length_range": Part(None, (
             "interfacial length: not measured for a drug batch (a single bead's drug "
-            "schedule states its numerical part; validate the fluid doses for the rest)")},
-        "model_form": {"relative": None, "text": "model form: not measured for a drug batch"},
+            "schedule states its numerical part; validate the fluid doses for the rest)")),
+        "model_form": Part(None, "model form: not measured for a drug batch"),
     }
     heating = ("a jump to T_end" if req.heating is None else
                f"the protocol ({'; '.join(req.heating.texts)})")

@@ -31,6 +31,7 @@ from ..model_choice import MODEL_NAMES, front_run, model_answer
 from ..request import DoseRequest
 from ..runs.lru import ByteLRU
 from ..runs.scenario import SolverSettings
+from ..truth import Part
 from ..units import timescale
 from .sizes import DrySizes
 
@@ -222,6 +223,20 @@ def convergence_table(fr: Any, sizes: DrySizes, fraction: float, single: float,
     return out
 
 
+@dataclass(frozen=True)
+class NodesPart:
+    """The ``nodes`` entry of a batch's uncertainty under a protocol
+    (dosing.population.curves): which size nodes ran on the full solver and which on the
+    reduced model, in words (``relative`` None: not a size)."""
+
+    relative: float | None
+    full_um: list[float]
+    reduced_um: list[float]
+    full_fluid_fraction: float
+    own_time_full_um: list[float]
+    text: str
+
+
 @dataclass
 class BatchAnswer:
     """A batch's dose: its time (dimensionless in the reference bead's tau, and seconds),
@@ -246,7 +261,9 @@ class BatchAnswer:
     percentile_seconds: list[float] | None
     quadrature: Quadrature
     note: str
-    uncertainty: dict[str, Any] | None = None  # a validated batch's (dosing.population.bands)
+    # a validated batch's (dosing.population.bands: its parts and ``bands``) or a batch's
+    # under a protocol (dosing.population.curves: its parts and ``nodes``)
+    uncertainty: dict[str, Part | NodesPart | list[dict[str, float]]] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form (JSON-ready)."""

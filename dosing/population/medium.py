@@ -39,7 +39,7 @@ from ..payload.release import GROWTH, MAX_HORIZON, check_protocol
 from ..quantity import micrometres, to_unit
 from ..request import _clamp_length
 from ..runs.mechanics import jump_mechanics, protocol_mechanics
-from ..truth import delayed_settings
+from ..truth import Part, delayed_settings
 from ..units import UM3_PER_UL, timescale
 from .bands import band_edges, size_settings
 from .cycles import ladder, rule
@@ -114,7 +114,7 @@ class DrugBatchAnswer:
     interfacial_length: float
     description: str
     note: str
-    uncertainty: dict[str, Any] | None = None  # numerical, interfacial length, model form
+    uncertainty: dict[str, Part] | None = None  # numerical, interfacial length, model form
     bands: list[dict[str, float]] | None = None  # each band's bead and interfacial length
 
     def to_dict(self) -> dict[str, Any]:
@@ -123,7 +123,7 @@ class DrugBatchAnswer:
 
 
 def truth_parts(req: Any, sizes: DrySizes, bands: Bands, reps: np.ndarray,
-                case: tuple[float | None, float, float, float]) -> dict[str, dict[str, Any]]:
+                case: tuple[float | None, float, float, float]) -> dict[str, Part]:
     """The three parts of the truth's uncertainty (module doc): each the relative change of
     the batch's dose time (n classes, 2 steps per interval) when every class follows one of
     the central band's other runs instead of that band's own; ``case`` is (v0, the dose,
@@ -147,11 +147,11 @@ def truth_parts(req: Any, sizes: DrySizes, bands: Bands, reps: np.ndarray,
     chk = s.check()
     gap = change(chk)
     num = (None if isinstance(gap, str) else gap + steps_gap)
-    out = {"numerical": {"relative": num, "text": (
+    out = {"numerical": Part(num, (
         f"numerical: {num:.2%}" if num is not None else "numerical: not measured") +
         f" (the mechanics on {chk.n} cells against {s.n}, {where}: "
         + (f"{gap:.2%}" if not isinstance(gap, str) else f"the check fails: {gap}")
-        + f"; the coupled solve's steps halved: {steps_gap:.1e})"}}
+        + f"; the coupled solve's steps halved: {steps_gap:.1e})")}
     if s.direct:
         own, lo, hi = req.constants.interfacial_lengths(float(reps[c]))
         ell = s.interfacial_length
@@ -159,28 +159,28 @@ def truth_parts(req: Any, sizes: DrySizes, bands: Bands, reps: np.ndarray,
         nums = [x for x in both if not isinstance(x, str)]
         rel = max(nums) if len(nums) == 2 else None
         xr = req.constants.mesh_length_range_nm
-        out["interfacial_length_range"] = {"relative": rel, "text": (
+        out["interfacial_length_range"] = Part(rel, (
             f"interfacial length: {rel:.2%}" if rel is not None else
             "interfacial length: not measured (" + "; ".join(
                 x for x in both if isinstance(x, str)) + ")") +
             f" (the mechanics at xi_dry {xr[0]:g}-{xr[1]:g} nm, {where}; each class runs at "
             "its band's ell, which differs from the bead's own by less than that range; the "
             f"bands' own ells moved the batch's time by {t_bands / t0 - 1.0:+.1e} "
-            "(relative) against every class at the central band's)"}
+            "(relative) against every class at the central band's)")
         dl = delayed_settings(s)[-1]
         mf = change(dl)
-        out["model_form"] = {"relative": None if isinstance(mf, str) else mf, "text": (
+        out["model_form"] = Part(None if isinstance(mf, str) else mf, (
             f"model form: {mf:.2%}" if not isinstance(mf, str) else
             f"model form: not measured ({mf})") + (
             f" (the delayed-transition law: the ell = 0 Lagrangian lattice, N = {dl.n}, "
-            f"{where})")}
+            f"{where})"))
     else:
         why = ("the paper's model (no interfacial energy)" if not s.regularized else
                "a ladder's coarsest rung")
         for k in ("interfacial_length_range", "model_form"):
-            out[k] = {"relative": None, "text": (
+            out[k] = Part(None, (
                 f"{k.replace('_range', '').replace('_', ' ')}: not measured for {why}; "
-                "the direct truth (the default) states it")}
+                "the direct truth (the default) states it"))
     return out
 
 
@@ -337,7 +337,7 @@ def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
             + ("" if v0 is None else
                f"; the sum of perfect-sink beads says {t_sink:.4g} tau_ref and overstates "
                f"the released drug at that time by {over:.1%} (re-absorption from the shared "
-               "medium)") + ". " + " ".join(p["text"] for p in unc.values()))
+               "medium)") + ". " + " ".join(p.text for p in unc.values()))
     return DrugBatchAnswer(
         model="full+batch-medium", dose_fraction=f, time=t, seconds=t * tau, sink_time=t_sink,
         sink_overestimate=over, medium_volume_ml=ml, bead_count=n_beads,
@@ -389,7 +389,7 @@ def _protocol_answer(req: Any, sizes: DrySizes,
             f"the batch ({sizes.spec.describe()}) releases {f:.0%} of its load at "
             f"{t * tau:.4g} s from the protocol's start. Quadrature: {res['quadrature']:.1e} "
             f"({res['nodes']} against {res['check_nodes']} nodes). "
-            + " ".join(p["text"] for p in unc.values()))
+            + " ".join(p.text for p in unc.values()))
     return DrugBatchAnswer(
         model="full+batch-medium under a protocol", dose_fraction=f, time=t, seconds=t * tau,
         sink_time=t_sink, sink_overestimate=over, medium_volume_ml=ml, bead_count=n_beads,
@@ -465,20 +465,20 @@ def protocol_batch_time(req: Any, sizes: DrySizes, v0: float | None) -> dict[str
             "horizon": horizon, "texts": prot.texts}
 
 
-def protocol_parts(res: dict[str, Any]) -> dict[str, dict[str, Any]]:
+def protocol_parts(res: dict[str, Any]) -> dict[str, Part]:
     """The answer's parts under a protocol (module doc), in numbers and words."""
     return {
-        "numerical": {"relative": res["numerical"], "text": (
+        "numerical": Part(res["numerical"], (
             f"numerical: {res['numerical']:.1e} (the coupled solve's steps halved); the "
             "mechanics' n / 2 check is not run per node (the single bead's drug dose under "
-            "the protocol gives it)")},
-        "interfacial_length_range": {"relative": None, "text": (
+            "the protocol gives it)")),
+        "interfacial_length_range": Part(None, (
             "interfacial length: not measured under a protocol (each node runs at its own "
-            "ell = xi_dry / a_d)")},
-        "model_form": {"relative": None, "text": (
+            "ell = xi_dry / a_d)")),
+        "model_form": Part(None, (
             "model form: D0 is held at the protocol's hottest temperature; what that costs "
             "is not run per node (the single bead's drug dose under the protocol bounds "
-            "it)")},
+            "it)")),
     }
 
 

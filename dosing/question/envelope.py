@@ -35,7 +35,8 @@ from typing import Any
 from solver.errors import BudgetExceeded, NotApplicableError, ParameterError, SolverError
 
 from ..answers import Pending
-from ..truth import delayed_settings
+from ..truth import Part as TruthPart
+from ..truth import Uncertainty, delayed_settings
 from ..units import HOW_TO_PIN, k0_temperature_factor, radius_after_dose, timescale_uncertainty
 
 # the review's measured delayed / Maxwell ratios span 1.05-2.65 (ANB and HHT, jumps and
@@ -187,10 +188,13 @@ def _sig(x: float, digits: int) -> str:
 
 
 # ------------------------------------------------------------------ the parts
-def _as_dict(unc: Any) -> dict[str, Any] | None:
+def _truth_parts(unc: Any) -> dict[str, Any]:
+    """An answer's uncertainty by name, its parts ``dosing.truth.Part`` (an
+    :class:`Uncertainty`'s fields, or the mapping a population's or a protocol's answer
+    holds)."""
     if unc is None:
-        return None
-    return unc.to_dict() if hasattr(unc, "to_dict") else dict(unc)
+        return {}
+    return unc.by_name() if isinstance(unc, Uncertainty) else dict(unc)
 
 
 def error_parts(ans: Any) -> list[Part]:
@@ -200,8 +204,9 @@ def error_parts(ans: Any) -> list[Part]:
     model = str(getattr(ans, "model", ""))
     reduced = model.startswith("front") and "+full" not in model
     est = getattr(ans, "error_estimate", None)
-    unc = _as_dict(getattr(ans, "uncertainty", None)) or {}
-    num = (unc.get("numerical") or {}).get("relative")
+    unc = _truth_parts(getattr(ans, "uncertainty", None))
+    numerical: TruthPart | None = unc.get("numerical")
+    num = None if numerical is None else numerical.relative
     if est is not None and math.isfinite(float(est)):
         text = str(getattr(ans, "error_explanation", "") or "")
         if reduced:
@@ -209,16 +214,15 @@ def error_parts(ans: Any) -> list[Part]:
                                  f"its truth, {100 * est:.2g}% (error_estimate, its "
                                  f"numerical part included). {text}".strip()))
             if num is not None:
-                out.append(symmetric("numerical", num, unc["numerical"].get("text", ""),
-                                     counted=False))
+                out.append(symmetric("numerical", num, numerical.text, counted=False))
         else:
             out.append(symmetric("numerical", est if num is None else max(est, num),
                                  f"numerical: {100 * est:.2g}% (error_estimate). {text}"))
     elif num is not None:
-        out.append(symmetric("numerical", num, unc["numerical"].get("text", "")))
-    ell = unc.get("interfacial_length_range") or {}
-    if ell.get("relative") is not None:
-        out.append(symmetric("interfacial_length", ell["relative"], ell.get("text", "")))
+        out.append(symmetric("numerical", num, numerical.text))
+    ell: TruthPart | None = unc.get("interfacial_length_range")
+    if ell is not None and ell.relative is not None:
+        out.append(symmetric("interfacial_length", ell.relative, ell.text))
     return out
 
 
