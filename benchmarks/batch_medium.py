@@ -18,11 +18,11 @@ import time
 
 import numpy as np
 
-from dosing.payload.drug import drug_settings
 from dosing.payload.release import DrugDoseRequest
 from dosing.population.medium import HORIZON, SUB, Bands, batch_classes, coupled
 from dosing.population.sizes import as_distribution
 from dosing.runs.mechanics import jump_mechanics
+from dosing.runs.solute import drug_settings
 from solver.solute import node_volumes
 
 SIZES = {"kind": "table", "sizes_um": [40.0, 60.0]}

@@ -35,7 +35,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from dosing.payload.drug import SAMPLES_PER_TAU
+from dosing.runs.solute import SAMPLES_PER_TAU
 from solver.full import FullResult, simulate
 from solver.solute import Hindrance, Solute, release
 
@@ -46,7 +46,7 @@ CASES = {"ANB 302->308": ("ANB", 302.0, [(0.3, 308.0)]),
 DRUGS = {"D0 = 0": Solute(0.0),
          "protein, sieved": Solute(8.8, Hindrance("free-volume", sieve=2.25, y=1.0)),
          "protein, no sieve": Solute(8.8, Hindrance("free-volume", sieve=0.0, y=1.0))}
-SAMPLES = (500, 1000, 2000, 4000)  # per unit time (drug runs: dosing.payload.drug.SAMPLES_PER_TAU)
+SAMPLES = (500, 1000, 2000, 4000)  # per unit time (drug runs: dosing.runs.solute.SAMPLES_PER_TAU)
 
 
 def median_time(fun: Callable[[], object], repeats: int) -> tuple[float, object]:
@@ -118,9 +118,10 @@ def reduced_section(repeats: int) -> None:
     (``plan_drug_dose`` without validate; a 50 um bead), the first call of a jump (its
     front trajectory computed, then memoised) and warm (median of ``repeats``), with the
     model, its stated error and the dose time; the target is under 10 ms."""
-    from dosing.payload.drug import DrugModel, drug_settings
+    from dosing.payload.drug import DrugModel
     from dosing.payload.reduced import applies
     from dosing.payload.release import DrugDoseRequest, plan_drug_dose
+    from dosing.runs.solute import drug_settings
 
     print(f"reduced drug model: CPU ms per answer (plan_drug_dose; warm: median of {repeats})")
     print(f"  {'case':<58} {'model':<13} {'first':>7} {'warm':>7} {'error':>6} {'time':>10}")

@@ -29,7 +29,7 @@ JUMPS = {"ANB": ("ANB", 302.0, 308.0), "HHT": ("HHT", 304.0, 308.0)}
 DRY_UM = 50.0
 HORIZON = 2.0  # tau: the full solver's drug run covers every dose of the table
 # the reference's protocol steps (tau): one heating, cut so that simulate_protocol's outputs
-# (at least dosing.payload.drug.MIN_SAMPLES a step) resolve every decade of time from 1e-5 tau: a
+# (at least dosing.runs.solute.MIN_SAMPLES a step) resolve every decade of time from 1e-5 tau: a
 # fast drug's small doses are out long before the planner's first output at 5e-4 tau
 CUTS = (1e-5, 1e-4, 1e-3, 1e-2, 0.5, HORIZON)
 
@@ -44,7 +44,7 @@ def fluid_request(name: str):
 
 def mechanics(name: str, cache: Path = CACHE):
     """The full solver's drug mechanics for ``name`` (cached on disk)."""
-    from dosing.payload.drug import drug_settings, simulate_protocol
+    from dosing.runs.solute import drug_settings, simulate_protocol
     from solver.full import FullResult
 
     cache.mkdir(parents=True, exist_ok=True)

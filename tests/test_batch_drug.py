@@ -13,11 +13,11 @@ from api_support import asgi
 
 from api.cli import main
 from api.http import create_app
-from dosing.payload.drug import drug_settings
 from dosing.payload.release import DrugDoseRequest
 from dosing.population.medium import HORIZON, batch_dry_volume_ul, drug_batch_dose
 from dosing.population.sizes import as_distribution
 from dosing.runs.mechanics import jump_mechanics
+from dosing.runs.solute import drug_settings
 from solver.errors import ParameterError
 from solver.gel import as_gel
 from solver.solute import Solute, release
@@ -143,8 +143,8 @@ def test_http_job_answers_the_python_batch(tmp_path) -> None:
 # --------------------------------------------- each band at its own ell, the three parts
 @functools.lru_cache(maxsize=16)
 def _coarse(temp: float, n: int):
-    from dosing.payload.drug import simulate_protocol
     from dosing.runs.scenario import SolverSettings
+    from dosing.runs.solute import simulate_protocol
 
     return simulate_protocol(as_gel("ANB"), 302.0, [(0.5, temp)], "swollen",
                              SolverSettings(grid="lagrangian", n=n, interfacial_length=0.0))

@@ -11,9 +11,9 @@ import pytest
 from api.cli import main
 from dosing import DoseRequest, PhysicalConstants, SolverSettings
 from dosing.payload.cycles import DrugScheduleRequest, plan_drug_schedule
-from dosing.payload.drug import DrugModel, DrugScenario, drug_settings
+from dosing.payload.drug import DrugModel
 from dosing.payload.release import DrugDoseRequest, plan_drug_dose
-from dosing.runs.solute import DrugRuns
+from dosing.runs.solute import DrugRuns, DrugScenario, drug_settings
 from solver.errors import ParameterError
 from solver.solute import crank_sphere_finite
 

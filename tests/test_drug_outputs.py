@@ -1,5 +1,5 @@
 """The full solver's drug runs resolve the first moments of a jump
-(dosing.payload.drug.step_outputs).
+(dosing.runs.solute.step_outputs).
 
 Between outputs the solute code takes the bead to shrink linearly in time; a fast drug's
 small doses leave in the first 5e-4 tau, before the uniform outputs' first sample.  Measured
@@ -19,12 +19,13 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import pytest
 
-import dosing.payload.drug as drug_module
+import dosing.runs.solute as drug_module
 import dosing.payload.release as drug_dose
 from dosing import PhysicalConstants, Planner
-from dosing.payload.drug import DrugModel, step_outputs
+from dosing.payload.drug import DrugModel
 from dosing.payload.release import DrugDoseRequest, plan_drug_dose
 from dosing.runs.scenario import SolverSettings
+from dosing.runs.solute import step_outputs
 
 
 def test_step_outputs_are_geometric_early_then_uniform() -> None:

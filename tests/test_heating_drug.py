@@ -14,8 +14,9 @@ from api.cli import main
 from api.http import create_app
 from dosing import DoseRequest, PhysicalConstants, SolverSettings
 from dosing.heating import response as pd
-from dosing.payload.drug import DrugModel, drug_settings, simulate_protocol
+from dosing.payload.drug import DrugModel
 from dosing.payload.release import DrugDoseRequest, plan_drug_dose
+from dosing.runs.solute import drug_settings, simulate_protocol
 from solver.errors import ParameterError
 from solver.solute import release
 

@@ -19,7 +19,7 @@ import pytest
 
 import solver.full.integrate as integ
 import solver.full.rosenbrock as ros
-from dosing.payload.drug import step_outputs
+from dosing.runs.solute import step_outputs
 from solver.errors import ParameterError
 from solver.full import moving, simulate
 from solver.full.dense import DENSE_C, DENSE_D

@@ -54,9 +54,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Simulate, then print (or JSON) the release."""
-    from dosing.payload.drug import drug_settings
     from dosing.request import bead_settings
     from dosing.runs.scenario import SolverSettings
+    from dosing.runs.solute import drug_settings
     from dosing.units import timescale
     from solver.equilibrium import equilibrium
     from solver.gel import check_temperature

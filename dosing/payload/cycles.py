@@ -32,10 +32,10 @@ from ..question.events import schedule_events
 from ..question.schedule import hold_schedule
 from ..question.shooting import Short, read_off, shoot_durations
 from ..request import ScheduleCase, ScheduleRequest
-from ..runs.solute import DrugRuns, runs_for
+from ..runs.solute import DrugRuns, drug_settings, runs_for
 from ..truth import Part, Uncertainty, truth_text
 from ..units import timescale, volume_to_ul
-from .drug import StatedTruth, carried_by_fluid, drug_settings, leak_time
+from .drug import StatedTruth, carried_by_fluid, leak_time
 from .release import DrugCase, DrugHeatings, first_heating
 
 LEAK_WARNING = 0.1  # a rest leaking more than this share of the next dose is flagged

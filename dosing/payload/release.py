@@ -28,17 +28,10 @@ from ..question.shooting import READ_OFF_FLOOR, Reach, Short, read_off, windows
 from ..request import Case, _resolve_protocol, at_start, resolve_case
 from ..runs.mechanics import protocol_mechanics
 from ..runs.scenario import SolverSettings, Step
-from ..runs.solute import DrugRuns, runs_for
+from ..runs.solute import DrugRuns, DrugScenario, drug_settings, runs_for
 from ..truth import Part, Uncertainty, truth_text
 from ..units import timescale, volume_to_ul
-from .drug import (
-    DrugModel,
-    DrugScenario,
-    StatedTruth,
-    carried_by_fluid,
-    drug_settings,
-    leak_time,
-)
+from .drug import DrugModel, StatedTruth, carried_by_fluid, leak_time
 
 MAX_HORIZON = DRUG_STEP_MAX  # tau: one simulate step holds at most 100000 samples
 FIRST_HEATING = 0.5  # tau: the first drug run's heating (read_off grows it x GROWTH)

@@ -34,11 +34,11 @@ from solver.errors import ParameterError
 from solver.limits import BEAD_COUNT_RANGE, MEDIUM_VOLUME_ML_RANGE
 from solver.solute import MediumRelease, coupled_release
 
-from ..payload.drug import drug_settings
 from ..payload.release import GROWTH, MAX_HORIZON, check_protocol
 from ..quantity import micrometres, to_unit
 from ..request import _clamp_length
 from ..runs.mechanics import jump_mechanics, protocol_mechanics
+from ..runs.solute import drug_settings
 from ..truth import Part, delayed_settings
 from ..units import UM3_PER_UL, timescale
 from .bands import band_edges, size_settings
@@ -263,7 +263,7 @@ def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
     """The batch's drug dose (module doc).  ``req`` is a DrugDoseRequest of the reference
     bead (its drug's own release_volume_ul must be None: the batch's medium is
     ``medium_volume``, mL, shared by ``count`` beads); ``size_distribution`` a spec."""
-    from ..payload.drug import drug_settings
+    from ..runs.solute import drug_settings
 
     if req.drug.release_volume_ul is not None:
         raise ParameterError("drug.release_volume_ul", req.drug.release_volume_ul,
@@ -480,34 +480,3 @@ def protocol_parts(res: dict[str, Any]) -> dict[str, Part]:
             "is not run per node (the single bead's drug dose under the protocol bounds "
             "it)")),
     }
-
-
-def check_batch_body(body: Any) -> None:
-    """A request's batch-medium fields, checked before any run (a ParameterError names the
-    field): ``medium_volume_ml`` and ``bead_count`` go together, with a drug and a
-    size_distribution; a batch's drug dose is a fraction of its load."""
-    ml, count = getattr(body, "medium_volume_ml", None), getattr(body, "bead_count", None)
-    batch = getattr(body, "drug", None) is not None and getattr(
-        body, "size_distribution", None) is not None
-    for name, value in (("medium_volume_ml", ml), ("bead_count", count)):
-        if value is not None and not batch:
-            raise ParameterError(name, value, "null without a drug and a size_distribution "
-                                 "(the medium a drug batch shares)")
-    if (ml is None) != (count is None):
-        name = "bead_count" if count is None else "medium_volume_ml"
-        raise ParameterError(name, None, "given with " + ("medium_volume_ml" if
-                             name == "bead_count" else "bead_count") + " (both or neither)")
-    if ml is not None:
-        medium_volume_ml(ml)
-        bead_count(count)
-    if batch and getattr(body, "dose_fraction", None) is None:
-        raise ParameterError("dose_fraction", None, "a fraction of the batch's load (0-1)")
-    if batch:
-        drug = body.drug
-        if getattr(drug, "release_volume_ul", None) is not None:
-            raise ParameterError("drug.release_volume_ul", drug.release_volume_ul,
-                                 "null for a batch (give medium_volume_ml and bead_count)")
-        for name in ("wait", "wait_seconds"):
-            if getattr(drug, name, None):
-                raise ParameterError(f"drug.{name}", getattr(drug, name), "0 or null for a "
-                                     "batch (a wait at T_start is not planned for batches)")

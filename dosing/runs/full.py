@@ -4,7 +4,7 @@ Boundary_Dimless), imported on first use so that a front-model answer loads no k
 This is the one import of the full solver in dosing/ (tests/test_architecture.py checks
 it).  A planner's runs take the store's ``solver`` (:class:`dosing.runs.store.RunStore`:
 this one by default, a stand-in in tests); the run functions a pool worker imports by name
-(``dosing.runs.scenario.run_scenario``, ``dosing.payload.drug.run_drug_scenario``) and a fit's dose
+(``dosing.runs.scenario.run_scenario``, ``dosing.runs.solute.run_drug_scenario``) and a fit's dose
 time, which have no planner, take it from here.
 """
 

@@ -18,12 +18,12 @@ from solver.equilibrium import equilibrium
 
 from ..heating.grammar import Protocol
 from ..heating.program import program_spec, solver_program
-from ..payload.drug import drug_settings
 from ..request import bead_settings
 from ..units import PhysicalConstants, timescale
 from .full import full_solver
 from .lru import ByteLRU
 from .scenario import SolverSettings, run_budget
+from .solute import drug_settings
 
 SAMPLES = 600  # mechanics outputs over the horizon (the solute's steps adapt within them)
 HORIZON_MARGIN = 1.02  # the run goes this far past the last measured time
@@ -90,6 +90,6 @@ def jump_mechanics(gel: Any, t_start: float, t_end: float, branch: str | None,
                    settings: Any, horizon: float) -> Any:
     """A drug run's mechanics of the jump to ``t_end`` held for ``horizon`` tau (a batch's
     reference bead, every class resting after its end; memoised, a FullResult)."""
-    from ..payload.drug import simulate_protocol
+    from .solute import simulate_protocol
 
     return simulate_protocol(gel, t_start, [(horizon, t_end)], branch or "swollen", settings)
