@@ -19,8 +19,8 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import pytest
 
-import dosing.runs.solute as drug_module
 import dosing.payload.release as drug_dose
+import dosing.runs.solute as drug_module
 from dosing import PhysicalConstants, Planner
 from dosing.payload.drug import DrugModel
 from dosing.payload.release import DrugDoseRequest, plan_drug_dose
