@@ -134,7 +134,7 @@ def simulate_protocol(gel: Gel, t_start: float, steps: list[Step], branch: str,
     ``budget`` wall seconds; one FullResult with its state after every step.  ``start``:
     the mechanics of a protocol's first steps (a :func:`mechanics_prefix`), continued from
     its last state (``simulate(..., initial=state)``, joined by ``FullResult.after``)."""
-    from ..runs.full import full_solver
+    from .full import full_solver
 
     simulate = full_solver()
     from solver.full.moving import MeshOptions
