@@ -25,12 +25,12 @@ from typing import Any
 
 import numpy as np
 
-from solver.errors import ParameterError, SolverError, require_finite_positive
+from solver.errors import ParameterError, require_finite_positive
 
 from ..answers import HoldRow
 from ..question.events import schedule_events
 from ..question.schedule import hold_schedule
-from ..question.shooting import Short, read_off, shoot_durations
+from ..question.shooting import Short, corrected, read_off
 from ..request import ScheduleCase, ScheduleRequest
 from ..runs.solute import DrugRuns, drug_settings, runs_for
 from ..truth import Part, Uncertainty, truth_text
@@ -207,25 +207,21 @@ def _leak_warnings(req: DrugScheduleRequest, reading: dict[str, Any], label: str
 
 
 def _shoot(run: DrugHeatings, guesses: Sequence[float]) -> tuple[dict[str, Any], list[str]]:
-    """The corrected schedule (:func:`dosing.question.shooting.shoot_durations`), with
-    warnings for a dose no actuation time meets and for leaky rests."""
+    """The corrected schedule (:func:`dosing.question.shooting.corrected`, partial: a dose
+    no actuation time meets is a warning, the doses before it kept), with warnings for it
+    and for leaky rests."""
     req = run.req
-    durations, short = shoot_durations(run, guesses)
+    res, short = corrected(run, guesses, lambda d: _reading(run, run.run(d), d),
+                           what="the drug doses",
+                           partial=True)
     warnings: list[str] = []
     if short is not None:
         k = short.k
         warnings.append(f"corrected: no actuation time meets dose {k + 1} "
                         f"({req.fractions[k]:.3g} of the load): heating then delivers "
                         f"at most {short.most:.3g}; doses from {k + 1} on are not corrected")
-    if not durations:
-        return {"actuation_times": [], "met": False, "runs": run.count}, warnings
-    res = _reading(run, run.run(durations), durations)
-    errs = [abs(e) for e in res["relative_errors"]]
-    res.update(runs=run.count, max_relative_error=max(errs),
-               met=len(durations) == len(req.fractions) and max(errs) <= req.tolerance)
-    if len(durations) == len(req.fractions) and max(errs) > req.tolerance:
-        raise SolverError(f"shooting did not meet the drug doses within {req.tolerance:.2%} "
-                          f"(worst {max(errs):.2%})", res)
+    if not res["actuation_times"]:
+        return res, warnings
     return res, warnings + _leak_warnings(req, res, "corrected")
 
 

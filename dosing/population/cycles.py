@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from solver.errors import NotApplicableError, ParameterError, SolverError
+from solver.errors import NotApplicableError, ParameterError
 
 from ..answers import HoldRow
 from ..heating.cycles import cycle_scenario
@@ -50,9 +50,9 @@ from ..question.shooting import (
     NodeHeatings,
     Reach,
     delivery,
-    shoot_durations,
     windows,
 )
+from ..question.shooting import corrected as shooting_corrected
 from ..request import ScheduleRequest, _clamp_length
 from ..runs.scenario import Scenario, SolverSettings
 from ..truth import Part, truth_text
@@ -335,19 +335,8 @@ def dose_request(req: ScheduleRequest, fraction: float, size_distribution: Any) 
 
 def shoot_batch(h: BatchHeatings, guesses: Sequence[float]) -> dict[str, Any]:
     """Actuation times meeting every dose of the batch within ``req.tolerance`` (the one
-    shooting routine), and what they deliver."""
-    durations, short = shoot_durations(h, guesses)
-    if short is not None:
-        raise SolverError(f"dose {short.k} is not reached by the batch within a heating of "
-                          f"{short.horizon:.4g}", {"dose": short.k, "horizon": short.horizon})
-    res = check(h, durations)
-    worst = float(np.max(np.abs(res["relative_errors"])))
-    res.update({"runs": h.count, "max_relative_error": worst,
-                "met": bool(worst <= h.req.tolerance)})
-    if not res["met"]:
-        raise SolverError(f"shooting did not meet the batch's doses within "
-                          f"{h.req.tolerance:.2%} (worst {worst:.2%})", res)
-    return res
+    shooting routine, :func:`dosing.question.shooting.corrected`), and what they deliver."""
+    return shooting_corrected(h, guesses, lambda d: check(h, d), what="the batch's doses")[0]
 
 
 def batch_schedule_with(planner: SchedulePlanner, req: ScheduleRequest,
@@ -553,27 +542,15 @@ def drug_batch_schedule_with(planner: SchedulePlanner, req: Any,
 
     rungs = ladder(sizes)
     h, nodes, text = lifted(rungs[0])
-    checked = corrected = None
-    if req.check_protocol:
-        got = h.delivered(h.run(guesses), guesses)
-        checked = {"actuation_times": list(guesses), "delivered_fractions": got,
-                   "relative_errors": [g / f - 1.0 for g, f in zip(got, req.fractions,
-                                                                   strict=True)]}
-    times = guesses
-    if req.correct:
-        durations, short = shoot_durations(h, guesses)
-        if short is not None:
-            raise SolverError(f"drug dose {short.k} is not reached by the batch within a "
-                              f"heating of {short.horizon:.4g} (at most {short.most:.4g})",
-                              {"dose": short.k, "horizon": short.horizon})
-        got = h.delivered(h.run(durations), durations)
-        worst = max(abs(g / f - 1.0) for g, f in zip(got, req.fractions, strict=True))
-        corrected = {"actuation_times": durations, "delivered_fractions": got,
-                     "relative_errors": [g / f - 1.0 for g, f in zip(got, req.fractions,
-                                                                     strict=True)],
-                     "runs": h.count, "max_relative_error": worst,
-                     "met": bool(worst <= req.tolerance)}
-        times = durations
+    def reading(d: list[float]) -> dict[str, Any]:
+        got = h.delivered(h.run(d), d)
+        return {"actuation_times": list(d), "delivered_fractions": got, "relative_errors": [
+            g / f - 1.0 for g, f in zip(got, req.fractions, strict=True)]}
+
+    checked = reading(list(guesses)) if req.check_protocol else None
+    corrected = (shooting_corrected(h, guesses, reading, what="the batch's drug doses")[0]
+                 if req.correct else None)
+    times = guesses if corrected is None else corrected["actuation_times"]
     err, table = 0.0, []
     if len(rungs) > 1 and (checked or corrected):
         fine, fine_nodes, _ = lifted(rungs[1])

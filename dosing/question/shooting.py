@@ -326,20 +326,38 @@ class FluidHeatings:
             return Reach(None, self.delivered(result, durations)[k])
 
 
+def corrected(h: Heatings, guesses: Sequence[float],
+              reading: Callable[[list[float]], dict[str, Any]], extra_runs: int = 0,
+              what: str = "the doses", partial: bool = False
+              ) -> tuple[dict[str, Any], Short | None]:
+    """The corrected schedule of any payload and population: :func:`shoot_durations`, then
+    ``reading`` of the times found (its ``relative_errors``) with the worst error, whether
+    every dose is met and the runs it took (``h.count`` + ``extra_runs``).  A dose out of
+    reach raises (``partial``: the times before it are kept, with its :class:`Short`);
+    found times missing the tolerance raise.  ``what``: the doses in the messages ("the
+    batch's doses")."""
+    durations, short = shoot_durations(h, guesses)
+    if short is not None and not partial:
+        raise SolverError(f"{what}: dose {short.k} is not reached within a heating of "
+                          f"{short.horizon:.4g} (it delivers at most {short.most:.4g})",
+                          {"dose": short.k, "horizon": short.horizon})
+    if not durations:
+        return {"actuation_times": [], "met": False, "runs": h.count + extra_runs}, short
+    res = reading(durations)
+    worst = float(np.max(np.abs(res["relative_errors"])))
+    complete = len(durations) == len(h.targets)
+    res.update({"runs": h.count + extra_runs, "max_relative_error": worst,
+                "met": bool(complete and worst <= h.tolerance)})
+    if complete and worst > h.tolerance:
+        raise SolverError(f"shooting did not meet {what} within "
+                          f"{h.tolerance:.2%} (worst {worst:.2%})", res)
+    return res, short
+
+
 def shoot(run: Runner, req: ScheduleRequest, guesses: Sequence[float],
           h: FluidHeatings | None = None) -> dict[str, Any]:
     """Actuation times meeting every dose within ``req.tolerance`` in the real protocol
-    (each heating a jump to T_end, or ``h``'s heatings)."""
+    (each heating a jump to T_end, or ``h``'s heatings): :func:`corrected`, its reading
+    the protocol check (one run more)."""
     h = h or FluidHeatings(run, req)
-    durations, short = shoot_durations(h, guesses)
-    if short is not None:
-        raise SolverError(f"dose {short.k} is not reached within a heating of "
-                          f"{short.horizon:.4g}", {"dose": short.k, "horizon": short.horizon})
-    res = check(run, req, durations, h)
-    worst = float(np.max(np.abs(res["relative_errors"])))
-    res.update({"runs": h.count + 1, "max_relative_error": worst,
-                "met": bool(worst <= req.tolerance)})
-    if not res["met"]:
-        raise SolverError(f"shooting did not meet the doses within {req.tolerance:.2%} "
-                          f"(worst {worst:.2%})", res)
-    return res
+    return corrected(h, guesses, lambda d: check(run, req, d, h), extra_runs=1)[0]
