@@ -128,7 +128,7 @@ def reduced_section(repeats: int) -> None:
     for gel, t0, drug, dose in REDUCED_CASES:
         req = DrugDoseRequest(gel, t0, 308.0, DrugModel(**drug), dose_fraction=dose,
                               dry_radius_um=50.0)
-        if applies(req, drug_settings(req.settings)) is None:
+        if not applies(req, drug_settings(req.settings)).applies:
             print(f"  {gel} {dose:.0%} {drug}: outside the reduced model's region (full)")
             continue
         c = time.process_time()

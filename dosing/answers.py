@@ -97,6 +97,18 @@ class ModelChoice:
 
 
 @dataclass(frozen=True)
+class Verdict:
+    """A reduced model's verdict on a request, one shape for every such model (the slow-
+    heating front model, ``dosing.heating.reduced``; the reduced drug model,
+    ``dosing.payload.reduced``): whether it ``applies`` (the request is inside its measured
+    region), ``why`` in words, and the ``stated_error`` it answers with where it applies."""
+
+    applies: bool
+    why: str
+    stated_error: float | None = None
+
+
+@dataclass(frozen=True)
 class ValidationReport(ByKey):
     """The full solver's verdict on a dose (:func:`dosing.validation.validation_report`).
 

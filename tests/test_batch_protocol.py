@@ -9,7 +9,7 @@ import pytest
 
 from api.cli import main
 from dosing import DoseRequest, PhysicalConstants
-from dosing.heating import reduced as heating_reduced
+from dosing.answers import Verdict
 from dosing.heating.response import Mode, reduced_dose
 from dosing.population.curves import BatchCurves, batch_protocol_answer
 from solver.errors import ParameterError
@@ -29,7 +29,7 @@ def batch(cv: float, fraction: float = 0.5, **kw):
 def single(fraction: float = 0.5):
     req = DoseRequest("ANB", 302.0, protocol=RAMP, dose_fraction=fraction,
                       dry_radius_um=MEAN_UM, constants=PAPER)
-    return reduced_dose(req, Mode(True, "kT"), heating_reduced.Choice(True, "test"))
+    return reduced_dose(req, Mode(True, "kT"), Verdict(True, "test"))
 
 
 def test_cv_zero_is_the_single_beads_protocol_answer_exactly() -> None:

@@ -165,7 +165,7 @@ def test_outside_the_region_the_full_solver_answers(protocol, fraction, why):
 
     req = DoseRequest(**BEAD, protocol=protocol, dose_fraction=fraction)
     choice = choose(req, req.heating.program(2204.6), False)
-    assert not choice.reduced and why in choice.why
+    assert not choice.applies and why in choice.why
 
 
 def test_holds_after_the_heating_stay_in_the_region():
@@ -173,7 +173,7 @@ def test_holds_after_the_heating_stay_in_the_region():
 
     req = DoseRequest(**BEAD, protocol=["Bath at 308 K with a time constant of 30 s for 2 min",
                                         "Hold at 308 K until 80 % released"], dose_fraction=0.8)
-    assert choose(req, req.heating.program(2204.6), False).reduced
+    assert choose(req, req.heating.program(2204.6), False).applies
 
 
 def test_the_region_edges_in_k_per_tau_and_tau():
@@ -190,7 +190,7 @@ def test_the_region_edges_in_k_per_tau_and_tau():
             (["Bath at 308 K with a time constant of 0.19 tau"], 0.5, False)):
         req = DoseRequest(**BEAD, protocol=protocol, dose_fraction=fraction)
         choice = choose(req, req.heating.program(2204.6), False)
-        assert choice.reduced is inside, (protocol, choice.why)
+        assert choice.applies is inside, (protocol, choice.why)
         if not inside:  # the bead's own K/min or seconds beside the tau units
             unit = "K/min for this bead" if "Heat" in protocol[0] else "s for this bead"
             assert unit in choice.why, choice.why
@@ -203,18 +203,18 @@ def test_beads_under_50_um_and_no_bead_size_go_to_the_full_solver():
         req = DoseRequest(**fields, protocol=["Heat to 308 K at 500 K/tau"], dose_fraction=0.8)
         choice = choose(req, req.heating.program(None if "dry_radius_um" not in fields
                                                  else 353.0), False)
-        assert not choice.reduced and "interfacial length" in choice.why
+        assert not choice.applies and "interfacial length" in choice.why
     big = DoseRequest(**{**BEAD, "dry_radius_um": 100.0}, protocol=["Heat to 308 K at 5 K/min"],
                       dose_fraction=0.8)
-    assert choose(big, big.heating.program(8818.0), False).reduced
+    assert choose(big, big.heating.program(8818.0), False).applies
 
 
 def test_validate_asks_for_the_full_solver():
     from dosing.heating.reduced import choose
 
     req = DoseRequest(**BEAD, protocol=["Heat to 308 K at 5 K/min"], dose_fraction=0.8)
-    assert choose(req, req.heating.program(2204.6), False).reduced
-    assert not choose(req, req.heating.program(2204.6), True).reduced
+    assert choose(req, req.heating.program(2204.6), False).applies
+    assert not choose(req, req.heating.program(2204.6), True).applies
 
 
 def test_until_hold_after_a_ramp_ends_at_the_reduced_dose_time(real_planner):
@@ -231,14 +231,14 @@ def test_until_hold_after_a_ramp_ends_at_the_reduced_dose_time(real_planner):
 
 def test_a_reduced_model_failure_falls_back_to_the_full_solver(monkeypatch):
     import dosing.heating.response as pdose
-    from dosing.heating.reduced import Choice
+    from dosing.answers import Verdict
     from solver.errors import SolverError
 
     def boom(*a, **k):
         raise SolverError("the shell levels did not converge", {})
 
     monkeypatch.setattr(pdose, "reduced_dose", boom)
-    monkeypatch.setattr(pdose, "_choice", lambda *a: Choice(True, "inside"))
+    monkeypatch.setattr(pdose, "_choice", lambda *a: Verdict(True, "inside"))
     req = DoseRequest(**BEAD, protocol=["Heat to 308 K at 5 K/min"], dose_fraction=0.8)
     fast, _, why = pdose._reduced_or_why(SimpleNamespace(solver=None), req, False, "auto")
     assert fast is None and "could not answer" in why

@@ -55,6 +55,7 @@ from typing import Any
 from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.front.slow import slow_front_trajectory
 
+from ..answers import Verdict
 from ..request import DoseRequest
 from ..truth import Part
 from ..units import timescale
@@ -97,24 +98,16 @@ TABLE_TEXT = ("measured against the truth (the full solver at the bead's own int
               "(benchmarks/heating_reduced.py, docs/heating.md)")
 
 
-@dataclass(frozen=True)
-class Choice:
-    """Whether the reduced model answers (``reduced``), and why, in words."""
-
-    reduced: bool
-    why: str
-
-
-def choose(req: DoseRequest, pieces: list[Piece], validate: bool) -> Choice:
+def choose(req: DoseRequest, pieces: list[Piece], validate: bool) -> Verdict:
     """The reduced model where the measured table says it is within STATED_ERROR."""
     if validate:
-        return Choice(False, "a validated answer runs the full solver")
+        return Verdict(False, "a validated answer runs the full solver")
     if not req.settings.regularized:
-        return Choice(False, "the reduced model's error was measured against the "
+        return Verdict(False, "the reduced model's error was measured against the "
                       "regularized truth only, not the paper's model")
     ell = req.settings.interfacial_length
     if ell > TABLE_ELL * (1.0 + 1e-9):
-        return Choice(False, f"the interfacial length {ell:.3g} is larger than the table's "
+        return Verdict(False, f"the interfacial length {ell:.3g} is larger than the table's "
                       f"{TABLE_ELL:g} (beads under 50 um, or no bead size): the truth's "
                       "front nucleates later there than the reduced model's (a 20 um HHT "
                       "bead's jump: 30 % dose 14 % later, 50 % 5.2 %)")
@@ -123,14 +116,14 @@ def choose(req: DoseRequest, pieces: list[Piece], validate: bool) -> Choice:
     if has_bath:
         lo = BATH_FRACTION_MIN
     if not lo <= req.fraction <= hi:
-        return Choice(False, f"the dose {req.fraction:.0%} is outside {lo:.0%}-{hi:.0%}, where "
+        return Verdict(False, f"the dose {req.fraction:.0%} is outside {lo:.0%}-{hi:.0%}, where "
                       "the reduced model is within its stated error (small doses are mostly "
                       "the front's nucleation and the uniform shrinking before it"
                       + (", and with a bath doses under 50 % too)" if has_bath else ")"))
     hot = req.t_end
     heating = [p for p in pieces if not (p.shape == "hold" and p.t1 == hot)]
     if len(heating) > 1 or (heating and (heating[0] is not pieces[0] or heating[0].t1 != hot)):
-        return Choice(False, "the protocol is not one ramp or bath to its hottest temperature "
+        return Verdict(False, "the protocol is not one ramp or bath to its hottest temperature "
                       "followed by holds there, the heatings the reduced model's error was "
                       "measured for")
     cur = req.t_start
@@ -139,27 +132,27 @@ def choose(req: DoseRequest, pieces: list[Piece], validate: bool) -> Choice:
     for p in pieces:
         where = f"protocol[{p.step}]"
         if p.shape == "trace":
-            return Choice(False, f"{where} is a measured trace: the reduced model's error "
+            return Verdict(False, f"{where} is a measured trace: the reduced model's error "
                           "was not measured for traces")
         if p.t1 < cur - 1e-9:
-            return Choice(False, f"{where} cools: the reduced model covers heating only")
+            return Verdict(False, f"{where} cools: the reduced model covers heating only")
         if p.shape == "ramp" and p.duration and abs(p.t1 - p.t0) / p.duration < RAMP_MIN:
             rate = abs(p.t1 - p.t0) / p.duration
             here = "" if tau_s is None else f" ({_per_minute(rate, tau_s)} at tau = {tau_s:.4g} s)"
-            return Choice(False, f"{where} ramps at {rate:.3g} K per tau{here}, slower than "
+            return Verdict(False, f"{where} ramps at {rate:.3g} K per tau{here}, slower than "
                           f"the measured {RAMP_MIN:.3g} ({RAMP_MIN_TEXT}"
                           + ("" if tau_s is None else
                              f", {_per_minute(RAMP_MIN, tau_s)} for this bead") + ")")
         if p.shape == "bath" and (p.time_constant or 0.0) > BATH_MAX:
             here = "" if tau_s is None else f" ({p.time_constant * tau_s:.4g} s)"
-            return Choice(False, f"{where} has a time constant of {p.time_constant:.3g} tau"
+            return Verdict(False, f"{where} has a time constant of {p.time_constant:.3g} tau"
                           f"{here}, longer than the measured {BATH_MAX:.3g} ({BATH_MAX_TEXT}"
                           + ("" if tau_s is None else
                              f", {BATH_MAX * tau_s:.3g} s for this bead") + ")")
         cur = p.t1
-    return Choice(True, f"the protocol and dose are inside the region where the reduced "
-                  f"model is within {STATED_ERROR:.0%} of the truth ({REGION_TEXT}; "
-                  f"{TABLE_TEXT})")
+    return Verdict(True, f"the protocol and dose are inside the region where the reduced "
+                   f"model is within {STATED_ERROR:.0%} of the truth ({REGION_TEXT}; "
+                   f"{TABLE_TEXT})", STATED_ERROR)
 
 
 @dataclass

@@ -33,7 +33,7 @@ from solver.equilibrium import nearest_stable
 from solver.errors import NotApplicableError, ParameterError, SolverError
 from solver.front.slow import slow_front_trajectory
 
-from ..answers import Pending
+from ..answers import Pending, Verdict
 from ..request import DoseRequest
 from ..runs.scenario import Scenario, Trajectory
 from ..truth import Part, Uncertainty, truth_text
@@ -373,7 +373,7 @@ def reduced_getter(req: DoseRequest) -> Getter:
     return get
 
 
-def reduced_dose(req: DoseRequest, mode: Mode, choice: heating_reduced.Choice
+def reduced_dose(req: DoseRequest, mode: Mode, choice: Verdict
                  ) -> ProtocolDoseAnswer:
     """The dose under ``req.heating`` from the reduced model (its until-steps by its own
     crossings), with its stated error as the model-form part."""
@@ -527,13 +527,13 @@ def queue_getter(planner: Any, fraction: float, start_radius: float) -> Getter:
 
 
 def _choice(planner: Any, req: DoseRequest, validate: bool, mode: Mode, model: str
-            ) -> heating_reduced.Choice:
+            ) -> Verdict:
     if model not in ("auto", "full"):
         raise ParameterError("model", model, "'auto' or 'full'")
     if model == "full":
-        return heating_reduced.Choice(False, "the full solver was asked for")
+        return Verdict(False, "the full solver was asked for")
     if not mode.continuous:
-        return heating_reduced.Choice(False, "the planner runs a stand-in solver (the "
+        return Verdict(False, "the planner runs a stand-in solver (the "
                                       "reduced model answers on the real solver only)")
     pieces = req.heating.program(_tau_seconds(req))
     return heating_reduced.choose(req, pieces, validate)
@@ -546,7 +546,7 @@ def _reduced_or_why(planner: Any, req: DoseRequest, validate: bool, model: str
     does not converge) the full solver, saying why."""
     mode = mode_for(planner, req)
     choice = _choice(planner, req, validate, mode, model)
-    if not choice.reduced:
+    if not choice.applies:
         return None, mode, choice.why
     try:
         return reduced_dose(req, mode, choice), mode, ""

@@ -31,6 +31,8 @@ from typing import Any
 
 from solver.front.solute import CELLS, HORIZON, front_release, time_to_release
 
+from ..answers import Verdict
+
 STATED_LIMIT = 0.05  # the reduced model answers where its measured error is at most this
 Y_MAX = 1.0  # the free-volume law's Y of the measured drugs
 # dry bead radii it answers for (um): the table's 50 um within a factor 2 either way, so the
@@ -127,23 +129,31 @@ def stated_error(solute: Any, dose: float,
     return err if err <= STATED_LIMIT else None
 
 
-def applies(req: Any, settings: Any) -> float | None:
-    """The stated error if the reduced model answers drug dose ``req`` (a
-    ``DrugDoseRequest``) on the truth ``settings``, else None."""
+def applies(req: Any, settings: Any) -> Verdict:
+    """Whether the reduced model answers drug dose ``req`` (a ``DrugDoseRequest``) on the
+    truth ``settings``, why, and its stated error where it does (module doc)."""
     from ..model_choice import choose_model
 
     dry = req.bead_dry_radius_um
-    if (req.lead > 0.0 or not settings.direct or dry is None
-            or not BEAD_UM[0] <= dry <= BEAD_UM[1]):
-        return None
+    if req.lead > 0.0:
+        return Verdict(False, "a wait at T_start before the heating was not measured")
+    if not settings.direct:
+        return Verdict(False, "its error was measured against the direct truth only")
+    if dry is None or not BEAD_UM[0] <= dry <= BEAD_UM[1]:
+        return Verdict(False, f"its error was measured for dry beads of {BEAD_UM[0]:g}-"
+                       f"{BEAD_UM[1]:g} um (the bead's size sets the truth's ell)")
     own = req.constants.interfacial_lengths(dry)[0]  # the bead's own ell: the measured truth
     if abs(settings.interfacial_length / own - 1.0) > 1e-9:
-        return None
+        return Verdict(False, "the truth is not at the bead's own interfacial length")
     err = stated_error(req.solute, req.fraction)
     if err is None:
-        return None
+        return Verdict(False, f"the drug and dose are outside the measured table, or its "
+                       f"error there is above {STATED_LIMIT:.0%}")
     model, _ = choose_model(req.gel, req.t_start, req.t_end, req.branch)
-    return err if model == "front" else None
+    if model != "front":
+        return Verdict(False, f"the jump's fluid answer is the {model} model's, not the "
+                       "front model's the reduced drug model rides on")
+    return Verdict(True, f"inside the measured table, its error there {err:.1%}", err)
 
 
 def reduced_release(req: Any, fraction: float | None = None) -> tuple[Any, float, float]:
@@ -202,9 +212,10 @@ class ReducedDose:
 
 def reduced_dose(req: Any, settings: Any) -> ReducedDose | None:
     """The drug dose from the reduced model where it answers (:func:`applies`), else None."""
-    err = applies(req, settings)
-    if err is None:
+    verdict = applies(req, settings)
+    if not verdict.applies:
         return None
+    err = verdict.stated_error
     from ..truth import Part, Uncertainty
 
     try:

@@ -48,6 +48,7 @@ from scipy.optimize import brentq
 
 from solver.errors import NotApplicableError, ParameterError, SolverError
 
+from ..answers import Verdict
 from ..heating import reduced as heating_reduced
 from ..heating.program import program_spec, solver_program
 from ..runs.scenario import DIRECT_ELL_RANGE
@@ -108,7 +109,7 @@ class OutsideRegion(ParameterError):
     model's region and no planner was given to run the full solver there."""
 
 
-def _region(req: Any, radius_um: float, validate: bool) -> heating_reduced.Choice:
+def _region(req: Any, radius_um: float, validate: bool) -> Verdict:
     """The reduced model's verdict on the bead of ``radius_um`` (its own ell and program)."""
     tau_s = timescale(float(radius_um), req.t_end, req.constants).seconds
     return heating_reduced.choose(_node_request(req, float(radius_um)),
@@ -128,7 +129,7 @@ def check_region(req: Any, radii: np.ndarray, weights: np.ndarray, validate: boo
     checked (they move V(t) by less than that whatever their error)."""
     for r in _checked(radii, weights):
         choice = _region(req, float(r), validate)
-        if not choice.reduced:
+        if not choice.applies:
             raise OutsideRegion(
                 "size_distribution", req.size_distribution.describe(),
                 "a batch whose beads are all inside the reduced slow-heating model's region "
@@ -141,7 +142,7 @@ def outside_region(req: Any, radii: np.ndarray, weights: np.ndarray,
                    validate: bool) -> set[float]:
     """The checked nodes (as :func:`check_region`) outside the reduced model's region."""
     return {float(r) for r in _checked(radii, weights)
-            if not _region(req, float(r), validate).reduced}
+            if not _region(req, float(r), validate).applies}
 
 
 # ----------------------------------------------------------------------------- full solver
@@ -361,7 +362,7 @@ class BatchCurves:
                 self._memo[key] = NodeCurve(self.req, key, self.mobility)
             else:
                 self._memo[key] = self._made(key, _region(self.req, key,
-                                                          self.validate).reduced)
+                                                          self.validate).applies)
         return self._memo[key]
 
     def _made(self, radius_um: float, inside: bool) -> NodeCurve | FullNodeCurve:
@@ -413,7 +414,7 @@ class BatchCurves:
         lo, hi = max(out), min(inside)
         while hi - lo > 1e-9 * hi:
             mid = 0.5 * (lo + hi)
-            if _region(self.req, mid, self.validate).reduced:
+            if _region(self.req, mid, self.validate).applies:
                 hi = mid
             else:
                 lo = mid
