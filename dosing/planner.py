@@ -448,16 +448,16 @@ class _ProtocolPath:
 
     @staticmethod
     def answer(planner: Planner, req: DoseRequest, validate: bool) -> Answered | Pending:
-        from .heating import response as protocol_dose
+        from .heating import response
 
-        out = protocol_dose.answer(planner, req, validate)
+        out = response.answer(planner, req, validate)
         return out if isinstance(out, Pending) else Answered(out)  # type: ignore[arg-type]
 
     @staticmethod
     def dose(planner: Planner, req: DoseRequest, validate: bool) -> Any:
-        from .heating import response as protocol_dose
+        from .heating import response
 
-        return protocol_dose.dose(planner, req, validate)
+        return response.dose(planner, req, validate)
 
 
 # the dose paths by the request's heating (``DoseRequest.heating_kind``): a registry like

@@ -4,7 +4,7 @@ The batch (a size distribution) of drug-loaded beads releases into a well-mixed 
 ``medium_volume_ml`` shared by its ``bead_count`` beads (None: a perfect sink, the default).
 Each size class follows the full-solver mechanics of its interfacial-length band in its own
 time t / tau_k (module ``batch``): the sizes are cut into the fluid batch's bands
-(``batch_truth.band_edges``: even in ln R over the volume-weighted central 99 %), each band
+(``population.bands.band_edges``: even in ln R over the volume-weighted central 99 %), each band
 run once at the ell of its geometric-centre bead (ell = xi_dry / a_d, as every truth's).
 The solute of every size class and the medium are solved together (module
 ``solver.solute.medium``), so the beads see one concentration c_med(t) and take drug back from it.
