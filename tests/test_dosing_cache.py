@@ -197,3 +197,37 @@ def test_blobs_of_the_old_format_still_load(tmp_path: Path) -> None:
     back = FullResult.from_npz(got.to_npz(), got.meta)  # and the new format round-trips
     assert back.spinodal and back.diagnostics == got.diagnostics
     np.testing.assert_array_equal(back.step_edge, got.step_edge)
+
+
+def test_stored_runs_decode_one_at_a_time(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+                                          ) -> None:
+    """numpy reads an npz header with ast.literal_eval, which CPython 3.11 can fail with a
+    spurious SystemError when threads compile at once (python/cpython#106905; seen here as
+    a batch node's run failing): the cache and the store decode under one lock, so eight
+    threads reading never overlap in the decoder, and every row survives."""
+    from dosing.runs import scenario
+
+    inside, most = [0], [0]
+    real = Trajectory.from_npz.__func__
+
+    def counting(cls, blob, meta):
+        inside[0] += 1
+        most[0] = max(most[0], inside[0])
+        time.sleep(0.002)
+        try:
+            return real(cls, blob, meta)
+        finally:
+            inside[0] -= 1
+
+    monkeypatch.setattr(scenario.Trajectory, "from_npz", classmethod(counting))
+    with ValidationCache(tmp_path / "c.sqlite") as cache:
+        for s in range(8):
+            cache.put_trajectory(f"k{s}", _traj(s))
+        got: list[Trajectory | None] = [None] * 8
+        threads = [threading.Thread(target=lambda i=i: got.__setitem__(i, cache.get(f"k{i}")))
+                   for i in range(8)]
+        for th in threads:
+            th.start()
+        for th in threads:
+            th.join()
+    assert most[0] == 1 and all(g is not None and g.meta["seed"] == i for i, g in enumerate(got))

@@ -35,7 +35,7 @@ from typing import Any
 
 from solver.errors import ParameterError
 
-from .scenario import Trajectory
+from .scenario import Trajectory, decode
 
 log = logging.getLogger("thermogel.cache")
 
@@ -263,7 +263,7 @@ class ValidationCache:
         if raw is None:
             return None
         try:
-            return Trajectory.from_npz(raw[1], raw[0])
+            return decode(raw[1], raw[0])
         except Exception as exc:  # an unchecked (old) row that no longer decodes
             log.warning("cache row %s does not decode (%r): dropped", key, exc)
             self._drop_corrupt(key, self._digest(key))

@@ -17,6 +17,7 @@ import hashlib
 import json
 import math
 import os
+import threading
 import time
 from array import array
 from collections.abc import Callable
@@ -341,6 +342,17 @@ class Scenario:
 
 
 Trajectory = FullResult
+
+# numpy reads an npz member's header with ast.literal_eval, and CPython 3.11's AST
+# constructor can raise a spurious SystemError ("AST constructor recursion depth mismatch",
+# python/cpython#106905) when threads compile at once: the store decodes one blob at a time
+NPZ_LOCK = threading.Lock()
+
+
+def decode(blob: bytes, meta: dict[str, Any]) -> Trajectory:
+    """A stored run from its npz blob and metadata (one thread at a time: NPZ_LOCK)."""
+    with NPZ_LOCK:
+        return Trajectory.from_npz(blob, meta)
 """A stored full-solver run: the one run record, :class:`solver.full.result.FullResult`,
 without profiles (:meth:`FullResult.without_profiles`), with its cache ``meta``."""
 

@@ -28,7 +28,7 @@ from solver.solute.result import RELEASE_ARRAYS
 
 from .cache import ValidationCache
 from .lru import ByteLRU
-from .scenario import RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
+from .scenario import NPZ_LOCK, RUN_BUDGET_S, Scenario, SolverSettings, Step, code_version
 
 # mechanics samples per unit time (at least MIN_SAMPLES per step): benchmarks/drug.py measures
 # the released fraction within 3e-3 of the load (1e-3 with sieving) at a cost <= 1.5 x
@@ -223,7 +223,7 @@ def to_npz(rel: ReleaseResult) -> bytes:
 
 def from_npz(blob: bytes, meta: dict[str, Any]) -> ReleaseResult:
     """Inverse of :func:`to_npz` (scalars from the metadata)."""
-    with np.load(io.BytesIO(blob)) as z:
+    with NPZ_LOCK, np.load(io.BytesIO(blob)) as z:
         arrays = {k: np.array(z[k]) for k in RELEASE_ARRAYS if k in z}
     return ReleaseResult(**arrays, mass_balance_error=float(meta.get("mass_balance_error", 0.0)),
                          effective_diffusivity=float(meta.get("effective_diffusivity", 0.0)),

@@ -32,7 +32,15 @@ from .full import full_solver
 from .jobs import DEFAULT_LEASE_SECONDS, Job, JobRunner
 from .lru import ByteLRU
 from .restart import Start, restartable, stopped_as_run
-from .scenario import Scenario, Solver, Trajectory, hard_limit, run_budget, run_scenario
+from .scenario import (
+    Scenario,
+    Solver,
+    Trajectory,
+    decode,
+    hard_limit,
+    run_budget,
+    run_scenario,
+)
 
 if TYPE_CHECKING:
     from .solute import DrugRuns
@@ -146,7 +154,7 @@ class RunStore:
                 raw = rows.get(key)
                 if raw is None:
                     continue
-                traj = Trajectory.from_npz(raw[1], raw[0])
+                traj = decode(raw[1], raw[0])
                 with self._mem_lock:
                     self._mem[key] = traj
                     self._row_digest[key] = found[key]
@@ -167,7 +175,7 @@ class RunStore:
                need_time: float) -> tuple[dict[str, Any], bytes] | None:
         """(meta, blob) of a stored run covering the need (one another process stored)."""
         raw = self.cache.get_raw(sc.key())
-        if raw is None or not _covers(Trajectory.from_npz(raw[1], raw[0]), sc, need_radius,
+        if raw is None or not _covers(decode(raw[1], raw[0]), sc, need_radius,
                                       need_time):
             return None
         return raw
@@ -206,11 +214,11 @@ class RunStore:
             return traj
         raw = self._fetch(sc, need_radius, 0.0)
         if raw is not None:
-            return Trajectory.from_npz(raw[1], raw[0])
+            return decode(raw[1], raw[0])
         meta, blob = run_scenario(sc.to_dict(), self.horizon, need_radius, budget=budget,
                                   solver=self.solver)
         self.cache.put_if_longer(meta["key"], meta, blob)
-        return Trajectory.from_npz(blob, meta)
+        return decode(blob, meta)
 
     def trajectory(self, sc: Scenario, need_radius: float | None = None,
                    need_time: float = 0.0) -> Trajectory:
@@ -220,7 +228,7 @@ class RunStore:
             if traj is not None:
                 return self._keep_states(sc, traj)
             meta, blob = self.submit(sc, need_radius, need_time).result()
-            traj = Trajectory.from_npz(blob, meta)
+            traj = decode(blob, meta)
             if _covers(traj, sc, need_radius, need_time):
                 return self._keep_states(sc, traj)
         raise SolverError("the full-solver run does not cover the dose", {"key": sc.key()})
