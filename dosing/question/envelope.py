@@ -29,6 +29,7 @@ import json
 import math
 import threading
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -326,22 +327,8 @@ def _rerun_ratio(planner: Any, request: Any, result: Any, constants: Any, t_end:
     when the rerun is not available now."""
     if math.isclose(d_cm2_s, constants.diffusivity(t_end) * 1e4, rel_tol=1e-9):
         return 1.0
-    # memo: the same request and candidate under an unchanged run store give the same ratio
-    try:
-        key = (str(planner.cache.path), planner.cache.generation(),
-               json.dumps(request.to_dict(), sort_keys=True, default=str), d_cm2_s)
-    except (AttributeError, TypeError):
-        key = None
-    with _LATTICE_LOCK:
-        if key is not None and key in _RERUNS:
-            return _RERUNS[key]
-    got = _rerun(planner, request, constants, t_end, d_cm2_s, secs)
-    if key is not None:
-        with _LATTICE_LOCK:
-            _RERUNS[key] = got
-            while len(_RERUNS) > 4096:
-                _RERUNS.popitem(last=False)
-    return got
+    return _memo(_RERUNS, _store_key(planner, request, d_cm2_s),
+                 lambda: _rerun(planner, request, constants, t_end, d_cm2_s, secs))
 
 
 def _rerun(planner: Any, request: Any, constants: Any, t_end: float, d_cm2_s: float,
@@ -380,21 +367,8 @@ def _law_over_timescale(planner: Any, request: Any, result: Any) -> dict[str, fl
     candidate whose answer needs new full-solver runs is left out."""
     if request.heating.tau_free:
         return {}
-    try:  # memo: the same request under an unchanged run store gives the same ratios
-        key = ("law", str(planner.cache.path), planner.cache.generation(),
-               json.dumps(request.to_dict(), sort_keys=True, default=str))
-    except (AttributeError, TypeError):
-        key = None
-    with _LATTICE_LOCK:
-        if key is not None and key in _RERUNS:
-            return dict(_RERUNS[key])  # type: ignore[arg-type]
-    got = _law_candidates(planner, request)
-    if key is not None:
-        with _LATTICE_LOCK:
-            _RERUNS[key] = got  # type: ignore[assignment]
-            while len(_RERUNS) > 4096:
-                _RERUNS.popitem(last=False)
-    return dict(got)
+    return dict(_memo(_RERUNS, _store_key(planner, request, "law"),
+                      lambda: _law_candidates(planner, request)))
 
 
 def _law_candidates(planner: Any, request: Any) -> dict[str, float]:
@@ -476,22 +450,43 @@ _LATTICE_LOCK = threading.Lock()
 def lattice_time(planner: Any, sc: Any, target: float) -> float:
     """The lattice run's time to ``target`` (run once and stored: ``Planner.run_here``);
     the number kept per process, not the run (a trace's program can be large)."""
-    key = (str(getattr(planner.cache, "path", "")), sc.key(), float(target))
-    with _LATTICE_LOCK:
-        if key in _LATTICE_TIMES:
-            _LATTICE_TIMES.move_to_end(key)
-            return _LATTICE_TIMES[key]
+    def run() -> float:
+        try:
+            traj = planner.run_here(sc, need_radius=target, budget=LATTICE_BUDGET_S)
+        except BudgetExceeded:  # a process's first run also compiles the solver's kernels
+            # (tens of seconds, cold numba cache) inside its budget: once more, compiled
+            traj = planner.run_here(sc, need_radius=target, budget=LATTICE_BUDGET_S)
+        return float(traj.time_to_radius(target))
+
+    return _memo(_LATTICE_TIMES, (str(getattr(planner.cache, "path", "")), sc.key(),
+                                  float(target)), run)
+
+
+def _store_key(planner: Any, request: Any, *extra: Any) -> tuple[Any, ...] | None:
+    """A memo key for what ``request`` gives under the planner's run store as it is now
+    (its file and generation: a new run stored makes a new key); None: not memoised."""
     try:
-        traj = planner.run_here(sc, need_radius=target, budget=LATTICE_BUDGET_S)
-    except BudgetExceeded:  # a process's first run also compiles the solver's kernels
-        # (tens of seconds, cold numba cache) inside its budget: once more, compiled
-        traj = planner.run_here(sc, need_radius=target, budget=LATTICE_BUDGET_S)
-    t = float(traj.time_to_radius(target))
-    with _LATTICE_LOCK:
-        _LATTICE_TIMES[key] = t
-        while len(_LATTICE_TIMES) > 4096:
-            _LATTICE_TIMES.popitem(last=False)
-    return t
+        return (str(planner.cache.path), planner.cache.generation(),
+                json.dumps(request.to_dict(), sort_keys=True, default=str), *extra)
+    except (AttributeError, TypeError):
+        return None
+
+
+def _memo(table: OrderedDict[Any, Any], key: Any, compute: Callable[[], Any]) -> Any:
+    """``compute()`` once per ``key`` in ``table`` (least recently used out past 4096
+    entries; a None key computes afresh)."""
+    if key is not None:
+        with _LATTICE_LOCK:
+            if key in table:
+                table.move_to_end(key)
+                return table[key]
+    got = compute()
+    if key is not None:
+        with _LATTICE_LOCK:
+            table[key] = got
+            while len(table) > 4096:
+                table.popitem(last=False)
+    return got
 
 
 def calibration_ratio(planned: Any) -> float | None:
