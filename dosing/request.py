@@ -292,7 +292,7 @@ class DoseRequest(Case):
     dose_volume_ul: float | None = None
     drug_mass_ug: float | None = None
     concentration_ug_per_ul: float | None = None
-    size_distribution: Any = field(default=None, kw_only=True)  # a batch (dosing.population.front)
+    size_distribution: Any = field(default=None, kw_only=True)  # a batch (dosing.population.sizes)
     fraction: float = field(init=False, repr=False, compare=False)
     # a heating protocol in place of t_end (dosing.heating.grammar; the dose:
     # dosing.heating.response)

@@ -42,6 +42,7 @@ from solver.errors import NotApplicableError, ParameterError
 from ..answers import HoldRow
 from ..heating.cycles import cycle_scenario
 from ..quantity import micrometres
+from ..question import shooting
 from ..question.events import schedule_events
 from ..question.schedule import SchedulePlanner, hold_schedule
 from ..question.shooting import (
@@ -52,7 +53,6 @@ from ..question.shooting import (
     delivery,
     windows,
 )
-from ..question.shooting import corrected as shooting_corrected
 from ..request import ScheduleRequest, _clamp_length
 from ..runs.scenario import Scenario, SolverSettings
 from ..truth import Part, truth_text
@@ -336,7 +336,7 @@ def dose_request(req: ScheduleRequest, fraction: float, size_distribution: Any) 
 def shoot_batch(h: BatchHeatings, guesses: Sequence[float]) -> dict[str, Any]:
     """Actuation times meeting every dose of the batch within ``req.tolerance`` (the one
     shooting routine, :func:`dosing.question.shooting.corrected`), and what they deliver."""
-    return shooting_corrected(h, guesses, lambda d: check(h, d), what="the batch's doses")[0]
+    return shooting.corrected(h, guesses, lambda d: check(h, d), what="the batch's doses")[0]
 
 
 def batch_schedule_with(planner: SchedulePlanner, req: ScheduleRequest,
@@ -548,7 +548,7 @@ def drug_batch_schedule_with(planner: SchedulePlanner, req: Any,
             g / f - 1.0 for g, f in zip(got, req.fractions, strict=True)]}
 
     checked = reading(list(guesses)) if req.check_protocol else None
-    corrected = (shooting_corrected(h, guesses, reading, what="the batch's drug doses")[0]
+    corrected = (shooting.corrected(h, guesses, reading, what="the batch's drug doses")[0]
                  if req.correct else None)
     times = guesses if corrected is None else corrected["actuation_times"]
     err, table = 0.0, []
