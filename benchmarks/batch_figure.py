@@ -16,7 +16,8 @@ import argparse
 import numpy as np
 
 from dosing import DoseRequest
-from dosing.population.front import batch_answer, batch_release, design_map
+from dosing.population.front import batch_answer, batch_release
+from dosing.studies.batch_design import design_map
 
 
 def main() -> None:

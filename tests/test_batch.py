@@ -154,7 +154,7 @@ def test_release_curves_reach_the_dose_at_the_dose_time() -> None:
 
 
 def test_design_map_and_the_tolerated_spread() -> None:
-    from dosing.population.front import design_map, tolerated_cv, with_cv
+    from dosing.studies.batch_design import design_map, tolerated_cv, with_cv
 
     base = _req(0.8)
     m = design_map(base, [0.0, 0.1, 0.2], [0.3, 0.8])

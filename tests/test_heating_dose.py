@@ -364,7 +364,7 @@ async def test_http_protocol_errors_422(tmp_path, fake, change, where):
 def test_heater_sweep_answers_which_heater(planner):
     """'Which heater do I need for a 30 % dose within a time?': faster ramps and smaller
     bath constants are sooner; the least demanding heater meeting the time is named."""
-    from dosing.heating.response import heater_needed, heater_sweep
+    from dosing.studies.heaters import heater_needed, heater_sweep
 
     fields = {**BEAD, "dose_fraction": 0.3}
     ramps = heater_sweep(planner, "ramp", [1.0, 5.0, 50.0], 308.0, **fields)
@@ -387,7 +387,7 @@ def test_a_schedule_runs_as_one_protocol_with_until_steps_and_rests(planner):
     """Two 30 % doses, a 5 K/min heating each, a 10 min rest at T_start between: one
     protocol; each dose ends at its until-step, the second heating starts after the rest,
     and the released fraction at each end is the cumulative dose."""
-    from dosing.heating.response import protocol_schedule, schedule_steps
+    from dosing.studies.heaters import protocol_schedule, schedule_steps
 
     steps = schedule_steps([0.3, 0.3], 302.0, 308.0, "10 min", "5 K/min")
     assert steps == ["Heat to 308 K at 5 K/min", "Hold at 308 K until 30 % released",
@@ -406,7 +406,7 @@ def test_a_schedule_runs_as_one_protocol_with_until_steps_and_rests(planner):
 
 
 def test_schedule_doses_are_checked():
-    from dosing.heating.response import schedule_steps
+    from dosing.studies.heaters import schedule_steps
 
     with pytest.raises(ParameterError) as e:
         schedule_steps([0.6, 0.5], 302.0, 308.0, "10 min")

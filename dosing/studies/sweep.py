@@ -122,7 +122,7 @@ class SweepGrid:
         object.__setattr__(self, "_gels", tuple(resolved))
         object.__setattr__(self, "t_start", float(self.t_start))
         if self.size_cvs is not None:
-            from ..population.front import check_cvs
+            from .batch_design import check_cvs
 
             object.__setattr__(self, "size_cvs", check_cvs(self.size_cvs))
         if self.size > MAX_POINTS:
@@ -231,7 +231,7 @@ def answer_point(point: dict[str, Any]) -> dict[str, Any]:
                expelled_volume_ul=ans.expelled_volume_ul, stored_volume_ul=ans.stored_volume_ul,
                error_estimate=ans.error_estimate)
     if point.get("size_cv") is not None:  # a batch of that CV (issue 26)
-        from ..population.front import batch_row
+        from .batch_design import batch_row
 
         row.update(batch_row(req, point["size_cv"]))
     return row
