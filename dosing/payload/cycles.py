@@ -29,7 +29,7 @@ from solver.errors import ParameterError, require_finite_positive
 
 from ..answers import HoldRow
 from ..question.events import schedule_events
-from ..question.schedule import hold_schedule
+from ..question.schedule import hold_schedule, with_seconds
 from ..question.shooting import Short, corrected, read_off
 from ..request import ScheduleCase, ScheduleRequest
 from ..runs.solute import DrugRuns, drug_settings, runs_for
@@ -255,12 +255,6 @@ def hold_reading(planner: Any, run: DrugHeatings,
     return "full", rows
 
 
-def _seconds(res: dict[str, Any] | None, tau: float | None) -> None:
-    if res is not None and "actuation_times" in res:
-        res["actuation_seconds"] = (None if tau is None
-                                    else [d * tau for d in res["actuation_times"]])
-
-
 def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
                        runs: DrugRuns | None = None) -> DrugScheduleAnswer:
     """Plan ``req``: hold times, the protocol check and the corrected schedule."""
@@ -281,8 +275,7 @@ def plan_drug_schedule(planner: Any, req: DrugScheduleRequest,
     if req.correct:
         corrected, more = _shoot(run, guesses)
         warnings += more
-    _seconds(checked, tau)
-    _seconds(corrected, tau)
+    with_seconds(tau, checked, corrected)
     s = drug_settings(req.settings)
     unc = _schedule_uncertainty(planner, req, runs, corrected or checked, s)
     d0 = req.drug.d0_cm2_s(req.t_end, req.constants)

@@ -44,7 +44,7 @@ from ..heating.cycles import cycle_scenario
 from ..quantity import micrometres
 from ..question import shooting
 from ..question.events import schedule_events
-from ..question.schedule import SchedulePlanner, hold_schedule
+from ..question.schedule import SchedulePlanner, hold_schedule, with_seconds
 from ..question.shooting import (
     FluidHeatings,
     Member,
@@ -333,10 +333,60 @@ def dose_request(req: ScheduleRequest, fraction: float, size_distribution: Any) 
                        size_distribution=as_distribution(size_distribution))
 
 
-def shoot_batch(h: BatchHeatings, guesses: Sequence[float]) -> dict[str, Any]:
-    """Actuation times meeting every dose of the batch within ``req.tolerance`` (the one
-    shooting routine, :func:`dosing.question.shooting.corrected`), and what they deliver."""
-    return shooting.corrected(h, guesses, lambda d: check(h, d), what="the batch's doses")[0]
+def over_rules(req: Any, sizes: DrySizes, lift: Any, reading: Any,
+               guesses: Sequence[float], targets: Sequence[float], what: str
+               ) -> tuple[dict[str, Any] | None, dict[str, Any] | None, Quadrature, list[Node]]:
+    """A batch schedule's readings over the size rules, any payload (module doc): the check
+    of ``guesses`` and the times shot (``shooting.corrected``) on the first rule's nodes
+    (``lift(n)`` -> the lifted heatings, their nodes, the rule in words; ``reading(h, d)``
+    what heatings ``h`` deliver at times ``d``), each run on the next rule: the largest
+    change of a dose is the quadrature error, and the finer rule's delivery the answer.
+    Above ``QUADRATURE_SHARE`` of the tolerance the shooting repeats on the finer rule."""
+    rungs = ladder(sizes)
+    table: list[tuple[int, float]] = []
+    checked = corrected = None
+    err, converged, used = 0.0, True, rungs[0]
+    for i, n in enumerate(rungs):
+        h, nodes, text = lift(n)
+        used = n
+        if req.check_protocol and checked is None:
+            checked = reading(h, guesses)
+        if req.correct:
+            corrected = shooting.corrected(h, guesses, lambda d, h=h: reading(h, d),
+                                           what=what)[0]
+        res = corrected if req.correct else checked
+        if res is None:
+            break
+        coarse, times = res["delivered_fractions"], res["actuation_times"]
+        table.append((len(nodes), float(coarse[-1])))
+        if sizes.exact:
+            break
+        if i + 1 == len(rungs):
+            converged = False
+            break
+        fine, fine_nodes, _ = lift(rungs[i + 1])
+        got = fine.delivered(fine.run(times), times)
+        err = max(abs(g / c - 1.0) for g, c in zip(got, coarse, strict=True))
+        table.append((len(fine_nodes), float(got[-1])))
+        errors = [g / f - 1.0 for g, f in zip(got, targets, strict=True)]
+        res.update(rule_nodes=len(nodes), rule_delivered_fractions=coarse,
+                   delivered_fractions=got, check_nodes=len(fine_nodes),
+                   relative_errors=errors)
+        if res is corrected:
+            worst = max(abs(e) for e in errors)
+            res.update(max_relative_error=worst, met=bool(worst <= req.tolerance))
+        converged = err <= QUADRATURE_SHARE * req.tolerance
+        if converged or not req.correct:
+            break
+        guesses = times
+    return checked, corrected, Quadrature(text, len(nodes), err, converged, table, used), nodes
+
+
+def _quadrature_part(quad: Quadrature) -> Part:
+    return Part(quad.error, (
+        f"quadrature over sizes: {quad.rule}, {quad.nodes} nodes, error {quad.error:.1e} "
+        "(the largest change of a dose on the next rule)"
+        + ("" if quad.converged else "; NOT converged within the rules tried")))
 
 
 def batch_schedule_with(planner: SchedulePlanner, req: ScheduleRequest,
@@ -347,59 +397,16 @@ def batch_schedule_with(planner: SchedulePlanner, req: ScheduleRequest,
     ref = sizes.mean_um
     tau = timescale(ref, req.t_end, req.constants).seconds
     hold_model, hold = batch_hold(planner, req, sizes.spec)
-    guesses = [row.actuation_time for row in hold]
-    rungs = ladder(sizes)
-    table: list[tuple[int, float]] = []
-    checked = corrected = None
-    err, converged, used = 0.0, True, rungs[0]
-    text = ""
-    for i, n in enumerate(rungs):
+
+    def lift(n: int) -> tuple[BatchHeatings, list[Node], str]:
         r, v, text = rule(sizes, n)
         h = BatchHeatings(planner, req, nodes_of(req, r, v, ref))
-        used, nodes = n, h.nodes
-        if req.check_protocol and checked is None:
-            checked = check(h, guesses)
-        if not req.correct:
-            if checked is not None and not sizes.exact:  # its quadrature on the next rule
-                r2, v2, _ = rule(sizes, rungs[1])
-                fine = check(BatchHeatings(planner, req, nodes_of(req, r2, v2, ref)), guesses)
-                got = fine["delivered_fractions"]
-                err = max(abs(g / c - 1.0) for g, c in zip(got, checked["delivered_fractions"],
-                                                            strict=True))
-                table += [(len(nodes), checked["delivered_fractions"][-1]), (len(r2), got[-1])]
-                checked.update(rule_delivered_fractions=checked["delivered_fractions"],
-                               delivered_fractions=got, check_nodes=len(r2),
-                               relative_errors=[g / f - 1.0 for g, f in zip(
-                                   got, req.doses, strict=True)])
-                converged = err <= QUADRATURE_SHARE * req.tolerance
-            break
-        corrected = shoot_batch(h, guesses)
-        table.append((len(nodes), float(corrected["delivered_fractions"][-1])))
-        if sizes.exact:
-            break
-        if i + 1 == len(rungs):
-            converged = False
-            break
-        r2, v2, _ = rule(sizes, rungs[i + 1])
-        fine = check(BatchHeatings(planner, req, nodes_of(req, r2, v2, ref)),
-                     corrected["actuation_times"])
-        got, coarse = fine["delivered_fractions"], corrected["delivered_fractions"]
-        err = max(abs(g / c - 1.0) for g, c in zip(got, coarse, strict=True))
-        table.append((len(r2), float(got[-1])))
-        # the answer: what the finer rule delivers (its own error far below err)
-        worst = max(abs(g / f - 1.0) for g, f in zip(got, req.doses, strict=True))
-        corrected.update(rule_nodes=len(nodes), rule_delivered_fractions=coarse,
-                         delivered_fractions=got, check_nodes=len(r2),
-                         relative_errors=[g / f - 1.0 for g, f in zip(got, req.doses,
-                                                                      strict=True)],
-                         max_relative_error=worst, met=bool(worst <= req.tolerance))
-        if err <= QUADRATURE_SHARE * req.tolerance:
-            break
-        guesses = corrected["actuation_times"]
-    for res in (checked, corrected):
-        if res is not None:
-            res["actuation_seconds"] = [d * tau for d in res["actuation_times"]]
-    quad = Quadrature(text, len(nodes), err, converged, table, used)
+        return h, h.nodes, text
+
+    checked, corrected, quad, nodes = over_rules(
+        req, sizes, lift, check, [row.actuation_time for row in hold], req.doses,
+        "the batch's doses")
+    with_seconds(tau, checked, corrected)
     parts = truth_parts(planner, req, nodes, corrected)
     return _answer(req, sizes, nodes, tau, (hold_model, hold), checked, corrected, quad, parts)
 
@@ -454,10 +461,7 @@ def _answer(req: ScheduleRequest, sizes: DrySizes, nodes: Sequence[Node], tau: f
             f"{req.tolerance:.0%} by the shooting (worst "
             + ("-" if worst is None else f"{worst:.2%}") + "); each node's run is the "
             "truth's (its numerical part as a single bead's schedule)")),
-        "quadrature": Part(quad.error, (
-            f"quadrature over sizes: {quad.rule}, {quad.nodes} nodes, error {quad.error:.1e} "
-            "(the largest change of a dose on the next rule)"
-            + ("" if quad.converged else "; NOT converged within the rules tried"))),
+        "quadrature": _quadrature_part(quad),
         **parts,
     }
     heating = ("" if req.heating is None else
@@ -520,8 +524,8 @@ def drug_batch_schedule_with(planner: SchedulePlanner, req: Any,
     """A batch's drug schedule: every size node its own drug run of the schedule (its own
     tau, interfacial length and solute), the batch's release the load-weighted sum (a
     bead's load ~ R^3: the volume weights), into a perfect sink; the reference bead's hold
-    reading as the first guesses, shot by the one shooting routine on the lifted heatings
-    (``protocol.NodeHeatings``) on the first rule, checked on the next (its quadrature)."""
+    reading as the first guesses, shot on the lifted heatings (``shooting.NodeHeatings``)
+    over the size rules as the fluid's (:func:`over_rules`)."""
     from ..payload.cycles import hold_reading
     from ..payload.release import DrugHeatings
     from ..runs.solute import runs_for
@@ -531,47 +535,30 @@ def drug_batch_schedule_with(planner: SchedulePlanner, req: Any,
     tau = timescale(ref, req.t_end, req.constants).seconds
     runs = runs_for(planner)
     hold_model, hold = hold_reading(planner, DrugHeatings(req, runs, req.fractions), tau)
-    guesses = [row.actuation_time for row in hold]
 
-    def lifted(n: int) -> tuple[NodeHeatings, list[Node], str]:
+    def lift(n: int) -> tuple[NodeHeatings, list[Node], str]:
         r, v, text = rule(sizes, n)
         nodes = nodes_of(req, r, v, ref)
         members = [Member(nd.weight, nd.rho, DrugHeatings(node_request(req, nd), runs,
                                                           req.fractions)) for nd in nodes]
         return NodeHeatings(members, req.fractions, req.tolerance), nodes, text
 
-    rungs = ladder(sizes)
-    h, nodes, text = lifted(rungs[0])
-    def reading(d: list[float]) -> dict[str, Any]:
+    def reading(h: NodeHeatings, d: Sequence[float]) -> dict[str, Any]:
         got = h.delivered(h.run(d), d)
         return {"actuation_times": list(d), "delivered_fractions": got, "relative_errors": [
             g / f - 1.0 for g, f in zip(got, req.fractions, strict=True)]}
 
-    checked = reading(list(guesses)) if req.check_protocol else None
-    corrected = (shooting.corrected(h, guesses, reading, what="the batch's drug doses")[0]
-                 if req.correct else None)
-    times = guesses if corrected is None else corrected["actuation_times"]
-    err, table = 0.0, []
-    if len(rungs) > 1 and (checked or corrected):
-        fine, fine_nodes, _ = lifted(rungs[1])
-        coarse = (corrected or checked)["delivered_fractions"]
-        got = fine.delivered(fine.run(times), times)
-        err = max(abs(g / c - 1.0) for g, c in zip(got, coarse, strict=True))
-        table = [(len(nodes), float(coarse[-1])), (len(fine_nodes), float(got[-1]))]
-    for res in (checked, corrected):
-        if res is not None:
-            res["actuation_seconds"] = [d * tau for d in res["actuation_times"]]
-    quad = Quadrature(text, len(nodes), err, err <= QUADRATURE_SHARE * req.tolerance, table,
-                      rungs[0])
+    checked, corrected, quad, nodes = over_rules(
+        req, sizes, lift, reading, [row.actuation_time for row in hold], req.fractions,
+        "the batch's drug doses")
+    with_seconds(tau, checked, corrected)
     worst = None if corrected is None else corrected["max_relative_error"]
     unc = {
         "numerical": Part(worst, (
             f"numerical: each drug dose met within the tolerance {req.tolerance:.0%} by the "
             "shooting (worst " + ("-" if worst is None else f"{worst:.2%}") + "); each node's "
             "drug run is the truth's mechanics with the solute on its cells")),
-        "quadrature": Part(err, (
-            f"quadrature over sizes: {text}, {len(nodes)} nodes, error {err:.1e} (the largest "
-            "change of a delivered dose on the next rule)")),
+        "quadrature": _quadrature_part(quad),
         "interfacial_length_range": Part(None, (
             "interfacial length: not measured for a drug batch (a single bead's drug "
             "schedule states its numerical part; validate the fluid doses for the rest)")),

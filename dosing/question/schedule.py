@@ -122,10 +122,12 @@ def hold_now(planner: SchedulePlanner, req: ScheduleRequest) -> ScheduleAnswer |
     return _answer(req, model, hold, None, None)
 
 
-def _seconds(res: dict[str, Any] | None, tau: float | None) -> None:
-    if res is not None:
-        res["actuation_seconds"] = (None if tau is None
-                                    else [d * tau for d in res["actuation_times"]])
+def with_seconds(tau: float | None, *readings: dict[str, Any] | None) -> None:
+    """Each reading's actuation times in seconds (None without a bead size), any schedule."""
+    for res in readings:
+        if res is not None and "actuation_times" in res:
+            res["actuation_seconds"] = (None if tau is None
+                                        else [d * tau for d in res["actuation_times"]])
 
 
 def plan_schedule_with(planner: SchedulePlanner, req: ScheduleRequest) -> ScheduleAnswer:
@@ -155,8 +157,7 @@ def _answer(req: ScheduleRequest, model: str, hold: list[HoldRow],
     """The schedule's answer from its readings: seconds, volumes, the truth and a note."""
     dry = req.bead_dry_radius_um
     tau = timescale(dry, req.t_end, req.constants) if dry is not None else None
-    _seconds(checked, tau and tau.seconds)
-    _seconds(corrected, tau and tau.seconds)
+    with_seconds(tau and tau.seconds, checked, corrected)
     sv = stored_volume(req.start_radius)
     s = req.settings
     solver = (f"full solver, {s.grid} grid, N = {s.n}" + (
