@@ -169,7 +169,7 @@ def print_events(events: list[dict[str, Any]]) -> None:
 def write_events(result: Any, args: argparse.Namespace) -> Path:
     """The answer's events (dosing.question.events) to ``args.out`` (.csv or .nc)."""
     from dosing.present import export
-    from dosing.question.events import events_dataset
+    from dosing.present.export import events_dataset
 
     from .outfile import request_of
 

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from solver.errors import ParameterError, require_finite_positive
+from solver.presenters import presenter
 
 from ..answers import HoldRow
 from ..question.events import schedule_events
@@ -120,10 +121,7 @@ class DrugScheduleAnswer(StatedTruth):
 
     def to_dataframe(self) -> Any:
         """The events, one row per step (pandas; ``dosing.question.events``)."""
-        from ..question.events import events_frame
-
-        return events_frame(self.events, {"model": self.model, "truth": self.truth,
-                                          "note": self.note})
+        return presenter("schedule_frame")(self)
 
 
 def _reading(run: DrugHeatings, rel: Any, durations: Sequence[float]) -> dict[str, Any]:

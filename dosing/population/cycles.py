@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from solver.errors import NotApplicableError, ParameterError
+from solver.presenters import presenter
 
 from ..answers import HoldRow
 from ..heating.cycles import cycle_scenario
@@ -285,10 +286,7 @@ class BatchScheduleAnswer:
 
     def to_dataframe(self) -> Any:
         """The events, one row per step (pandas; ``dosing.question.events``)."""
-        from ..question.events import events_frame
-
-        return events_frame(self.events, {"model": self.model, "truth": self.truth,
-                                          "note": self.note})
+        return presenter("schedule_frame")(self)
 
 
 def _node_dicts(req: ScheduleRequest, nodes: Sequence[Node], tau_ref: float) -> list[dict]:

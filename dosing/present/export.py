@@ -576,3 +576,28 @@ def save(ds: xr.Dataset, path: str | Path) -> Path:
         return p
     return to_netcdf(ds, p)
 
+
+def events_dataset(events: Sequence[dict[str, Any]], attrs: dict[str, Any] | None = None
+                   ) -> Any:
+    """The events as an xarray Dataset over ``step`` (units and long names on every
+    variable; text columns as strings; None as NaN), with ``attrs``."""
+    import xarray as xr
+
+    from ..question.events import EVENT_COLUMNS
+
+    n = len(events)
+    data: dict[str, Any] = {}
+    for name, (unit, long_name) in EVENT_COLUMNS.items():
+        if name == "step":
+            continue
+        values = [e.get(name) for e in events]
+        if unit == "" or name in ("kind", "program", "reading"):
+            arr = np.array(["" if v is None else str(v) for v in values], dtype=str)
+        elif name in ("heating", "rough"):
+            arr = np.array([int(v or 0) for v in values], dtype=np.int32)
+        else:
+            arr = np.array([np.nan if v is None else float(v) for v in values], dtype=float)
+        data[name] = ("step", arr, {"units": unit, "long_name": long_name})
+    coords = {"step": ("step", np.arange(1, n + 1, dtype=np.int32),
+                       {"units": "1", "long_name": EVENT_COLUMNS["step"][1]})}
+    return xr.Dataset(data, coords=coords, attrs=dict(attrs or {}))

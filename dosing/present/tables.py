@@ -93,12 +93,25 @@ def answer_html(ans: DoseAnswer) -> str:
 
 
 # ---------------------------------------------------------------------------- schedules
-def schedule_frame(ans: ScheduleAnswer) -> pd.DataFrame:
-    """The schedule as a lab runs it: one row per step (heat, rest), the corrected times
-    when it was corrected, else the hold reading marked rough (:mod:`dosing.question.events`;
-    the per-dose table of every reading is ``to_xarray``)."""
-    from ..question.events import events_frame
+def events_frame(events: Sequence[dict[str, Any]], attrs: dict[str, Any] | None = None
+                 ) -> Any:
+    """The events as a pandas DataFrame, one row per step, columns ``name [unit]``."""
+    import pandas as pd
 
+    from ..question.events import EVENT_COLUMNS
+
+    # ``name [unit]`` as every tidy table (dosing.present.export.header), no brackets without one
+    cols = {(f"{name} [{unit}]" if unit else name): [e.get(name) for e in events]
+            for name, (unit, _) in EVENT_COLUMNS.items()}
+    df = pd.DataFrame(cols)
+    df.attrs.update(attrs or {})
+    return df
+
+
+def schedule_frame(ans: ScheduleAnswer) -> pd.DataFrame:
+    """Any schedule (fluid or drug, one bead or a batch) as a lab runs it: one row per step
+    (heat, rest), the corrected times when it was corrected, else the hold reading marked
+    rough (:mod:`dosing.question.events`; every reading's table is ``to_xarray``)."""
     return events_frame(ans.events, {"model": ans.model, "truth": ans.truth,
                                      "note": ans.note})
 

@@ -23,8 +23,8 @@ protocol the lab runs, in order on one clock.
   heating, when the protocol check is off), and ``rough``: true for the hold reading only.
 
 The corrected schedule is used whenever it was found, else the checked hold times, else the
-hold reading (rough).  :func:`events_dataset` is the table as an xarray Dataset (dimension
-``step``, units on every variable) for ``thermogel schedule --out FILE.csv|.nc``.
+hold reading (rough).  ``dosing.present.export.events_dataset`` is the table as an xarray
+Dataset (units on every variable) for ``thermogel schedule --out FILE.csv|.nc``.
 """
 
 from __future__ import annotations
@@ -182,41 +182,3 @@ def schedule_events(answer: Any, req: Any) -> list[dict[str, Any]]:
         add("heat", d, temp, _get(delivered, k), k + 1, target_fraction=_get(doses, k),
             dose_error=None if err is None else float(err), program=program)
     return rows
-
-
-def events_dataset(events: Sequence[dict[str, Any]], attrs: dict[str, Any] | None = None
-                   ) -> Any:
-    """The events as an xarray Dataset over ``step`` (units and long names on every
-    variable; text columns as strings; None as NaN), with ``attrs``."""
-    import numpy as np
-    import xarray as xr
-
-    n = len(events)
-    data: dict[str, Any] = {}
-    for name, (unit, long_name) in EVENT_COLUMNS.items():
-        if name == "step":
-            continue
-        values = [e.get(name) for e in events]
-        if unit == "" or name in ("kind", "program", "reading"):
-            arr = np.array(["" if v is None else str(v) for v in values], dtype=str)
-        elif name in ("heating", "rough"):
-            arr = np.array([int(v or 0) for v in values], dtype=np.int32)
-        else:
-            arr = np.array([np.nan if v is None else float(v) for v in values], dtype=float)
-        data[name] = ("step", arr, {"units": unit, "long_name": long_name})
-    coords = {"step": ("step", np.arange(1, n + 1, dtype=np.int32),
-                       {"units": "1", "long_name": EVENT_COLUMNS["step"][1]})}
-    return xr.Dataset(data, coords=coords, attrs=dict(attrs or {}))
-
-
-def events_frame(events: Sequence[dict[str, Any]], attrs: dict[str, Any] | None = None
-                 ) -> Any:
-    """The events as a pandas DataFrame, one row per step, columns ``name [unit]``."""
-    import pandas as pd
-
-    # ``name [unit]`` as every tidy table (dosing.present.export.header), no brackets without one
-    cols = {(f"{name} [{unit}]" if unit else name): [e.get(name) for e in events]
-            for name, (unit, _) in EVENT_COLUMNS.items()}
-    df = pd.DataFrame(cols)
-    df.attrs.update(attrs or {})
-    return df
