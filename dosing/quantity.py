@@ -51,6 +51,17 @@ def registry() -> Any:
     return ureg
 
 
+def number(value: Any) -> float:
+    """``value`` as a float; NaN for a bool or what ``float`` refuses, so that one range
+    check refuses it naming the field."""
+    if isinstance(value, bool):
+        return math.nan
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan
+
+
 MAX_TEXT = 100  # characters of one quantity string
 # pint evaluates powers exactly: "9**9**9 s" would never finish.  A unit may carry a small
 # power ("m^2", "cm**2/s"); a number or a bracket raised to a power, a power of more than

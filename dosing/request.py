@@ -19,6 +19,7 @@ from solver.gel import Gel, Permeability, check_temperature
 from solver.limits import DRY_RADIUS_UM_RANGE, REST_RANGE
 
 from .fits.gel_store import calibrated_constants, lookup
+from .quantity import number
 from .runs.scenario import DIRECT_ELL_RANGE, TRUTH, SolverSettings
 from .units import PhysicalConstants, stored_volume, timescale, ul_to_volume, volume_to_ul
 
@@ -407,12 +408,8 @@ def at_start(name: str, value: Any, seconds: Any, dry: float | None, t_end: floa
                                     f" = {lo:g}-{top * tau:.4g} s (tau = {tau:.4g} s)")
 
     def one(where: str, v: Any) -> float:
-        try:
-            x = float(v)
-        except (TypeError, ValueError):
-            x = math.nan
-        x = x if tau is None else x / tau
-        if isinstance(v, bool) or not (math.isfinite(x) and lo <= x <= top):
+        x = number(v) if tau is None else number(v) / tau
+        if not (math.isfinite(x) and lo <= x <= top):
             raise ParameterError(where, v, f"a finite number {span}")
         return x
 

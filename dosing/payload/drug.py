@@ -39,6 +39,7 @@ from solver.errors import ParameterError
 from solver.limits import T_MAX, T_MIN
 from solver.solute import Hindrance, Solute, crank_sphere
 
+from ..quantity import number
 from ..units import (
     BOLTZMANN,
     REFERENCE_TEMPERATURE_K,
@@ -55,11 +56,8 @@ T_REF_RANGE = (T_MIN, T_MAX)  # solver.limits
 def _opt_positive(name: str, value: Any) -> float | None:
     if value is None:
         return None
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        x = math.nan
-    if isinstance(value, bool) or not (math.isfinite(x) and x > 0.0):
+    x = number(value)
+    if not (math.isfinite(x) and x > 0.0):
         raise ParameterError(name, value, "a finite number > 0")
     return x
 
@@ -99,12 +97,8 @@ class DrugModel:
     def __post_init__(self) -> None:
         d = self.diffusivity_cm2_s
         if d is not None:
-            try:
-                x = float(d)
-            except (TypeError, ValueError):
-                x = math.nan
-            if isinstance(d, bool) or not (math.isfinite(x)
-                                           and D_RANGE_CM2_S[0] <= x <= D_RANGE_CM2_S[1]):
+            x = number(d)
+            if not (math.isfinite(x) and D_RANGE_CM2_S[0] <= x <= D_RANGE_CM2_S[1]):
                 raise ParameterError("drug.diffusivity_cm2_s", d,
                                      f"a finite number {D_RANGE_CM2_S[0]:g} <= D0 <= "
                                      f"{D_RANGE_CM2_S[1]:g} cm^2/s (0: no diffusion)")
@@ -131,12 +125,8 @@ class DrugModel:
             raise ParameterError("drug.fiber_radius_nm", None,
                                  f"a finite number > 0 (nm) for the {self.hindrance} law")
         tr = self.reference_temperature_k
-        try:
-            x = float(tr)
-        except (TypeError, ValueError):
-            x = math.nan
-        if isinstance(tr, bool) or not (math.isfinite(x) and T_REF_RANGE[0] <= x
-                                        <= T_REF_RANGE[1]):
+        x = number(tr)
+        if not (math.isfinite(x) and T_REF_RANGE[0] <= x <= T_REF_RANGE[1]):
             raise ParameterError("drug.reference_temperature_k", tr,
                                  f"{T_REF_RANGE[0]:g}-{T_REF_RANGE[1]:g} K (liquid water)")
         object.__setattr__(self, "reference_temperature_k", x)

@@ -35,7 +35,7 @@ from solver.limits import BEAD_COUNT_RANGE, MEDIUM_VOLUME_ML_RANGE
 from solver.solute import MediumRelease, coupled_release
 
 from ..payload.release import GROWTH, MAX_HORIZON, check_protocol
-from ..quantity import micrometres, to_unit
+from ..quantity import micrometres, number, to_unit
 from ..request import _clamp_length
 from ..runs.mechanics import jump_mechanics, protocol_mechanics
 from ..runs.solute import drug_settings
@@ -74,12 +74,8 @@ def medium_volume_ml(value: Any, field: str = "medium_volume_ml") -> float | Non
 
 def bead_count(value: Any, field: str = "bead_count") -> float:
     """The batch's number of beads."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        x = math.nan
-    lo, hi = BEAD_COUNT_RANGE
-    if isinstance(value, bool) or not (math.isfinite(x) and lo <= x <= hi):
+    x, (lo, hi) = number(value), BEAD_COUNT_RANGE
+    if not (math.isfinite(x) and lo <= x <= hi):
         raise ParameterError(field, value, f"a number of beads {lo:g}-{hi:g}")
     return x
 

@@ -35,7 +35,7 @@ import numpy as np
 from solver.errors import ParameterError
 from solver.limits import DRY_RADIUS_UM_RANGE, SIZE_UM_RANGE
 
-from ..quantity import micrometres
+from ..quantity import micrometres, number
 
 KINDS = ("lognormal", "normal", "table")
 WEIGHTINGS = ("number", "volume")
@@ -58,10 +58,7 @@ def _pos(name: str, value: Any) -> float:
 
 
 def _cv(name: str, value: Any) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        x = math.nan
+    x = number(value)
     if not (math.isfinite(x) and 0.0 <= x <= MAX_CV):
         raise ParameterError(f"{F}.{name}", value, f"a finite number 0 <= CV <= {MAX_CV:g}")
     return x
@@ -157,10 +154,7 @@ class SizeDistribution:
         if self.cv is not None:
             set_(self, "cv", _cv("cv", self.cv))
         if self.gsd is not None:
-            try:
-                g = float(self.gsd)
-            except (TypeError, ValueError):
-                g = math.nan
+            g = number(self.gsd)
             top = math.exp(math.sqrt(math.log1p(MAX_CV**2)))
             if not (math.isfinite(g) and 1.0 <= g <= top):
                 raise ParameterError(f"{F}.gsd", self.gsd, f"a finite number 1 <= GSD <= "
