@@ -20,12 +20,15 @@ from solver.presenters import register as _register_presenters
 _EXPORT, _TABLES = "dosing.present.export:", "dosing.present.tables:"
 _register_presenters(
     **{name: _EXPORT + name for name in ("run_dataset", "fit_dataset", "to_netcdf",
-                                         "schedule_dataset", "sweep_dataset")},
+                                         "schedule_dataset", "schedule_result_dataset",
+                                         "sweep_dataset")},
     # the planner's own answers, schedules and sweeps among them (their tables live above
     # them: no import of dosing.present from the modules they present)
     **{name: _TABLES + name for name in ("run_frame", "run_html", "fit_frame", "fit_html",
                                          "answer_frame", "answer_html", "schedule_frame",
-                                         "schedule_html", "sweep_frame")})
+                                         "schedule_html", "sweep_frame", "result_frame",
+                                         "result_html", "schedule_result_frame",
+                                         "schedule_result_html")})
 
 if TYPE_CHECKING:
     from .answers import (

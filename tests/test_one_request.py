@@ -101,6 +101,7 @@ async def test_one_answer_whatever_the_way_in(name, fields, cli, body, planner, 
     assert r.status_code == 200, r.text
     want = py.to_dict()
     check_envelope(want)
+    check_views(py)
     for d in (out, r.json()):
         assert d["cell"] == py.cell and d["question"] == "dose"
         assert d["time"] == pytest.approx(py.time, rel=1e-12)
@@ -211,6 +212,7 @@ async def test_a_schedule_reads_the_same_whatever_the_way_in(
     py = plan(Request(**FAKE_CASE, heating=heating, question=q, population=population),
               planner=fake_planner)
     assert py.cell == name.replace(" ", " · ") and py.reading == "corrected"
+    check_views(py)
     assert main(["schedule", "--gel", "ANB", "--t-start", "302", "--dry-radius-um", "2",
                  "--doses", "0.3", "0.3", "--rests", "0.5", *cli, "--json",
                  "--cache", str(tmp_path / "c.sqlite")]) == 0
@@ -311,6 +313,30 @@ def check_envelope(d: dict) -> None:
     assert d["dominant_uncertainty"]["how_to_pin"]
 
 
+def check_views(res) -> None:
+    """Every cell's one result has its notebook views, led by what it cannot rule out: the
+    HTML opens with the envelope's lines (as the CLI's text answer), the dose's table row
+    carries the envelope of its JSON, a schedule's table and Dataset are its events."""
+    import html as html_module
+
+    d = res.to_dict()
+    view = res._repr_html_()
+    lead = view.split("</p>", 1)[0]
+    assert lead.startswith("<div><p>") and html_module.escape(
+        res.envelope.lines("x")[0].split(" ", 1)[1]) in lead, lead
+    df = res.to_dataframe()
+    if d["question"] == "dose":
+        assert len(df) == 1 and df["cell"][0] == res.cell
+        low = df["envelope_low_s [s]"][0] if d["envelope_seconds"] else df["envelope_low [1]"][0]
+        want = (d["envelope_seconds"] or d["envelope_time"])[0]
+        assert low == pytest.approx(want, rel=1e-12)
+        assert df["dominant_uncertainty"][0] == d["dominant_uncertainty"]["name"]
+    else:
+        assert len(df) == len(d["events"]) and df.attrs["reading"] == res.reading
+        ds = res.to_xarray()
+        assert ds.sizes["step"] == len(d["events"]) and ds.attrs["headline"] == res.headline
+
+
 def _headline(d: dict) -> list[float]:
     return d["actuation_times"] if d["question"] == "schedule" else [d["time"]]
 
@@ -331,8 +357,10 @@ async def test_a_drug_cell_reads_the_same_whatever_the_way_in(
     sizes.write_text("radius_um\n45\n55\n")
     cli = [str(sizes) if c == "{sizes}" else c for c in cli]
     with Planner(cache_path=cache, executor=ThreadPoolExecutor(2)) as p:
-        py = plan(Request(**CASE, heating=heating, question=question, payload=Drug(D0),
-                          population=population), planner=p).to_dict()
+        res = plan(Request(**CASE, heating=heating, question=question, payload=Drug(D0),
+                           population=population), planner=p)
+        check_views(res)
+        py = res.to_dict()
         assert py["cell"] == name.replace(" ", " · ") and py["drug"] is True
         assert main([cli[0], "--gel", "ANB", "--t-start", "302", "--dry-radius-um", "50",
                      "--drug-diffusivity-cm2-s", "0", *cli[1:], "--json",

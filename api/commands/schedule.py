@@ -169,14 +169,10 @@ def print_events(events: list[dict[str, Any]]) -> None:
 def write_events(result: Any, args: argparse.Namespace) -> Path:
     """The answer's events (dosing.question.events) to ``args.out`` (.csv or .nc)."""
     from dosing.present import export
-    from dosing.present.export import events_dataset
 
     from .outfile import request_of
 
-    attrs = export.provenance("schedule events", request_of(args), result.truth,
-                              model=result.model, reading=result.reading,
-                              headline=result.headline, note=result.note)
-    return export.save(events_dataset(result.events, attrs), args.out)
+    return export.save(result.to_xarray(request_of(args)), args.out)
 
 
 def _plot(planner: Any, req: Any, ans: Any, path: str) -> None:

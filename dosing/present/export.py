@@ -601,3 +601,11 @@ def events_dataset(events: Sequence[dict[str, Any]], attrs: dict[str, Any] | Non
     coords = {"step": ("step", np.arange(1, n + 1, dtype=np.int32),
                        {"units": "1", "long_name": EVENT_COLUMNS["step"][1]})}
     return xr.Dataset(data, coords=coords, attrs=dict(attrs or {}))
+
+
+def schedule_result_dataset(res: Any, request: Any = None) -> xr.Dataset:
+    """Any schedule (every cell) as its events Dataset, with provenance, the reading and
+    the headline: what ``thermogel schedule --out`` writes."""
+    attrs = provenance("schedule events", request, res.truth, model=res.model,
+                       reading=res.reading, headline=res.headline, note=res.note)
+    return events_dataset(res.events, attrs)

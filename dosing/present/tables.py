@@ -92,6 +92,74 @@ def answer_html(ans: DoseAnswer) -> str:
     return _table("thermogel dose answer", rows, f"truth: {ans.truth}")
 
 
+# ---------------------------------------------------------------------------- the one answer
+# (dosing.question.result: every cell's DoseResult and ScheduleResult, led by its envelope)
+def _lead(res: Any, what: str) -> list[str]:
+    """The lines the CLI's text answer leads with (the envelope's), else the headline."""
+    env = res.envelope
+    return env.lines(what) if env is not None else [res.headline]
+
+
+def _envelope_rows(res: Any) -> list[tuple[str, Any, str]]:
+    """Each part of the envelope, widest first: its factors, counted or listed only."""
+    env = res.envelope
+    if env is None:
+        return []
+    return [(f"  {p.name.replace('_', ' ')}", f"x{p.low:.3g} to x{p.high:.3g}",
+             "" if p.counted else "listed, not counted")
+            for p in sorted(env.parts, key=lambda p: -p.factor)]
+
+
+def _lead_html(lines: list[str]) -> str:
+    return "<br>".join(html.escape(x) for x in lines)
+
+
+def result_frame(res: Any) -> pd.DataFrame:
+    """Any dose (every cell): one row leading with what cannot be ruled out (the envelope
+    in s and tau, its dominant part), then the point, the model and each part's factors."""
+    d = res.to_dict()
+    env = d.get("envelope_seconds") or [None, None]
+    env_t = d.get("envelope_time") or [None, None]
+    cols: dict[str, list[Any]] = {
+        "cell": [res.cell], "envelope_low_s": [env[0]], "envelope_high_s": [env[1]],
+        "envelope_low": [env_t[0]], "envelope_high": [env_t[1]],
+        "dominant_uncertainty": [(d.get("dominant_uncertainty") or {}).get("name")],
+        "seconds": [res.seconds], "time": [res.time], "model": [res.model]}
+    for p in ([] if res.envelope is None else res.envelope.parts):
+        cols[f"{p.name}_low"], cols[f"{p.name}_high"] = [p.low], [p.high]
+    units = {"envelope_low_s": "s", "envelope_high_s": "s", "seconds": "s",
+             "envelope_low": "1", "envelope_high": "1", "time": "1"}
+    return _frame(cols, units, {"headline": res.headline, "truth": d.get("truth"),
+                                "note": d.get("note")})
+
+
+def result_html(res: Any) -> str:
+    """Any dose (every cell): the envelope's lead lines as the caption, the point, the
+    model, each part's factors, and the truth."""
+    rows = [("time", res.time, "tau"), ("time", res.seconds, "s"), ("model", res.model, ""),
+            *_envelope_rows(res)]
+    truth = getattr(res, "truth", "") or ""
+    body = _table(f"thermogel dose ({res.cell})", rows, f"truth: {truth}" if truth else "")
+    return f"<div><p>{_lead_html(_lead(res, 'the dose after'))}</p>{body}</div>"
+
+
+def schedule_result_frame(res: Any) -> pd.DataFrame:
+    """Any schedule (every cell): its events, one row per step, the envelope and the
+    headline in the attributes."""
+    df = schedule_frame(res.answer)
+    df.attrs.update(headline=res.headline, reading=res.reading,
+                    lead=_lead(res, f"heat for ({res.reading} times)"))
+    return df
+
+
+def schedule_result_html(res: Any) -> str:
+    """Any schedule (every cell): the envelope's lead lines, its parts, then the events."""
+    parts = _envelope_rows(res)
+    table = _table("uncertainty parts (factors of every time)", parts) if parts else ""
+    return (f"<div><p>{_lead_html(_lead(res, f'heat for ({res.reading} times)'))}</p>"
+            f"{table}{schedule_html(res.answer)}</div>")
+
+
 # ---------------------------------------------------------------------------- schedules
 def events_frame(events: Sequence[dict[str, Any]], attrs: dict[str, Any] | None = None
                  ) -> Any:

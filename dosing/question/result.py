@@ -14,6 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from solver.presenters import presenter
+
 
 @dataclass
 class DoseResult:
@@ -58,6 +60,13 @@ class DoseResult:
         if name.startswith("__") or name in ("answer", "batch"):
             raise AttributeError(name)
         return getattr(self.answer if self.answer is not None else self.batch, name)
+
+    def to_dataframe(self) -> Any:
+        """One row led by the envelope (pandas; ``dosing.present.tables.result_frame``)."""
+        return presenter("result_frame")(self)
+
+    def _repr_html_(self) -> str:
+        return presenter("result_html")(self)
 
     def to_dict(self) -> dict[str, Any]:
         """The cell's answer with the headline over it and the sections beside it."""
@@ -135,6 +144,17 @@ class ScheduleResult:
         if name.startswith("__") or name == "answer":
             raise AttributeError(name)
         return getattr(self.answer, name)
+
+    def to_dataframe(self) -> Any:
+        """The events, one row per step (pandas; ``dosing.present.tables``)."""
+        return presenter("schedule_result_frame")(self)
+
+    def to_xarray(self, request: Any = None) -> Any:
+        """The events as an xarray Dataset with provenance (what ``--out`` writes)."""
+        return presenter("schedule_result_dataset")(self, request)
+
+    def _repr_html_(self) -> str:
+        return presenter("schedule_result_html")(self)
 
     def to_dict(self) -> dict[str, Any]:
         """The cell's answer with the headline over it."""
