@@ -3,8 +3,7 @@
     from . import DoseRequest, plan_dose
     ans = plan_dose(DoseRequest("ANB", 302, 308, dose_fraction=0.8, dry_radius_um=50))
 
-Times in tau (eq. timescale), in seconds given a bead size.  Imports no fastapi or matplotlib
-(docs/architecture.md, "The layers")."""
+Times in tau (eq. timescale), s given a bead size; no fastapi/matplotlib (docs/architecture.md)."""
 
 from __future__ import annotations
 
