@@ -3,7 +3,7 @@
 Every answer (each cell of ``dosing.question.cells``) carries typed :class:`Part` objects and an
 :class:`Envelope`: the point answer times every counted part's low ends to their high ends (a
 bracket, not a confidence interval); ``dominant_uncertainty`` is the widest counted part.
-The parts (reduction, numerical, interfacial length, front law, timescale...): docs/envelope.md."""
+Parts (reduction, numerical, interfacial length, front law, eq. timescale...): docs/envelope.md."""
 
 from __future__ import annotations
 
