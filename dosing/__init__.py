@@ -3,9 +3,7 @@
     from . import DoseRequest, plan_dose
     ans = plan_dose(DoseRequest("ANB", 302, 308, dose_fraction=0.8, dry_radius_um=50))
 
-Times are dimensionless (by tau of eq. timescale) and in seconds when a bead size is
-given.  Nothing here imports fastapi or matplotlib.
-"""
+Times in tau (eq. timescale), s given a bead size; no fastapi/matplotlib (docs/architecture.md)."""
 
 from __future__ import annotations
 

@@ -1,11 +1,9 @@
 """The planner's answers as types: the model choice, the validation report, a dose's answer,
 ``Answered | Pending`` (one planner call per request), a validation's state, hold rows.
 
-A leaf module (the planner, the validation report, the schedules and the service import it;
-it imports none of them).  Every record's ``to_dict()`` is its JSON form; the reports that
-used to be plain dicts also read like them (``report["time"]``, ``row.get("end")``), so the
-callers that index them keep working.
-"""
+A leaf (the planner, the report, the schedules and the service import it; it imports none of
+them).  ``to_dict()`` is a record's JSON; reports that were dicts still index like them
+(``report["time"]``, ``row.get("end")``).  docs/architecture.md, "The life of a dose request"."""
 
 from __future__ import annotations
 
@@ -76,13 +74,10 @@ class ByKey:
 
 @dataclass(frozen=True)
 class ModelChoice:
-    """Which model answers a dose request, decided from the initial equilibrium alone.
-
-    ``radius`` is the target radius after the dose (eq. FluidVolExpelled); ``model``
-    'front' (the paper's front model), 'front-sharp' (the sharp-interface one) or 'full';
-    ``why`` in words; ``front_time`` the front model's dimensionless time (None where the
-    full solver answers); ``behaviour`` the jump classifier's verdict.
-    """
+    """Which model answers a dose request, decided from the initial equilibrium alone: ``radius``
+    the target radius (eq. FluidVolExpelled); ``model`` 'front' (the paper's), 'front-sharp' or
+    'full'; ``why`` in words; ``front_time`` the front model's time in tau (None where the full
+    solver answers); ``behaviour`` the jump classifier's verdict."""
 
     radius: float
     model: str
@@ -110,15 +105,10 @@ class Verdict:
 
 @dataclass(frozen=True)
 class ValidationReport(ByKey):
-    """The full solver's verdict on a dose (:func:`dosing.validation.validation_report`).
-
-    ``runs`` has one entry per validation run (grid, n, interfacial length, key; its time,
-    nucleation time, wall time and warning, or its error; the direct truth's ``role``);
-    ``time`` is the truth's time (None when its runs failed), ``error`` its relative error;
-    ``limit`` the ladder's extrapolation, ``grid_spread`` the paper's two grids' gap,
-    ``uncertainty`` the direct truth's three parts (``Uncertainty.to_dict``); ``front_*``
-    the front model's time and its errors against the truth.
-    """
+    """The full solver's verdict on a dose (:func:`dosing.validation.validation_report`): ``runs``
+    (per run: grid, n, ell, key, times, wall time, warning or error, ``role``); ``time`` the truth's
+    (None if its runs failed), ``error``; ``limit`` (ladder), ``grid_spread`` (the paper's grids),
+    ``uncertainty`` (``Uncertainty.to_dict``), ``front_*`` the front model's time and errors."""
 
     model: str
     method: str

@@ -1,22 +1,9 @@
 """The sharp-interface limit of the regularized model from a ladder of interfacial lengths.
 
-The dose time t(ell) of the regularized model converges as ell -> 0, monotonically from
-above, at an observed order p of 1.2-1.9 (docs/interfacial.md, sec. 7).  Most of its
-ell-dependence is the delay t_nuc(ell) before the front nucleates at the edge, which
-vanishes as ell -> 0 (~ell^1.9 ANB, ~ell^1.2 HHT); the time after nucleation,
-s = t - t_nuc, converges much faster.  So where every rung's front nucleated before the
-dose, the limit of t is that of s, with an error bound at least the gap to the limit of t
-where that one has an order; otherwise that of t itself.  From three grid-converged
-runs at ell, ell/2, ell/4 Richardson extrapolation gives the limit and, with the usual
-safety factor of the grid convergence index (Roache), an error bound:
-
-    p = log2((v0 - v1) / (v1 - v2)),   v(0) = v2 - (v1 - v2) / (2^p - 1),
-    error = SAFETY |v(0) - v2|.
-
-Outside the asymptotic range (the differences change sign or do not shrink, the order is
-outside ORDER_RANGE or the limit changes sign) no order can be trusted: the finest run is
-the answer and the ladder's whole spread its error.
-"""
+Richardson extrapolation of the dose time t(ell), or of s = t - t_nuc where every rung's front
+nucleated before the dose, from grid-converged runs at ell, ell/2, ell/4, with a GCI error
+bound (``SAFETY``); outside the asymptotic range (``ORDER_RANGE``) the finest run and the
+ladder's spread.  Formulas and measured orders: docs/interfacial.md sec. 7."""
 
 from __future__ import annotations
 

@@ -1,11 +1,8 @@
 """Which model answers a dose, and the answer it makes: the jump classifier's verdict, the
 front model where it applies (its whole trajectory memoised per jump), else the full solver;
-:func:`build_answer` turns a model's time into a DoseAnswer (radii, volumes, seconds, the
-truth it is checked against).
-
-A leaf below the planner (it imports no planner module), so the planner, the fits, sweeps
-and the page share one model choice without import cycles.
-"""
+:func:`build_answer` turns a model's time into a DoseAnswer (radii, volumes, seconds, truth).
+A leaf below the planner (imports no planner module), so the planner, fits, sweeps and the
+page share one model choice without import cycles (docs/architecture.md, dosing/)."""
 
 from __future__ import annotations
 

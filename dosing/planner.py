@@ -1,18 +1,9 @@
 """The dose planner: model choice, actuation times, validation against the full solver.
 
-Procedure of sec. Application: a(0) is the equilibrium stretch at T_start (eq. EqlEqn);
-a dose f of the stored fluid leaves a^3 = a0^3 - f (a0^3 - 1) (eq. FluidVolExpelled);
-the answer is the time a(t) falls to that radius, times tau (eq. timescale) for seconds.
-The front model answers in milliseconds where the jump classifier says "front"; the
-full solver answers (blocking, cached) otherwise.  The truth is set by the request's
-``SolverSettings``: by default the regularized model's sharp-interface limit (answered by
-the sharp-interface front model 'front-sharp', validated by a ladder of interfacial
-lengths), or the paper's model (interfacial_length 0: the paper's front model 'front',
-validated on both grids, whose spread is part of the error estimate).  Module
-``validation`` writes the verdict.  :meth:`Planner.answer` is the one call a request
-makes (``Answered | Pending``, module ``answers``); :meth:`Planner.dose` the blocking
-form.  The planner runs scenarios on the solver it is given (``Planner(solver=...)``).
-"""
+Sec. Application: a0 from eq. EqlEqn, the dose radius a^3 = a0^3 - f (a0^3 - 1) (eq.
+FluidVolExpelled), the time a(t) falls to it, times tau (eq. timescale) for seconds.
+:meth:`Planner.answer` is a request's one call (``Answered | Pending``), :meth:`Planner.dose`
+the blocking form.  Models and truths: docs/architecture.md, docs/interfacial.md sec. 9."""
 
 from __future__ import annotations
 
@@ -106,15 +97,9 @@ def request_scenarios(req: DoseRequest | ScheduleRequest) -> tuple[Scenario, ...
 
 class Planner:
     """Plans doses and schedules; keeps full-solver validations in a persistent cache.
-
-    ``executor`` is any ``concurrent.futures.Executor`` (default: a process pool); full
-    solver runs are deduplicated by scenario key, also across processes sharing the cache
-    file (a lease per run, lapsing ``lease_seconds`` after its holder stops renewing it),
-    and at most ``max_pending`` validations (each admitted with all its runs) are queued.
-    ``solver`` runs each scenario (default ``solver.full.simulate``; tests pass a fake):
-    it travels to the executor's workers with every run, so on a process pool or Dask it
-    must pickle (a module-level function does, by name).
-    """
+    ``executor``: any ``concurrent.futures.Executor`` (default a process pool); runs deduplicated by
+    key across processes on one file (a lease lapses ``lease_seconds`` unrenewed); at most
+    ``max_pending`` validations queued; ``solver`` (default ``solver.full.simulate``) pickles."""
 
     def __init__(self, cache_path: str | None = None, executor: Executor | None = None,
                  max_pending: int = 64, horizon: float = DEFAULT_HORIZON,
@@ -228,15 +213,10 @@ class Planner:
         return self._dose(req, choice, scs, trajs)
 
     def _front_dose(self, req: DoseRequest, choice: ModelChoice) -> DoseAnswer:
-        """A front-model answer from the runs stored now (none run): validated when every
-        validation run covering the dose is stored, else with the prior.
-
-        The verdict (validation report, error estimate) is remembered per request and
-        cache generation (:meth:`ValidationCache.generation`, read once, before any row):
-        while no row of the file changed, in this process or another, a warm answer reads
-        none, and the first answer after a change (a longer run, a new row) builds it again
-        from the rows.  The rest of the answer (seconds, a fitted gel's interval) is made
-        afresh as for any answer."""
+        """A front-model answer from the runs stored now (none run): validated when every validation
+        run covering the dose is stored, else with the prior.  The verdict is memoised per request
+        and cache generation (:meth:`ValidationCache.generation`, docs/speed.md sec. 2); the rest
+        of the answer (seconds, a fitted gel's interval) is made afresh."""
         key = (_verdict_key(req, choice), self.cache.generation())
         with self._mem_lock:
             verdict = self._verdicts.get(key)

@@ -1,11 +1,9 @@
 """What made an answer: the resolved request with its units, and the code's version.
 
-Every JSON answer (``thermogel ... --json``, every HTTP route's JSON object) and every
-export's attributes carry ``request`` (the request as resolved: defaults filled, each
-physical field's unit in ``request["units"]``) and ``version`` (:func:`version_info`: the
-package version, the checkout's ``git describe`` and the solver's code digest, which keys
-the validation cache).  A leaf: it imports nothing of the planner at import time.
-"""
+Every JSON answer and export carries ``request`` (as resolved: defaults filled, units in
+``request["units"]``) and ``version`` (:func:`version_info`: package, ``git describe``, the
+solver's code digest that keys the validation cache).  A leaf: it imports nothing of the
+planner at import time (docs/results.md)."""
 
 from __future__ import annotations
 

@@ -1,13 +1,9 @@
 """Physical quantities at the edges: one unit table, parsed with pint.
 
-Every way in (Python, CLI, HTTP, the page) accepts a physical quantity as a plain number in
-the field's documented unit, a string with a unit ("50 um", "29 degC", "10 min", "5 K/min")
-or a pint ``Quantity``; ``to_unit`` returns the plain float in the documented unit or raises
-a ``ParameterError`` naming the field.  Nothing else in the code converts units by hand.
-
-pint is imported on first use only (about 0.3 s), so a call that passes plain numbers pays
-nothing for it.
-"""
+Every way in takes a plain number in the field's documented unit, a string with a unit ("50
+um", "29 degC", "5 K/min") or a pint ``Quantity``; nothing else converts units by hand.  pint
+is imported on first use only (about 0.3 s), so plain numbers pay nothing for it
+(docs/speed.md sec. 1)."""
 
 from __future__ import annotations
 
@@ -107,12 +103,9 @@ def parse(value: Any, field: str) -> Any:
 
 
 def to_unit(value: Any, kind: str, field: str) -> float:
-    """``value`` as a float in the documented unit of ``kind`` (see ``UNITS``).
-
-    Plain numbers are taken as already in that unit; strings and pint Quantities are
-    converted.  A wrong dimension ("50 K" for a length) or a non-finite value raises a
-    ``ParameterError`` naming ``field``.
-    """
+    """``value`` as a float in the documented unit of ``kind`` (see ``UNITS``): plain numbers are
+    taken as in that unit, strings and pint Quantities converted.  A wrong dimension ("50 K" for a
+    length) or a non-finite value raises a ``ParameterError`` naming ``field``."""
     unit = UNITS[kind]
     q = parse(value, field)
     if _is_quantity(q):

@@ -1,10 +1,8 @@
 """Dose and schedule requests, validated on construction (ParameterError names the field).
 
-A dose is a fraction of the stored fluid, the pore volume of the swollen bead
-(4 pi/3)(a0^3 - 1) in dry-radius units, an absolute volume in microlitres, or a drug mass
-with the loaded concentration.  It must be smaller than what the gel can expel at T_end,
-(4 pi/3)(a0^3 - a_inf^3), reached only as t -> infinity.
-"""
+A dose is a fraction of the stored fluid (the swollen bead's pore volume (4 pi/3)(a0^3 - 1) in
+dry-radius units), a volume in microlitres, or a drug mass with the loaded concentration; it
+must be below what the gel can expel at T_end, (4 pi/3)(a0^3 - a_inf^3), reached as t -> inf."""
 
 from __future__ import annotations
 
@@ -31,13 +29,10 @@ GEL_FIELDS = ("omega", "a0", "b0", "a1", "b1")
 
 def gel_with(base: str, overrides: dict[str, Any] | None = None,
              permeability: str | None = None, beta: float | None = None) -> Gel:
-    """A preset or stored gel (``base``, by name) with any of its parameters (eq.
-    FloryParam) or its permeability law (eq. Permeability) replaced.
-
-    The one rule of the HTTP service, the command line and Python: the gel keeps its base's
-    name when nothing changes and is called 'custom' otherwise; a bad parameter is a
-    ParameterError naming ``gel.<parameter>``.
-    """
+    """A preset or stored gel (``base``, by name) with any of its parameters (eq. FloryParam) or
+    its permeability law (eq. Permeability) replaced: the one rule of HTTP, the CLI and Python.
+    It keeps its base's name when nothing changes, else is called 'custom'; a bad parameter is a
+    ParameterError naming ``gel.<parameter>``."""
     gel = lookup(base)
     custom = {k: float(v) for k, v in (overrides or {}).items() if v is not None}
     unknown = sorted(set(custom) - set(GEL_FIELDS))
@@ -282,12 +277,10 @@ def check_fraction(name: str, value: float, jump: Jump, limit: float | None = No
 
 @dataclass(frozen=True)
 class DoseRequest(Case):
-    """One dose: how long to heat a bead from T_start to T_end to release it.
-
-    Give exactly one of ``dose_fraction`` (of the stored fluid), ``dose_volume_ul``, or
-    ``drug_mass_ug`` with ``concentration_ug_per_ul``; volumes and seconds need a bead
-    size (``dry_radius_um`` or ``swollen_radius_um`` at T_start; the :class:`Case` fields).
-    """
+    """One dose: how long to heat a bead from T_start to T_end to release it.  Exactly one of
+    ``dose_fraction`` (of the stored fluid), ``dose_volume_ul``, or ``drug_mass_ug`` with
+    ``concentration_ug_per_ul``; volumes and seconds need a bead size (``dry_radius_um`` or
+    ``swollen_radius_um`` at T_start; the :class:`Case` fields)."""
 
     dose_fraction: float | None = None
     dose_volume_ul: float | None = None

@@ -1,35 +1,9 @@
 """thermogel's settings: one :class:`Settings` object read from the environment
 (pydantic-settings, prefix ``THERMOGEL_``), its default folders from platformdirs.
 
-Every variable thermogel reads is a field here, under the name it has always had:
-
-=====================================  ====================================================
-``THERMOGEL_CACHE``                    the validation cache file (default: the user cache
-                                       folder's ``validations.sqlite``, ~/.cache/thermogel
-                                       on Linux)
-``THERMOGEL_GELS``                     the stored fitted gels' folder (default: ``gels/``
-                                       beside the cache)
-``THERMOGEL_MAX_PENDING``              validations queued or running before a 429
-``THERMOGEL_MAX_BODY``                 the largest request body, bytes
-``THERMOGEL_LEASE_SECONDS``            a run's lease in the cache, s
-``THERMOGEL_WARMUP``                   ``0`` skips the service's kernel warm-up
-``THERMOGEL_API_TOKEN``                the service's bearer token
-``THERMOGEL_ALLOWED_HOSTS``            Host names the service answers, comma-separated
-``THERMOGEL_READ_TIMEOUT``             a request's read deadline, s
-``THERMOGEL_MAX_CONNECTIONS_PER_CLIENT``  open connections per client address
-``THERMOGEL_MAX_CONNECTIONS``          open connections in all
-``THERMOGEL_SUPERVISOR_PID``           (set by ``thermogel serve --workers``) the supervisor
-``THERMOGEL_ARTIFACTS``                where the browser test writes its screenshots
-``THERMOGEL_RUN_SECONDS``              the wall-clock budget of one full-solver run, s
-                                       (default 600; read where a run starts:
-                                       ``dosing.runs.scenario.run_budget``)
-=====================================  ====================================================
-
-An empty variable is unset; a value of the wrong type is a ``ParameterError`` naming the
-variable.  :func:`settings` reads the environment anew on each call (a process that sets a
-variable, as ``thermogel serve`` does for its app factory, is read as it is now); the
-pydantic imports happen there, not when :mod:`dosing` is imported.
-"""
+Every variable thermogel reads is a field here (the table: docs/architecture.md, "Settings").
+An empty variable is unset; a bad value is a ``ParameterError`` naming it.  :func:`settings`
+reads the environment anew on each call and imports pydantic then, not with :mod:`dosing`."""
 
 from __future__ import annotations
 

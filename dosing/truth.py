@@ -1,24 +1,8 @@
-"""The direct truth's runs and its uncertainty in three parts (issue 12).
-
-A direct validation (``SolverSettings.method == 'direct'``) runs the regularized model at the
-bead's own interfacial length ell = xi_dry / a_d on the moving grid, and states its error in
-three parts, each in words and numbers:
-
-* numerical: the same run with half the cells; the scheme converges at second order, so
-  the relative gap |t(n) - t(n/2)| / t(n) bounds the finer run's error about three times
-  over (docs/moving_mesh.md, sec. 6);
-* interfacial length: the dose time at xi_lo / a_d and xi_hi / a_d (the mesh length's
-  plausible range, ``PhysicalConstants.mesh_length_range_nm``), run with n / 2 cells (their
-  numerical error is the check run's, far below the ell-dependence they measure); matters
-  for small doses, whose time is mostly the nucleation delay at the edge;
-* model form: the delayed-transition front law, the ell = 0 Lagrangian lattice at
-  N = 200 / 400 (N-independent: its N-spread is reported), against the local-equilibrium
-  (Maxwell) front of the regularized model (docs/interfacial.md, sec. 10).  Bead-size
-  independent, so its runs are cached per gel and jump.
-
-The runs are ordinary scenarios (``Scenario``), so the planner caches, deduplicates and
-queues them with the truth's own two runs; :func:`uncertainty` reads them back by role.
-"""
+"""The direct truth's runs and its uncertainty in three parts (issue 12): numerical (n vs
+n / 2 cells), interfacial length (the mesh length's plausible range) and model form (the
+delayed-transition front law, the ell = 0 lattice), around the regularized model at the bead's
+own ell = xi_dry / a_d on the moving grid.  The runs are ordinary scenarios, queued with
+the truth's own; :func:`uncertainty` reads them by role.  docs/interfacial.md sec. 9."""
 
 from __future__ import annotations
 
@@ -84,13 +68,10 @@ class Part:
 
 @dataclass(frozen=True)
 class Uncertainty:
-    """The three parts of a direct answer's uncertainty (each relative to the truth's time).
-
-    ``numerical``: n vs n / 2 cells; ``interfacial_length_range``: the largest relative
-    change of the time over ell in [xi_lo, xi_hi] / a_d (with the two times);
-    ``model_form``: the delayed-transition time of the ell = 0 lattice, its ratio to the
-    truth and its N-spread.
-    """
+    """The three parts of a direct answer's uncertainty (each relative to the truth's time):
+    ``numerical`` n vs n / 2 cells; ``interfacial_length_range`` the largest relative change of the
+    time over ell in [xi_lo, xi_hi] / a_d (with the two times); ``model_form`` the
+    delayed-transition time of the ell = 0 lattice, its ratio to the truth and its N-spread."""
 
     numerical: Part
     interfacial_length_range: Part

@@ -1,15 +1,9 @@
 """Seconds, micrometres and microlitres: the timescale of eq. timescale and volume conversions.
 
-The solver is dimensionless (lengths by the dry radius R, time by tau).  Here
-tau = eta Omega_p R^2 / (k0 k_B T_end) (eq. timescale).  The paper's constants
-(eta = 1e-3 Pa s, Omega_p = 3e-25 m^3, k0 = 8e-20 m^2: printed "m^3", a slip, see
-../shared/DESIGN.md) give an effective diffusivity D = k0 k_B T / (eta Omega_p) of about
-1e-8 cm^2/s, not the 3e-7 cm^2/s the text calls similar, and contradict the gel's own
-Omega = Omega_p / Omega_f of eq. EqlEqn (3e-25 / 3e-29 = 1e4, against ANB's 100).  The
-default is therefore consistent with the gel: Omega_p = Omega Omega_f with water's molecular
-volume (D ~ 1.1e-6 cm^2/s for ANB at 308 K, within 4x of Tanaka & Fillmore's gel);
-``PhysicalConstants.paper()`` gives the paper's, and every constant is settable.
-"""
+The solver is dimensionless (lengths by the dry radius R, time by tau = eta Omega_p R^2 /
+(k0 k_B T_end), eq. timescale).  The default Omega_p = Omega Omega_f is consistent with the
+gel's Omega of eq. EqlEqn; ``PhysicalConstants.paper()`` gives the paper's; every constant is
+settable.  Why: docs/fitting.md, "The constants (decision)"."""
 
 from __future__ import annotations
 
@@ -43,19 +37,9 @@ def water_viscosity(temperature: float) -> float:
 @dataclass(frozen=True)
 class PhysicalConstants:
     """Constants of eq. timescale.  ``viscosity_pa_s="water"`` uses water at T_end.
-
-    ``polymer_volume_m3`` (Omega_p) defaults to None: the value consistent with the gel's own
-    Omega of eq. EqlEqn, Omega_p = Omega Omega_f with water's molecular volume, resolved
-    against the gel by :meth:`for_gel` (every request's case does so).
-    :meth:`paper` gives the paper's constants (Omega_p = 3e-25 m^3, 1e4 Omega_f).
-
-    ``mesh_length_nm`` is the gel's dry mesh (interfacial) length xi_dry, which sets the
-    bead's interfacial length ell = xi_dry / a_d of the truth (docs/interfacial.md, sec. 1:
-    a swollen PNIPAM mesh of ~10 nm at a swelling stretch ~2.3 is ~4 nm in the dry frame);
-    ``mesh_length_range_nm`` its plausible range (default a factor 2 either way, 2-8 nm:
-    swollen mesh sizes of 5-20 nm), over which the answer's interfacial-length
-    part of the error is measured.
-    """
+    ``polymer_volume_m3`` (Omega_p) None: Omega Omega_f (eq. EqlEqn), resolved by :meth:`for_gel`;
+    :meth:`paper`: 3e-25 m^3.  ``mesh_length_nm``: the dry mesh xi_dry, ell = xi_dry / a_d, and
+    ``mesh_length_range_nm`` its range (default x2 either way): docs/interfacial.md sec. 9."""
 
     viscosity_pa_s: float | str = 1.0e-3
     # None: consistent with the gel, Omega_p = Omega Omega_f (resolved by ``for_gel``)
@@ -172,11 +156,8 @@ class PhysicalConstants:
 
     def diffusivity(self, t_end: float) -> float:
         """Effective diffusivity D = k0 k_B T_end / (eta Omega_p) in m^2/s (after eq. timescale).
-
-        Calibrated (``diffusivity_m2_s`` measured at ``diffusivity_t_k`` by a kinetics fit,
-        which pins only this combination, not k0 or Omega_p alone), D at another T_end
-        follows the formula's own temperature dependence: D_ref (T/T_ref) eta(T_ref)/eta(T).
-        """
+        Calibrated (``diffusivity_m2_s`` at ``diffusivity_t_k``, from a kinetics fit, which pins
+        only this combination), D at another T_end is D_ref (T/T_ref) eta(T_ref)/eta(T)."""
         if self.diffusivity_m2_s is not None:
             t_ref = float(self.diffusivity_t_k)
             return (self.diffusivity_m2_s * (t_end / t_ref)
@@ -331,16 +312,10 @@ def timescale_uncertainty(omega: float, t_end: float, constants: PhysicalConstan
                           seconds: float | None = None,
                           calibrated_interval: tuple[float, float] | None = None
                           ) -> dict[str, Any]:
-    """How far the seconds can be trusted: the effective diffusivity over the constants' range.
-
-    eq. timescale needs k0 / Omega_p, which nothing in a swelling curve fixes.  Uncalibrated,
-    D is taken at three defensible values: the constants used (by default Omega_p = Omega
-    Omega_f, consistent with the gel's own Omega of eq. EqlEqn: D ~ 1.1e-6 cm^2/s for ANB at
-    308 K), the paper's (Omega_p = 3e-25 m^3: D smaller by 3e-25 / (Omega Omega_f), 100x for
-    ANB, 14x for HHT) and the 3e-7 cm^2/s the paper quotes from Tanaka & Fillmore; the
-    seconds' range is tau over them.  Calibrated (a kinetics fit), the range is the fit's
-    interval.
-    """
+    """How far the seconds can be trusted: tau over three defensible diffusivities (eq. timescale;
+    no swelling curve fixes k0 / Omega_p): the constants used, the paper's (Omega_p = 3e-25 m^3)
+    and Tanaka & Fillmore's 3e-7 cm^2/s; calibrated (a kinetics fit), the fit's interval.
+    docs/fitting.md, "The constants (decision)"."""
     c = constants.for_gel(omega)
     d_used = c.diffusivity(t_end) * 1e4  # cm^2/s
     if c.calibrated:

@@ -1,13 +1,9 @@
 """The full solver's verdict on a dose: the validation report and the answer's error.
 
-Two truths (``SolverSettings.interfacial_length``):
-
-* regularized (ell > 0, the default, issue 8): the dose time of the well-posed model at
-  ell, ell/2, ell/4 (each grid-converged), extrapolated to the sharp-interface limit
-  ell -> 0 (module ``ladder``); the limit's error bound is part of every estimate;
-* the paper's model (ell = 0): both grids at N; in the front regime they disagree by
-  30-60 % (no interfacial energy fixes the front speed), and the spread is reported.
-"""
+Two truths (``SolverSettings.interfacial_length``): regularized (ell > 0, default, issue 8:
+ell, ell/2, ell/4 extrapolated to ell -> 0 by module ``ladder``, its bound in every estimate)
+or the paper's model (ell = 0: both grids at N, 30-60 % apart in the front regime, the spread
+reported).  docs/interfacial.md secs. 6-9."""
 
 from __future__ import annotations
 
@@ -115,14 +111,10 @@ def run_failure(exc: BaseException | None) -> str:
 
 def validation_report(scs: list[Scenario], trajs: list[Any], start_radius: float,
                       radius: float, t_front: float | None) -> ValidationReport:
-    """The truth's time for the dose, each run's, and the front model's errors.
-
-    ``scs`` are the settings' validation runs (``SolverSettings.rungs``) and ``trajs``
-    their trajectories or exceptions, in the same order.  Regularized runs also report when
-    the front nucleated at the edge (module ``ladder``).  The volume error is what the
-    truth run (the paper's: the first grid; regularized: the finest rung) expels by the
-    front model's time, against the dose: (V_full(t_front) - V) / V.
-    """
+    """The truth's time for the dose, each run's, and the front model's errors.  ``scs``: the
+    settings' validation runs (``SolverSettings.rungs``), ``trajs`` their trajectories or exceptions
+    in order; regularized runs also report the edge nucleation (module ``ladder``).  The volume
+    error is (V_full(t_front) - V) / V on the truth run (the paper's first grid, or finest rung)."""
     s = scs[0].settings
     sc0 = scs[0]
     level = (nucleation_level(sc0.gel, sc0.t_start, sc0.t_end, sc0.branch)  # type: ignore[arg-type]

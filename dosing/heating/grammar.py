@@ -1,28 +1,9 @@
 """Heating a lab can do: a step grammar, the typed ``Protocol`` and its program in tau.
 
-Steps in the style of PyBaMM's ``Experiment`` strings, in physical units (parsed with pint
-through :mod:`dosing.quantity`, the one unit parser):
-
-- ``"Heat to 308 K at 5 K/min"``, ``"Cool to 29 degC at 2 K/min"`` (a linear ramp);
-- ``"Hold at 308 K for 2 min"``, ``"Rest at 302 K for 10 min"`` (a jump to the temperature,
-  then a hold); ``"... until 30 % released"``, ``"... until 20 ug released"`` (with a drug
-  concentration), ``"... until 0.5 nL released"``, ``"... until radius 60 um"``;
-- ``"Bath at 308 K with a time constant of 30 s"`` (a first-order lag from the current
-  temperature, T' = (T_bath - T) / tau_b; optionally ``for`` / ``until``);
-- ``"Trace from run.csv"`` (Python and the CLI) or a structured trace step (any way in): a
-  measured T(t), interpolated linearly.
-
-Temperatures in K or degC, durations in s, min, h (or ``tau``), rates in K/s, K/min, K/h
-(or ``K/tau``).  The same steps as structured JSON (:func:`parse_step`), e.g.
-``{"step": "heat", "to": "308 K", "rate": "5 K/min"}``.  After the last step the bead holds
-at the last temperature.  Every error is a ``ParameterError`` whose field names the step
-(``protocol[2].rate``), whose reason quotes the step's text and whose ``valid`` states the
-range (HTTP 422, CLI exit 2).
-
-The solver is dimensionless (time by tau, eq. timescale): :meth:`Protocol.program` turns
-seconds into tau through one timescale, tau at a stated reference temperature (the
-protocol's hottest temperature: its ``T_end``).
-"""
+Steps in the style of PyBaMM's ``Experiment`` (heat, cool, hold, rest, bath, trace; until-
+conditions) in physical units parsed by :mod:`dosing.quantity`, or as structured JSON
+(:func:`parse_step`); every error a ``ParameterError`` naming the step.  Seconds become tau at
+the protocol's hottest temperature (eq. timescale).  docs/heating.md, "Planner: the step ..."."""
 
 from __future__ import annotations
 
@@ -760,13 +741,10 @@ class Piece:
 
 @dataclass(frozen=True)
 class Protocol:
-    """A heating protocol from ``t_start`` (K): typed steps, validated on construction.
-
-    ``steps`` are step texts, structured dicts or step objects; a Heat must go up and a
-    Cool down from the temperature the step before ends at; a step without ``for`` or
-    ``until`` (a bare Hold or Bath) may only be the last.  After the last step the bead
-    holds at the last temperature.
-    """
+    """A heating protocol from ``t_start`` (K): typed steps, validated on construction.  ``steps``
+    are step texts, structured dicts or step objects; a Heat must go up and a Cool down from the
+    temperature before it; a bare Hold or Bath (no ``for`` / ``until``) may only be the last.
+    After the last step the bead holds at the last temperature."""
 
     t_start: float
     steps: tuple[Step, ...]

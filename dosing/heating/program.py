@@ -1,11 +1,9 @@
 """A protocol's program (``dosing.heating.grammar.Piece``s in tau) as the solver runs it.
 
 :func:`program_spec` / :func:`solver_program`: plain data for a ``Scenario`` and the
-``solver.heating.Program`` built from it (continuous T(t) in the kernels, the mobility law
-relative to T_ref; docs/heating.md).  :func:`staircase`: the pre-program path, each ramp,
-bath or trace as piecewise-constant holds, for a stand-in solver that takes no program and
-for the staircase convergence benchmark.
-"""
+``solver.heating.Program`` built from it (continuous T(t), the mobility relative to T_ref).
+:func:`staircase`: each ramp, bath or trace as piecewise-constant holds, for a stand-in solver
+without programs and the staircase benchmark (docs/heating.md, "Planner: a dose ...")."""
 
 from __future__ import annotations
 
@@ -26,12 +24,10 @@ MAX_STAIRS = 4000
 
 def staircase(pieces: Sequence[Piece], tail: float, resolution: float = STAIR_KELVIN
               ) -> list[tuple[float, float]]:
-    """The program as piecewise-constant (duration, temperature) steps in tau, the solver's
-    protocol before continuous T(t): each continuous piece is cut where its temperature has
-    moved by ``resolution`` K and each stair holds at the stair's time-mean temperature
-    (second-order in the stair width); a bath without an end stays in stairs until within
-    resolution / 2 of the bath, then holds.  ``tail`` tau are held at the last temperature
-    after the last piece.  Every piece needs a duration (until-steps resolved first)."""
+    """The program as piecewise-constant (duration, temperature) steps in tau: each continuous
+    piece cut where T moved ``resolution`` K, each stair at its time-mean T (second order); a bath
+    without an end in stairs until within resolution / 2, then held; ``tail`` tau held after the
+    last piece.  Every piece needs a duration (until-steps resolved first)."""
     out: list[tuple[float, float]] = []
     end = pieces[0].t0 if pieces else math.nan  # the temperature the last piece ends at
     for p in pieces:
@@ -160,12 +156,10 @@ _GRAMMAR_FIELD = {"duration": "for", "rate": "rate", "target": "to", "temperatur
 
 
 def check_program(protocol: Any, tau_s: float | None) -> None:
-    """What the grammar accepted, checked by the solver's own rules before anything runs:
-    each step of ``protocol`` (a ``dosing.heating.grammar.Protocol``) as the solver will get it in
-    tau (``tau_s``: tau in seconds, None for a protocol in tau alone), through
-    ``solver.heating``'s checks (durations, rates, time constants, traces: the ranges of
-    ``solver.limits``), and no step longer than PROGRAM_STEP_MAX tau.  A ParameterError
-    names the protocol's step and the grammar's field (``protocol[0].time_constant``)."""
+    """What the grammar accepted, checked by the solver's rules before anything runs: ``protocol``'s
+    steps in tau (``tau_s``: tau in s, None for tau alone) through ``solver.heating``'s checks
+    (durations, rates, time constants, traces: ``solver.limits``), none over PROGRAM_STEP_MAX tau.
+    A ParameterError names the step and the grammar's field (``protocol[0].time_constant``)."""
     from solver.limits import PROGRAM_STEP_MAX
 
     try:

@@ -1,50 +1,9 @@
 """Which model answers a dose under a heating protocol, and the reduced model's answer.
 
-The reduced model is the front model under slow heating (``solver.front.slow``: uniform
-shrinking with a linear poro-elastic lag, a front that nucleates when the state enters the
-coexistence region and the edge loses its swollen root, then the front with its levels at
-the current temperature).  Its error against the truth (the full solver at the bead's own
-interfacial length on the moving grid) was measured by ``benchmarks/heating_reduced.py``
-over ANB, HHT and a custom gel, a 50 um dry bead and doses of 10-90 % (docs/heating.md),
-twice: with the paper's constants (tau = 2205 s at 308 K: ramps of 0.5-100 K/min are
-18.4-3675 K per tau, baths of 1-300 s 4.5e-4-0.136 tau) and with Omega_p = Omega Omega_f
-(``--constants consistent``: tau = 22.05 s for ANB, 158.7 s for HHT, 66.14 s for the custom
-gel, so the same ramps are 0.18-265 K per tau and the baths 0.0063-13.6 tau), plus a grid in
-K per tau (0.03-18.4) and tau (0.1-0.19) on all three gels.  Both the truth and the model
-see the heating only in these units, so the region is set in them and holds for any
-constants.  Where the tables say it is within ``STATED_ERROR`` it answers, in
-milliseconds; elsewhere the full solver does.
-
-The region, in the dimensionless units the tables measured (tau at T_ref = the protocol's
-hottest temperature):
-
-* one ramp or bath from T_start to the protocol's hottest temperature (or a jump there),
-  then holds at it (for a time or until a condition): the heatings the tables measured;
-* every ramp at least ``RAMP_MIN`` = 10 K per tau (0.27 K/min for a 50 um bead at the
-  paper's tau of 2205 s; 27 K/min for ANB's at 22.05 s, 3.8 K/min HHT's, 9.1 K/min the
-  custom gel's): from 10 K per tau up the 30-90 % doses are within 3.3 % on all three
-  gels.  Slower, a window fails, the model early: ANB's 30 % dose 4.9 % at 9 K per tau,
-  8.1 % at 7.35 and 12-13 % at 2-4 (its 50 % up to 10.5 %, 80-90 % up to 5.1 %), the
-  custom gel's 30 % 10 % at 1-2 and 5.5 % at 0.37.  At 0.03-0.18 K per tau the 30-80 %
-  doses are within 3 % again, but there the model misses HHT's 90 % dose (its bead shrinks
-  uniformly, no front, and is short of 90 % 50 tau after the ramp: "never"), so that
-  window is not in the region;
-* every bath's time constant at most ``BATH_MAX`` = 0.17 tau (375 s at 2205 s; 3.7 s for
-  ANB's bead at 22.05 s, 27 s HHT's, 11 s the custom gel's): its 50-90 % doses within
-  4.6 % (HHT's 90 %, growing with the time constant: 4.1 % at 0.15 tau, 5.1 % at 0.19);
-  longer baths are up to 16.5 % off (ANB at 1.36 tau; 0.45-4.5 tau measured, the custom
-  gel within 1.6 % at 0.45 but 13.6 % at 1.5) and at 1.9 tau HHT's model bead shrinks
-  without a front and never reaches 90 %;
-* doses of 30-90 % with ramps and holds only, 50-90 % when a bath is in the protocol
-  (a bath's slow creep near the nucleation temperature makes 30 % doses 6-9 % off);
-* beads of 50 um and larger (the truth's interfacial length at most the table's 8e-5;
-  checked at 100 um: within 4.3 % in the old region, 4.6 % at the new edges, 10 K per tau
-  and 0.17 tau): smaller beads' larger interfacial length delays the truth's nucleation
-  (a 20 um HHT bead's jump: 30 % dose 14 % later than the model's, 50 % 5.2 %), and
-  without a bead size the truth runs at 1e-4;
-* the regularized truth (the paper's model has no measured table); not validated
-  (``validate=True`` asks for the full solver).
-"""
+The reduced model is the front model under slow heating (``solver.front.slow``).  It answers,
+in milliseconds, inside the region its tables measured within ``STATED_ERROR`` (``RAMP_MIN``,
+``BATH_MAX``, doses, bead sizes, the regularized truth, not validated); elsewhere the full
+solver does.  Model, tables, region: docs/heating.md, "The reduced model for slow heating"."""
 
 from __future__ import annotations
 

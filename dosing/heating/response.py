@@ -1,22 +1,9 @@
 """A dose under a heating protocol: the time from the protocol's start at which it is reached.
 
-The truth is the full solver (the request's ``SolverSettings``: by default the regularized
-model at the bead's own interfacial length on the moving grid, checked by a run on n / 2
-cells).  The dose radius follows from a^3 = a0^3 - f (a0^3 - 1) (eq. FluidVolExpelled); the
-answer is the first time a(t) reaches it, in tau and in seconds through tau at the
-protocol's hottest temperature (eq. timescale).  An until-step ("Hold at 308 K until 30 %
-released") ends when the truth run of the protocol so far reaches its radius; the steps
-after it start there.  After the last step the bead holds at the last temperature for a
-tail of ``TAIL`` tau, extended x4 (up to ``MAX_TAIL``) while the radius is not reached.
-
-On the real solver a protocol runs as a continuous T(t) inside the kernels
-(``solver.heating.Program``, with the mobility's temperature dependence m(T) relative to
-T_ref) and every run stops at its target radius (``simulate(stop=...)``); a stand-in solver
-without programs (the tests' fake) gets a fine staircase of holds
-(``dosing.heating.program.staircase``, 0.05 K per stair).  The answer says which.  Runs are
-scenarios of the planner's cache; without them :func:`answer` queues them as a validation
-(HTTP 202) and the same request asked again answers from the cache.
-"""
+The truth is the full solver (the request's ``SolverSettings``); the dose radius is eq.
+FluidVolExpelled's, the answer in tau and in seconds through tau at the protocol's hottest
+temperature (eq. timescale).  Until-steps, the tail (``TAIL``, ``MAX_TAIL``), program or
+staircase, cache and jobs: docs/heating.md, "Planner: a dose under a protocol"."""
 
 from __future__ import annotations
 

@@ -1,31 +1,9 @@
 """The drug: physical parameters, their dimensionless solute, and full-solver drug runs.
 
-A drug is a passive solute in the pore fluid (solver/solute).  Its diffusivity in water D0
-is given at a stated reference temperature (``reference_temperature_k``, default 25 degC)
-and carried to T_end by Stokes-Einstein with water's viscosity,
-D0(T) = D0(T_ref) (T / T_ref) eta_w(T_ref) / eta_w(T); its Stokes-Einstein radius is
-k_B T_ref / (6 pi eta_w(T_ref) D0(T_ref)) (or given, then D0(T) = k_B T / (6 pi eta_w(T)
-r_s)).  D0(T_end) is scaled by the gel's own D = R^2 / tau = k0 k_B T_end / (eta Omega_p)
-(eq. timescale), so one dimensionless run serves every bead size.  The hindrance (module
-``solver.solute.hindrance``): diffusion by Lustig & Peppas' free-volume law (default),
-Ogston-Preston-Wells, Amsden or none; convective sieving of the expelled fluid's solute;
-the partition K0 K_s(phi).  The gel's mesh is one length per gel: its dry mesh xi_dry =
-``PhysicalConstants.mesh_length_nm`` (the same length that sets the interfacial length),
-affine in the local (smallest principal) stretch; ``mesh_size_nm`` (the swollen mesh at
-T_start, xi_dry = mesh_size_nm / a0) overrides it for the drug alone, and the answer says
-so.  The retained solute's osmotic pressure is neglected: Staverman-van 't Hoff,
-Pi = sigma c R T with sigma = 1 - W <= 1, over the stress scale k_B T / Omega_p is at most
-c N_A Omega_p (the default Omega_p = Omega Omega_f, 3e-27 m^3 for ANB: 1.8e-6 per uM;
-the paper's 3e-25 m^3: 1.8e-4 per uM), times the enrichment of a
-retaining shell (at most the fluid's volume ratio a0^3 / a^3 ~ 10): below 2 % of the stress
-scale for retained loads under ~10 uM with the paper's Omega_p (0.7 mg/mL of a 66 kDa
-protein; ~1 mM with the default); small drugs pass the
-mesh (sigma ~ 0) and exert none.  Above that the answer overstates the collapse.
-A drug run is the full solver (Lagrangian grid, outputs at every protocol boundary
-and densely between them) followed by the solute on its cells; runs are cached per
-dimensionless drug scenario in the planner's SQLite file (own table, so nothing of the
-validation cache is touched).
-"""
+A passive solute in the pore fluid (solver/solute): D0 carried to T_end by Stokes-Einstein and
+scaled by the gel's D = R^2 / tau (eq. timescale), so one dimensionless run serves every bead
+size.  Hindrance, sieving, partition, the mesh, what is neglected, and how drug runs are run
+and cached: docs/drug.md (sec. 8 for this module)."""
 
 from __future__ import annotations
 
@@ -64,20 +42,11 @@ def _opt_positive(name: str, value: Any) -> float | None:
 
 @dataclass(frozen=True)
 class DrugModel:
-    """A drug dissolved in the pore fluid, in physical units (validated on construction).
-
-    ``diffusivity_cm2_s`` D0 in water at ``reference_temperature_k`` (0: carried by the
-    fluid alone), or ``solute_radius_nm`` (D0 from Stokes-Einstein with water's viscosity);
-    ``hindrance`` law; ``mesh_size_nm`` of the swollen gel at T_start (default None: the
-    gel's own dry mesh, ``PhysicalConstants.mesh_length_nm``, affine in the stretch),
-    ``fiber_radius_nm`` (Ogston, Amsden; with it the partition's steric part is Ogston's
-    K_s(phi) unless ``partition_law`` says "constant"), ``free_volume_y`` Y; ``sieving``
-    (the convective sieving of the fluid's solute, on by default; hindrance "none" turns
-    every hindrance off); ``partition`` K0 = c_pore / c_medium (the affinity);
-    ``release_volume_ul`` of a well-mixed medium (None: a perfect sink); ``load_ug`` drug per
-    bead, or ``loading_concentration_ug_per_ul`` of the loading solution (the pore fluid
-    holds K times it).
-    """
+    """A drug dissolved in the pore fluid, in physical units (validated on construction):
+    ``diffusivity_cm2_s`` D0 at ``reference_temperature_k`` or ``solute_radius_nm``; ``hindrance``,
+    ``mesh_size_nm``, ``fiber_radius_nm``, ``free_volume_y``, ``sieving``, ``partition`` K0,
+    ``release_volume_ul`` (None: a sink), ``load_ug`` or ``loading_concentration_ug_per_ul``
+    (each field: docs/drug.md sec. 8)."""
 
     diffusivity_cm2_s: float | None = None
     solute_radius_nm: float | None = None
@@ -325,13 +294,10 @@ class StatedTruth:
 
 def sieved_out(solute: Any, start_radius: float, released: float | None = None,
                expelled: float | None = None) -> str | None:
-    """A warning when the gel's mesh holds the solute in (issue 37), or None when it can
-    leave.  Either at the swollen start state (stretch ``start_radius``) neither diffusion
-    nor the fluid can carry it out (hindered D = 0 and convective transmission W = 0:
-    r_s >= xi), so it releases nothing however the bead is heated; or the run released
-    almost nothing (``released`` < 0.1 % of the load) while the bead expelled fluid
-    (``expelled`` > 1 % of the stored fluid): the mesh, tighter still in the collapsed
-    shell, sieved it out."""
+    """A warning when the gel's mesh holds the solute in (issue 37), else None: at the swollen
+    start (stretch ``start_radius``) neither diffusion nor the fluid carries it out (r_s >= xi), or
+    the run released < 0.1 % of the load (``released``) while expelling > 1 % of the stored fluid
+    (``expelled``): the mesh, tighter still in the collapsed shell, sieved it out."""
     h = solute.hindrance
     if h.code == 0 and not h.convective:
         return None

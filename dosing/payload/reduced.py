@@ -1,24 +1,9 @@
 """Drug doses from the reduced drug model, where its measured error holds (issue 23).
 
-The model (``solver.front.solute``): the drug's advection, hindered diffusion, sieving and
-partition, exactly as the full solver's drug (docs/drug.md), on the step-function front
-model's bead (the sharp-interface front model of the fluid answers) instead of the full
-solver's mechanics; a few milliseconds a dose.  Its error is measured against the full
-solver's drug runs (a 50 um bead of ANB 302 -> 308 K and HHT 304 -> 308 K, D0 1e-9 to 1e-5
-cm^2/s, four hindrance laws, doses 10-90 %: ``benchmarks/drug_reduced.py --table``,
-docs/drug_reduced.md), and :data:`MEASURED` keeps the largest |error| of both gels at each
-measured (law, D0 / D_gel, dose).
-
-Where it answers (:func:`applies`, :func:`stated_error`): a dose at once after the heating
-starts (no wait at T_start), into a perfect sink, from a bead of 25-100 um dry radius
-(``BEAD_UM``) on a jump the fluid answer gives to the front model (the direct truth: the
-regularized model at the bead's own ell), with a law measured here, Y <= ``Y_MAX``,
-D0 / D_gel, the dose and the drug's size (r_s / xi_dry, r_s / r_f) inside the measured
-ranges, and every corner of its cell (the measured D0, doses and sizes on either side, both
-gels; the unhindered drug standing for size 0) within ``STATED_LIMIT``.  The answer states
-that largest corner as its model-form error.  Elsewhere the full solver answers, as it
-does when asked to validate.
-"""
+The model (``solver.front.solute``): the full solver's drug physics on the sharp front model's
+bead, a few milliseconds a dose; :data:`MEASURED` keeps its largest |error| (both gels) per
+measured (law, D0 / D_gel, dose).  Where it answers (:func:`applies`, :func:`stated_error`)
+and why: docs/drug_reduced.md secs. 4, 5 and 7."""
 
 from __future__ import annotations
 
@@ -93,12 +78,10 @@ def _near(a: float, b: float) -> bool:
 
 def stated_error(solute: Any, dose: float,
                  measured: dict[str, list[Row]] | None = None) -> float | None:
-    """The reduced model's stated error for ``solute`` (a ``solver.solute.Solute``) at
-    ``dose`` of the load, or None where it does not answer (module docstring): the
-    largest error at the corners of its measured cell, in D0 / D_gel, in the dose and in
-    the drug's size: the measured drugs of its law just above and just below its
-    r_s / xi_dry and r_s / r_f (below the smallest measured, the unhindered drug).
-    ``measured``: the error table (default :data:`MEASURED`)."""
+    """The reduced model's stated error for ``solute`` (a ``solver.solute.Solute``) at ``dose`` of
+    the load, or None where it does not answer: the largest error at the corners of its measured
+    cell in D0 / D_gel, dose and size (r_s / xi_dry, r_s / r_f; below the smallest measured size
+    the unhindered drug).  ``measured``: the error table (default :data:`MEASURED`)."""
     table = MEASURED if measured is None else measured
     h = solute.hindrance
     d = solute.diffusivity
@@ -157,14 +140,10 @@ def applies(req: Any, settings: Any) -> Verdict:
 
 
 def reduced_release(req: Any, fraction: float | None = None) -> tuple[Any, float, float]:
-    """The reduced model's release (``solver.solute.ReleaseResult``) for ``req``'s jump,
-    the dose's (``fraction``, default ``req.fraction``) time on it and the squeezed part by
-    then (the D0 = 0 twin's release, run
-    only to that time where sieving makes it differ from the expelled fluid).  Run in
-    stages that stop early: to a quarter past the fluid's time for the same fraction
-    (where a drug the shell hardly sieves has its dose: diffusion adds to what the fluid
-    carries out; skipped for r_s / xi_dry > ``SIEVED``), then to twice the front's time to
-    the centre, then to the horizon; ValueError if the dose is never reached."""
+    """The reduced model's release (``solver.solute.ReleaseResult``) for ``req``'s jump, the dose's
+    (``fraction``, default ``req.fraction``) time on it and the squeezed part by then (the D0 = 0
+    twin's).  Run in stages that stop early (docs/drug_reduced.md sec. 7); ValueError if the dose
+    is never reached."""
     from solver.solute import Solute
 
     from ..model_choice import front_run

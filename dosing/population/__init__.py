@@ -1,8 +1,6 @@
-"""The population axis: one bead, or a batch of sizes.  ``sizes`` holds the size laws and
-measured tables (each law picks its quadrature rule); a batch's dose is the one-bead
-answer lifted over the sizes by the model that answers it: the front model's table
-(``front``), per-node release curves under heating steps (``curves``: the reduced
-slow-heating model or the full solver per node), the truth per interfacial-length band
-(``bands``), a drug's classes coupled through one shared medium (``medium``), and the
-nodes' runs shot together through heat-and-rest cycles (``cycles``).  Modules are
-imported by name: this package imports none of them."""
+"""The population axis: one bead, or a batch of sizes (docs/batch.md).  ``sizes``: size laws
+and measured tables (each law picks its quadrature rule).  A batch's dose lifts the one-bead
+answer over the sizes by the model that answers it: ``front`` (the front model's table),
+``curves`` (per-node release curves under heating steps), ``bands`` (the truth per
+interfacial-length band), ``medium`` (a drug's classes in one medium), ``cycles`` (heat and
+rest cycles).  Modules are imported by name: this package imports none of them."""

@@ -1,15 +1,9 @@
 """One request, one answer: the planner as one pipeline over payload x population x heating
-x question (issue 35).
-
-    from . import Request, Jump, Dose, Batch, plan
-    ans = plan(Request("ANB", 302, Jump(308), Dose(0.8), population=Batch({"cv": 0.2}),
-                       dry_radius_um=50))
-    ans.seconds            # the batch's own time: the answer to the question asked
-
-:func:`plan` answers blocking; :func:`answer` answers without waiting on a new full-solver
-run (a result, a ``Pending`` validation, or None: the request needs a job, which
-:func:`plan` then is).  Which code answers a cell: ``dosing.question.cells.CELLS``.
-"""
+x question (issue 35; docs/architecture.md).  E.g. ``plan(Request("ANB", 302, Jump(308),
+Dose(0.8), population=Batch({"cv": 0.2}), dry_radius_um=50)).seconds``: the batch's own time.
+:func:`plan` answers blocking; :func:`answer` without waiting on a new full-solver run (a
+result, a ``Pending`` validation, or None: the request needs a job, which :func:`plan` then
+is).  Which code answers a cell: ``dosing.question.cells.CELLS``."""
 
 from __future__ import annotations
 

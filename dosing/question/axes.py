@@ -1,19 +1,9 @@
 """The axes of a request: payload x population x heating x question, one class per value.
 
-A request (:class:`dosing.question.request.Request`) is a case (gel, temperatures, bead
-size, constants, truth settings) and one value of each axis:
-
-- payload: :class:`Fluid` (the stored pore fluid, eq. FluidVolExpelled) or :class:`Drug`
-  (a solute in it, with its medium);
-- population: :class:`OneBead` or :class:`Batch` (a size distribution or table);
-- heating: :class:`Jump` (T_start -> T_end at once, the paper's) or :class:`Heating` (the
-  step grammar of ``dosing.heating.grammar``: ramps, holds, baths, traces);
-- question: :class:`Dose` (when is it out) or :class:`Schedule` (several doses with rests).
-
-Each value names itself (``key``) and gives the fields it contributes to the planner's
-request (``fields()``); nothing here branches on another axis.  A new value of an axis is a
-new class here and its cells in ``dosing.question.cells``.
-"""
+Payload :class:`Fluid` (the stored pore fluid, eq. FluidVolExpelled) or :class:`Drug`;
+population :class:`OneBead` or :class:`Batch`; heating :class:`Jump` or :class:`Heating` (the
+step grammar); question :class:`Dose` or :class:`Schedule`.  Each gives ``key`` and ``fields()``
+and branches on no other axis (docs/architecture.md, "Where to add ...")."""
 
 from __future__ import annotations
 
@@ -73,13 +63,10 @@ class Drug:
         return {"drug": self.model, "wait": self.wait, "wait_seconds": self.wait_seconds}
 
     def mesh_variants(self, planned: Any) -> list[tuple[str, Any]]:
-        """The payloads of the mesh part (issue 36): a sieved drug at xi_dry / 2 and 2 xi_dry
-        (its own mesh_size_nm, so the bead's mechanics and their runs stay), with the
-        other stretch bound (J^(1/3) vs the smallest principal stretch) and, with a fibre
-        radius, in the other microstructure: the default mixes pore transmission with
-        free-volume diffusion and a constant partition, the fibre matrix takes Ogston's
-        diffusion and partition (docs/drug.md: the combination is stated as a bound); none
-        when nothing sieves it (no solute radius, no hindrance)."""
+        """The payloads of the mesh part (issue 36): a sieved drug at xi_dry / 2 and 2 xi_dry (its
+        own mesh_size_nm: the bead's mechanics and runs stay), with the other stretch bound and,
+        with a fibre radius, in the other microstructure (docs/drug.md, "One microstructure ...");
+        none when nothing sieves it (no solute radius, no hindrance)."""
         from dataclasses import replace
 
         drug = planned.drug

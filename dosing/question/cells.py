@@ -1,12 +1,9 @@
 """The registry of cells: which code answers each payload x population x heating x question.
 
-Like scipy's ``METHODS`` table, ``CELLS`` maps a request's axes (``Request.cell_key``) to
-one :class:`Cell`: ``build`` resolves the request into the planner's request of the cell
-(validating it: ``ParameterError`` names the field), ``now`` answers without waiting on a
-new full-solver run (a result, a ``Pending`` validation, or None: the cell needs a job) and
-``run`` answers blocking.  Every cell of the 16 is listed and answers.  The planner, the
-question modules and the HTTP adapter only look cells up here: none branches on an axis.
-"""
+``CELLS`` (like scipy's ``METHODS``) maps ``Request.cell_key`` to one :class:`Cell`: ``build``
+(the cell's planner request, validated), ``now`` (no wait on a new full-solver run: a result,
+``Pending``, or None: a job) and ``run`` (blocking).  All 16 cells answer; nothing else
+branches on an axis (docs/architecture.md, "Where to add ...")."""
 
 from __future__ import annotations
 

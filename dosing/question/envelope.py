@@ -1,26 +1,9 @@
 """The envelope of an answer: what the user cannot rule out with what they gave (issue 36).
 
-Every answer (each cell of ``dosing.question.cells``) carries its uncertainty as typed
-:class:`Part` s in one vocabulary and an :class:`Envelope` over them: the point answer times
-the product of every counted part's low ends, to the product of their high ends (a bracket,
-not a confidence interval: each part is a choice the data do not make, so any combination
-can hold).  The parts:
-
-- ``reduction``: a reduced model's gap to its truth (the front model's ``error_estimate``,
-  numerical part included); ``numerical``: the truth's own (n vs n / 2 cells), counted when
-  no reduced model stands between;
-- ``interfacial_length``: the truth over the mesh length's plausible range (validated);
-- ``front_law``: the delayed (hysteretic) front law against the local-equilibrium (Maxwell)
-  one, the ell = 0 Lagrangian lattice run under the same heating (``ratio`` delayed /
-  Maxwell; docs/interfacial.md sec. 10); about a second of CPU once, then stored;
-- ``timescale``: the constants of eq. timescale (``factor``, ``source``): a rescale where
-  the dimensionless answer is free of tau (a jump's fluid), else the cell rerun at each
-  candidate (a ramp's K/tau and a drug's D0 / D_gel move with tau), or a fit's interval;
-- ``quadrature`` (batches), ``mesh`` (a sieved drug: not measured yet, listed),
-  ``parameters`` (a fitted gel's swelling parameters).
-
-``dominant_uncertainty`` is the widest counted part with the measurement that pins it.
-"""
+Every answer (each cell of ``dosing.question.cells``) carries typed :class:`Part` objects and an
+:class:`Envelope`: the point answer times every counted part's low ends to their high ends (a
+bracket, not a confidence interval); ``dominant_uncertainty`` is the widest counted part.
+Parts (reduction, numerical, interfacial length, front law, eq. timescale...): docs/envelope.md."""
 
 from __future__ import annotations
 

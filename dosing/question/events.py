@@ -1,31 +1,9 @@
 """A schedule as events: the one table a bath controller or a lab notebook takes (issue 37).
 
-Every schedule answer (fluid or drug, one bead or a batch, after a jump or under a
-protocol) carries ``events``, built here and nowhere else: one row per step of the heat/rest
-protocol the lab runs, in order on one clock.
-
-- ``kind``: 'heat' (a heating: a jump to T_end, or the protocol's steps from T_start cut at
-  the heating's time), 'rest' (at T_start between heatings) or 'hold' (a drug's wait at
-  T_start before the first heating);
-- ``start_s``, ``duration_s`` (seconds; null without a bead size) and ``start_tau``,
-  ``duration_tau`` (units of tau of the reference bead);
-- ``temperature_K``: the set temperature (a jump's T_end, a rest's T_start; for a protocol
-  heating the set temperature at the heating's end) and ``program``: a protocol heating's
-  steps cut at its time, in the step grammar's words (null for a jump);
-- ``dose_fraction``: what the step delivers (of the stored fluid, or of the drug load; a
-  drug's rest or wait: what leaks), ``amount_ul`` / ``amount_ug`` in volume or mass when
-  known, ``released_fraction``: the cumulative release at the step's end, ``target_fraction``
-  the dose asked of a heating, ``dose_error`` delivered / asked - 1 on the full solver (for
-  the corrected reading: the shooting residual), ``uptake_fraction`` the fluid a fluid rest
-  takes back up;
-- ``reading``: which times the row is, 'corrected' (shot on the full solver), 'checked' (the
-  hold times as the full solver runs them) or 'hold' (the hold reading: one continuous
-  heating, when the protocol check is off), and ``rough``: true for the hold reading only.
-
-The corrected schedule is used whenever it was found, else the checked hold times, else the
-hold reading (rough).  ``dosing.present.export.events_dataset`` is the table as an xarray
-Dataset (units on every variable) for ``thermogel schedule --out FILE.csv|.nc``.
-"""
+Every schedule answer (fluid or drug, bead or batch, jump or protocol) carries ``events``, built
+here alone: one row per heat/rest step, on one clock; the corrected reading when found, else
+the checked hold times, else the hold reading (rough).  ``present.export.events_dataset``: the
+xarray Dataset for ``--out FILE.csv|.nc``.  Columns: docs/results.md, "Tables and notebooks"."""
 
 from __future__ import annotations
 
@@ -116,12 +94,10 @@ def _get(values: Sequence[Any] | None, k: int) -> Any:
 
 
 def schedule_events(answer: Any, req: Any) -> list[dict[str, Any]]:
-    """The answer's schedule as events (module doc): one dict per step, in order.
-
-    ``answer``: a fluid (``dosing.question.schedule.ScheduleAnswer``), drug
-    (``dosing.payload.cycles.DrugScheduleAnswer``) or batch
-    (``dosing.population.cycles.BatchScheduleAnswer``) schedule answer; ``req``: the planner's
-    request it answers (its temperatures, heating, rests and a drug's wait)."""
+    """The answer's schedule as events (module doc): one dict per step, in order.  ``answer``: a
+    fluid (``dosing.question.schedule.ScheduleAnswer``), drug (``dosing.payload.cycles.
+    DrugScheduleAnswer``) or batch (``dosing.population.cycles.BatchScheduleAnswer``) schedule
+    answer; ``req``: the planner's request it answers (temperatures, heating, rests, a wait)."""
     reading, res = reading_of(answer)
     tau = getattr(answer, "timescale_seconds", None)
     doses = list(answer.doses)

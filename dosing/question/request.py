@@ -1,11 +1,9 @@
 """One request: a case x payload x population x heating x question, validated once.
 
-The case is what every request shares (``dosing.request.Case``: the gel, T_start, the bead
-size, the timescale constants, the start branch, the truth's settings); the axes are the
-values of ``dosing.question.axes``.  Construction resolves the request into the planner's
-request of its cell (``dosing.question.cells``), so a bad field raises ``ParameterError``
-naming it at once, whatever the way in (HTTP 422, CLI exit 2).
-"""
+The case (``dosing.request.Case``: gel, T_start, bead size, timescale constants, start branch,
+truth settings) is what every request shares; the axes are ``dosing.question.axes``' values.
+Construction resolves it into its cell's planner request (``dosing.question.cells``), so a bad
+field raises ``ParameterError`` at once, whatever the way in (HTTP 422, CLI exit 2)."""
 
 from __future__ import annotations
 
@@ -29,13 +27,10 @@ def _gel(gel: Any) -> Any:
 
 @dataclass(frozen=True)
 class Request:
-    """What the planner is asked: ``gel`` and ``t_start`` and the bead (``dry_radius_um``
-    or ``swollen_radius_um``; a batch's reference size), ``constants``, ``branch``,
-    ``settings``; ``payload`` (:class:`~dosing.question.axes.Fluid` by default),
-    ``population`` (:class:`~dosing.question.axes.OneBead`), ``heating`` (a
-    :class:`~dosing.question.axes.Jump` or a :class:`~dosing.question.axes.Heating`
-    protocol), ``question`` (:class:`~dosing.question.axes.Dose` or
-    :class:`~dosing.question.axes.Schedule`) and ``validate`` (also run the truth)."""
+    """What the planner is asked: ``gel``, ``t_start``, the bead (``dry_radius_um`` or
+    ``swollen_radius_um``; a batch's reference size), ``constants``, ``branch``, ``settings``; the
+    axes ``payload`` (default ``Fluid``), ``population`` (``OneBead``), ``heating`` (``Jump`` or
+    ``Heating``), ``question`` (``Dose`` or ``Schedule``); ``validate`` (also run the truth)."""
 
     gel: Any
     t_start: Any

@@ -1,13 +1,9 @@
 """One answer per question: :class:`DoseResult` and :class:`ScheduleResult`.
 
-Whatever the cell (payload x population x heating), the headline answers the question
-asked: a dose's ``time`` / ``seconds`` is the population's (a batch's own time, not its
-mean bead's: issue 35), a schedule's ``actuation_times`` / ``actuation_seconds`` are the
-corrected times when they were found (the hold reading otherwise, and ``reading`` says
-which).  The cell's own answer (``answer``: the bead's, or a drug batch's) and the optional
-sections (``batch``) are kept whole; ``to_dict()`` is the JSON every way in returns: the
-cell's answer with the headline over it, the sections beside it and the request it answered.
-"""
+Whatever the cell, the headline answers the question asked: a dose's ``time`` / ``seconds`` is
+the population's (a batch's own time: issue 35), a schedule's ``actuation_times`` / ``_seconds``
+the corrected ones when found, else the hold reading (``reading`` says).  The cell's ``answer``
+and sections are kept whole; ``to_dict()`` is the JSON every way in returns (docs/results.md)."""
 
 from __future__ import annotations
 

@@ -1,21 +1,8 @@
 """The validation cache: full-solver trajectories in SQLite, one row per scenario key.
 
-SQLite in WAL mode on a local file: readers never block the writer, every write is one
-``BEGIN IMMEDIATE ... COMMIT`` transaction (a row is there whole or not at all), and a
-process killed mid-write leaves the file readable with every committed row intact (the
-WAL is rolled back on the next open).  Each thread gets its own connection, each process
-opens its own, so concurrent readers and writers are safe.  A row holds the trajectory
-as an ``.npz`` blob plus its JSON metadata (scenario, horizon, diagnostics).  A second
-table records validation requests, so ids survive a restart; a third, the leases, makes
-each scenario computed once across processes sharing the file (a claim with an expiry,
-renewed while its holder works, taken over once it lapses or its holder's process is
-gone); a fourth stores jobs (schedule checks): their request, state and result.
-
-Each trajectory row carries a SHA-256 of its metadata and blob (column ``sha256``; rows
-written before it have none and are read as they are): a row whose bytes no longer match
-(a flipped bit, a torn page copied in) is detected on read, dropped and reported missing,
-so it is computed again instead of answering from damaged data.
-"""
+SQLite in WAL mode, one transaction per write, a connection per thread and process; tables of
+trajectories (an ``.npz`` blob, JSON metadata, a SHA-256 checked on read), validations, leases
+and jobs.  Crash safety, checksums and the tables: docs/architecture.md, "The run store"."""
 
 from __future__ import annotations
 
@@ -297,16 +284,10 @@ class ValidationCache:
     def get_many(self, keys: list[str] | tuple[str, ...],
                  found: dict[str, str] | None = None
                  ) -> dict[str, tuple[dict[str, Any], bytes]]:
-        """(metadata, npz blob) of every stored key among ``keys``, in one query (absent
-        keys are left out, and damaged rows, which are dropped: checksums verified; no
-        decoding: the caller decodes what it keeps).  ``found``, if given, receives each
-        returned row's checksum (:meth:`digests`).
-
-        Keys found absent are remembered with the file's version (``PRAGMA data_version``,
-        which changes when another connection, thread or process commits, and this
-        connection's own ``total_changes``): while neither has moved, asking for them again
-        costs that one pragma instead of the lookup (a warm answer whose runs are not
-        computed yet)."""
+        """(metadata, npz blob) of every stored key among ``keys`` in one query, checksums verified
+        (absent keys and damaged rows, dropped, left out; no decoding).  ``found``, if given, gets
+        each row's checksum (:meth:`digests`).  Absent keys are remembered while ``PRAGMA
+        data_version`` and ``total_changes`` stand still (docs/speed.md sec. 2)."""
         out: dict[str, tuple[dict[str, Any], bytes]] = {}
         con = self._con()
         uniq = list(dict.fromkeys(keys))

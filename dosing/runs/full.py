@@ -1,12 +1,9 @@
 """The full solver as dosing/ reaches it: ``solver.full.simulate`` (eqs. PDE_Dimless to
 Boundary_Dimless), imported on first use so that a front-model answer loads no kernels.
 
-This is the one import of the full solver in dosing/ (tests/test_architecture.py checks
-it).  A planner's runs take the store's ``solver`` (:class:`dosing.runs.store.RunStore`:
-this one by default, a stand-in in tests); the run functions a pool worker imports by name
-(``dosing.runs.scenario.run_scenario``, ``dosing.runs.solute.run_drug_scenario``) and a fit's dose
-time, which have no planner, take it from here.
-"""
+The one import of the full solver in dosing/ (tests/test_architecture.py).  A planner's runs
+take the store's ``solver`` (this one by default); the run functions a pool worker imports by
+name, and a fit's dose time, have no planner and take it from here (docs/architecture.md)."""
 
 from __future__ import annotations
 

@@ -1,30 +1,9 @@
 """Computations on a pluggable ``concurrent.futures`` executor, deduplicated by key.
 
-Any executor works: the default is a process pool (spawned workers, so a threaded parent
-such as a web server forks nothing it should not; each worker has a watchdog process that
-kills it once its parent is gone, even inside a compiled loop that holds the GIL, and
-:meth:`JobRunner.shutdown` stops them); past one machine pass a Dask
-``Client(...).get_executor()``.
-
-A job on a process pool runs through the worker's edge, :func:`run_in_worker`: an error
-comes back as an error (one that does not pickle as a :class:`WorkerError` with its type
-and message), never as a broken pool, and the worker marks which job it runs.  If the pool
-breaks anyway (a worker killed: by the OS, or by the runner's hard time limit on a job
-that overran its own budget) the runner replaces its own pool at once, fails the jobs that
-were running in the dead worker (not retried: a poll does not rebuild the same failure)
-and re-queues the others; :meth:`JobRunner.pool_status` says so (``/health``).
-
-Submitting a key that is already pending or running returns the same future.
-
-Admission is by group: a group (one validation: all its runs) is admitted whole or not at
-all, and at most ``max_pending`` unfinished groups are accepted; beyond that
-:class:`QueueFullError` says what is full and when to retry.
-
-Across processes (two servers, or uvicorn workers, on one cache file) a :class:`Leases`
-store makes each key computed once: the process that claims a key's lease runs it and
-renews the lease while it runs; every other process waits for the result to appear
-(``fetch``) and takes the work over if the lease expires (a crashed holder).
-"""
+:class:`JobRunner`: a process pool by default (spawned workers, a watchdog each) or any
+executor (Dask's); one future per pending key; groups admitted whole, at most ``max_pending``
+(:class:`QueueFullError`); a broken pool replaced; :class:`Leases` make each key computed
+once across processes.  How and why: docs/architecture.md, "The run store"."""
 
 from __future__ import annotations
 
@@ -181,14 +160,10 @@ _SPAWN_LOCK = threading.Lock()
 
 @contextmanager
 def _main_not_reimported() -> Iterator[None]:
-    """While processes start here, a spawned child is not told to re-run ``__main__``.
-
-    multiprocessing's spawn makes each child import the parent's main script again (as
-    ``__mp_main__``), so a script without an ``if __name__ == "__main__"`` guard would run
-    again in every worker, start pools of its own and never finish.  The pool's work is
-    importable by name (``dosing.runs.scenario.run_scenario``, ``solver.full.simulate``), so its
-    workers need nothing from the script: the README's code runs as pasted.
-    """
+    """While processes start here, a spawned child is not told to re-run ``__main__``: spawn
+    would import the parent's script again (``__mp_main__``), so a script without a main guard
+    would rerun in every worker.  The pool's work is importable by name, so the README's code
+    runs as pasted."""
     with _SPAWN_LOCK:
         original = mp_spawn.get_preparation_data
 
@@ -240,13 +215,10 @@ def _alive(pid: int) -> bool:
 
 
 def kill_with_parent(parent_pid: int, interval: float = 0.5) -> int | None:
-    """Fork a watchdog process that SIGKILLs this process once ``parent_pid`` is no longer
-    its parent (the parent died: this process was re-parented) and ends itself once this
-    process is gone; its pid (None where there is no fork).
-
-    A thread in this process (:func:`exit_with_parent`) cannot do it while a compiled loop
-    holds the GIL; a process of its own can.  It closes every inherited descriptor, so it
-    holds none of the pool's pipes, and makes only system calls."""
+    """Fork a watchdog that SIGKILLs this process once ``parent_pid`` is no longer its parent and
+    ends itself once this process is gone; its pid (None where there is no fork).  A process, not
+    a thread (:func:`exit_with_parent`): a compiled loop may hold the GIL.  It closes every
+    inherited descriptor (none of the pool's pipes) and makes only system calls."""
     if not hasattr(os, "fork"):
         return None
     me = os.getpid()

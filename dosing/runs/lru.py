@@ -1,14 +1,9 @@
-"""One least-recently-used map bounded in bytes (issue 40, R7): the planner's caches of
-runs, programs and mechanics, and the service's rendered tables, hold at most a budget of
-memory, not a number of entries (a run of a 100,000-row trace weighs a thousand ordinary
-ones).
+"""One least-recently-used map bounded in bytes (issue 40, R7): the planner's caches of runs,
+programs and mechanics, and the service's rendered tables, hold a memory budget, not a count.
 
-:class:`ByteLRU` is an ``OrderedDict`` as those caches used it (``get``, ``[key] = value``,
-``move_to_end``, ``popitem(last=False)``, ``pop``, ``clear``) that evicts its oldest
-entries once their sizes sum past ``max_bytes`` (or their count past ``max_items``); a
-value larger than the whole budget is not kept.  Sizes come from :func:`approx_size`, an
-estimate that walks containers, dataclasses and numpy arrays once per insertion.
-"""
+:class:`ByteLRU`: an ``OrderedDict`` as those caches used it that evicts its oldest entries
+past ``max_bytes`` (or ``max_items``); a value larger than the budget is not kept.  Sizes:
+:func:`approx_size`, an estimate per insertion (docs/architecture.md, "The run store")."""
 
 from __future__ import annotations
 

@@ -1,14 +1,9 @@
 """The planner's bookkeeping for protocol runs that continue a stored prefix.
 
-The full solver records a protocol run's state after every step
-(``FullResult.boundary_states``), continues a protocol from one of them exactly
-(``simulate(..., initial=state)``) and joins the continued run to the record before it
-(``FullResult.after``).  Here: which stored run a protocol starts from (:class:`Start`), the
-one ``simulate`` call from there (:func:`run_protocol`), and a read-off heating's stopped
-run as the run of the protocol ending at its stop (:func:`stopped_as_run`).  A schedule's
-shooting thus simulates only the heating it varies, not the heatings and rests before it.
-Runs the planner stored before the solver kept the states (in their meta) read the same.
-"""
+Which stored run a protocol starts from (:class:`Start`), the one ``simulate`` call from its
+state (:func:`run_protocol`), and a read-off heating's stopped run as the run of the protocol
+ending at its stop (:func:`stopped_as_run`).  docs/architecture.md, "The life of a schedule"
+and "The run store"."""
 
 from __future__ import annotations
 
@@ -50,13 +45,10 @@ def restartable(solver: Any) -> bool:
 
 def run_protocol(sc: Any, solver: Any, budget: float, start: Start | None = None
                  ) -> FullResult:
-    """``sc``'s protocol run (a :class:`dosing.runs.scenario.Scenario` with ``protocol``) as
-    stored (no profiles; its boundary states kept): one ``simulate`` from ``start`` (or
-    t = 0) within ``budget`` wall seconds, output at the one-shot run's times and at every
-    protocol boundary.  With ``sc.stop_expelled`` the last step stops where it has expelled
-    that volume from its own start, a radius known from the state before it: a run without
-    that state runs the steps before the last first (a second call, whose state the record
-    keeps)."""
+    """``sc``'s protocol run (a ``Scenario`` with ``protocol``) as stored (no profiles, boundary
+    states kept): one ``simulate`` from ``start`` (or t = 0) within ``budget`` wall seconds, output
+    at the one-shot run's times and every boundary.  With ``sc.stop_expelled`` the last step stops
+    once it expelled that volume (docs/architecture.md, "The run store")."""
     steps = tuple(sc.protocol)
     began = time.perf_counter()
     bounds = protocol_boundaries(steps)

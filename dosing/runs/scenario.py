@@ -1,14 +1,9 @@
 """The dimensionless scenario (the cache key) and the full-solver run that serves it.
 
-One dimensionless run serves every bead size and dose, so the key holds only the gel's
-dimensionless parameters and permeability law, the start temperature and branch, the
-temperature protocol (one jump, or heat/cool steps), the solver settings (grid, N,
-integrator, tolerance, interfacial length) and the code version.  ``run_scenario`` is a
-plain top-level function of plain data so any ``concurrent.futures`` executor (a process
-pool, a Dask client's executor) can run it; it runs the solver it is given (the planner's,
-by default ``solver.full.simulate``) and returns the run record
-(:class:`solver.full.result.FullResult`, stored without profiles) as an ``.npz`` blob.
-"""
+One dimensionless run serves every bead size and dose: the key holds the gel's dimensionless
+parameters and permeability law, the start temperature and branch, the protocol, the solver
+settings and the code version.  :func:`run_scenario`: plain data in, an ``.npz`` blob out, for
+any executor (docs/architecture.md, "The run store")."""
 
 from __future__ import annotations
 
@@ -64,21 +59,10 @@ RUNGS = LADDER_RUNGS  # ladder ell, ell/2, ell/4: the observed order and the lim
 
 @dataclass(frozen=True)
 class SolverSettings:
-    """Full-solver settings that define a validation (all part of the scenario key).
-
-    ``method`` 'direct' (the default, issue 12): the truth is the regularized model at the
-    interfacial length ell itself, run directly on the moving grid (``grid`` 'moving', n 400,
-    rtol 1e-5) and checked by a run with n / 2 cells (:meth:`rungs`; their relative gap is
-    the numerical bound).  ``interfacial_length`` None means the bead's own, ell = xi_dry /
-    a_d (the request sets it from ``PhysicalConstants.mesh_length_nm`` and the bead size;
-    :attr:`auto_length` says it was not given); without a bead size it is
-    ``LIMIT_INTERFACIAL_LENGTH`` = 1e-4, which stands for the limit ell -> 0.
-    ``method`` 'ladder' (issue 8): the truth is the sharp-interface limit extrapolated from
-    the ladder ell, ell/2, ell/4 (default ell 0.005), each grid-converged at
-    ``CELLS_PER_LENGTH / ell`` cells on the Lagrangian grid (module ``dosing.ladder``).
-    ell = 0 is the paper's model (either method), checked on both fixed grids (Eulerian
-    N = 400 is the paper's).  Unset fields take the defaults of the model chosen.
-    """
+    """Full-solver settings that define a validation (all part of the scenario key).  ``method``
+    'direct' (default, issue 12): the regularized model at ell on the moving grid, checked at n / 2
+    (:meth:`rungs`); 'ladder' (issue 8): the ell -> 0 limit from ell, ell/2, ell/4; ell = 0: the
+    paper's model.  ``interfacial_length`` None: the bead's own (docs/interfacial.md sec. 9)."""
 
     grid: str | None = None
     n: int | None = None
@@ -245,12 +229,10 @@ def hard_limit(budget: float) -> float:
 
 @dataclass(frozen=True)
 class Scenario:
-    """A dimensionless full-solver run: one jump (``t_end``) or a protocol of steps.
-
-    ``protocol`` is a tuple of (duration, temperature) steps from the equilibrium at
-    ``t_start`` on ``branch``.  A jump has no fixed duration: its run is extended until
-    the radius asked for is reached, and the cache keeps one row per scenario.
-    """
+    """A dimensionless full-solver run: one jump (``t_end``) or a protocol of steps (``protocol``:
+    (duration, temperature) steps from the equilibrium at ``t_start`` on ``branch``).  A jump has
+    no fixed duration: its run is extended until the radius asked for is reached, and the cache
+    keeps one row per scenario."""
 
     gel: Gel
     t_start: float
@@ -453,19 +435,10 @@ def run_scenario(scenario: dict[str, Any], horizon: float = 1.0, need_radius: fl
                  need_time: float = 0.0, max_horizon: float = 64.0, budget: float | None = None,
                  solver: Solver | None = None, stop: bool = True,
                  start: Any = None) -> tuple[dict, bytes]:
-    """Run the full solver for a scenario: plain data in, (metadata, npz blob) out.
-
-    A jump is simulated for ``horizon``, extended (x4, up to ``max_horizon``) until a(t)
-    falls to ``need_radius`` and t reaches ``need_time``; with ``stop`` (default) the run
-    ends where a(t) reaches ``need_radius`` (a terminal event: nothing past the dose is
-    computed; a run that stopped before ``need_time`` is run again to it without the
-    event); all its runs together get ``budget`` seconds of wall time (default
-    :func:`run_budget`; past it a BudgetExceeded naming the settings), on ``solver`` (the
-    planner's: a module-level function pickles by name).
-    A protocol starts from ``start`` (:class:`dosing.runs.restart.Start`: a stored run's state
-    after its first steps) when given.
-    Top-level and free of shared state, so process pools and Dask workers can run it.
-    """
+    """Run the full solver for a scenario: plain data in, (metadata, npz blob) out; top-level and
+    free of shared state (any executor).  A jump runs to ``need_radius`` and ``need_time`` (horizon
+    x4 up to ``max_horizon``; ``stop``: a terminal event), a protocol from ``start``; all in
+    ``budget`` wall seconds (BudgetExceeded) on ``solver`` (docs/architecture.md, run store)."""
     if solver is None:
         from .full import full_solver
 

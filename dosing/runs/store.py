@@ -1,16 +1,9 @@
 """The run store: the one place in dosing/ that runs the full solver.
 
-Every full-solver run the planner needs (a jump's validation ladder, a protocol's run, a
-drug's mechanics and solute, a batch band's run, a fit's dose time) is found here or run
-here: in memory (a byte-bounded LRU), then in the SQLite cache file
-(:class:`dosing.runs.cache.ValidationCache`: runs, leases, jobs, prefix states), then on
-the planner's executor (:class:`dosing.runs.jobs.JobRunner`, deduplicated by scenario key
-across processes sharing the file) with the planner's ``solver``.  A protocol run starts
-from the stored state after its longest stored prefix (:mod:`dosing.runs.restart`).
-
-:mod:`dosing.runs.full` is the only import of ``solver.full.simulate`` in dosing/ (tests/
-test_architecture.py checks it).
-"""
+Every full-solver run the planner needs is found or run here: memory (a byte-bounded LRU),
+the SQLite cache file (:class:`dosing.runs.cache.ValidationCache`), then the executor
+(:class:`dosing.runs.jobs.JobRunner`) with the planner's ``solver``; a protocol run starts from
+its longest stored prefix (:mod:`dosing.runs.restart`).  docs/architecture.md, "The run store"."""
 
 from __future__ import annotations
 
@@ -56,14 +49,10 @@ RUN_FAILURE = "run-failure-"  # the id prefix of a run whose worker died (the ca
 
 
 class RunStore:
-    """Full-solver runs: memory, the cache file, then ``executor`` (module doc).
-
-    ``solver`` runs each scenario (default :func:`full_solver`; tests pass a fake): it
-    travels to the executor's workers with every run, so on a process pool or Dask it must
-    pickle (a module-level function does, by name).  At most ``max_pending`` groups of
-    runs are queued; a claim on a run lapses ``lease_seconds`` after its holder stops
-    renewing it.
-    """
+    """Full-solver runs: memory, the cache file, then ``executor`` (module doc).  ``solver`` runs
+    each scenario (default :func:`full_solver`; tests pass a fake) and must pickle on a process
+    pool or Dask (a module-level function does, by name).  At most ``max_pending`` groups of runs
+    are queued; a claim on a run lapses ``lease_seconds`` after its holder stops renewing it."""
 
     def __init__(self, cache_path: str | None = None, executor: Executor | None = None,
                  max_pending: int = 64, horizon: float = DEFAULT_HORIZON,
