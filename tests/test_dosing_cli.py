@@ -102,6 +102,13 @@ def test_validation_plot_from_the_answer_alone(tmp_path: Path, capsys) -> None:
                  "0.5", "--plot", str(tmp_path / "y.png"),
                  "--cache", str(tmp_path / "c.sqlite")]) == 2
     assert "plot" in capsys.readouterr().err
+    # a drug answer (one bead or a batch) has no validation figure: refused before any run
+    for batch in ([], ["--size-cv", "0.2"]):
+        assert main(["dose", "--gel", "ANB", "--t-start", "302", "--t-end", "308",
+                     "--fraction", "0.5", "--dry-radius-um", "50", "--drug-diffusivity-cm2-s",
+                     "1e-6", *batch, "--validate", "--plot", str(tmp_path / "z.png"),
+                     "--cache", str(tmp_path / "c.sqlite")]) == 2
+        assert "plot" in capsys.readouterr().err and not (tmp_path / "z.png").exists()
 
 
 def test_direct_validation_plot_from_the_answer_alone(tmp_path: Path) -> None:

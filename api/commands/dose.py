@@ -254,6 +254,10 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError("--fraction", None, "a fraction of the batch's load, 0-1")
     if args.plot and not args.validate:
         raise ParameterError("plot", args.plot, "used with --validate")
+    if args.plot and drug is not None:
+        raise ParameterError("plot", args.plot, "used with a fluid dose (the figure is the "
+                             "fluid answer's validation; a drug answer states its parts in "
+                             "--explain)")
     request = request_from_args(args, Dose(
         fraction=args.fraction, volume_ul=args.volume_ul, drug_mass_ug=args.drug_mass_ug,
         concentration_ug_per_ul=args.concentration_ug_per_ul), steps, drug)
@@ -276,7 +280,11 @@ def run(args: argparse.Namespace) -> int:
         from api.plots.validation import draw_validation
 
         path = figure_path(args.plot, args.format)
-        print(f"wrote {draw_validation(result.answer.to_dict(), path)}", file=sys.stderr)
+        try:
+            print(f"wrote {draw_validation(result.answer.to_dict(), path)}", file=sys.stderr)
+        except ValueError as exc:  # no regularized validation (the paper's model)
+            raise ParameterError("plot", args.plot, "a dose with a regularized validation",
+                                 str(exc)) from None
     if args.json:
         print_json(result.to_dict())
         return 0
