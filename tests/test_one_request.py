@@ -335,6 +335,7 @@ def check_views(res) -> None:
         assert len(df) == len(d["events"]) and df.attrs["reading"] == res.reading
         ds = res.to_xarray()
         assert ds.sizes["step"] == len(d["events"]) and ds.attrs["headline"] == res.headline
+        assert res.answer._repr_html_().startswith("<table")  # the cell's own answer too
 
 
 def _headline(d: dict) -> list[float]:

@@ -26,11 +26,10 @@ from typing import Any
 import numpy as np
 
 from solver.errors import ParameterError, require_finite_positive
-from solver.presenters import presenter
 
 from ..answers import HoldRow
 from ..question.events import schedule_events
-from ..question.schedule import hold_schedule, with_seconds
+from ..question.schedule import ScheduleViews, hold_schedule, with_seconds
 from ..question.shooting import Short, corrected, read_off
 from ..request import ScheduleCase, ScheduleRequest
 from ..runs.solute import DrugRuns, drug_settings, runs_for
@@ -98,7 +97,7 @@ class DrugScheduleRequest(DrugCase, ScheduleCase):
 
 
 @dataclass
-class DrugScheduleAnswer(StatedTruth):
+class DrugScheduleAnswer(StatedTruth, ScheduleViews):
     """A drug schedule under each reading, with leakage and warnings."""
 
     model: str
@@ -118,10 +117,6 @@ class DrugScheduleAnswer(StatedTruth):
     uncertainty: Uncertainty | None = None
     # the schedule as a lab runs it, one row per step (dosing.question.events)
     events: list[dict[str, Any]] = field(default_factory=list)
-
-    def to_dataframe(self) -> Any:
-        """The events, one row per step (pandas; ``dosing.question.events``)."""
-        return presenter("schedule_frame")(self)
 
 
 def _reading(run: DrugHeatings, rel: Any, durations: Sequence[float]) -> dict[str, Any]:

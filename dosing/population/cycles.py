@@ -38,14 +38,13 @@ from typing import Any
 import numpy as np
 
 from solver.errors import NotApplicableError, ParameterError
-from solver.presenters import presenter
 
 from ..answers import HoldRow
 from ..heating.cycles import cycle_scenario
 from ..quantity import micrometres
 from ..question import shooting
 from ..question.events import schedule_events
-from ..question.schedule import SchedulePlanner, hold_schedule, with_seconds
+from ..question.schedule import SchedulePlanner, ScheduleViews, hold_schedule, with_seconds
 from ..question.shooting import (
     FluidHeatings,
     Member,
@@ -252,7 +251,7 @@ def check(h: BatchHeatings, durations: Sequence[float]) -> dict[str, Any]:
 
 # ------------------------------------------------------------------------------ answer
 @dataclass
-class BatchScheduleAnswer:
+class BatchScheduleAnswer(ScheduleViews):
     """A batch's schedule: actuation times (in the reference bead's tau and seconds) whose
     summed release meets each dose of the batch's stored fluid, the nodes it ran, the
     quadrature and its error, and the hold reading it started from."""
@@ -283,10 +282,6 @@ class BatchScheduleAnswer:
         d = asdict(self)
         d["quadrature"] = self.quadrature.to_dict()
         return d
-
-    def to_dataframe(self) -> Any:
-        """The events, one row per step (pandas; ``dosing.question.events``)."""
-        return presenter("schedule_frame")(self)
 
 
 def _node_dicts(req: ScheduleRequest, nodes: Sequence[Node], tau_ref: float) -> list[dict]:

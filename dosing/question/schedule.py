@@ -46,8 +46,20 @@ class SchedulePlanner(Protocol):
                    need_time: float = 0.0) -> FullResult: ...
 
 
+class ScheduleViews:
+    """What every schedule answer (fluid or drug, one bead or a batch) shows of itself: its
+    events as a table and in a notebook (``dosing.present.tables``)."""
+
+    def to_dataframe(self) -> Any:
+        """The events, one row per step (heat, rest, a drug's wait; pandas)."""
+        return presenter("schedule_frame")(self)
+
+    def _repr_html_(self) -> str:
+        return presenter("schedule_html")(self)
+
+
 @dataclass
-class ScheduleAnswer:
+class ScheduleAnswer(ScheduleViews):
     """A schedule's actuation times under each reading, with delivered volumes."""
 
     model: str
@@ -75,17 +87,9 @@ class ScheduleAnswer:
         """Plain-data form (JSON-ready)."""
         return asdict(self)
 
-    def to_dataframe(self) -> Any:
-        """The events, one row per step (heat, rest): start, duration, temperature, dose,
-        cumulative release, amount (pandas; ``dosing.question.events``)."""
-        return presenter("schedule_frame")(self)
-
     def to_xarray(self, request: Any = None) -> Any:
         """The event table as an xarray Dataset (:func:`dosing.present.export.schedule_dataset`)."""
         return presenter("schedule_dataset")(self, request)
-
-    def _repr_html_(self) -> str:
-        return presenter("schedule_html")(self)
 
 
 def hold_rows(req: ScheduleRequest, answers: Sequence[DoseAnswer]) -> tuple[str, list[HoldRow]]:
