@@ -331,6 +331,8 @@ def check_views(res) -> None:
         want = (d["envelope_seconds"] or d["envelope_time"])[0]
         assert low == pytest.approx(want, rel=1e-12)
         assert df["dominant_uncertainty"][0] == d["dominant_uncertainty"]["name"]
+        assert list(df.columns[:3]) == ["cell", "envelope_low_s [s]", "envelope_high_s [s]"]
+        assert df["seconds [s]"][0] == d["seconds"]  # the cell's own fields follow
     else:
         assert len(df) == len(d["events"]) and df.attrs["reading"] == res.reading
         ds = res.to_xarray()

@@ -116,7 +116,8 @@ def _lead_html(lines: list[str]) -> str:
 
 def result_frame(res: Any) -> pd.DataFrame:
     """Any dose (every cell): one row leading with what cannot be ruled out (the envelope
-    in s and tau, its dominant part), then the point, the model and each part's factors."""
+    in s and tau, its dominant part), then the point, the model, each part's factors and
+    the cell's own scalar fields (dose, volumes, radii, ...)."""
     d = res.to_dict()
     env = d.get("envelope_seconds") or [None, None]
     env_t = d.get("envelope_time") or [None, None]
@@ -127,10 +128,12 @@ def result_frame(res: Any) -> pd.DataFrame:
         "seconds": [res.seconds], "time": [res.time], "model": [res.model]}
     for p in ([] if res.envelope is None else res.envelope.parts):
         cols[f"{p.name}_low"], cols[f"{p.name}_high"] = [p.low], [p.high]
-    units = {"envelope_low_s": "s", "envelope_high_s": "s", "seconds": "s",
-             "envelope_low": "1", "envelope_high": "1", "time": "1"}
-    return _frame(cols, units, {"headline": res.headline, "truth": d.get("truth"),
-                                "note": d.get("note")})
+    words = ("headline", "truth", "note", "question")
+    cols.update({k: [v] for k, v in d.items() if k not in cols and k not in words
+                 and (v is None or isinstance(v, (bool, int, float, str)))})
+    units = {**ANSWER_UNITS, "envelope_low_s": "s", "envelope_high_s": "s",
+             "envelope_low": "1", "envelope_high": "1"}
+    return _frame(cols, units, {k: d.get(k) for k in words})
 
 
 def result_html(res: Any) -> str:
