@@ -120,7 +120,8 @@ SHARP_LIMIT_NOTE = (
     "ell = xi_dry / a_d")
 
 
-def _pct(x: float) -> str:
+def pct(x: float) -> str:
+    """A relative number as a percentage: 2 significant figures below 10 %."""
     return f"{100 * x:.2g}%" if abs(x) < 0.1 else f"{100 * x:.0f}%"
 
 
@@ -135,7 +136,7 @@ def uncertainty(truth: SolverSettings, runs: list[dict[str, Any]], time: float,
     if chk:
         num = abs(time - chk[0]) / time if time > 0 else 0.0
         numerical = Part(num, (
-            f"numerical: {_pct(num)}, the gap between the moving grid's {truth.n} cells "
+            f"numerical: {pct(num)}, the gap between the moving grid's {truth.n} cells "
             f"({time:.5g}) and {truth.n // 2} cells ({chk[0]:.5g}) at ell = {ell:.3g}, rtol "
             f"{truth.rtol:g} (second order in the cell size, so the gap bounds the finer run's "
             "error about three times over)"))
@@ -147,7 +148,7 @@ def uncertainty(truth: SolverSettings, runs: list[dict[str, Any]], time: float,
         change = max(abs(t - time) / time for _, t in rng) if time > 0 else 0.0
         listing = ", ".join(f"{t:.5g} at ell = {e:.3g}" for e, t in rng)
         ell_part = Part(change, (
-            f"interfacial length: {_pct(change)}, the largest change over the mesh length's "
+            f"interfacial length: {pct(change)}, the largest change over the mesh length's "
             f"plausible range ({listing}; the answer's ell = {ell:.3g} is xi_dry / a_d). Small "
             "doses feel it most: their time is mostly the delay before the front nucleates "
             "at the edge, which grows with ell"))
@@ -178,7 +179,7 @@ def uncertainty(truth: SolverSettings, runs: list[dict[str, Any]], time: float,
             "Helmers & Herrmann; Novick-Cohen & Pego), gives "
             f"{t_d:.5g} (the ell = 0 Lagrangian lattice, N = "
             f"{'/'.join(str(k) for k, _ in mf)}: {', '.join(f'{t:.5g}' for t in ts)}, "
-            f"N-spread {_pct(spread)}; N = 800 moves it by under 1 %: ANB 80 % 0.4 %). "
+            f"N-spread {pct(spread)}; N = 800 moves it by under 1 %: ANB 80 % 0.4 %). "
             "Which law holds is for experiment to decide "
             "(docs/interfacial.md, sec. 10); it is not part of the error estimate"))
     else:

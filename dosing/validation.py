@@ -19,7 +19,7 @@ from solver.phase import nucleation_level
 from .answers import ValidationReport
 from .ladder import dose_limit
 from .runs.scenario import Scenario, Trajectory
-from .truth import role, uncertainty
+from .truth import pct, role, uncertainty
 from .units import expelled_volume
 
 # Prior relative error of an unvalidated front-model time, by dose fraction: the largest
@@ -166,10 +166,6 @@ def failure(rep: ValidationReport) -> str | None:
                      f"{e['error']}" for e in rep.runs if "error" in e) or "no run"
 
 
-def _pct(x: float) -> str:
-    return f"{100 * x:.2g}%" if x < 0.1 else f"{100 * x:.0f}%"
-
-
 def _runs_text(rep: ValidationReport) -> str:
     return ", ".join(f"{e['time']:.5g} at ell = {e['interfacial_length']:g} (N = {e['n']})"
                      for e in rep.runs if "time" in e)
@@ -181,7 +177,7 @@ def _prior(model: str, fraction: float) -> tuple[float, str]:
         return prior, (
             f"Not yet checked against the full solver for this scenario (ask for a "
             f"validation). For {PRIOR_NOTE}, this front model (the step-function model with "
-            f"the sharp-interface front condition) was within {_pct(prior)} of the direct "
+            f"the sharp-interface front condition) was within {pct(prior)} of the direct "
             "truth (the regularized model on the moving grid at ell = 1e-4, standing for the "
             "limit ell -> 0), its numerical bound included (small doses are worst: the "
             "regularized model's front first has to nucleate at the edge).")
@@ -189,13 +185,13 @@ def _prior(model: str, fraction: float) -> tuple[float, str]:
         return prior, (
             f"Not yet checked against the full solver for this scenario (ask for a "
             f"validation). For {PRIOR_NOTE}, this front model (the step-function model with "
-            f"the sharp-interface front condition) was within {_pct(prior)} of the "
+            f"the sharp-interface front condition) was within {pct(prior)} of the "
             "regularized full model's limit ell -> 0 at this dose, that limit's own error "
             "included (small doses are worst: the regularized model's front first has to "
             "nucleate at the edge).")
     return prior, (
         f"Not yet checked against the full solver for this scenario (ask for a "
-        f"validation). For {PRIOR_NOTE}, the paper's front model was within {_pct(prior)} of "
+        f"validation). For {PRIOR_NOTE}, the paper's front model was within {pct(prior)} of "
         "the paper's full model on both of its grids at this dose (small doses are worst: in "
         "the full model the shrunken shell takes time to form). Much of that gap is the full "
         "model's own uncertainty in this regime: without an interfacial energy the speed of "
@@ -215,9 +211,9 @@ def _regularized(model: str, time: float, rep: ValidationReport) -> tuple[float,
     else:
         est = (abs(time - truth) + abs_err) / time
         text = (f"The front model (a fast reduced model) gives {time:.5g}; {ladder}The "
-                f"front model is {_pct(abs(time - truth) / truth)} off that limit. ")
+                f"front model is {pct(abs(time - truth) / truth)} off that limit. ")
     lo, hi = min(time, truth - abs_err), max(time, truth + abs_err)
-    return est, text + (f"The estimate ({_pct(est)}) adds the limit's error bound; treat "
+    return est, text + (f"The estimate ({pct(est)}) adds the limit's error bound; treat "
                         f"the true time as between {lo:.4g} and {hi:.4g}.")
 
 
@@ -240,16 +236,16 @@ def _direct(model: str, time: float, rep: ValidationReport) -> tuple[float, str]
         denom = time if time > 0.0 else truth
         est = (abs(time - truth) + num * truth) / denom if denom > 0.0 else num
         text = (f"The front model (a fast reduced model, the sharp-interface limit "
-                f"ell -> 0) gives {time:.5g}; {run}The front model is {_pct(gap)} off it. ")
+                f"ell -> 0) gives {time:.5g}; {run}The front model is {pct(gap)} off it. ")
     rng = unc["interfacial_length_range"]["relative"]
     ratio = unc.get("delayed_transition_ratio")
-    summary = (f"numerical {_pct(num)}; interfacial length "
+    summary = (f"numerical {pct(num)}; interfacial length "
                + ("not applicable (no bead size)" if rng is None else
-                  f"{_pct(rng)} over the mesh length's range")
+                  f"{pct(rng)} over the mesh length's range")
                + "; model form: the delayed-transition law gives "
                + ("no time (its runs failed)" if ratio is None else
                   f"{unc['delayed_transition_time']:.5g}, {ratio:.3g}x this truth"))
-    return est, text + (f"The estimate ({_pct(est)}) is the numerical bound"
+    return est, text + (f"The estimate ({pct(est)}) is the numerical bound"
                         + ("" if model == "full" else " plus that gap")
                         + f". The truth's uncertainty in three parts (each explained in "
                           f"`uncertainty`): {summary}; only the numerical part is in the "
@@ -274,16 +270,16 @@ def _paper(model: str, time: float, rep: ValidationReport) -> tuple[float, str]:
                 f"model gives {listing} (N = {s['n']}). ")
     spread = rep.grid_spread
     if spread is not None and spread > 0.01:
-        text += (f"The two grids disagree by {_pct(spread)}: here a sharp front forms and the "
+        text += (f"The two grids disagree by {pct(spread)}: here a sharp front forms and the "
                  "paper's model, which has no interfacial energy, does not fix its speed, so "
                  "each discretization picks its own (the regularized model, interfacial_length "
                  "> 0, does). ")
     elif spread is not None:
-        text += f"The two grids agree to {_pct(max(spread, 1e-6))}. "
+        text += f"The two grids agree to {pct(max(spread, 1e-6))}. "
     if failed:
         text += f"The {', '.join(failed)} grid failed to run, so it is not in the estimate. "
     lo, hi = min([time, *times.values()]), max([time, *times.values()])
-    return est, text + (f"The estimate ({_pct(est)}) is the largest gap between this answer "
+    return est, text + (f"The estimate ({pct(est)}) is the largest gap between this answer "
                         f"and the full model's answers; treat the true time as between "
                         f"{lo:.4g} and {hi:.4g}.")
 
@@ -300,7 +296,7 @@ def _no_prior(gel: Gel) -> tuple[float, str]:
         f"Not yet checked against the full solver, and there is no prior for this gel "
         f"(Omega = {gel.omega:g}): the front model's priors were measured on {PRIOR_NOTE} "
         f"only, and a gel outside that set can differ by much more (the estimate "
-        f"{_pct(NO_PRIOR_ESTIMATE)} says the error is unknown, not measured). Ask for a "
+        f"{pct(NO_PRIOR_ESTIMATE)} says the error is unknown, not measured). Ask for a "
         f"validation: {VALIDATION_COST}.")
 
 

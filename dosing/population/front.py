@@ -67,9 +67,7 @@ def _table(fr: Any) -> tuple[np.ndarray, np.ndarray]:
     a = np.asarray(c.radius(x), dtype=float)
     f = (a0**3 - a**3) / (a0**3 - 1.0)
     s[0], s = fr.t[0], np.maximum.accumulate(s)
-    _TABLES[id(fr)] = (fr, s, f)
-    while len(_TABLES) > 16:
-        _TABLES.popitem(last=False)
+    _TABLES[id(fr)] = (fr, s, f)  # the ByteLRU keeps 16 at most
     return s, f
 
 

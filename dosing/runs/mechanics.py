@@ -78,10 +78,7 @@ def protocol_mechanics(gel: Any, prot: Protocol, dry_radius_um: float, horizon_s
                    max_seconds=run_budget())
     mech = ReleaseMechanics(res, tau, t_ref, equilibrium(gel, prot.t_start, "swollen").stretch,
                             s, time.process_time() - started, tuple(prot.texts))
-    with _LOCK:
-        _MEMO[key] = mech
-        while len(_MEMO) > MEMO_SIZE:
-            _MEMO.popitem(last=False)
+    _MEMO[key] = mech  # the ByteLRU evicts past MEMO_BYTES or MEMO_SIZE itself
     return mech
 
 

@@ -295,10 +295,7 @@ class DrugRuns:
 
     def _remember(self, key: str, rel: ReleaseResult) -> None:
         with self._lock:
-            self._mem[key] = rel
-            self._mem.move_to_end(key)
-            while len(self._mem) > 32:
-                self._mem.popitem(last=False)
+            self._mem[key] = rel  # last in the ByteLRU's order; it evicts past its bounds
 
     def run(self, sc: DrugScenario) -> ReleaseResult:
         """The drug run for ``sc`` (blocking; cached)."""

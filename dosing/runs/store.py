@@ -114,11 +114,8 @@ class RunStore:
             if traj is None:
                 return None
             with self._mem_lock:
-                self._mem[key] = traj
+                self._mem[key] = traj  # the ByteLRU evicts (and drops its row digest)
                 self._row_digest.pop(key, None)  # its row unknown: cached_many reads it
-                self._mem.move_to_end(key)
-                while len(self._mem) > 64:
-                    self._row_digest.pop(self._mem.popitem(last=False)[0], None)
         return traj if _covers(traj, sc, need_radius, need_time) else None
 
     def cached_many(self, scs: list[Scenario] | tuple[Scenario, ...],
@@ -146,10 +143,8 @@ class RunStore:
                 traj = decode(raw[1], raw[0])
                 with self._mem_lock:
                     self._mem[key] = traj
-                    self._row_digest[key] = found[key]
-                    self._mem.move_to_end(key)
-                    while len(self._mem) > 64:
-                        self._row_digest.pop(self._mem.popitem(last=False)[0], None)
+                    if key in self._mem:  # a run over the memory budget is not kept
+                        self._row_digest[key] = found[key]
                 out[i] = traj
         if all(t is None for t in out):
             return out
