@@ -31,13 +31,12 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..request import DoseRequest, _clamp_length
 from ..runs.scenario import SolverSettings
 from ..truth import Part, delayed_settings, role
 from ..units import radius_after_dose
-from .front import BatchAnswer, batch_answer, batch_sizes
+from .front import BatchAnswer, BatchRelease, batch_answer, batch_sizes
 from .sizes import DrySizes
 
 BANDS = 3
@@ -98,44 +97,6 @@ def _release(traj: Any, a0: float) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(t, dtype=float), np.maximum.accumulate(f)
 
 
-class BandRelease:
-    """V(T) for a batch on per-band runs (module doc)."""
-
-    def __init__(self, sizes: DrySizes, edges: np.ndarray, curves: list[tuple[np.ndarray,
-                                                                            np.ndarray]],
-                 kink_time: float) -> None:
-        self.sizes, self.edges, self.curves = sizes, edges, curves
-        self.ref = sizes.mean_um
-        self.kink_time = kink_time
-
-    def _nodes(self, t: float, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        cut = self.ref * math.sqrt(t / self.kink_time)
-        r, v = self.sizes.nodes(n, (*self.edges.tolist(), cut))
-        return (r / self.ref) ** 2, v, np.searchsorted(self.edges, r)
-
-    def __call__(self, t: float, n: int) -> float:
-        rho, v, band = self._nodes(t, n)
-        out = 0.0
-        for b, (s, f) in enumerate(self.curves):
-            m = band == b
-            if m.any():
-                out += float(np.interp(t / rho[m], s, f) @ v[m])
-        return out
-
-    def dose_time(self, fraction: float, n: int, guess: float) -> float:
-        lo, hi = 0.5 * guess, 2.0 * guess
-        for _ in range(20):
-            if self(lo, n) < fraction:
-                break
-            lo *= 0.5
-        for _ in range(20):
-            if self(hi, n) > fraction:
-                break
-            hi *= 2.0
-        return float(brentq(lambda t: self(t, n) - fraction, lo, hi, xtol=1e-13 * hi,
-                            rtol=1e-11))
-
-
 def validated_batch(planner: Any, req: DoseRequest, n_bands: int = BANDS,
                     every_band: bool = False, lean: bool = True) -> BatchAnswer:
     """The batch's answer from the truth per interfacial-length band, with the three-part
@@ -165,10 +126,9 @@ def validated_batch(planner: Any, req: DoseRequest, n_bands: int = BANDS,
     for _ in range(4):  # until every band's run covers its smallest central bead
         runs, delayed = _band_runs(planner, breqs, target, needs, a0, every_band,
                                    req.fraction, lean)
-        t_of = {}
-        for k, curves in runs.items():
-            rel = BandRelease(sizes, edges, curves, kink)
-            t_of[k] = [rel.dose_time(req.fraction, n, guess) for n in PANEL_NODES]
+        t_of = {k: [BatchRelease(sizes, n, curves, kink, edges).dose_time(
+                        req.fraction, _own(curves, edges, sizes.mean_um, req.fraction), guess)
+                    for n in PANEL_NODES] for k, curves in runs.items()}
         guess = t_of["truth"][-1]
         short = [max(t_of[k][-1] for k in t_of) / rho_lower[b] > min(
                  runs[k][b][0][-1] for k in runs) for b in range(len(reps))]
@@ -196,8 +156,9 @@ def validated_batch(planner: Any, req: DoseRequest, n_bands: int = BANDS,
         "bands": band_info,
     }
     if delayed is not None:
-        rel = BandRelease(sizes, np.array([]), [_release(delayed, a0)], kink)
-        t_d = rel.dose_time(req.fraction, PANEL_NODES[-1], ans.time)
+        curve = [_release(delayed, a0)]
+        t_d = BatchRelease(sizes, PANEL_NODES[-1], curve, kink).dose_time(
+            req.fraction, _own(curve, np.array([]), sizes.mean_um, req.fraction), ans.time)
         covered = t_d / rho_lower[0] <= _release(delayed, a0)[0][-1]
         unc["model_form"] = Part(abs(t_d / t_truth - 1.0), (
             f"model form: {t_d / t_truth:.3g}x, the batch's time ({t_d:.5g}) if every bead "
@@ -232,6 +193,13 @@ def validated_batch(planner: Any, req: DoseRequest, n_bands: int = BANDS,
                    percentile_times=pt.tolist(),
                    percentile_seconds=None if tau is None else (pt * tau).tolist(),
                    note=note, uncertainty=unc, model="truth-bands")
+
+
+def _own(curves: list[tuple[np.ndarray, np.ndarray]], edges: np.ndarray, radius_um: float,
+         fraction: float) -> float:
+    """The own dose time of the bead of ``radius_um`` (dimensionless in its band's run)."""
+    s, f = curves[int(np.searchsorted(edges, radius_um))]
+    return float(np.interp(fraction, f, s))
 
 
 def _roles(breq: DoseRequest, scs: list[Any], trajs: list[Any]) -> tuple[dict[str, Any], Any]:

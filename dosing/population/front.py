@@ -78,31 +78,33 @@ def release_fraction(fr: Any, s: Any) -> np.ndarray:
     return np.interp(np.asarray(s, dtype=float), ts, fs)
 
 
-def batch_fraction(fr: Any, rho: np.ndarray, v: np.ndarray, t: Any) -> np.ndarray:
-    """V(t) = sum_k v_k F(t / rho_k) for times ``t`` (any shape) on fixed nodes."""
-    tt = np.asarray(t, dtype=float)
-    s = tt.reshape(-1, 1) / rho.reshape(1, -1)
-    return (release_fraction(fr, s) @ v).reshape(tt.shape)
-
-
 class BatchRelease:
-    """V(t) for one batch and trajectory with ``n`` nodes per panel, the panels split at the
-    bead that finishes at t (its trajectory's end: the integrand's kink), so Gauss-Legendre
-    converges fast."""
+    """V(t) = sum_k v_k F_b(k)(t / rho_k) with ``n`` nodes per panel: ``curves`` (s, F) per
+    band of sizes (split at the inner ``edges``, um; one curve serves every bead), the panels
+    split at the edges and at the bead that finishes at t (``kink``: the reference bead's
+    end, the integrand's kink), so Gauss-Legendre converges fast."""
 
-    def __init__(self, fr: Any, sizes: DrySizes, n: int) -> None:
-        self.fr, self.sizes, self.n = fr, sizes, n
+    def __init__(self, sizes: DrySizes, n: int, curves: list[tuple[np.ndarray, np.ndarray]],
+                 kink: float, edges: Any = ()) -> None:
+        self.sizes, self.n, self.curves, self.kink = sizes, n, curves, kink
+        self.edges = np.asarray(edges, dtype=float)
         self.ref = sizes.mean_um
 
-    def nodes(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """(rho_k, v_k) for time t."""
-        cut = self.ref * math.sqrt(t / self.fr.t_stop) if t > 0 else 0.0
-        r, v = self.sizes.nodes(self.n, (cut,) if cut > 0 else ())
-        return (r / self.ref) ** 2, v
+    @classmethod
+    def front(cls, fr: Any, sizes: DrySizes, n: int) -> BatchRelease:
+        """On the front model's trajectory ``fr`` (its table: every bead follows it)."""
+        return cls(sizes, n, [_table(fr)], fr.t_stop)
+
+    def nodes(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(rho_k, v_k, the band of each node) for time t."""
+        cut = (self.ref * math.sqrt(t / self.kink),) if t > 0 else ()
+        r, v = self.sizes.nodes(self.n, (*self.edges.tolist(), *cut))
+        return (r / self.ref) ** 2, v, np.searchsorted(self.edges, r)
 
     def __call__(self, t: float) -> float:
-        rho, v = self.nodes(t)
-        return float(batch_fraction(self.fr, rho, v, t))
+        rho, v, band = self.nodes(t)
+        return sum(float(np.interp(t / rho[band == b], s, f) @ v[band == b])
+                   for b, (s, f) in enumerate(self.curves))
 
     def curve(self, times: Any) -> np.ndarray:
         """V at each of ``times``."""
@@ -112,7 +114,7 @@ class BatchRelease:
         """T with V(T) = fraction; ``single`` is the reference bead's own time s_f.  The
         root lies between the smallest and the largest bead's own time (each F_k is
         monotone); ``guess`` (the previous rung's) narrows the bracket when it holds."""
-        rho, _ = self.nodes(single)
+        rho = self.nodes(single)[0]
         lo, hi = single * float(rho.min()), single * float(rho.max())
         if hi <= lo * (1.0 + 1e-15):
             return lo
@@ -177,7 +179,7 @@ def _rule(sizes: DrySizes) -> str:
 
 def _exact(fr: Any, sizes: DrySizes, fraction: float,
            single: float) -> tuple[float, Quadrature, BatchRelease]:
-    rel = BatchRelease(fr, sizes, 0)
+    rel = BatchRelease.front(fr, sizes, 0)
     t = rel.dose_time(fraction, single)
     k = len(rel.nodes(t)[0])
     return t, Quadrature(_rule(sizes), k, 0.0, True, [(k, t)], k), rel
@@ -194,10 +196,10 @@ def converge(fr: Any, sizes: DrySizes, fraction: float, single: float,
     table: list[tuple[int, float]] = []
     n, t, err = FIRST_PANEL_NODES, None, math.inf
     while True:
-        rel = BatchRelease(fr, sizes, n)
+        rel = BatchRelease.front(fr, sizes, n)
         t = rel.dose_time(fraction, single, t)
         table.append((len(rel.nodes(t)[0]), t))
-        fine = BatchRelease(fr, sizes, 2 * n)
+        fine = BatchRelease.front(fr, sizes, 2 * n)
         t2 = fine.newton(t, fraction)
         err = abs(t2 - t) / t2
         table.append((len(fine.nodes(t2)[0]), t2))
@@ -214,7 +216,7 @@ def convergence_table(fr: Any, sizes: DrySizes, fraction: float, single: float,
     out: list[tuple[int, float]] = []
     t = None
     for n in ladder:
-        rel = BatchRelease(fr, sizes, n)
+        rel = BatchRelease.front(fr, sizes, n)
         t = rel.dose_time(fraction, single, t)
         out.append((len(rel.nodes(t)[0]), t))
     return out
