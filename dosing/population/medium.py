@@ -307,45 +307,56 @@ def drug_batch_dose(req: Any, size_distribution: Any, medium_volume: Any = None,
                              "batch's release into this medium by the largest bead's "
                              f"{HORIZON:g} tau)", str(exc)) from None
     sink = best if v0 is None else coupled(bands, solute, sizes, CLASSES[0], None, SUB[1])
-    t_sink = sink.time_to_release(f)
-    over = sink.released_at(t) / best.released_at(t) - 1.0
+    steps_gap = abs(t_num - t) / t
+    unc = truth_parts(req, sizes, bands, reps, (v0, f, steps_gap, t))
+    ells = ", ".join(f"{x.interfacial_length:.3g}" for x in bands.settings)
+    return _answer(
+        req, sizes, (ml, n_beads, v0), t, best, sink, lambda medium, tau, t_sink, over: (
+            f"Full-solver mechanics ({settings.grid} grid, N = {settings.n}) of "
+            f"{len(reps)} interfacial-length band(s) of the batch (beads of "
+            f"{', '.join(f'{r:.4g}' for r in reps)} um dry at ell = {ells}; each size in its "
+            f"own tau ~ R^2, the reference bead {sizes.mean_um:.4g} um dry) with the drug of "
+            f"{best.rho.size} size classes ({sizes.spec.describe()}) released into {medium}: "
+            f"the batch releases {f:.0%} of its load at {t:.4g} tau_ref = {t * tau:.4g} s"
+            + ("" if v0 is None else
+               f"; the sum of perfect-sink beads says {t_sink:.4g} tau_ref and overstates "
+               f"the released drug at that time by {over:.1%} (re-absorption from the shared "
+               "medium)") + ". " + " ".join(p.text for p in unc.values())),
+        model="full+batch-medium", unc=unc,
+        mass_balance_error=max(r.mass_balance_error for r in runs.values()),
+        numerical_error=steps_gap,
+        quadrature_error=0.0 if sizes.exact else abs(t_quad - t) / t,
+        classes=int(best.rho.size),
+        interfacial_length=float(settings.interfacial_length or 0.0),
+        bands=list(zip(reps, bands.settings, strict=True)))
+
+
+def _answer(req: Any, sizes: DrySizes, medium: tuple[float | None, float | None, float | None],
+            t: float, best: MediumRelease, sink: MediumRelease, note: Any, unc: dict[str, Part],
+            bands: list[tuple[float, Any]], **fields: Any) -> DrugBatchAnswer:
+    """The answer of a batch releasing into ``medium`` (mL, beads, v0) at ``t`` (tau_ref) on
+    ``best``; ``sink`` the perfect-sink beads' release; ``note(medium text, tau, sink time,
+    overstatement)``; ``bands`` (dry radius, settings) of its mechanics."""
+    ml, n_beads, v0 = medium
+    f = req.fraction
+    t_sink = sink.time_to_release(f) if sink is not best else t
+    over = sink.released_at(t) / best.released_at(t) - 1.0 if sink is not best else 0.0
     tau = timescale(sizes.mean_um, req.t_end, req.constants).seconds
-    pore = None if v0 is None else v0 / (float(solute.partition_at(1.0 - 1.0 / req.start_radius
-                                                                   ** 3))
-                                         * (req.start_radius**3 - 1.0))
+    pore = _pore(req, v0)
     conc = None
     if v0 is not None and req.load_ug is not None:  # per load and batch dry volume -> ug/uL
         ref_ul = 4.0 * math.pi / 3.0 * sizes.mean_um**3 / UM3_PER_UL
         conc = float(np.interp(t, best.t, best.concentration)) * req.load_ug / ref_ul
-    medium = ("a perfect sink" if v0 is None else
-              f"one well-mixed medium of {ml:.4g} mL shared by {n_beads:.4g} beads "
-              f"({pore:.3g}x their partition-weighted pore volume)")
-    steps_gap = abs(t_num - t) / t
-    unc = truth_parts(req, sizes, bands, reps, (v0, f, steps_gap, t))
-    ells = ", ".join(f"{x.interfacial_length:.3g}" for x in bands.settings)
-    note = (f"Full-solver mechanics ({settings.grid} grid, N = {settings.n}) of "
-            f"{len(reps)} interfacial-length band(s) of the batch (beads of "
-            f"{', '.join(f'{r:.4g}' for r in reps)} um dry at ell = {ells}; each size in its "
-            f"own tau ~ R^2, the reference bead {sizes.mean_um:.4g} um dry) with the drug of "
-            f"{best.rho.size} size classes "
-            f"({sizes.spec.describe()}) released into {medium}: the batch releases "
-            f"{f:.0%} of its load at {t:.4g} tau_ref = {t * tau:.4g} s"
-            + ("" if v0 is None else
-               f"; the sum of perfect-sink beads says {t_sink:.4g} tau_ref and overstates "
-               f"the released drug at that time by {over:.1%} (re-absorption from the shared "
-               "medium)") + ". " + " ".join(p.text for p in unc.values()))
+    text = ("a perfect sink" if v0 is None else
+            f"one well-mixed medium of {ml:.4g} mL shared by {n_beads:.4g} beads "
+            f"({pore:.3g}x their partition-weighted pore volume)")
     return DrugBatchAnswer(
-        model="full+batch-medium", dose_fraction=f, time=t, seconds=t * tau, sink_time=t_sink,
-        sink_overestimate=over, medium_volume_ml=ml, bead_count=n_beads,
-        medium_over_pore_volume=pore, medium_concentration_ug_per_ul=conc,
-        mass_balance_error=max(r.mass_balance_error for r in runs.values()),
-        numerical_error=steps_gap,
-        quadrature_error=0.0 if sizes.exact else abs(t_quad - t) / t,
-        classes=int(best.rho.size), reference_dry_radius_um=sizes.mean_um,
-        interfacial_length=float(settings.interfacial_length or 0.0),
-        description=sizes.spec.describe(), note=note, uncertainty=unc,
-        bands=[{"dry_radius_um": float(r), "interfacial_length": float(x.interfacial_length)}
-               for r, x in zip(reps, bands.settings, strict=True)])
+        dose_fraction=f, time=t, seconds=t * tau, sink_time=t_sink, sink_overestimate=over,
+        medium_volume_ml=ml, bead_count=n_beads, medium_over_pore_volume=pore,
+        medium_concentration_ug_per_ul=conc, reference_dry_radius_um=sizes.mean_um,
+        description=sizes.spec.describe(), note=note(text, tau, t_sink, over),
+        uncertainty=unc, bands=[{"dry_radius_um": float(r), "interfacial_length": float(
+            x.interfacial_length)} for r, x in bands], **fields)
 
 
 def _pore(req: Any, v0: float | None) -> float | None:
@@ -360,44 +371,26 @@ def _protocol_answer(req: Any, sizes: DrySizes,
                      medium: tuple[float | None, float | None, float | None]
                      ) -> DrugBatchAnswer:
     """The batch's drug dose under ``req.heating`` (:func:`protocol_batch_time`)."""
-    ml, n_beads, v0 = medium
+    v0 = medium[2]
     res = protocol_batch_time(req, sizes, v0)
     t, best, f = res["time"], res["release"], req.fraction
-    if v0 is None:
-        t_sink, over = t, 0.0
-    else:
-        sink = protocol_batch_time(req, sizes, None)["release"]
-        t_sink = sink.time_to_release(f)
-        over = sink.released_at(t) / best.released_at(t) - 1.0
-    tau = timescale(sizes.mean_um, req.t_end, req.constants).seconds
-    conc = None
-    if v0 is not None and req.load_ug is not None:
-        ref_ul = 4.0 * math.pi / 3.0 * sizes.mean_um**3 / UM3_PER_UL
-        conc = float(np.interp(t, best.t, best.concentration)) * req.load_ug / ref_ul
+    sink = best if v0 is None else protocol_batch_time(req, sizes, None)["release"]
     unc = protocol_parts(res)
-    runs = res["runs"]
-    medium_text = ("a perfect sink" if v0 is None else
-                   f"one well-mixed medium of {ml:.4g} mL shared by {n_beads:.4g} beads")
-    note = (f"Under the protocol {'; '.join(res['texts'])}: each of {res['nodes']} size "
+    return _answer(
+        req, sizes, medium, t, best, sink, lambda text, tau, t_sink, over: (
+            f"Under the protocol {'; '.join(res['texts'])}: each of {res['nodes']} size "
             f"nodes ({', '.join(f'{r:.4g}' for r in res['radii'])} um dry) runs the full "
             f"solver's mechanics of the protocol at its own size and interfacial length (its "
-            f"own program: tau ~ R^2), the drug of every node released into {medium_text}; "
-            f"the batch ({sizes.spec.describe()}) releases {f:.0%} of its load at "
-            f"{t * tau:.4g} s from the protocol's start. Quadrature: {res['quadrature']:.1e} "
-            f"({res['nodes']} against {res['check_nodes']} nodes). "
-            + " ".join(p.text for p in unc.values()))
-    return DrugBatchAnswer(
-        model="full+batch-medium under a protocol", dose_fraction=f, time=t, seconds=t * tau,
-        sink_time=t_sink, sink_overestimate=over, medium_volume_ml=ml, bead_count=n_beads,
-        medium_over_pore_volume=_pore(req, v0), medium_concentration_ug_per_ul=conc,
+            f"own program: tau ~ R^2), the drug of every node released into "
+            f"{text}; the batch ({sizes.spec.describe()}) releases {f:.0%} of "
+            f"its load at {t * tau:.4g} s from the protocol's start. Quadrature: "
+            f"{res['quadrature']:.1e} ({res['nodes']} against {res['check_nodes']} nodes). "
+            + " ".join(p.text for p in unc.values())),
+        model="full+batch-medium under a protocol", unc=unc,
         mass_balance_error=best.mass_balance_error, numerical_error=res["numerical"],
         quadrature_error=res["quadrature"], classes=res["nodes"],
-        reference_dry_radius_um=sizes.mean_um,
         interfacial_length=float(req.settings.interfacial_length or 0.0),
-        description=sizes.spec.describe(), note=note, uncertainty=unc,
-        bands=[{"dry_radius_um": float(r), "interfacial_length":
-                float(m.settings.interfacial_length)} for r, m in zip(res["radii"], runs,
-                                                                      strict=True)])
+        bands=[(r, m.settings) for r, m in zip(res["radii"], res["runs"], strict=True)])
 
 
 def _protocol_solve(req: Any, sizes: DrySizes, n: int, horizon_s: float, v0: float | None,
