@@ -293,27 +293,14 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
             got["squeezed_fraction"], got["diffused_fraction"]))
     solute = req.solute
     settings = drug_settings(req.settings)  # the fluid answers' truth (issue 12)
-    c = req.constants
     dry = req.bead_dry_radius_um
-    tau = timescale(dry, req.t_end, c).seconds if dry is not None else None
-    d0 = req.drug.d0_cm2_s(req.t_end, c)
-    d_gel = c.diffusivity(req.t_end) * 1e4
-    phi0 = 1.0 - 1.0 / req.start_radius**3
-    d_eff = d0 * float(solute.hindrance.factor(phi0))
-    t10 = leak_time(solute, req.start_radius)
+    tau = timescale(dry, req.t_end, req.constants).seconds if dry is not None else None
+    common = _fields(req, tau, settings)
     load = req.load_ug
 
     def ug(x: float) -> float | None:
         return None if load is None else x * load
 
-    common = dict(dose_fraction=req.fraction, dose_ug=ug(req.fraction), load_ug=load,
-                  wait=req.lead, leak_time_10pct=t10,
-                  leak_time_10pct_seconds=None if tau is None or math.isinf(t10) else t10 * tau,
-                  effective_diffusivity_cm2_s=d_eff, drug_diffusivity_cm2_s=d0,
-                  timescale_seconds=tau,
-                  interfacial_length=settings.interfacial_length,
-                  bead_dry_radius_um=dry, truth=truth_text(req))
-    common.update(mesh=req.drug.mesh_note(req.start_radius, c))
     # the drug dose's model choice: D0 = 0 -> the fluid answer (exact on one heating);
     # else the full solver with the drug on its cells
     if carried_by_fluid(solute):
@@ -372,14 +359,16 @@ def plan_drug_dose(planner: Any, req: DrugDoseRequest, runs: DrugRuns | None = N
                           else "diffusion keeps up with the fluid's motion.")
                        if pe is not None else ""),
         note=(f"Full solver ({s.grid} grid, N = {s.n}, interfacial length "
-              f"{s.interfacial_length:g}) with the drug on its cells: D0 = {d0:.3g} cm^2/s "
-              f"({solute.diffusivity:.3g} x the gel's {d_gel:.3g}), hindered by "
+              f"{s.interfacial_length:g}) with the drug on its cells: D0 = "
+              f"{common['drug_diffusivity_cm2_s']:.3g} cm^2/s ({solute.diffusivity:.3g} x the "
+              f"gel's {req.constants.diffusivity(req.t_end) * 1e4:.3g}), hindered by "
               f"{solute.hindrance.law} (r_s / xi_dry {solute.hindrance.mesh_ratio:.3g}, "
               f"r_s / r_f {solute.hindrance.fiber_ratio:.3g}, Y {solute.hindrance.y:g}) to "
-              f"{d_eff:.3g} cm^2/s in the start state; partition "
+              f"{common['effective_diffusivity_cm2_s']:.3g} cm^2/s in the start state; partition "
               f"{solute.partition:g}; "
               + ("a perfect sink" if solute.release_volume is None else "a well-mixed medium")
-              + f". At T_start the bead leaks 10% of its load in {t10:.3g} tau. D0 is "
+              + f". At T_start the bead leaks 10% of its load in {common['leak_time_10pct']:.3g} "
+              "tau. D0 is "
               f"{req.drug.reference_temperature_k:g} K's value carried to T_end by "
               "Stokes-Einstein with water's viscosity. The permeability does not depend on "
               "temperature at fixed porosity (k0 as given: a k0 calibrated at one T_end may "
@@ -418,6 +407,24 @@ def drug_dose_now(planner: Any, req: DrugDoseRequest,
                               validate=validate)
     except RunNotCached:
         return None
+
+
+def _fields(req: Any, tau: float | None, settings: SolverSettings) -> dict[str, Any]:
+    """The fields every drug dose's answer shares: the dose and load, the wait and the leak
+    at T_start, the drug's diffusivities (D0 at T_end, hindered in the start state), tau, the
+    truth and the mesh."""
+    solute, c, load = req.solute, req.constants, req.load_ug
+    d0 = req.drug.d0_cm2_s(req.t_end, c)
+    t10 = leak_time(solute, req.start_radius)
+    return dict(dose_fraction=req.fraction, dose_ug=None if load is None else req.fraction * load,
+                load_ug=load, wait=req.lead, leak_time_10pct=t10,
+                leak_time_10pct_seconds=None if tau is None or math.isinf(t10) else t10 * tau,
+                effective_diffusivity_cm2_s=d0 * float(solute.hindrance.factor(
+                    1.0 - 1.0 / req.start_radius**3)),
+                drug_diffusivity_cm2_s=d0, timescale_seconds=tau,
+                interfacial_length=settings.interfacial_length,
+                bead_dry_radius_um=req.bead_dry_radius_um, truth=truth_text(req),
+                mesh=req.drug.mesh_note(req.start_radius, c))
 
 
 def _fluid_fraction(req: DrugDoseRequest, rel: Any, t: float) -> float:
@@ -625,14 +632,11 @@ def answer_fields(req: Any) -> dict[str, Any]:
     solute, load = req.solute, req.load_ug
     d0 = req.drug.d0_cm2_s(req.t_end, c)
     d_start = req.drug.d0_cm2_s(req.t_start, c)
-    phi0 = 1.0 - 1.0 / req.start_radius**3
-    d_eff = d0 * float(solute.hindrance.factor(phi0))
     squeezed = float(squeezed_under(mech, np.array([t_hit * tau_s]))[0])
     a3 = float(np.interp(t_hit, mech.result.t, np.asarray(mech.result.radius) ** 3))
     a0 = req.start_radius
     fluid = (a0**3 - a3) / (a0**3 - 1.0)
     pe = rel.peclet(0.0, t_hit)
-    t10 = leak_time(solute, a0)
     from ..heating.response import temperature_curve
 
     pieces, _ = _pieces_seconds(prot, tau_s)
@@ -653,24 +657,13 @@ def answer_fields(req: Any) -> dict[str, Any]:
                "temperature_k": temperature_curve(pieces, prot.t_start, tc).tolist(),
                "released_fraction": np.interp(tc, rel.t, rel.released_fraction).tolist()})
     s = mech.settings
-    conc = None
-    if req.drug.release_volume_ul is not None and load is not None:
-        grown = volume_to_ul(4.0 * math.pi / 3.0 * (a0**3 - a3), dry)
-        conc = req.fraction * load / (req.drug.release_volume_ul + grown)
     return dict(
-        model=STEPS_MODEL, time=t_hit, seconds=t_hit * tau_s, dose_fraction=req.fraction,
-        dose_ug=None if load is None else req.fraction * load, load_ug=load, wait=0.0,
+        _fields(req, tau_s, s), model=STEPS_MODEL, time=t_hit, seconds=t_hit * tau_s,
         leaked_before_heating=0.0, leaked_before_heating_ug=None if load is None else 0.0,
-        leak_time_10pct=t10,
-        leak_time_10pct_seconds=None if math.isinf(t10) else t10 * tau_s,
         squeezed_fraction=squeezed, diffused_fraction=req.fraction - squeezed,
-        fluid_fraction=fluid,
-        medium_concentration_ug_per_ul=conc, effective_diffusivity_cm2_s=d_eff,
-        drug_diffusivity_cm2_s=d0, mass_balance_error=rel.mass_balance_error,
-        timescale_seconds=tau_s, fluid_answer=None, scenario_key=None,
-        uncertainty=unc, peclet=pe, mesh=req.drug.mesh_note(a0, c),
-        interfacial_length=s.interfacial_length, bead_dry_radius_um=dry,
-        truth=truth_text(req), protocol=extra,
+        fluid_fraction=fluid, medium_concentration_ug_per_ul=_conc(req, req.fraction, a3 ** (
+            1.0 / 3.0)), mass_balance_error=rel.mass_balance_error, fluid_answer=None,
+        scenario_key=None, uncertainty=unc, peclet=pe, protocol=extra,
         note=(f"Full solver's mechanics of the protocol {'; '.join(prot.texts)} ({s.grid} "
               f"grid, N = {s.n}, rtol {s.rtol:g}, interfacial length "
               f"{s.interfacial_length:g}, T(t) in the kernels, tau = {tau_s:.4g} s at "
