@@ -19,7 +19,14 @@ from solver.limits import DRY_RADIUS_UM_RANGE, REST_RANGE
 from .fits.gel_store import calibrated_constants, lookup
 from .quantity import number
 from .runs.scenario import DIRECT_ELL_RANGE, TRUTH, SolverSettings
-from .units import PhysicalConstants, stored_volume, timescale, ul_to_volume, volume_to_ul
+from .units import (
+    PhysicalConstants,
+    released_fraction,
+    stored_volume,
+    timescale,
+    ul_to_volume,
+    volume_to_ul,
+)
 
 BRANCHES = ("swollen", "shrunken")
 
@@ -95,8 +102,7 @@ class Jump:
     @property
     def max_fraction(self) -> float:
         """Largest fraction of the stored fluid the gel gives up at T_end (as t -> inf)."""
-        a0, af = self.start_radius, self.final_radius
-        return (a0**3 - af**3) / (a0**3 - 1.0)
+        return released_fraction(self.start_radius, self.final_radius)
 
 
 def resolve_jump(gel: Gel, t_start: float, t_end: float, branch: str | None) -> Jump:

@@ -256,6 +256,12 @@ def expelled_volume(start_radius: float, radius: float) -> float:
     return 4.0 * math.pi / 3.0 * (start_radius**3 - radius**3)
 
 
+def released_fraction(start_radius: Any, radius: Any) -> Any:
+    """The fraction of the stored fluid expelled at radius a: (a0^3 - a^3) / (a0^3 - 1)
+    (eq. FluidVolExpelled over the stored volume; arrays too)."""
+    return (start_radius**3 - radius**3) / (start_radius**3 - 1.0)
+
+
 def radius_after_dose(start_radius: float, fraction: float) -> float:
     """Radius once ``fraction`` of the stored fluid has left: a^3 = a0^3 - f (a0^3 - 1).
 

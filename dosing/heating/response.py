@@ -24,7 +24,14 @@ from ..answers import Pending, Verdict
 from ..request import DoseRequest
 from ..runs.scenario import Scenario, Trajectory
 from ..truth import Part, Uncertainty, truth_text
-from ..units import expelled_volume, radius_after_dose, timescale, ul_to_volume, volume_to_ul
+from ..units import (
+    expelled_volume,
+    radius_after_dose,
+    released_fraction,
+    timescale,
+    ul_to_volume,
+    volume_to_ul,
+)
 from ..validation import validation_report
 from . import reduced as heating_reduced
 from .grammar import Piece, Protocol, Until, reference_text
@@ -450,7 +457,7 @@ def _answer(req: DoseRequest, prot: Protocol, untils: list[UntilResult], pieces:
     span = min(max(1.5 * time, sum(p.duration or 0.0 for p in pieces)), float(t[-1]))
     tc = np.union1d(np.linspace(0.0, span, CURVE_POINTS), [time])
     ac = np.interp(tc, t, np.asarray(traj.radius, dtype=float))
-    released = (a0**3 - ac**3) / (a0**3 - 1.0)
+    released = released_fraction(a0, ac)
     temps = temperature_curve(pieces, prot.t_start, tc)
     curve = {"time": tc.tolist(), "temperature_k": temps.tolist(),
              "released_fraction": released.tolist(),

@@ -35,7 +35,7 @@ import numpy as np
 from ..request import DoseRequest, _clamp_length
 from ..runs.scenario import SolverSettings
 from ..truth import Part, delayed_settings, role
-from ..units import radius_after_dose
+from ..units import radius_after_dose, released_fraction
 from .front import BatchAnswer, BatchRelease, batch_answer, batch_sizes
 from .sizes import DrySizes
 
@@ -93,7 +93,7 @@ def _release(traj: Any, a0: float) -> tuple[np.ndarray, np.ndarray]:
     """(s, F(s)) of a full-solver run: the released fraction on its dense steps (eq.
     FluidVolExpelled), made non-decreasing."""
     t, a = (traj.step_t, traj.step_radius) if len(traj.step_t) else (traj.t, traj.radius)
-    f = (a0**3 - np.asarray(a, dtype=float) ** 3) / (a0**3 - 1.0)
+    f = released_fraction(a0, np.asarray(a, dtype=float))
     return np.asarray(t, dtype=float), np.maximum.accumulate(f)
 
 

@@ -31,7 +31,7 @@ from ..model_choice import MODEL_NAMES, front_run, model_answer
 from ..request import DoseRequest
 from ..runs.lru import ByteLRU
 from ..truth import Part
-from ..units import timescale
+from ..units import released_fraction, timescale
 from .sizes import DrySizes
 
 QUADRATURE_TOL = 1e-6  # relative change of the batch's dose time between n / 2 and n nodes
@@ -45,8 +45,7 @@ def exact_release_fraction(fr: Any, s: Any) -> np.ndarray:
     a0 = float(fr.radius[0])
     t = np.clip(np.asarray(s, dtype=float), fr.t[0], fr.t_stop)
     x = np.maximum(fr.curve.front_at(t.ravel()), fr.front_stop)
-    a = np.asarray(fr.curve.radius(x), dtype=float).reshape(t.shape)
-    return (a0**3 - a**3) / (a0**3 - 1.0)
+    return released_fraction(a0, np.asarray(fr.curve.radius(x), dtype=float).reshape(t.shape))
 
 
 TABLE_POINTS = 8001  # F(s) tabulated at this many front positions: |error| < 1e-7
@@ -64,8 +63,7 @@ def _table(fr: Any) -> tuple[np.ndarray, np.ndarray]:
     u = np.linspace(0.0, 1.0, TABLE_POINTS)
     x = fr.front_stop + (c.x_start - fr.front_stop) * (1.0 - u**2)
     s = np.asarray(c.time_of_front(x), dtype=float)
-    a = np.asarray(c.radius(x), dtype=float)
-    f = (a0**3 - a**3) / (a0**3 - 1.0)
+    f = released_fraction(a0, np.asarray(c.radius(x), dtype=float))
     s[0], s = fr.t[0], np.maximum.accumulate(s)
     _TABLES[id(fr)] = (fr, s, f)  # the ByteLRU keeps 16 at most
     return s, f
