@@ -148,6 +148,12 @@ class PhysicalConstants:
         lo, hi = self.mesh_length_range_nm
         return self.mesh_length_nm / a, lo / a, hi / a
 
+    @property
+    def mobility(self) -> str:
+        """The mobility's temperature law under a heating program: 'water' (k_B T and water's
+        viscosity) when the viscosity is water's, else 'kT' (dosing.heating.program)."""
+        return "water" if self.viscosity_pa_s == WATER else "kT"
+
     def viscosity(self, t_end: float) -> float:
         """eta in Pa s: the given value, or water's at T_end."""
         if self.viscosity_pa_s == WATER:

@@ -163,7 +163,7 @@ def mode_for(planner: Any, req: DoseRequest) -> Mode:
     'kT'); the staircase on a stand-in solver."""
     from ..runs.full import is_full_solver
 
-    mobility = "water" if req.constants.viscosity_pa_s == "water" else "kT"
+    mobility = req.constants.mobility
     return Mode(is_full_solver(planner.solver), mobility)
 
 

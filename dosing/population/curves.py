@@ -521,7 +521,7 @@ def batch_protocol_answer(req: Any, validate: bool = False, tol: float = QUADRAT
     the reduced model (a node outside its region refuses: :class:`OutsideRegion`); with one
     the nodes outside it on the planner's full solver (blocking; ``wait`` False: only from
     the cache, None when a run is missing)."""
-    mobility = "water" if req.constants.viscosity_pa_s == "water" else "kT"
+    mobility = req.constants.mobility
     runs = None
     if planner is not None:
         from ..heating.response import mode_for

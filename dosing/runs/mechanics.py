@@ -58,8 +58,7 @@ def protocol_mechanics(gel: Any, prot: Protocol, dry_radius_um: float, horizon_s
     tau = timescale(dry_radius_um, t_ref, constants).seconds
     s, _ = bead_settings(settings or SolverSettings(), constants, dry_radius_um)
     s = drug_settings(s)
-    mobility = "water" if constants.viscosity_pa_s == "water" else "kT"
-    spec = program_spec(prot.program(tau), mobility, t_ref)
+    spec = program_spec(prot.program(tau), constants.mobility, t_ref)
     horizon = HORIZON_MARGIN * horizon_s / tau
     key = json.dumps({"gel": gel.to_dict(), "t_start": prot.t_start, "program": spec,
                       "horizon": horizon, "settings": repr(s), "samples": SAMPLES},

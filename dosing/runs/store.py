@@ -227,10 +227,8 @@ class RunStore:
             key = alias[0].key()
             self.cache.put_if_longer(key, alias[1].meta, alias[1].to_npz())
             with self._mem_lock:
-                self._mem[key] = alias[1]
-                self._mem.move_to_end(key)
-                while len(self._mem) > 64:
-                    self._mem.popitem(last=False)
+                self._mem[key] = alias[1]  # the ByteLRU evicts past its bounds
+                self._row_digest.pop(key, None)  # its row unknown: cached_many reads it
         if states:
             new = []
             with self._mem_lock:
