@@ -163,8 +163,7 @@ def mode_for(planner: Any, req: DoseRequest) -> Mode:
     'kT'); the staircase on a stand-in solver."""
     from ..runs.full import is_full_solver
 
-    mobility = req.constants.mobility
-    return Mode(is_full_solver(planner.solver), mobility)
+    return Mode(is_full_solver(planner.solver), req.constants.mobility)
 
 
 def _settings_list(req: DoseRequest, check: Any) -> list[Any]:
