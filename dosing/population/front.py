@@ -101,6 +101,8 @@ class BatchRelease:
 
     def __call__(self, t: float) -> float:
         rho, v, band = self.nodes(t)
+        if len(self.curves) == 1:  # one curve serves every bead (the front model's)
+            return float(np.interp(t / rho, *self.curves[0]) @ v)
         return sum(float(np.interp(t / rho[band == b], s, f) @ v[band == b])
                    for b, (s, f) in enumerate(self.curves))
 
