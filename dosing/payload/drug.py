@@ -21,8 +21,8 @@ from ..quantity import number
 from ..units import (
     BOLTZMANN,
     REFERENCE_TEMPERATURE_K,
-    UM3_PER_UL,
     PhysicalConstants,
+    volume_to_ul,
     water_viscosity,
 )
 
@@ -219,7 +219,7 @@ class DrugModel:
             if dry_radius_um is None:
                 raise ParameterError("dry_radius_um", None, "a finite number > 0 (um; or "
                                      "swollen_radius_um) to use drug.release_volume_ul")
-            unit = 4.0 * math.pi / 3.0 * dry_radius_um**3 / UM3_PER_UL  # uL
+            unit = volume_to_ul(4.0 * math.pi / 3.0, dry_radius_um)  # uL
             vol = self.release_volume_ul / unit
             if not vol > start_radius**3:
                 raise ParameterError("drug.release_volume_ul", self.release_volume_ul,

@@ -40,7 +40,7 @@ from ..request import _clamp_length
 from ..runs.mechanics import jump_mechanics, protocol_mechanics
 from ..runs.solute import drug_settings
 from ..truth import Part, delayed_settings
-from ..units import UM3_PER_UL, timescale
+from ..units import UM3_PER_UL, timescale, volume_to_ul
 from .bands import band_edges, size_settings
 from .cycles import ladder, rule
 from .sizes import DrySizes, SizeDistribution, as_distribution
@@ -345,7 +345,7 @@ def _answer(req: Any, sizes: DrySizes, medium: tuple[float | None, float | None,
     pore = _pore(req, v0)
     conc = None
     if v0 is not None and req.load_ug is not None:  # per load and batch dry volume -> ug/uL
-        ref_ul = 4.0 * math.pi / 3.0 * sizes.mean_um**3 / UM3_PER_UL
+        ref_ul = volume_to_ul(4.0 * math.pi / 3.0, sizes.mean_um)
         conc = float(np.interp(t, best.t, best.concentration)) * req.load_ug / ref_ul
     text = ("a perfect sink" if v0 is None else
             f"one well-mixed medium of {ml:.4g} mL shared by {n_beads:.4g} beads "

@@ -167,16 +167,10 @@ def schedule_result_html(res: Any) -> str:
 def events_frame(events: Sequence[dict[str, Any]], attrs: dict[str, Any] | None = None
                  ) -> Any:
     """The events as a pandas DataFrame, one row per step, columns ``name [unit]``."""
-    import pandas as pd
-
     from ..question.events import EVENT_COLUMNS
 
-    # ``name [unit]`` as every tidy table (dosing.present.export.header), no brackets without one
-    cols = {(f"{name} [{unit}]" if unit else name): [e.get(name) for e in events]
-            for name, (unit, _) in EVENT_COLUMNS.items()}
-    df = pd.DataFrame(cols)
-    df.attrs.update(attrs or {})
-    return df
+    return _frame({name: [e.get(name) for e in events] for name in EVENT_COLUMNS},
+                  {name: unit for name, (unit, _) in EVENT_COLUMNS.items()}, attrs)
 
 
 def schedule_frame(ans: ScheduleAnswer) -> pd.DataFrame:
